@@ -1,0 +1,43 @@
+"""The typed IR: domains, states and goals as pydantic models (thesis 3.2-3.5, 4.4)."""
+
+from cfgplan.ir.model import (
+    Atom,
+    BodyItem,
+    ChannelSpec,
+    Condition,
+    Domain,
+    Effect,
+    Eval,
+    Functionality,
+    Goal,
+    Medium,
+    Method,
+    Negation,
+    Port,
+    SExpr,
+    Span,
+    State,
+    Term,
+    is_variable,
+)
+
+__all__ = [
+    "Atom",
+    "BodyItem",
+    "ChannelSpec",
+    "Condition",
+    "Domain",
+    "Effect",
+    "Eval",
+    "Functionality",
+    "Goal",
+    "Medium",
+    "Method",
+    "Negation",
+    "Port",
+    "SExpr",
+    "Span",
+    "State",
+    "Term",
+    "is_variable",
+]

@@ -1,0 +1,212 @@
+"""The typed intermediate representation of domains and states (thesis 3.2-3.5, 4.4).
+
+Every node keeps the source position it was read from in ``span``. Spans are
+excluded from serialisation, so ``model_dump()`` compares two IRs by meaning
+alone (the round-trip test relies on it).
+
+Terms are plain strings: a variable starts with ``?`` (``?r``), anything else
+is a constant (``Pippi``, ``Door1``, ``200``). Symbols are case-sensitive.
+"""
+
+from __future__ import annotations
+
+from typing import Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field
+from typing_extensions import TypeAliasType
+
+Term = str
+"""A variable (``?r``) or a constant (``Pippi``)."""
+
+
+def is_variable(term: Term) -> bool:
+    """True for a variable such as ``?r``."""
+    return term.startswith("?")
+
+
+class Span(BaseModel):
+    """Where a node stands in its source file (1-based line and column)."""
+
+    model_config = ConfigDict(frozen=True)
+
+    file: str
+    line: int
+    column: int
+    end_line: int
+    end_column: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+def _span_field() -> Span | None:
+    return Field(default=None, exclude=True, repr=False)  # type: ignore[no-any-return]
+
+
+class Node(BaseModel):
+    """Base of every IR node: immutable, with an optional source span."""
+
+    model_config = ConfigDict(frozen=True)
+
+    span: Span | None = _span_field()
+
+
+class Atom(Node):
+    """A predicate applied to terms: a fact ``(in Pippi Room1)``, a data
+    descriptor ``(image ?r)`` or a call ``(camera ?r)``."""
+
+    kind: Literal["atom"] = "atom"
+    predicate: str
+    args: tuple[Term, ...] = ()
+
+    @property
+    def arity(self) -> int:
+        return len(self.args)
+
+    @property
+    def signature(self) -> tuple[str, int]:
+        """Name and arity: the identity of a method or functionality (thesis 4.5)."""
+        return (self.predicate, len(self.args))
+
+    def variables(self) -> list[Term]:
+        return [a for a in self.args if is_variable(a)]
+
+    def __str__(self) -> str:
+        return "(" + " ".join((self.predicate, *self.args)) + ")"
+
+
+class Negation(Node):
+    """``(not ATOM)``: in a precondition, no fact matches; in a postcondition,
+    the fact is deleted."""
+
+    kind: Literal["not"] = "not"
+    atom: Atom
+
+    def __str__(self) -> str:
+        return f"(not {self.atom})"
+
+
+SExpr = TypeAliasType("SExpr", Union[str, int, float, list["SExpr"]])  # type: ignore[misc]
+"""A raw s-expression: a symbol, a number, or a list of s-expressions."""
+
+
+class Eval(Node):
+    """``(eval EXPR)``: a test in the safe Lisp subset of
+    :mod:`cfgplan.check.evaluate`. It is interpreted, never executed."""
+
+    kind: Literal["eval"] = "eval"
+    expr: SExpr
+
+    def variables(self) -> list[Term]:
+        found: list[Term] = []
+        stack: list[SExpr] = [self.expr]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, list):
+                stack.extend(reversed(item))
+            elif isinstance(item, str) and is_variable(item) and item not in found:
+                found.append(item)
+        return found
+
+
+Condition = Union[Atom, Negation, Eval]
+"""A precondition: an atom, a negated atom or an eval test."""
+
+Effect = Union[Atom, Negation]
+"""A postcondition: an atom to add, or ``(not ATOM)`` to delete."""
+
+
+class Functionality(Node):
+    """A functionality operator ``<r, Id, I, O, Pr, Po, Freq, Cost>`` (3.2, 4.4).
+
+    The first argument of ``name`` is the robot (or other agent) it runs on.
+    """
+
+    name: Atom
+    inputs: tuple[Atom, ...] = ()
+    outputs: tuple[Atom, ...] = ()
+    precond: tuple[Condition, ...] = ()
+    postcond: tuple[Effect, ...] = ()
+    cost: float | None = None
+    freq: float | None = None
+
+
+class Port(Node):
+    """An entry of a method's ``:in`` or ``:out``: which body label consumes or
+    produces the descriptor, with an optional bandwidth (4.4)."""
+
+    label: str
+    data: Atom
+    bandwidth: float | None = None
+
+
+class ChannelSpec(Node):
+    """A channel a method creates: ``((local ?r) ?f1 ?f2 (image ?r) [bw])`` or
+    ``((global ?from ?to) ?f1 ?f2 (pos ?r ?d) [bw])`` (3.4, 4.4)."""
+
+    kind: Literal["local", "global"]
+    robots: tuple[Term, ...]
+    source: str
+    target: str
+    data: Atom
+    bandwidth: float | None = None
+
+
+class BodyItem(Node):
+    """A labelled functionality or method call in a method body."""
+
+    label: str
+    call: Atom
+
+
+class Method(Node):
+    """A configuration method (4.4). Several versions may share a name; a method
+    is identified by name and arity."""
+
+    name: Atom
+    precond: tuple[Condition, ...] = ()
+    postcond: tuple[Effect, ...] = ()
+    inputs: tuple[Port, ...] = ()
+    outputs: tuple[Port, ...] = ()
+    channels: tuple[ChannelSpec, ...] = ()
+    body: tuple[BodyItem, ...] = ()
+
+
+class Domain(Node):
+    """Functionality operators and methods, in file order (4.4)."""
+
+    functionalities: tuple[Functionality, ...] = ()
+    methods: tuple[Method, ...] = ()
+
+    def functionality(self, signature: tuple[str, int]) -> Functionality | None:
+        for f in self.functionalities:
+            if f.name.signature == signature:
+                return f
+        return None
+
+    def method_versions(self, signature: tuple[str, int]) -> list[Method]:
+        """All versions of a method, in domain order (their order decides ties, 6.3.2)."""
+        return [m for m in self.methods if m.name.signature == signature]
+
+
+class Medium(Node):
+    """``medium(type, from, to, capacity)``: a one-way communication medium (4.6)."""
+
+    type: str
+    sender: str
+    receiver: str
+    capacity: float
+
+
+class Goal(Node):
+    """A method instance to plan for, e.g. ``(do-cross-door Pippi Door1)``."""
+
+    call: Atom
+
+
+class State(Node):
+    """A world state: facts in order, media, and an optional goal (4.4)."""
+
+    facts: tuple[Atom, ...] = ()
+    media: tuple[Medium, ...] = ()
+    goal: Goal | None = None

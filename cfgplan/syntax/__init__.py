@@ -1,0 +1,1 @@
+"""Syntax: the Lark grammar, the reader into the IR, the printer back, and diagnostics."""

@@ -1,0 +1,279 @@
+"""Interpreting the forms of the language (thesis 4.4, Appendix A) into the IR.
+
+The grammar gives each keyword's value as a raw :class:`Sx` tree; the
+functions here check its shape and build the pydantic IR, raising a
+positioned error at the first thing that does not fit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from cfgplan.ir.model import (
+    Atom,
+    BodyItem,
+    ChannelSpec,
+    Condition,
+    Effect,
+    Eval,
+    Functionality,
+    Goal,
+    Medium,
+    Method,
+    Negation,
+    Port,
+    Span,
+    State,
+)
+from cfgplan.syntax.errors import error
+from cfgplan.syntax.sx import Sx
+
+FUNCTIONALITY_KEYWORDS = (":name", ":in", ":out", ":precond", ":postcond", ":cost", ":freq")
+METHOD_KEYWORDS = (":name", ":precond", ":postcond", ":in", ":out", ":channels", ":body")
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Option:
+    """``:keyword value`` inside a make-functionality or make-config-method form."""
+
+    keyword: str
+    span: Span
+    value: Sx
+
+
+def _options(form: str, span: Span, children: Sequence[Any], allowed: tuple[str, ...]) -> dict[
+    str, Option
+]:
+    found: dict[str, Option] = {}
+    for opt in children:
+        if not isinstance(opt, Option):
+            continue
+        if opt.keyword not in allowed:
+            hint = f"{form} takes " + ", ".join(allowed)
+            if opt.keyword.lower() in allowed:
+                hint = f"keywords are case-sensitive: write {opt.keyword.lower()}"
+            raise error(f"unknown keyword {opt.keyword} in {form}", opt.span, hint)
+        if opt.keyword in found:
+            raise error(f"{opt.keyword} is given twice in this {form}", opt.span)
+        found[opt.keyword] = opt
+    if ":name" not in found:
+        raise error(f"{form} has no :name", span, "add :name '(NAME ?robot ...)")
+    return found
+
+
+def _elements(node: Sx, what: str) -> tuple[Sx, ...]:
+    """The items of a list value; ``nil`` and ``()`` are the empty list."""
+    if node.is_symbol and node.text.lower() == "nil":
+        return ()
+    if not node.is_list:
+        raise error(f"expected a list of {what}, found {node}", node.span)
+    items = node.items
+    # A quoted value written inside the list, '(quote (...)) is kept as is.
+    if node.head() == "quote" and len(items) == 2 and items[1].is_list:
+        return items[1].items
+    return items
+
+
+def atom(node: Sx, what: str = "an atom such as (camera ?r)") -> Atom:
+    """``(predicate term ...)`` with symbols or numbers as terms."""
+    if not node.is_list or not node.items:
+        raise error(f"expected {what}, found {node if node.is_list else node.text}", node.span)
+    head, *args = node.items
+    if not head.is_symbol:
+        raise error(f"an atom starts with a name, found {head}", head.span)
+    for arg in args:
+        if arg.is_list:
+            raise error(
+                f"an argument of ({head.text} ...) must be a symbol or a number, found a list",
+                arg.span,
+                "atoms are flat: (in Pippi Room1)",
+            )
+    return Atom(predicate=head.text, args=tuple(a.text for a in args), span=node.span)
+
+
+def _number(node: Sx, what: str) -> float:
+    if node.kind != "number":
+        raise error(f"expected a number for {what}, found {node}", node.span)
+    return float(node.text)
+
+
+def condition(node: Sx) -> Condition:
+    """A precondition: an atom, ``(not ATOM)`` or ``(eval EXPR)``."""
+    head = node.head()
+    if head == "not":
+        if len(node.items) != 2:
+            raise error("(not ...) takes exactly one atom", node.span)
+        return Negation(atom=atom(node.items[1]), span=node.span)
+    if head == "eval":
+        if len(node.items) != 2:
+            raise error("(eval ...) takes exactly one expression", node.span)
+        return Eval(expr=node.items[1].to_sexpr(), span=node.span)
+    return atom(node, "a condition: an atom, (not ATOM) or (eval EXPR)")
+
+
+def effect(node: Sx) -> Effect:
+    """A postcondition: an atom to add, or ``(not ATOM)`` to delete."""
+    if node.head() == "not":
+        if len(node.items) != 2:
+            raise error("(not ...) takes exactly one atom", node.span)
+        return Negation(atom=atom(node.items[1]), span=node.span)
+    return atom(node, "a postcondition: an atom or (not ATOM)")
+
+
+def _each(opts: dict[str, Option], key: str, what: str, fn: Callable[[Sx], T]) -> tuple[T, ...]:
+    if key not in opts:
+        return ()
+    return tuple(fn(item) for item in _elements(opts[key].value, what))
+
+
+def _label(node: Sx, where: str) -> str:
+    if not node.is_symbol:
+        raise error(f"expected a label such as ?f1 in {where}, found {node}", node.span)
+    return node.text
+
+
+def _optional_bandwidth(items: Sequence[Sx], index: int, where: str) -> float | None:
+    if len(items) <= index:
+        return None
+    if len(items) > index + 1:
+        raise error(f"too many elements in {where}", items[index + 1].span)
+    return _number(items[index], "the bandwidth")
+
+
+def port(node: Sx) -> Port:
+    """A method :in/:out entry ``(?f2 (pos ?r ?d) [bandwidth])``."""
+    where = "a method :in/:out entry (?f (descriptor ...) [bandwidth])"
+    if not node.is_list or len(node.items) < 2:
+        raise error(f"expected {where}, found {node}", node.span)
+    items = node.items
+    return Port(
+        label=_label(items[0], where),
+        data=atom(items[1], "a data descriptor such as (pos ?r ?d)"),
+        bandwidth=_optional_bandwidth(items, 2, where),
+        span=node.span,
+    )
+
+
+def channel(node: Sx) -> ChannelSpec:
+    """``((local ?r) ?f1 ?f2 (image ?r) [bw])`` or ``((global ?a ?b) ...)``."""
+    where = "a channel ((local ?r) ?f1 ?f2 (descriptor ...) [bandwidth])"
+    if not node.is_list or len(node.items) < 4:
+        raise error(f"expected {where}, found {node}", node.span)
+    kind_node, src, dst, data, *_ = node.items
+    kind = atom(kind_node, "(local ?r) or (global ?from ?to)")
+    if kind.predicate not in ("local", "global"):
+        hint = None
+        if kind.predicate.lower() in ("local", "global"):
+            hint = f"symbols are case-sensitive: write {kind.predicate.lower()}"
+        raise error(f"a channel is local or global, found {kind.predicate}", kind_node.span, hint)
+    want = 1 if kind.predicate == "local" else 2
+    if kind.arity != want:
+        form = "(local ?robot)" if want == 1 else "(global ?from ?to)"
+        raise error(f"{kind.predicate} takes {want} robot(s): {form}", kind_node.span)
+    return ChannelSpec(
+        kind="local" if kind.predicate == "local" else "global",
+        robots=kind.args,
+        source=_label(src, where),
+        target=_label(dst, where),
+        data=atom(data, "a data descriptor such as (image ?r)"),
+        bandwidth=_optional_bandwidth(node.items, 4, where),
+        span=node.span,
+    )
+
+
+def body_item(node: Sx) -> BodyItem:
+    """``(?f1 (camera ?r))``."""
+    where = "a body entry (?f1 (name ?robot ...))"
+    if not node.is_list or len(node.items) != 2:
+        raise error(f"expected {where}, found {node}", node.span)
+    return BodyItem(
+        label=_label(node.items[0], where), call=atom(node.items[1]), span=node.span
+    )
+
+
+def _name(opts: dict[str, Option], form: str) -> Atom:
+    name = atom(opts[":name"].value, "a name such as (camera ?r)")
+    if form == "make-functionality" and not name.args:
+        raise error(
+            "a functionality's name needs the robot it runs on: (NAME ?robot ...)",
+            name.span,
+        )
+    return name
+
+
+def functionality(span: Span, children: Sequence[Any]) -> Functionality:
+    """``(make-functionality :name ... :in ... :out ... :precond ... :postcond ...)``."""
+    form = "make-functionality"
+    opts = _options(form, span, children, FUNCTIONALITY_KEYWORDS)
+    cost = _number(opts[":cost"].value, ":cost") if ":cost" in opts else None
+    freq = _number(opts[":freq"].value, ":freq") if ":freq" in opts else None
+    return Functionality(
+        name=_name(opts, form),
+        inputs=_each(opts, ":in", "data descriptors", atom),
+        outputs=_each(opts, ":out", "data descriptors", atom),
+        precond=_each(opts, ":precond", "conditions", condition),
+        postcond=_each(opts, ":postcond", "postconditions", effect),
+        cost=cost,
+        freq=freq,
+        span=span,
+    )
+
+
+def method(span: Span, children: Sequence[Any]) -> Method:
+    """``(make-config-method :name ... :precond ... :in ... :out ... :channels ... :body ...)``."""
+    form = "make-config-method"
+    opts = _options(form, span, children, METHOD_KEYWORDS)
+    return Method(
+        name=_name(opts, form),
+        precond=_each(opts, ":precond", "conditions", condition),
+        postcond=_each(opts, ":postcond", "postconditions", effect),
+        inputs=_each(opts, ":in", ":in entries", port),
+        outputs=_each(opts, ":out", ":out entries", port),
+        channels=_each(opts, ":channels", "channels", channel),
+        body=_each(opts, ":body", "body entries", body_item),
+        span=span,
+    )
+
+
+def _medium(fact: Atom) -> Medium:
+    if fact.arity != 4:
+        raise error(
+            "a medium is (medium TYPE FROM TO CAPACITY)", fact.span, "e.g. (medium socket Pippi Emil 200)"
+        )
+    mtype, sender, receiver, capacity = fact.args
+    try:
+        cap = float(capacity)
+    except ValueError:
+        raise error(f"the capacity of a medium is a number, found {capacity}", fact.span) from None
+    return Medium(type=mtype, sender=sender, receiver=receiver, capacity=cap, span=fact.span)
+
+
+def state(span: Span, children: Sequence[Any]) -> State:
+    """``(state (robot Pippi) ...)`` or ``(state robot(Pippi), ...)``; media apart."""
+    facts: list[Atom] = []
+    media: list[Medium] = []
+    for node in children:
+        if not isinstance(node, Sx):
+            continue
+        fact = atom(node, "a fact such as (robot Pippi)")
+        for arg in fact.args:
+            if arg.startswith("?"):
+                raise error(f"a fact holds no variables, found {arg} in {fact}", node.span)
+        if fact.predicate == "medium":
+            media.append(_medium(fact))
+        else:
+            facts.append(fact)
+    return State(facts=tuple(facts), media=tuple(media), span=span)
+
+
+def goal(span: Span, node: Sx) -> Goal:
+    """``(goal (do-cross-door Pippi Door1))``."""
+    call = atom(node, "a method instance such as (do-cross-door Pippi Door1)")
+    for arg in call.args:
+        if arg.startswith("?"):
+            raise error(f"a goal names constants only, found the variable {arg}", node.span)
+    return Goal(call=call, span=span)

@@ -1,0 +1,312 @@
+"""Reading source text: Lark (LALR, positions on) plus a Transformer that maps
+each grammar rule straight to an :class:`Sx` node or an IR object.
+
+Entry points: :func:`read_domain` and :func:`read_state` (files or text).
+Errors are :class:`~cfgplan.syntax.errors.CfgplanError` with a span, built from
+Lark's ``UnexpectedInput`` for syntax errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from lark import Lark, Token, v_args
+from lark.visitors import Transformer_NonRecursive, VisitError
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
+from cfgplan.syntax import forms
+from cfgplan.syntax.errors import CfgplanError, error
+from cfgplan.syntax.sx import Sx
+
+MAX_NESTING = 64
+"""Lists may nest this deep; deeper input is refused (no recursion anywhere)."""
+
+_TERMINAL_NAMES = {
+    "LPAR": '"("',
+    "RPAR": '")"',
+    "COMMA": '","',
+    "QUOTE": "a quote '",
+    "KEYWORD": "a keyword such as :name",
+    "SYMBOL": "a symbol",
+    "NUMBER": "a number",
+    "CALL_NAME": "a name followed by (",
+    "MAKE_FUNCTIONALITY": "make-functionality",
+    "MAKE_CONFIG_METHOD": "make-config-method",
+    "STATE": "state",
+    "GOAL": "goal",
+    "$END": "end of file",
+}
+
+
+@cache
+def grammar_text() -> str:
+    """The grammar, read from the installed package data ``cfgplan.grammar``."""
+    return resources.files("cfgplan.grammar").joinpath("cfgplan.lark").read_text("utf-8")
+
+
+@dataclass
+class SourceFile:
+    """Everything one file declares, in file order."""
+
+    name: str
+    text: str
+    functionalities: list[Functionality] = field(default_factory=list)
+    methods: list[Method] = field(default_factory=list)
+    states: list[State] = field(default_factory=list)
+    goals: list[Goal] = field(default_factory=list)
+    order: list[str] = field(default_factory=list)
+
+
+class _ToIR(Transformer_NonRecursive):
+    """Maps grammar rules to Sx nodes (generic s-expressions) and IR objects."""
+
+    def __init__(self, filename: str) -> None:
+        super().__init__(visit_tokens=False)
+        self.filename = filename
+
+    def _span(self, meta: Any) -> Span:
+        return Span(
+            file=self.filename,
+            line=meta.line,
+            column=meta.column,
+            end_line=meta.end_line,
+            end_column=meta.end_column,
+        )
+
+    def _token_span(self, tok: Token) -> Span:
+        return Span(
+            file=self.filename,
+            line=tok.line or 0,
+            column=tok.column or 0,
+            end_line=tok.end_line or tok.line or 0,
+            end_column=tok.end_column or tok.column or 0,
+        )
+
+    @v_args(inline=True)
+    def symbol(self, tok: Token) -> Sx:
+        return Sx("symbol", self._token_span(tok), text=str(tok))
+
+    @v_args(inline=True)
+    def number(self, tok: Token) -> Sx:
+        return Sx("number", self._token_span(tok), text=str(tok))
+
+    @v_args(meta=True)
+    def list(self, meta: Any, children: list[Any]) -> Sx:
+        return self._list(self._span(meta), children)
+
+    def _list(self, span: Span, items: list[Any]) -> Sx:
+        depth = 1 + max((i.depth for i in items), default=0)
+        if depth > MAX_NESTING:
+            raise error(
+                f"lists nest more than {MAX_NESTING} levels deep here",
+                span,
+                "domains and states need only a few levels; check for a runaway '('",
+            )
+        return Sx("list", span, items=tuple(items), depth=depth)
+
+    @v_args(meta=True)
+    def quote(self, meta: Any, children: list[Any]) -> Sx:
+        quote_tok, value = children
+        span = self._span(meta)
+        head = Sx("symbol", self._token_span(quote_tok), text="quote")
+        return self._list(span, [head, value])
+
+    @v_args(meta=True)
+    def call(self, meta: Any, children: list[Any]) -> Sx:
+        name_tok, *args = children
+        head = Sx("symbol", self._token_span(name_tok), text=str(name_tok))
+        return self._list(self._span(meta), [head, *(a for a in args if a is not None)])
+
+    @v_args(meta=True)
+    def option(self, meta: Any, children: list[Any]) -> forms.Option:
+        keyword, *rest = children
+        value = rest[-1]
+        return forms.Option(str(keyword), self._token_span(keyword), value)
+
+    @v_args(meta=True)
+    def functionality(self, meta: Any, children: list[Any]) -> Functionality:
+        return forms.functionality(self._span(meta), children[1:])
+
+    @v_args(meta=True)
+    def method(self, meta: Any, children: list[Any]) -> Method:
+        return forms.method(self._span(meta), children[1:])
+
+    @v_args(meta=True)
+    def state(self, meta: Any, children: list[Any]) -> State:
+        return forms.state(self._span(meta), children[1:])
+
+    @v_args(meta=True)
+    def goal(self, meta: Any, children: list[Any]) -> Goal:
+        value = [c for c in children[1:] if isinstance(c, Sx)][0]
+        return forms.goal(self._span(meta), value)
+
+
+@cache
+def _parser() -> Lark:
+    return Lark(grammar_text(), parser="lalr", propagate_positions=True, maybe_placeholders=True)
+
+
+def _describe_expected(expected: set[str]) -> str:
+    names = sorted({_TERMINAL_NAMES.get(e, e) for e in expected})
+    if not names:
+        return ""
+    if len(names) == 1:
+        return names[0]
+    return ", ".join(names[:-1]) + " or " + names[-1]
+
+
+def _syntax_error(exc: UnexpectedInput, filename: str, text: str) -> CfgplanError:
+    line = getattr(exc, "line", 1) or 1
+    column = getattr(exc, "column", 1) or 1
+    if isinstance(exc, UnexpectedEOF) or (
+        isinstance(exc, UnexpectedToken) and exc.token.type == "$END"
+    ):
+        lines = text.splitlines() or [""]
+        line, column = len(lines), len(lines[-1]) + 1
+        message = "unexpected end of file: a list is not closed (missing ')')"
+        span = Span(file=filename, line=line, column=column, end_line=line, end_column=column)
+        return error(message, span, "every '(' needs a matching ')'")
+    if isinstance(exc, UnexpectedToken):
+        tok = exc.token
+        found = f"'{tok}'" if tok.type != "$END" else "end of file"
+        expected = _describe_expected(set(exc.expected))
+        message = f"unexpected {found}; expected {expected}"
+        hint = None
+        if tok.type == "RPAR" and "RPAR" not in exc.expected:
+            hint = "there is one ')' too many, or an opening '(' is missing"
+        elif tok.type == "SYMBOL" and {"MAKE_FUNCTIONALITY", "STATE"} & set(exc.expected):
+            hint = _form_hint(str(tok))
+        end_col = (tok.end_column or column + 1) if tok.end_line == tok.line else column + 1
+        span = Span(file=filename, line=line, column=column, end_line=line, end_column=end_col)
+        return error(message, span, hint)
+    assert isinstance(exc, UnexpectedCharacters)
+    char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else "?"
+    span = Span(file=filename, line=line, column=column, end_line=line, end_column=column + 1)
+    return error(f"unexpected character {char!r}", span)
+
+
+def _form_hint(word: str) -> str:
+    known = ("make-functionality", "make-config-method", "state", "goal")
+    for k in known:
+        if word.lower() == k:
+            return f"symbols are case-sensitive: write {k}"
+    return "a file holds (make-functionality ...), (make-config-method ...), (state ...) or (goal ...)"
+
+
+def decode(data: bytes, filename: str) -> str:
+    """Decode UTF-8 source; a bad byte is reported at its line and column."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        before = data[: exc.start]
+        line = before.count(b"\n") + 1
+        column = exc.start - (before.rfind(b"\n") + 1) + 1
+        span = Span(file=filename, line=line, column=column, end_line=line, end_column=column + 1)
+        raise error(
+            f"invalid UTF-8 byte 0x{data[exc.start]:02x}",
+            span,
+            "cfgplan reads UTF-8 text; re-save the file as UTF-8",
+        ) from None
+
+
+def parse(text: str, filename: str = "<text>") -> SourceFile:
+    """Parse one file's text into its forms (functionalities, methods, states, goals)."""
+    source = SourceFile(filename, text)
+    if not text.strip() or all(
+        not ln.strip() or ln.lstrip().startswith(";") for ln in text.splitlines()
+    ):
+        span = Span(file=filename, line=1, column=1, end_line=1, end_column=1)
+        raise error("the file is empty: it holds no forms", span)
+    try:
+        tree = _parser().parse(text)
+    except UnexpectedInput as exc:
+        raise _syntax_error(exc, filename, text) from None
+    except RecursionError:  # pragma: no cover - the grammar and transformer are iterative
+        raise error("input too deeply nested") from None
+    try:
+        items = _ToIR(filename).transform(tree).children
+    except VisitError as exc:
+        if isinstance(exc.orig_exc, CfgplanError):
+            raise exc.orig_exc from None
+        raise
+    for item in items:
+        if isinstance(item, Functionality):
+            source.functionalities.append(item)
+            source.order.append("functionality")
+        elif isinstance(item, Method):
+            source.methods.append(item)
+            source.order.append("method")
+        elif isinstance(item, State):
+            source.states.append(item)
+            source.order.append("state")
+        elif isinstance(item, Goal):
+            source.goals.append(item)
+            source.order.append("goal")
+    return source
+
+
+def read_text_file(path: str | Path) -> tuple[str, str]:
+    """Read a file as UTF-8; returns (display name, text)."""
+    p = Path(path)
+    name = str(path)
+    try:
+        data = p.read_bytes()
+    except FileNotFoundError:
+        raise error(f"no such file: {name}") from None
+    except IsADirectoryError:
+        raise error(f"{name} is a directory, not a file") from None
+    except OSError as exc:
+        raise error(f"cannot read {name}: {exc.strerror}") from None
+    return name, decode(data, name)
+
+
+def domain_from(source: SourceFile) -> Domain:
+    """A Domain from a parsed file; state and goal forms do not belong there."""
+    for item in (*source.states, *source.goals):
+        raise error(
+            "a domain file holds only make-functionality and make-config-method forms",
+            item.span,
+            "put (state ...) and (goal ...) in the state file",
+        )
+    span = Span(file=source.name, line=1, column=1, end_line=1, end_column=1)
+    return Domain(
+        functionalities=tuple(source.functionalities), methods=tuple(source.methods), span=span
+    )
+
+
+def state_from(source: SourceFile) -> State:
+    """The State of a parsed state file, with its goal if one is given."""
+    for item in (*source.functionalities, *source.methods):
+        raise error(
+            "a state file holds one (state ...) form and an optional (goal ...)",
+            item.span,
+            "put make-functionality and make-config-method forms in the domain file",
+        )
+    if not source.states:
+        span = Span(file=source.name, line=1, column=1, end_line=1, end_column=1)
+        raise error("no (state ...) form in this file", span)
+    if len(source.states) > 1:
+        raise error("a second (state ...) form; a state file holds one", source.states[1].span)
+    if len(source.goals) > 1:
+        raise error("a second (goal ...) form; a state file holds one", source.goals[1].span)
+    state = source.states[0]
+    if source.goals:
+        state = state.model_copy(update={"goal": source.goals[0]})
+    return state
+
+
+def read_domain(path: str | Path) -> tuple[Domain, str]:
+    """Parse a domain file; returns the Domain and the file's text (for messages)."""
+    name, text = read_text_file(path)
+    return domain_from(parse(text, name)), text
+
+
+def read_state(path: str | Path) -> tuple[State, str]:
+    """Parse a state file; returns the State and the file's text."""
+    name, text = read_text_file(path)
+    return state_from(parse(text, name)), text
