@@ -10,11 +10,11 @@ Anything else is rejected by :func:`problems` at check time.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Union
+from itertools import pairwise
 
 from cfgplan.ir.model import SExpr, is_variable
 
-Value = Union[str, int, float, bool, list["Value"]]
+Value = str | int | float | bool | list["Value"]
 
 SPECIAL = ("quote", "and", "or")
 FUNCTIONS: dict[str, tuple[int, int | None]] = {
@@ -50,9 +50,7 @@ def problems(expr: SExpr) -> list[str]:
             head = item[0]
             if not isinstance(head, str) or head not in ALLOWED:
                 shown = head if not isinstance(head, list) else "a list"
-                found.append(
-                    f"eval may not call {shown}; it allows only " + ", ".join(ALLOWED)
-                )
+                found.append(f"eval may not call {shown}; it allows only " + ", ".join(ALLOWED))
                 continue
             args = item[1:]
             if head == "quote":
@@ -115,7 +113,7 @@ def _quoted(expr: SExpr, bindings: Mapping[str, str]) -> Value:
 
 def _compare(op: Callable[[float, float], bool], values: list[Value]) -> bool:
     nums = [_number(v) for v in values]
-    return all(op(a, b) for a, b in zip(nums, nums[1:], strict=False))
+    return all(op(a, b) for a, b in pairwise(nums))
 
 
 def evaluate(expr: SExpr, bindings: Mapping[str, str]) -> Value:

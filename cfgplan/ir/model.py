@@ -10,7 +10,7 @@ is a constant (``Pippi``, ``Door1``, ``200``). Symbols are case-sensitive.
 
 from __future__ import annotations
 
-from typing import Literal, Union
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 from typing_extensions import TypeAliasType
@@ -40,7 +40,7 @@ class Span(BaseModel):
 
 
 def _span_field() -> Span | None:
-    return Field(default=None, exclude=True, repr=False)  # type: ignore[no-any-return]
+    return Field(default=None, exclude=True, repr=False)
 
 
 class Node(BaseModel):
@@ -86,7 +86,7 @@ class Negation(Node):
         return f"(not {self.atom})"
 
 
-SExpr = TypeAliasType("SExpr", Union[str, int, float, list["SExpr"]])  # type: ignore[misc]
+SExpr = TypeAliasType("SExpr", str | int | float | list["SExpr"])  # type: ignore[misc]
 """A raw s-expression: a symbol, a number, or a list of s-expressions."""
 
 
@@ -109,10 +109,10 @@ class Eval(Node):
         return found
 
 
-Condition = Union[Atom, Negation, Eval]
+Condition = Atom | Negation | Eval
 """A precondition: an atom, a negated atom or an eval test."""
 
-Effect = Union[Atom, Negation]
+Effect = Atom | Negation
 """A postcondition: an atom to add, or ``(not ATOM)`` to delete."""
 
 

@@ -1,0 +1,143 @@
+"""Step 4 of thesis 4.5: when the stack is empty, verify the configuration is
+admissible (3.5) and return it.
+
+Causal admissibility and channel locations were checked as the configuration
+grew; here remain information (every input fed), cycles (5.1) and, when the
+state declares media, communication (4.6).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from cfgplan.configuration.media import Demand, assign
+from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
+from cfgplan.planner.match import substitute
+from cfgplan.planner.partial import Dead, Partial, describe_call
+from cfgplan.planner.task import Task, show
+
+if TYPE_CHECKING:
+    from cfgplan.planner.search import Report
+
+
+def _label(n: int) -> str:
+    return f"F{n}"
+
+
+def _information(node: Partial) -> Dead | None:
+    """Every input of every functionality has a channel carrying its descriptor,
+    from a functionality that produces it."""
+    located = node.located()
+    fed: set[tuple[int, tuple[str, ...]]] = set()
+    for ch in node.channels:
+        src = located[ch.source]
+        env = dict(zip(src.schema.params, src.call[1:], strict=True))
+        produced = {substitute(o, env) for o in src.schema.outputs}
+        if ch.data not in produced:
+            return Dead(
+                describe_call(src.call),
+                f"does not produce {show(ch.data)}",
+                condition="information",
+            )
+        fed.add((ch.target, ch.data))
+    for p in node.placed:
+        env = dict(zip(p.schema.params, p.call[1:], strict=True))
+        for descriptor in p.schema.inputs:
+            need = substitute(descriptor, env)
+            if (p.label, need) not in fed:
+                return Dead(
+                    describe_call(p.call),
+                    f"input {show(need)} is fed by no channel",
+                    condition="information",
+                )
+    return None
+
+
+def _cycle(node: Partial) -> Dead | None:
+    """A cycle among the functionalities (the sort of 5.1 would fail)."""
+    succ: dict[int, set[int]] = {p.label: set() for p in node.placed}
+    indegree = dict.fromkeys(succ, 0)
+    for ch in node.channels:
+        if ch.target not in succ[ch.source]:
+            succ[ch.source].add(ch.target)
+            indegree[ch.target] += 1
+    ready = [n for n, d in indegree.items() if d == 0]
+    seen = 0
+    while ready:
+        n = ready.pop()
+        seen += 1
+        for m in succ[n]:
+            indegree[m] -= 1
+            if indegree[m] == 0:
+                ready.append(m)
+    if seen == len(succ):
+        return None
+    on_cycle = sorted(_label(n) for n, d in indegree.items() if d > 0)
+    return Dead(
+        "configuration",
+        "its channels form a cycle through " + ", ".join(on_cycle),
+        condition="cycle",
+    )
+
+
+def build(node: Partial, total: float, task: Task) -> Configuration:
+    """The configuration of a finished node, in the thesis's list order."""
+    located = node.located()
+    functionalities = tuple(
+        FunctionalityInstance(label=_label(p.label), name=p.call[0], args=p.call[1:])
+        for p in reversed(node.placed)
+    )
+    channels = tuple(
+        Channel(
+            kind="global" if ch.kind == "global" else "local",
+            source=_label(ch.source),
+            target=_label(ch.target),
+            source_robot=located[ch.source].robot,
+            target_robot=located[ch.target].robot,
+            data=ch.data,
+            bandwidth=ch.bandwidth,
+        )
+        for ch in node.channels
+    )
+    post = tuple(show(a) if positive else f"(not {show(a)})" for positive, a in node.effects)
+    return Configuration(
+        functionalities=functionalities,
+        channels=channels,
+        postconditions=tuple(dict.fromkeys(post)),
+        cost=total,
+        weights=task.weights,
+    )
+
+
+def demands(config: Configuration) -> list[Demand | None]:
+    """What each channel needs of the media: global channels between two robots."""
+    return [
+        Demand(c.source_robot, c.target_robot, c.bandwidth or 0.0)
+        if c.kind == "global" and c.source_robot != c.target_robot
+        else None
+        for c in config.channels
+    ]
+
+
+def finish(node: Partial, task: Task, total: float, report: Report) -> Configuration | None:
+    """The admissible configuration of a finished node, or None (reason reported)."""
+    for dead in (_information(node), _cycle(node)):
+        if dead is not None:
+            report.note(dead)
+            report.rejected.append((dead.condition, f"{dead.where}: {dead.reason}"))
+            return None
+    config = build(node, total, task)
+    if task.media:
+        result = assign(demands(config), task.media)
+        if not result.ok:
+            report.rejected.append(("communication", result.problem))
+            return None
+        assert result.assignment is not None
+        config = config.model_copy(
+            update={
+                "media": tuple(
+                    Assignment(channel=c, medium=m) for c, m in result.assignment.items()
+                )
+            }
+        )
+    return config

@@ -1,0 +1,151 @@
+"""Matching preconditions against the world state (thesis 4.5, step 2b).
+
+:func:`bindings` yields every binding of a schema's preconditions, facts taken
+in state order: the backtrack points of the planner. When none exists,
+:func:`why_not` names the first condition that failed and the bindings it
+failed under, for the "why nothing was found" report.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+from cfgplan.check.evaluate import EvalFailure, holds
+from cfgplan.ir.model import Span, is_variable
+from cfgplan.planner.task import Ground, Pattern, Task, Test, show
+
+Bindings = dict[str, str]
+
+
+def substitute(p: Pattern, env: Mapping[str, str]) -> Ground:
+    """Replace bound variables of ``p`` (unbound ones stay as they are)."""
+    return tuple(env.get(t, t) if t[:1] == "?" else t for t in p)
+
+
+def _unify(p: Pattern, fact: Ground, env: Bindings) -> Bindings | None:
+    """Extend ``env`` so that ``p`` equals ``fact``, or None."""
+    new: Bindings | None = None
+    for term, value in zip(p[1:], fact[1:], strict=True):
+        if term[:1] == "?":
+            bound = env.get(term) if new is None else new.get(term, env.get(term))
+            if bound is None:
+                if new is None:
+                    new = dict(env)
+                new[term] = value
+            elif bound != value:
+                return None
+        elif term != value:
+            return None
+    return new if new is not None else env
+
+
+def _candidates(task: Task, p: Pattern) -> tuple[Ground, ...]:
+    return task.facts_by_predicate.get((p[0], len(p) - 1), ())
+
+
+def _passes(task: Task, test: Test, env: Bindings) -> bool:
+    if test.kind == "not":
+        return not any(
+            _unify(test.pattern, f, env) is not None for f in _candidates(task, test.pattern)
+        )
+    try:
+        return holds(test.expr, env)
+    except EvalFailure:
+        return False
+
+
+def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bindings]:
+    """Every extension of ``env`` satisfying ``tests``, depth-first, facts in state order."""
+    if not tests:
+        yield env
+        return
+    stack: list[tuple[int, Bindings]] = [(0, env)]
+    while stack:
+        index, current = stack.pop()
+        if index == len(tests):
+            yield current
+            continue
+        test = tests[index]
+        if test.kind == "atom":
+            matches = [
+                m
+                for f in _candidates(task, test.pattern)
+                if (m := _unify(test.pattern, f, current)) is not None
+            ]
+            stack.extend((index + 1, m) for m in reversed(matches))
+        elif _passes(task, test, current):
+            stack.append((index + 1, current))
+
+
+@dataclass(frozen=True)
+class Failure:
+    """The first precondition that no binding got past."""
+
+    condition: str
+    span: Span | None
+    bindings: tuple[tuple[str, str], ...]
+    detail: str = ""
+
+    def describe(self) -> str:
+        shown = [f"{k} = {v}" for k, v in self.bindings]
+        where = f" with {', '.join(shown)}" if shown else ""
+        return f"{self.detail or 'no fact matches'} {self.condition}{where}"
+
+
+def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern) -> Failure:
+    """Explain why :func:`bindings` yields nothing: the deepest test reached
+    and the first binding it failed under (variables of the name omitted)."""
+    best: tuple[int, Bindings] = (0, env)
+    stack: list[tuple[int, Bindings]] = [(0, env)]
+    while stack:
+        index, current = stack.pop()
+        if index > best[0]:
+            best = (index, current)
+        if index == len(tests):
+            continue
+        test = tests[index]
+        if test.kind == "atom":
+            matches = [
+                m
+                for f in _candidates(task, test.pattern)
+                if (m := _unify(test.pattern, f, current)) is not None
+            ]
+            stack.extend((index + 1, m) for m in reversed(matches))
+        elif _passes(task, test, current):
+            stack.append((index + 1, current))
+    index, current = best
+    test = tests[min(index, len(tests) - 1)]
+    named = {k: v for k, v in current.items() if k in params}
+    if test.kind == "eval":
+        # An eval is shown as written, with every variable it mentions.
+        condition = test.text
+        shown = tuple((k, v) for k, v in current.items() if _mentions(test, k))
+    else:
+        # An atom is shown with the name's variables filled in, the others listed.
+        condition = show(substitute(test.pattern, named))
+        shown = tuple((k, v) for k, v in current.items() if k not in params and _mentions(test, k))
+    detail = {"atom": "no fact matches", "not": "a fact matches the negated", "eval": "false:"}[
+        test.kind
+    ]
+    if test.kind == "atom":
+        hint = _case_hint(task, test.pattern, current)
+        if hint:
+            detail = f"no fact matches ({hint})"
+    return Failure(condition, test.span, shown, detail)
+
+
+def _mentions(test: Test, var: str) -> bool:
+    if test.kind != "eval":
+        return var in test.pattern
+    return var in test.text.replace("(", " ").replace(")", " ").split()
+
+
+def _case_hint(task: Task, p: Pattern, env: Bindings) -> str:
+    """A hint when a symbol of the condition differs only in case from the state's."""
+    ground = substitute(p, env)
+    folded = {n.lower(): n for n in task.state_names}
+    for term in ground:
+        if not is_variable(term) and term not in task.state_names and term.lower() in folded:
+            return f"the state spells {term} as {folded[term.lower()]}; symbols are case-sensitive"
+    return ""

@@ -1,0 +1,219 @@
+"""Best-first search for ranked admissible configurations (thesis 4.5).
+
+The thesis's planner expands the goal depth-first, backtracking over method
+versions and precondition bindings, and returns configurations cheapest
+first. Here the same derivations are explored best-first: a node's priority is
+the cost of its settled part (which never decreases as it grows) and then its
+path of choices, so configurations come out ordered by cost and, at equal
+cost, in the depth-first order of the thesis (domain order of method versions,
+state order of facts, 6.3.2). Nothing is enumerated and then sorted.
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner.complete import finish
+from cfgplan.planner.match import bindings, why_not
+from cfgplan.planner.partial import (
+    Dead,
+    Item,
+    Partial,
+    cost,
+    describe_call,
+    expand_method,
+    place_functionality,
+    root,
+)
+from cfgplan.planner.task import Ground, Task
+
+
+@dataclass
+class Stats:
+    """What the search did: shown by ``--verbose`` and in JSON output."""
+
+    nodes: int = 0
+    expansions: int = 0
+    derivations: int = 0
+    duplicates: int = 0
+    rejected: int = 0
+    seconds: float = 0.0
+    complete: bool = True  # False when a limit stopped the search early
+
+
+@dataclass
+class Report:
+    """Dead ends met on the way, first occurrence kept, in the order met."""
+
+    dead: dict[tuple[str, str], Dead] = field(default_factory=dict)
+    rejected: list[tuple[str, str]] = field(default_factory=list)  # (condition, reason)
+
+    def note(self, dead: Dead) -> None:
+        self.dead.setdefault((dead.where, dead.condition), dead)
+
+
+Progress = Callable[[Stats, float], None]
+
+
+class Search:
+    """An iterator over configurations, best first; see :func:`plan`."""
+
+    def __init__(
+        self,
+        task: Task,
+        goal: Ground,
+        *,
+        distinct: bool = True,
+        time_limit: float | None = None,
+        progress: Progress | None = None,
+    ) -> None:
+        self.task = task
+        self.goal = goal
+        self.distinct = distinct
+        self.time_limit = time_limit
+        self.progress = progress
+        self.stats = Stats()
+        self.report = Report()
+        self._seen: set[object] = set()
+        self._heap: list[tuple[float, tuple[int, ...], Partial]] = []
+        self._start = 0.0
+
+    def __iter__(self) -> Iterator[Configuration]:
+        self._start = time.perf_counter()
+        self._push_settled(root(self.goal))
+        next_tick = 1.0
+        while self._heap:
+            elapsed = time.perf_counter() - self._start
+            if self.time_limit is not None and elapsed > self.time_limit:
+                self.stats.complete = False
+                break
+            if self.progress is not None and elapsed > next_tick:
+                self.progress(self.stats, elapsed)
+                next_tick = elapsed + 0.5
+            total, _, node = heapq.heappop(self._heap)
+            self.stats.nodes += 1
+            if node.done:
+                config = finish(node, self.task, total, self.report)
+                self.stats.seconds = time.perf_counter() - self._start
+                if config is None:
+                    self.stats.rejected += 1
+                    continue
+                self.stats.derivations += 1
+                config = config.model_copy(update={"derivation": self.stats.derivations})
+                if self.distinct:
+                    ident = config.identity()
+                    if ident in self._seen:
+                        self.stats.duplicates += 1
+                        continue
+                    self._seen.add(ident)
+                yield config
+                continue
+            self._expand(node)
+        self.stats.seconds = time.perf_counter() - self._start
+
+    def _expand(self, node: Partial) -> None:
+        """Branch on the method on top of the stack: each version, each binding."""
+        item = node.stack[0]
+        versions = self.task.methods.get((item.call[0], len(item.call) - 1), ())
+        self.stats.expansions += 1
+        if item.call in item.ancestors:
+            self.report.note(
+                Dead(
+                    describe_call(item.call),
+                    "it recurs on its own expansion path",
+                    condition="recursion",
+                )
+            )
+            return
+        choice = 0
+        for method in versions:
+            env = dict(zip(method.params, item.call[1:], strict=True))
+            found = False
+            for env2 in bindings(self.task, method.tests, env):
+                found = True
+                child = expand_method(node, item, method, env2, choice)
+                choice += 1
+                if isinstance(child, Dead):
+                    self.report.note(child)
+                    continue
+                self._push_settled(child)
+            if not found:
+                failure = why_not(self.task, method.tests, env, method.params)
+                self.report.note(
+                    Dead(
+                        f"{describe_call(item.call)}, version {method.version}",
+                        failure.describe(),
+                        failure.span or method.span,
+                    )
+                )
+
+    def _push_settled(self, node: Partial) -> None:
+        """Place the functionalities on top of the stack, then queue the node
+        (one per precondition binding when a functionality has several)."""
+        todo = [node]
+        while todo:
+            current = todo.pop()
+            if current.done or _is_method(self.task, current.stack[0]):
+                heapq.heappush(self._heap, (cost(current, self.task), current.path, current))
+                continue
+            item = current.stack[0]
+            schema = self.task.functionalities.get((item.call[0], len(item.call) - 1))
+            if schema is None:
+                self.report.note(
+                    Dead(
+                        describe_call(item.call),
+                        "is neither a method nor a functionality",
+                        condition="domain",
+                    )
+                )
+                continue
+            if item.call in current.labels:
+                child = place_functionality(current, item, schema, None, None)
+                if isinstance(child, Dead):
+                    self.report.note(child)
+                else:
+                    todo.append(child)
+                continue
+            env = dict(zip(schema.params, item.call[1:], strict=True))
+            options = list(bindings(self.task, schema.tests, env))
+            if not options:
+                failure = why_not(self.task, schema.tests, env, schema.params)
+                self.report.note(Dead(describe_call(item.call), failure.describe(), schema.span))
+                continue
+            children: list[Partial] = []
+            for index, env2 in enumerate(options):
+                choice = index if len(options) > 1 else None
+                child = place_functionality(current, item, schema, env2, choice)
+                if isinstance(child, Dead):
+                    self.report.note(child)
+                else:
+                    children.append(child)
+            todo.extend(reversed(children))
+
+
+def _is_method(task: Task, item: Item) -> bool:
+    return (item.call[0], len(item.call) - 1) in task.methods
+
+
+def plan(
+    task: Task,
+    goal: Ground,
+    *,
+    limit: int | None = 1,
+    distinct: bool = True,
+    time_limit: float | None = None,
+    progress: Progress | None = None,
+) -> tuple[list[Configuration], Search]:
+    """The ``limit`` cheapest admissible configurations (all when None)."""
+    search = Search(task, goal, distinct=distinct, time_limit=time_limit, progress=progress)
+    found: list[Configuration] = []
+    for config in search:
+        found.append(config)
+        if limit is not None and len(found) >= limit:
+            search.stats.complete = False
+            break
+    return found, search
