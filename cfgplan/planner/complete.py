@@ -39,6 +39,15 @@ def _information(node: Partial) -> Dead | None:
                 f"does not produce {show(ch.data)}",
                 condition="information",
             )
+        dst = located[ch.target]
+        if src.schema.freq is not None and dst.schema.freq is not None:
+            if src.schema.freq < dst.schema.freq:
+                return Dead(
+                    describe_call(src.call),
+                    f"runs at {src.schema.freq:g} Hz but feeds {describe_call(dst.call)} "
+                    f"at {dst.schema.freq:g} Hz",
+                    condition="information",
+                )
         fed.add((ch.target, ch.data))
     for p in node.placed:
         env = dict(zip(p.schema.params, p.call[1:], strict=True))
@@ -123,7 +132,6 @@ def finish(node: Partial, task: Task, total: float, report: Report) -> Configura
     """The admissible configuration of a finished node, or None (reason reported)."""
     for dead in (_information(node), _cycle(node)):
         if dead is not None:
-            report.note(dead)
             report.rejected.append((dead.condition, f"{dead.where}: {dead.reason}"))
             return None
     config = build(node, total, task)

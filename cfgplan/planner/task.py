@@ -61,6 +61,7 @@ class FunctionalitySchema:
     tests: tuple[Test, ...]
     effects: tuple[EffectSpec, ...]
     cost: float | None
+    freq: float | None
     span: Span | None
 
 
@@ -176,6 +177,7 @@ def _functionality(f: Functionality) -> FunctionalitySchema:
         tests=_tests(f.precond, {p for p in params if is_variable(p)}),
         effects=_effects(f.postcond),
         cost=f.cost,
+        freq=f.freq,
         span=f.span,
     )
 

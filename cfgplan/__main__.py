@@ -1,0 +1,6 @@
+"""``python -m cfgplan``: the same as the ``cfgplan`` command."""
+
+from cfgplan.cli.app import main
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,161 @@
+"""``cfgplan plan``: formats, exit codes, determinism (thesis 4.4-4.6, issue 3)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from tests.cli.conftest import ROOT, Run
+
+CROSS = ("domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp")
+MEDIA = ("domains/cross-door/domain-bandwidth.lisp", "domains/cross-door/state-4.6-media.lisp")
+WALL = ("domains/build-wall/domain.lisp", "domains/build-wall/state-6.4.lisp")
+
+
+def test_table_lists_ranked_costs(cfgplan: Run) -> None:
+    out = cfgplan("plan", *CROSS)
+    assert out.returncode == 0, out.stderr
+    rows = [line for line in out.stdout.splitlines() if line.startswith("│")]
+    assert [r.split("│")[2].strip() for r in rows] == ["44", "47"]
+    assert "communication admissibility not checked" in out.stdout
+
+
+def test_json_schema_and_values(cfgplan: Run) -> None:
+    """The public JSON interface (README, 'JSON output') on section 4.6."""
+    out = cfgplan("plan", *MEDIA, "--format", "json", "-k", "1")
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert list(doc) == ["goal", "configurations", "communication_checked", "stats"]
+    assert doc["goal"] == "do-cross-door(Pippi, Door1)"
+    assert doc["communication_checked"] is True
+    (config,) = doc["configurations"]
+    assert (config["rank"], config["cost"]) == (1, 44)
+    assert set(config["robots"]) == {"Pippi", "Emil"}
+    assert set(config["functionalities"][0]) == {"id", "name", "args", "robot"}
+    channel = config["channels"][-1]
+    assert channel == {
+        "kind": "global",
+        "from": "F7",
+        "to": "F3",
+        "from_robot": "Emil",
+        "to_robot": "Pippi",
+        "data": ["orient", "Pippi", "Door1"],
+        "bandwidth": 10,
+        "medium": 1,
+    }
+
+
+def test_json_is_byte_identical_across_runs(cfgplan: Run) -> None:
+    """Determinism: the same input gives the same bytes, whatever the hash seed."""
+    a = cfgplan("plan", *WALL, "--all", "--format", "json", env={"PYTHONHASHSEED": "1"})
+    b = cfgplan("plan", *WALL, "--all", "--format", "json", env={"PYTHONHASHSEED": "987"})
+    assert a.returncode == b.returncode == 0
+    assert a.stdout == b.stdout
+    assert len(json.loads(a.stdout)["configurations"]) == 100
+
+
+def test_derivations_counts_as_the_thesis(cfgplan: Run) -> None:
+    """Section 6.4: --derivations --all lists 128."""
+    out = cfgplan("plan", *WALL, "--derivations", "--all", "--format", "json")
+    doc = json.loads(out.stdout)
+    assert len(doc["configurations"]) == 128
+    assert doc["stats"]["duplicates"] == 0
+
+
+def test_lisp_format_is_the_thesis_description(cfgplan: Run) -> None:
+    """Section 4.6's configuration description, with the media loads."""
+    out = cfgplan("plan", *MEDIA, "--format", "lisp", "-k", "1")
+    assert out.returncode == 0
+    text = out.stdout
+    assert "    global(Emil, Pippi, F7, F3, pos(Pippi, Door1), 20)" in text
+    assert "    local(Emil, F8, F14, image(Emil))" in text
+    assert "medium(socket, Emil, Pippi, 200): load 30" in text
+    assert text.rstrip().endswith("Cost: 44\n)")
+
+
+def test_weights_change_the_ranking(cfgplan: Run) -> None:
+    out = cfgplan(
+        "plan", *CROSS, "--weights", "robot=0,global=0,local=0,functionality=1", "--format", "json"
+    )
+    doc = json.loads(out.stdout)
+    assert [c["cost"] for c in doc["configurations"]] == [8, 9]
+
+
+def test_bad_weights_is_usage_error(cfgplan: Run) -> None:
+    out = cfgplan("plan", *CROSS, "--weights", "robots=3")
+    assert out.returncode == 2
+    assert "bad weight 'robots=3'" in out.stderr
+
+
+def test_nothing_admissible_exit_3_with_reason(cfgplan: Run) -> None:
+    """Section 6.2.2 step 3 as printed: exit 3, the failed (in Door1 ?room) named."""
+    out = cfgplan(
+        "plan",
+        "domains/cross-door/domain.lisp",
+        "domains/cross-door/state-6.2.2-step3-as-printed.lisp",
+    )
+    assert out.returncode == 3
+    assert out.stdout == ""
+    assert (
+        "get-door-info(Pippi, Door1), version 1 (domains/cross-door/domain.lisp:41:" in out.stderr
+    )
+    assert "no fact matches (in Door1 ?room) with ?room = Room2" in out.stderr
+
+
+def test_goal_option_overrides_the_state(cfgplan: Run) -> None:
+    out = cfgplan("plan", *CROSS, "--goal", "do-cross-door(Emil, Door1)", "--format", "json")
+    assert json.loads(out.stdout)["goal"] == "do-cross-door(Emil, Door1)"
+
+
+def test_bad_goal_is_input_error_with_caret(cfgplan: Run) -> None:
+    out = cfgplan("plan", *CROSS, "--goal", "(do-cross-door Pippi")
+    assert out.returncode == 1
+    assert out.stderr.startswith("--goal:1:")
+    assert "^" in out.stderr
+    assert "Traceback" not in out.stderr
+
+
+def test_missing_file_is_input_error(cfgplan: Run) -> None:
+    out = cfgplan("plan", "nope.lisp", CROSS[1])
+    assert out.returncode == 1
+    assert "no such file: nope.lisp" in out.stderr
+
+
+def test_output_file_is_not_overwritten_without_force(cfgplan: Run, tmp_path: Path) -> None:
+    target = tmp_path / "out.json"
+    target.write_text("keep me")
+    refused = cfgplan("plan", *CROSS, "--format", "json", "-o", str(target))
+    assert refused.returncode == 1
+    assert target.read_text() == "keep me"
+    forced = cfgplan("plan", *CROSS, "--format", "json", "-o", str(target), "--force")
+    assert forced.returncode == 0
+    assert json.loads(target.read_text())["configurations"][0]["cost"] == 44
+
+
+def test_help_documents_every_option(cfgplan: Run) -> None:
+    out = cfgplan("plan", "--help")
+    for option in (
+        "--goal",
+        "-k",
+        "--all",
+        "--derivations",
+        "--weights",
+        "--format",
+        "--details",
+        "--verbose",
+        "--time-limit",
+        "--output",
+        "--force",
+    ):
+        assert option in out.stdout, option
+
+
+def test_verbose_goes_to_stderr(cfgplan: Run) -> None:
+    out = cfgplan("plan", *CROSS, "--format", "json", "--verbose")
+    json.loads(out.stdout)  # stdout stays pure JSON
+    assert "search:" in out.stderr
+
+
+def test_readme_quick_start_example_exists() -> None:
+    readme = (ROOT / "README.md").read_text()
+    assert "cfgplan plan domains/cross-door/domain.lisp" in readme
