@@ -40,14 +40,13 @@ def _information(node: Partial) -> Dead | None:
                 condition="information",
             )
         dst = located[ch.target]
-        if src.schema.freq is not None and dst.schema.freq is not None:
-            if src.schema.freq < dst.schema.freq:
-                return Dead(
-                    describe_call(src.call),
-                    f"runs at {src.schema.freq:g} Hz but feeds {describe_call(dst.call)} "
-                    f"at {dst.schema.freq:g} Hz",
-                    condition="information",
-                )
+        slow = src.schema.freq, dst.schema.freq
+        if slow[0] is not None and slow[1] is not None and slow[0] < slow[1]:
+            return Dead(
+                describe_call(src.call),
+                f"runs at {slow[0]:g} Hz but feeds {describe_call(dst.call)} at {slow[1]:g} Hz",
+                condition="information",
+            )
         fed.add((ch.target, ch.data))
     for p in node.placed:
         env = dict(zip(p.schema.params, p.call[1:], strict=True))

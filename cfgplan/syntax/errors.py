@@ -65,16 +65,16 @@ def render(diagnostic: Diagnostic, sources: Mapping[str, str]) -> str:
     else:
         out = [f"{span.file}:{span.line}:{span.column}: {head}"]
         text = sources.get(span.file)
-        if text is not None:
+        # Quote the line if the file has it (an empty file has an empty line 1).
+        if text is not None and 1 <= span.line <= max(1, len(text.splitlines())):
             line = source_line(text, span.line).expandtabs(1)
-            if line:
-                width = 1
-                if span.end_line == span.line and span.end_column > span.column:
-                    width = span.end_column - span.column
-                width = max(1, min(width, len(line) - span.column + 1))
-                gutter = f"{span.line:>5} | "
-                out.append(gutter + line)
-                out.append(" " * (len(gutter) - 2) + "| " + " " * (span.column - 1) + "^" * width)
+            width = 1
+            if span.end_line == span.line and span.end_column > span.column:
+                width = span.end_column - span.column
+            width = max(1, min(width, len(line) - span.column + 1))
+            gutter = f"{span.line:>5} | "
+            out.append(gutter + line)
+            out.append(" " * (len(gutter) - 2) + "| " + " " * (span.column - 1) + "^" * width)
     if diagnostic.hint:
         out.append(f"  hint: {diagnostic.hint}")
     return "\n".join(out)

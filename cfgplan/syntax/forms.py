@@ -242,7 +242,9 @@ def method(span: Span, children: Sequence[Any]) -> Method:
 def _medium(fact: Atom) -> Medium:
     if fact.arity != 4:
         raise error(
-            "a medium is (medium TYPE FROM TO CAPACITY)", fact.span, "e.g. (medium socket Pippi Emil 200)"
+            "a medium is (medium TYPE FROM TO CAPACITY)",
+            fact.span,
+            "e.g. (medium socket Pippi Emil 200)",
         )
     mtype, sender, receiver, capacity = fact.args
     try:
@@ -256,9 +258,15 @@ def state(span: Span, children: Sequence[Any]) -> State:
     """``(state (robot Pippi) ...)`` or ``(state robot(Pippi), ...)``; media apart."""
     facts: list[Atom] = []
     media: list[Medium] = []
-    for node in children:
-        if not isinstance(node, Sx):
-            continue
+    nodes = [node for node in children if isinstance(node, Sx)]
+    for i, node in enumerate(nodes):
+        after = nodes[i + 1] if i + 1 < len(nodes) else None
+        if node.is_symbol and after is not None and after.is_list:
+            raise error(
+                f"expected a fact such as (robot Pippi), found {node.text}",
+                node.span,
+                f"in the printed notation no space precedes '(': write {node.text}{after}",
+            )
         fact = atom(node, "a fact such as (robot Pippi)")
         for arg in fact.args:
             if arg.startswith("?"):

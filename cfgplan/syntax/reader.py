@@ -8,6 +8,7 @@ Lark's ``UnexpectedInput`` for syntax errors.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -15,8 +16,14 @@ from pathlib import Path
 from typing import Any
 
 from lark import Lark, Token, v_args
-from lark.visitors import Transformer_NonRecursive, VisitError
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.exceptions import (
+    UnexpectedCharacters,
+    UnexpectedEOF,
+    UnexpectedInput,
+    UnexpectedToken,
+    VisitError,
+)
+from lark.visitors import Transformer_NonRecursive
 
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
@@ -62,7 +69,7 @@ class SourceFile:
     order: list[str] = field(default_factory=list)
 
 
-class _ToIR(Transformer_NonRecursive):
+class _ToIR(Transformer_NonRecursive[Token, Any]):
     """Maps grammar rules to Sx nodes (generic s-expressions) and IR objects."""
 
     def __init__(self, filename: str) -> None:
@@ -96,10 +103,10 @@ class _ToIR(Transformer_NonRecursive):
         return Sx("number", self._token_span(tok), text=str(tok))
 
     @v_args(meta=True)
-    def list(self, meta: Any, children: list[Any]) -> Sx:
+    def list(self, meta: Any, children: Sequence[Any]) -> Sx:
         return self._list(self._span(meta), children)
 
-    def _list(self, span: Span, items: list[Any]) -> Sx:
+    def _list(self, span: Span, items: Sequence[Any]) -> Sx:
         depth = 1 + max((i.depth for i in items), default=0)
         if depth > MAX_NESTING:
             raise error(
@@ -110,39 +117,39 @@ class _ToIR(Transformer_NonRecursive):
         return Sx("list", span, items=tuple(items), depth=depth)
 
     @v_args(meta=True)
-    def quote(self, meta: Any, children: list[Any]) -> Sx:
+    def quote(self, meta: Any, children: Sequence[Any]) -> Sx:
         quote_tok, value = children
         span = self._span(meta)
         head = Sx("symbol", self._token_span(quote_tok), text="quote")
         return self._list(span, [head, value])
 
     @v_args(meta=True)
-    def call(self, meta: Any, children: list[Any]) -> Sx:
+    def call(self, meta: Any, children: Sequence[Any]) -> Sx:
         name_tok, *args = children
         head = Sx("symbol", self._token_span(name_tok), text=str(name_tok))
         return self._list(self._span(meta), [head, *(a for a in args if a is not None)])
 
     @v_args(meta=True)
-    def option(self, meta: Any, children: list[Any]) -> forms.Option:
+    def option(self, meta: Any, children: Sequence[Any]) -> forms.Option:
         keyword, *rest = children
         value = rest[-1]
         return forms.Option(str(keyword), self._token_span(keyword), value)
 
     @v_args(meta=True)
-    def functionality(self, meta: Any, children: list[Any]) -> Functionality:
+    def functionality(self, meta: Any, children: Sequence[Any]) -> Functionality:
         return forms.functionality(self._span(meta), children[1:])
 
     @v_args(meta=True)
-    def method(self, meta: Any, children: list[Any]) -> Method:
+    def method(self, meta: Any, children: Sequence[Any]) -> Method:
         return forms.method(self._span(meta), children[1:])
 
     @v_args(meta=True)
-    def state(self, meta: Any, children: list[Any]) -> State:
+    def state(self, meta: Any, children: Sequence[Any]) -> State:
         return forms.state(self._span(meta), children[1:])
 
     @v_args(meta=True)
-    def goal(self, meta: Any, children: list[Any]) -> Goal:
-        value = [c for c in children[1:] if isinstance(c, Sx)][0]
+    def goal(self, meta: Any, children: Sequence[Any]) -> Goal:
+        value = next(c for c in children[1:] if isinstance(c, Sx))
         return forms.goal(self._span(meta), value)
 
 
@@ -170,24 +177,53 @@ def _syntax_error(exc: UnexpectedInput, filename: str, text: str) -> CfgplanErro
         line, column = len(lines), len(lines[-1]) + 1
         message = "unexpected end of file: a list is not closed (missing ')')"
         span = Span(file=filename, line=line, column=column, end_line=line, end_column=column)
-        return error(message, span, "every '(' needs a matching ')'")
+        advice = "every '(' needs a matching ')'"
+        opened = _unclosed(text)
+        if opened is not None:
+            advice += f"; the '(' at line {opened[0]}, column {opened[1]} is never closed"
+        return error(message, span, advice)
     if isinstance(exc, UnexpectedToken):
         tok = exc.token
         found = f"'{tok}'" if tok.type != "$END" else "end of file"
         expected = _describe_expected(set(exc.expected))
         message = f"unexpected {found}; expected {expected}"
-        hint = None
+        hint: str | None = None
         if tok.type == "RPAR" and "RPAR" not in exc.expected:
             hint = "there is one ')' too many, or an opening '(' is missing"
+        elif tok.type == "LPAR" and "KEYWORD" in exc.expected:
+            hint = "a form holds :keyword value pairs; if the form before ends here, it lacks a ')'"
         elif tok.type == "SYMBOL" and {"MAKE_FUNCTIONALITY", "STATE"} & set(exc.expected):
             hint = _form_hint(str(tok))
         end_col = (tok.end_column or column + 1) if tok.end_line == tok.line else column + 1
         span = Span(file=filename, line=line, column=column, end_line=line, end_column=end_col)
         return error(message, span, hint)
     assert isinstance(exc, UnexpectedCharacters)
-    char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else "?"
+    pos = exc.pos_in_stream
+    char = text[pos] if pos is not None and pos < len(text) else "?"
     span = Span(file=filename, line=line, column=column, end_line=line, end_column=column + 1)
-    return error(f"unexpected character {char!r}", span)
+    hint = None
+    if char == '"':
+        hint = "cfgplan has no strings: write a symbol, or (quote symbol) inside (eval ...)"
+    return error(f"unexpected character {char!r}", span, hint)
+
+
+def _unclosed(text: str) -> tuple[int, int] | None:
+    """Line and column of the outermost '(' that is never closed (comments skipped)."""
+    stack: list[tuple[int, int]] = []
+    line, column, in_comment = 1, 0, False
+    for char in text:
+        column += 1
+        if char == "\n":
+            line, column, in_comment = line + 1, 0, False
+        elif in_comment:
+            continue
+        elif char == ";":
+            in_comment = True
+        elif char == "(":
+            stack.append((line, column))
+        elif char == ")" and stack:
+            stack.pop()
+    return stack[0] if stack else None
 
 
 def _form_hint(word: str) -> str:
@@ -195,7 +231,9 @@ def _form_hint(word: str) -> str:
     for k in known:
         if word.lower() == k:
             return f"symbols are case-sensitive: write {k}"
-    return "a file holds (make-functionality ...), (make-config-method ...), (state ...) or (goal ...)"
+    return (
+        "a file holds (make-functionality ...), (make-config-method ...), (state ...) or (goal ...)"
+    )
 
 
 def decode(data: bytes, filename: str) -> str:
@@ -205,7 +243,9 @@ def decode(data: bytes, filename: str) -> str:
     except UnicodeDecodeError as exc:
         before = data[: exc.start]
         line = before.count(b"\n") + 1
-        column = exc.start - (before.rfind(b"\n") + 1) + 1
+        # Count characters, not bytes: what precedes the bad byte decodes cleanly.
+        line_start = before.rfind(b"\n") + 1
+        column = len(data[line_start : exc.start].decode("utf-8")) + 1
         span = Span(file=filename, line=line, column=column, end_line=line, end_column=column + 1)
         raise error(
             f"invalid UTF-8 byte 0x{data[exc.start]:02x}",
