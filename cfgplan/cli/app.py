@@ -71,8 +71,7 @@ def write_output(text: str, output: Path | None, force: bool) -> None:
 
 def main() -> None:
     """Entry point of the console script."""
-    from cfgplan.cli import check as _check  # noqa: F401  (registers commands)
-    from cfgplan.cli import plan as _plan  # noqa: F401
+    from cfgplan.cli import commands  # noqa: F401  (registers the commands)
 
     try:
         app()

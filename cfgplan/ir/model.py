@@ -10,10 +10,13 @@ is a constant (``Pippi``, ``Door1``, ``200``). Symbols are case-sensitive.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 from typing_extensions import TypeAliasType
+
+Quantity = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+"""A bandwidth, cost, frequency or capacity: finite and not negative."""
 
 Term = str
 """A variable (``?r``) or a constant (``Pippi``)."""
@@ -127,8 +130,8 @@ class Functionality(Node):
     outputs: tuple[Atom, ...] = ()
     precond: tuple[Condition, ...] = ()
     postcond: tuple[Effect, ...] = ()
-    cost: float | None = None
-    freq: float | None = None
+    cost: Quantity | None = None
+    freq: Quantity | None = None
 
 
 class Port(Node):
@@ -137,7 +140,7 @@ class Port(Node):
 
     label: str
     data: Atom
-    bandwidth: float | None = None
+    bandwidth: Quantity | None = None
 
 
 class ChannelSpec(Node):
@@ -149,7 +152,7 @@ class ChannelSpec(Node):
     source: str
     target: str
     data: Atom
-    bandwidth: float | None = None
+    bandwidth: Quantity | None = None
 
 
 class BodyItem(Node):
@@ -195,7 +198,7 @@ class Medium(Node):
     type: str
     sender: str
     receiver: str
-    capacity: float
+    capacity: Quantity
 
 
 class Goal(Node):

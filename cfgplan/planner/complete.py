@@ -12,7 +12,6 @@ from typing import TYPE_CHECKING
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
-from cfgplan.planner.match import substitute
 from cfgplan.planner.partial import Dead, Partial, describe_call
 from cfgplan.planner.task import Task, show
 
@@ -27,19 +26,23 @@ def _label(n: int) -> str:
 def _information(node: Partial) -> Dead | None:
     """Every input of every functionality has a channel carrying its descriptor,
     from a functionality that produces it."""
-    located = node.located()
+    located = node.located
     fed: set[tuple[int, tuple[str, ...]]] = set()
     for ch in node.channels:
         src = located[ch.source]
-        env = dict(zip(src.schema.params, src.call[1:], strict=True))
-        produced = {substitute(o, env) for o in src.schema.outputs}
-        if ch.data not in produced:
+        if ch.data not in src.outputs:
             return Dead(
                 describe_call(src.call),
                 f"does not produce {show(ch.data)}",
                 condition="information",
             )
         dst = located[ch.target]
+        if ch.data not in dst.inputs:
+            return Dead(
+                describe_call(dst.call),
+                f"does not consume {show(ch.data)}",
+                condition="information",
+            )
         slow = src.schema.freq, dst.schema.freq
         if slow[0] is not None and slow[1] is not None and slow[0] < slow[1]:
             return Dead(
@@ -49,9 +52,7 @@ def _information(node: Partial) -> Dead | None:
             )
         fed.add((ch.target, ch.data))
     for p in node.placed:
-        env = dict(zip(p.schema.params, p.call[1:], strict=True))
-        for descriptor in p.schema.inputs:
-            need = substitute(descriptor, env)
+        for need in p.inputs:
             if (p.label, need) not in fed:
                 return Dead(
                     describe_call(p.call),
@@ -90,7 +91,7 @@ def _cycle(node: Partial) -> Dead | None:
 
 def build(node: Partial, total: float, task: Task) -> Configuration:
     """The configuration of a finished node, in the thesis's list order."""
-    located = node.located()
+    located = node.located
     functionalities = tuple(
         FunctionalityInstance(label=_label(p.label), name=p.call[0], args=p.call[1:])
         for p in reversed(node.placed)

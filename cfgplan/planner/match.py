@@ -40,6 +40,19 @@ def _unify(p: Pattern, fact: Ground, env: Bindings) -> Bindings | None:
     return new if new is not None else env
 
 
+def bind_name(params: Pattern, args: Ground) -> Bindings | None:
+    """Match a schema's name parameters against a call's arguments: a variable
+    binds (a repeated one must get the same value), a constant must be equal."""
+    env: Bindings = {}
+    for param, arg in zip(params, args, strict=True):
+        if param[:1] == "?":
+            if env.setdefault(param, arg) != arg:
+                return None
+        elif param != arg:
+            return None
+    return env
+
+
 def _candidates(task: Task, p: Pattern) -> tuple[Ground, ...]:
     return task.facts_by_predicate.get((p[0], len(p) - 1), ())
 

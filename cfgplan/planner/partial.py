@@ -45,15 +45,15 @@ class Channel:
 
 @dataclass(frozen=True, slots=True)
 class Placed:
-    """A functionality instance in the configuration, located at ``call[1]``."""
+    """A functionality instance in the configuration, located at ``robot``
+    (its first argument), with its inputs and outputs instantiated."""
 
     label: int
     call: Key
     schema: FunctionalitySchema
-
-    @property
-    def robot(self) -> str:
-        return self.call[1]
+    robot: str
+    inputs: tuple[Ground, ...]
+    outputs: tuple[Ground, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,17 +73,16 @@ class Partial:
     stack: tuple[Item, ...]
     placed: tuple[Placed, ...]  # in the order added
     labels: dict[Key, int]  # functionality instance -> its label
+    located: dict[int, Placed]  # label -> placed functionality
     channels: tuple[Channel, ...]  # in the thesis's list order (newest block first)
     effects: tuple[tuple[bool, Ground], ...]
     next_label: int
     path: tuple[int, ...]  # the choices made: orders equal costs as the thesis does
+    cost: float  # of the settled part; see the module docstring of search.py
 
     @property
     def done(self) -> bool:
         return not self.stack
-
-    def located(self) -> dict[int, Placed]:
-        return {p.label: p for p in self.placed}
 
 
 def root(goal: Ground) -> Partial:
@@ -92,10 +91,12 @@ def root(goal: Ground) -> Partial:
         stack=(Item(1, goal, frozenset()),),
         placed=(),
         labels={},
+        located={},
         channels=(),
         effects=(),
         next_label=2,
         path=(),
+        cost=0.0,
     )
 
 
@@ -112,37 +113,56 @@ def _instantiate(p: Ground, env: Bindings, where: str) -> Ground | Dead:
     return ground
 
 
-def _settle_channels(
-    channels: list[Channel], located: dict[int, Placed]
-) -> tuple[Channel, ...] | Dead:
-    """Check the location of every resolved channel and merge identical ones
-    (same kind, ends and data; the larger bandwidth is kept)."""
-    out: list[Channel] = []
-    seen: dict[tuple[str, int, int, Ground], int] = {}
-    for ch in channels:
+def _touching(channels: tuple[Channel, ...], label: int) -> list[int]:
+    return [i for i, ch in enumerate(channels) if ch.source == label or ch.target == label]
+
+
+def _settle(
+    channels: tuple[Channel, ...], located: dict[int, Placed], touching: list[int], task: Task
+) -> tuple[tuple[Channel, ...], float] | Dead:
+    """The channels at ``touching`` (indices) may just have got both ends
+    placed: check their location, merge each with an identical channel already
+    resolved (same kind, ends and data; the larger bandwidth is kept), and
+    return the cost the newly resolved ones add."""
+    if not touching:
+        return channels, 0.0
+    out = list(channels)
+    existing: dict[tuple[str, int, int, Ground], int] | None = None
+    dropped: set[int] = set()
+    added = 0.0
+    for i in touching:
+        ch = channels[i]
         src, dst = located.get(ch.source), located.get(ch.target)
-        if src is not None and dst is not None:
-            wanted = (ch.robots[0], ch.robots[0]) if ch.kind == "local" else ch.robots
-            if (src.robot, dst.robot) != wanted:
-                return Dead(
-                    f"{ch.kind} channel {show(ch.data)}",
-                    f"declared ({ch.kind} {' '.join(ch.robots)}) but it runs from "
-                    f"{describe_call(src.call)} on {src.robot} to "
-                    f"{describe_call(dst.call)} on {dst.robot}",
-                    condition="location",
-                )
-            ident = (ch.kind, ch.source, ch.target, ch.data)
-            if ident in seen:
-                index = seen[ident]
-                kept = out[index]
-                if ch.bandwidth is not None and (
-                    kept.bandwidth is None or ch.bandwidth > kept.bandwidth
-                ):
-                    out[index] = replace(kept, bandwidth=ch.bandwidth)
-                continue
-            seen[ident] = len(out)
-        out.append(ch)
-    return tuple(out)
+        if src is None or dst is None:
+            continue
+        wanted = (ch.robots[0], ch.robots[0]) if ch.kind == "local" else ch.robots
+        if (src.robot, dst.robot) != wanted:
+            return Dead(
+                f"{ch.kind} channel {show(ch.data)}",
+                f"declared ({ch.kind} {' '.join(ch.robots)}) but it runs from "
+                f"{describe_call(src.call)} on {src.robot} to "
+                f"{describe_call(dst.call)} on {dst.robot}",
+                condition="location",
+            )
+        if existing is None:
+            existing = {
+                (c.kind, c.source, c.target, c.data): j
+                for j, c in enumerate(channels)
+                if j not in touching and c.source in located and c.target in located
+            }
+        ident = (ch.kind, ch.source, ch.target, ch.data)
+        j = existing.get(ident)
+        if j is None:
+            existing[ident] = i
+            added += task.weights.global_ if ch.kind == "global" else task.weights.local
+            continue
+        kept = out[j]
+        if ch.bandwidth is not None and (kept.bandwidth is None or ch.bandwidth > kept.bandwidth):
+            out[j] = replace(kept, bandwidth=ch.bandwidth)
+        dropped.add(i)
+    if dropped:
+        out = [c for i, c in enumerate(out) if i not in dropped]
+    return tuple(out), added
 
 
 def expand_method(
@@ -206,22 +226,27 @@ def expand_method(
     effects = list(node.effects)
     for eff in method.effects:
         effects.append((eff.positive, substitute(eff.pattern, env)))
-    channels = _settle_channels([*block, *rewired], node.located())
-    if isinstance(channels, Dead):
-        return channels
+    # Fresh labels are not placed yet: no channel got resolved, nothing to settle.
     return Partial(
         stack=(*pushed, *node.stack[1:]),
         placed=node.placed,
         labels=node.labels,
-        channels=channels,
+        located=node.located,
+        channels=(*block, *rewired),
         effects=tuple(effects),
         next_label=label,
         path=(*node.path, choice),
+        cost=node.cost,
     )
 
 
 def place_functionality(
-    node: Partial, item: Item, schema: FunctionalitySchema, env: Bindings | None, choice: int | None
+    node: Partial,
+    item: Item,
+    schema: FunctionalitySchema,
+    env: Bindings | None,
+    choice: int | None,
+    task: Task,
 ) -> Partial | Dead:
     """Step 2a of 4.5: add the functionality to C, or reuse the instance already
     there (its channels move to the existing label). ``env`` binds its
@@ -229,24 +254,42 @@ def place_functionality(
     existing = node.labels.get(item.call)
     path = node.path if choice is None else (*node.path, choice)
     if existing is not None:
-        channels = [
-            replace(
+        old = item.label
+        channels = tuple(
+            ch
+            if ch.source != old and ch.target != old
+            else replace(
                 ch,
-                source=existing if ch.source == item.label else ch.source,
-                target=existing if ch.target == item.label else ch.target,
+                source=existing if ch.source == old else ch.source,
+                target=existing if ch.target == old else ch.target,
             )
             for ch in node.channels
-        ]
-        settled = _settle_channels(channels, node.located())
+        )
+        settled = _settle(channels, node.located, _touching(node.channels, old), task)
         if isinstance(settled, Dead):
             return settled
-        return replace(node, stack=node.stack[1:], channels=settled, path=path)
+        return replace(
+            node, stack=node.stack[1:], channels=settled[0], path=path, cost=node.cost + settled[1]
+        )
     assert env is not None
-    placed = (*node.placed, Placed(item.label, item.call, schema))
-    located = {p.label: p for p in placed}
-    settled = _settle_channels(list(node.channels), located)
+    args = env  # the name's bindings extended by the preconditions'
+    new = Placed(
+        item.label,
+        item.call,
+        schema,
+        item.call[1],
+        tuple(substitute(i, args) for i in schema.inputs),
+        tuple(substitute(o, args) for o in schema.outputs),
+    )
+    located = dict(node.located)
+    located[item.label] = new
+    settled = _settle(node.channels, located, _touching(node.channels, item.label), task)
     if isinstance(settled, Dead):
         return settled
+    w = task.weights
+    added = settled[1] + (schema.cost if schema.cost is not None else w.functionality)
+    if all(p.robot != new.robot for p in node.placed):
+        added += w.robot
     effects = list(node.effects)
     for eff in schema.effects:
         effects.append((eff.positive, substitute(eff.pattern, env)))
@@ -254,26 +297,12 @@ def place_functionality(
     labels[item.call] = item.label
     return Partial(
         stack=node.stack[1:],
-        placed=placed,
+        placed=(*node.placed, new),
         labels=labels,
-        channels=settled,
+        located=located,
+        channels=settled[0],
         effects=tuple(effects),
         next_label=node.next_label,
         path=path,
+        cost=node.cost + added,
     )
-
-
-def cost(node: Partial, task: Task) -> float:
-    """Cost of the settled part (3.5): functionalities placed, their locations,
-    and channels whose both ends are placed. It never decreases as a node
-    grows, and equals the configuration's cost once the stack is empty."""
-    w = task.weights
-    located = node.located()
-    robots = {p.robot for p in node.placed}
-    total = w.robot * len(robots)
-    for p in node.placed:
-        total += p.schema.cost if p.schema.cost is not None else w.functionality
-    for ch in node.channels:
-        if ch.source in located and ch.target in located:
-            total += w.global_ if ch.kind == "global" else w.local
-    return total

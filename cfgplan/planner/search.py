@@ -17,13 +17,13 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.planner.bound import Bound
 from cfgplan.planner.complete import finish
-from cfgplan.planner.match import bindings, why_not
+from cfgplan.planner.match import bind_name, bindings, why_not
 from cfgplan.planner.partial import (
     Dead,
     Item,
     Partial,
-    cost,
     describe_call,
     expand_method,
     place_functionality,
@@ -70,8 +70,11 @@ class Search:
         distinct: bool = True,
         time_limit: float | None = None,
         progress: Progress | None = None,
+        bound: bool = True,
     ) -> None:
         self.task = task
+        self.bound = Bound(task) if bound else None
+        self.pruned = 0  # nodes the bound proved to have no completion
         self.goal = goal
         self.distinct = distinct
         self.time_limit = time_limit
@@ -131,7 +134,17 @@ class Search:
             return
         choice = 0
         for method in versions:
-            env = dict(zip(method.params, item.call[1:], strict=True))
+            env = bind_name(method.params, item.call[1:])
+            if env is None:
+                self.report.note(
+                    Dead(
+                        f"{describe_call(item.call)}, version {method.version}",
+                        f"its name ({method.name} {' '.join(method.params)}) does not match",
+                        method.span,
+                        condition="binding",
+                    )
+                )
+                continue
             found = False
             for env2 in bindings(self.task, method.tests, env):
                 found = True
@@ -158,7 +171,14 @@ class Search:
         while todo:
             current = todo.pop()
             if current.done or _is_method(self.task, current.stack[0]):
-                heapq.heappush(self._heap, (cost(current, self.task), current.path, current))
+                priority = current.cost
+                if self.bound is not None and not current.done:
+                    rest = self.bound.of(current)
+                    if rest is None:
+                        self.pruned += 1
+                        continue
+                    priority += rest
+                heapq.heappush(self._heap, (priority, current.path, current))
                 continue
             item = current.stack[0]
             schema = self.task.functionalities.get((item.call[0], len(item.call) - 1))
@@ -172,13 +192,24 @@ class Search:
                 )
                 continue
             if item.call in current.labels:
-                child = place_functionality(current, item, schema, None, None)
+                child = place_functionality(current, item, schema, None, None, self.task)
                 if isinstance(child, Dead):
                     self.report.note(child)
                 else:
                     todo.append(child)
                 continue
-            env = dict(zip(schema.params, item.call[1:], strict=True))
+            env = bind_name(schema.params, item.call[1:])
+            if env is None:
+                self.report.note(
+                    Dead(
+                        describe_call(item.call),
+                        f"does not match the functionality ({schema.name} "
+                        f"{' '.join(schema.params)})",
+                        schema.span,
+                        condition="domain",
+                    )
+                )
+                continue
             options = list(bindings(self.task, schema.tests, env))
             if not options:
                 failure = why_not(self.task, schema.tests, env, schema.params)
@@ -187,7 +218,7 @@ class Search:
             children: list[Partial] = []
             for index, env2 in enumerate(options):
                 choice = index if len(options) > 1 else None
-                child = place_functionality(current, item, schema, env2, choice)
+                child = place_functionality(current, item, schema, env2, choice, self.task)
                 if isinstance(child, Dead):
                     self.report.note(child)
                 else:
@@ -216,4 +247,11 @@ def plan(
         if limit is not None and len(found) >= limit:
             search.stats.complete = False
             break
+    if not found and search.pruned and search.stats.complete:
+        # The bound cut branches without meeting their dead ends; search them
+        # without it, so the report can say why nothing is admissible.
+        explaining = Search(task, goal, distinct=distinct, bound=False)
+        for _ in explaining:
+            break
+        search.report = explaining.report
     return found, search

@@ -7,6 +7,8 @@ positioned error at the first thing that does not fit.
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
@@ -45,9 +47,9 @@ class Option:
     value: Sx
 
 
-def _options(form: str, span: Span, children: Sequence[Any], allowed: tuple[str, ...]) -> dict[
-    str, Option
-]:
+def _options(
+    form: str, span: Span, children: Sequence[Any], allowed: tuple[str, ...]
+) -> dict[str, Option]:
     found: dict[str, Option] = {}
     for opt in children:
         if not isinstance(opt, Option):
@@ -95,10 +97,27 @@ def atom(node: Sx, what: str = "an atom such as (camera ?r)") -> Atom:
     return Atom(predicate=head.text, args=tuple(a.text for a in args), span=node.span)
 
 
+def quantity(text: str) -> float | None:
+    """A bandwidth, cost, frequency or capacity: a finite number >= 0, written
+    as digits with an optional fraction (no nan, inf, exponents or '_')."""
+    if not _QUANTITY.fullmatch(text):
+        return None
+    value = float(text)
+    return value if math.isfinite(value) else None
+
+
+_QUANTITY = re.compile(r"\+?\d{1,300}(\.\d{1,300})?")
+
+
 def _number(node: Sx, what: str) -> float:
-    if node.kind != "number":
-        raise error(f"expected a number for {what}, found {node}", node.span)
-    return float(node.text)
+    value = quantity(node.text) if node.kind == "number" else None
+    if value is None:
+        raise error(
+            f"expected a number for {what}, found {node}",
+            node.span,
+            "write digits with an optional fraction; quantities are not negative",
+        )
+    return value
 
 
 def condition(node: Sx) -> Condition:
@@ -190,9 +209,7 @@ def body_item(node: Sx) -> BodyItem:
     where = "a body entry (?f1 (name ?robot ...))"
     if not node.is_list or len(node.items) != 2:
         raise error(f"expected {where}, found {node}", node.span)
-    return BodyItem(
-        label=_label(node.items[0], where), call=atom(node.items[1]), span=node.span
-    )
+    return BodyItem(label=_label(node.items[0], where), call=atom(node.items[1]), span=node.span)
 
 
 def _name(opts: dict[str, Option], form: str) -> Atom:
@@ -247,10 +264,13 @@ def _medium(fact: Atom) -> Medium:
             "e.g. (medium socket Pippi Emil 200)",
         )
     mtype, sender, receiver, capacity = fact.args
-    try:
-        cap = float(capacity)
-    except ValueError:
-        raise error(f"the capacity of a medium is a number, found {capacity}", fact.span) from None
+    cap = quantity(capacity)
+    if cap is None:
+        raise error(
+            f"the capacity of a medium is a number >= 0, found {capacity}",
+            fact.span,
+            "e.g. (medium socket Pippi Emil 200)",
+        )
     return Medium(type=mtype, sender=sender, receiver=receiver, capacity=cap, span=fact.span)
 
 

@@ -1,0 +1,186 @@
+"""The method hierarchy of a goal in DOT, drawn like the thesis's Fig. 4.4.
+
+Starting from the goal method's schema (``do-cross-door(r, d)``), each method
+points to the items of its body with the method's parameters replaced by the
+caller's arguments, as the figure prints them (``get-door-info(rh1, r, d)`` ->
+``get-door-info(rh1, d)`` -> ``camera(rh1)``). Methods are grey boxes,
+functionalities white ones. A method with several versions gets one small
+``version k`` node per version, showing that version's preconditions, and its
+body hangs from there. The drawing is a tree, like the figure (``camera(rh1)``
+appears under each method that uses it); a method already being expanded
+higher up the same branch is drawn dashed, with a dashed arrow back to it,
+and is not expanded again, so recursive methods end.
+
+Node ids are the paths of body labels from the root (``goal.f1.v2.f3``), so the
+DOT source is the same on every run.
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from cfgplan.backends.dot import call, new_graph, term
+from cfgplan.ir.model import SExpr, is_variable
+from cfgplan.planner.task import MethodSchema, Task, Test
+from cfgplan.syntax.errors import error
+
+METHOD = {"fillcolor": "gray80"}
+FUNCTIONALITY = {"fillcolor": "white"}
+VERSION = {"shape": "box", "style": "rounded", "fontsize": "8", "margin": "0.06,0.03"}
+UNKNOWN = {"fillcolor": "white", "style": "dashed", "color": "red"}
+MAX_NODES = 2000
+
+
+@dataclass
+class _Builder:
+    task: Task
+    graph: Any
+    max_nodes: int
+    count: int = 0
+    has_versions: bool = False
+    path: dict[tuple[str, int], str] = field(default_factory=dict)  # method -> node id
+
+    def add(self, node_id: str, label: str, **attrs: str) -> None:
+        self.count += 1
+        if self.count > self.max_nodes:
+            raise error(
+                f"the method hierarchy has more than {self.max_nodes} nodes; "
+                "it is too large to draw",
+                hint="draw the hierarchy of a method lower down with --goal",
+            )
+        self.graph.node(node_id, label, **attrs)
+
+    def expand(self, node_id: str, goal: tuple[str, ...]) -> None:
+        """Draw the bodies of every version of the method ``goal``, depth first."""
+        signature = (goal[0], len(goal) - 1)
+        versions = self.task.methods[signature]
+        self.path[signature] = node_id
+        for method in versions:
+            parent = node_id
+            env = substitution(method, goal[1:])
+            if len(versions) > 1:
+                self.has_versions = True
+                parent = f"{node_id}.v{method.version}"
+                self.add(parent, version_label(method, env), **VERSION)
+                self.graph.edge(node_id, parent, style="dashed", arrowhead="none")
+            for label, pattern in method.body:
+                child = (pattern[0], *(env.get(a, a) for a in pattern[1:]))
+                self.item(f"{parent}.{label.lstrip('?')}", parent, child)
+        del self.path[signature]
+
+    def item(self, node_id: str, parent: str, item: tuple[str, ...]) -> None:
+        """One body item: a functionality, a method (expanded), or a recursion."""
+        signature = (item[0], len(item) - 1)
+        text = call(item[0], item[1:])
+        if signature in self.path:
+            self.add(node_id, f"{text}\\n(recursive)", style="filled,dashed", **METHOD)
+            self.graph.edge(parent, node_id)
+            self.graph.edge(
+                node_id, self.path[signature], style="dashed", constraint="false", label="recurs"
+            )
+        elif signature in self.task.methods:
+            self.add(node_id, text, **METHOD)
+            self.graph.edge(parent, node_id)
+            self.expand(node_id, item)
+        elif signature in self.task.functionalities:
+            self.add(node_id, text, **FUNCTIONALITY)
+            self.graph.edge(parent, node_id)
+        else:
+            self.add(node_id, f"{text}\\n(undefined)", **UNKNOWN)
+            self.graph.edge(parent, node_id)
+
+
+def substitution(method: MethodSchema, args: Sequence[str]) -> dict[str, str]:
+    """Parameters to the caller's arguments; other variables keep their names,
+    primed (``rh1'``) when the caller already uses that name."""
+    env = dict(zip(method.params, args, strict=True))
+    taken = {a for a in args if is_variable(a)}
+    for var in _variables(method):
+        if var in env:
+            continue
+        name = var
+        while name in taken:
+            name += "'"
+        env[var] = name
+        taken.add(name)
+    return env
+
+
+def _variables(method: MethodSchema) -> list[str]:
+    """The variables of a method's body and preconditions, in order of appearance."""
+    found: dict[str, None] = {}
+    for _, pattern in method.body:
+        found.update(dict.fromkeys(a for a in pattern[1:] if is_variable(a)))
+    for test in method.tests:
+        found.update(dict.fromkeys(a for a in _test_terms(test) if is_variable(a)))
+    return list(found)
+
+
+def _test_terms(test: Test) -> list[str]:
+    if test.kind != "eval":
+        return list(test.pattern[1:])
+    terms: list[str] = []
+    stack: list[SExpr] = [test.expr]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, list):
+            stack.extend(reversed(item))
+        elif isinstance(item, str):
+            terms.append(item)
+    return terms
+
+
+def version_label(method: MethodSchema, env: dict[str, str]) -> str:
+    """``version 2`` and its preconditions, one a line: what tells versions apart."""
+    lines = [f"version {method.version}"]
+    for test in method.tests:
+        if test.kind == "eval":
+            lines.append("eval " + _sexpr(test.expr, env))
+        else:
+            atom = call(test.pattern[0], [env.get(a, a) for a in test.pattern[1:]])
+            lines.append(f"not {atom}" if test.kind == "not" else atom)
+    return "<" + "<BR/>".join(html.escape(line) for line in lines) + ">"
+
+
+def _sexpr(expr: SExpr, env: dict[str, str]) -> str:
+    if isinstance(expr, list):
+        return "(" + " ".join(_sexpr(e, env) for e in expr) + ")"
+    text = str(expr)
+    return term(env.get(text, text))
+
+
+def hierarchy_graph(task: Task, goal: Sequence[str], *, max_nodes: int = MAX_NODES) -> Any:
+    """The ``graphviz.Digraph`` of the methods and functionalities below the
+    method of ``goal`` (name and arity; its arguments are not used)."""
+    signature = (goal[0], len(goal) - 1)
+    versions = task.methods.get(signature)
+    if not versions:
+        raise error(f"{goal[0]} with {signature[1]} argument(s) is not a method of the domain")
+    root = (goal[0], *versions[0].params)
+    text = call(root[0], root[1:])
+    graph = new_graph("hierarchy", f"Methods (grey) and functionalities (white) for {text}")
+    builder = _Builder(task, graph, max_nodes)
+    builder.add("goal", text, **METHOD)
+    builder.expand("goal", root)
+    _legend(graph, builder.has_versions)
+    return graph
+
+
+def _legend(graph: Any, versions: bool) -> None:
+    with graph.subgraph(name="cluster_legend") as legend:
+        legend.attr(label="Legend", style="rounded", color="gray60", fontsize="11")
+        legend.node_attr.update(fontsize="9", margin="0.08,0.04", height="0.3")
+        legend.node("legend_method", "method", **METHOD)
+        legend.node("legend_functionality", "functionality", **FUNCTIONALITY)
+        legend.edge("legend_method", "legend_functionality", style="invis")
+        if versions:
+            legend.node("legend_version", "version k: its preconditions", **VERSION)
+            legend.edge("legend_functionality", "legend_version", style="invis")
+
+
+def hierarchy_dot(task: Task, goal: Sequence[str], *, max_nodes: int = MAX_NODES) -> str:
+    """DOT source of :func:`hierarchy_graph`."""
+    return str(hierarchy_graph(task, goal, max_nodes=max_nodes).source)

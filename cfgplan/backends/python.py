@@ -1,0 +1,194 @@
+"""Translating individual configurations into Python modules (5.3, with cfgplan.runtime).
+
+The thesis generates LISP (5.3); this backend does the same job in Python.
+A robot's module has a ``configure(robot)`` function that creates the
+robot's channels, named ``ch_1`` .. ``ch_n`` as CH-1 .. CH-n (the ``LET``),
+and the wrappers of its functionalities (5.2.1), and returns the *cycle*
+(the ``LAMBDA``): one call per functionality in sorted order, passing one
+entry per ``:in`` descriptor and one list of channels per ``:out``
+descriptor, as the LISP call does. An input fed by several channels gets a
+list, an input without channel ``None``. Run as a script, the module executes
+that robot alone (``python emil.py --impl IMPL --cycles 10 --rate 5``).
+
+Because the in-process transport only joins robots of one process, a
+``run_all.py`` is emitted too: it loads every robot's module and runs them
+together. The text is deterministic: no dates, no paths.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+from cfgplan.backends.wiring import Call, RobotPart
+from cfgplan.configuration.describe import call_text
+
+__all__ = ["module_name", "run_all", "to_python"]
+
+WIDTH = 100
+
+
+def module_name(robot: str) -> str:
+    """The file a robot's module is written to: ``emil.py`` for Emil (without ``.py``)."""
+    return robot.lower()
+
+
+def _str(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _tuple(items: Sequence[str]) -> str:
+    inner = ", ".join(_str(x) for x in items)
+    return f"({inner},)" if len(items) == 1 else f"({inner})"
+
+
+def _channel(index: int) -> str:
+    return f"ch_{index + 1}"
+
+
+def _wrapper(call: Call) -> str:
+    f = call.functionality
+    return f"{f.label.lower()}_{re.sub(r'[^0-9a-zA-Z]+', '_', f.name).strip('_').lower()}"
+
+
+def _input(channels: Sequence[int]) -> str:
+    if not channels:
+        return "None"
+    if len(channels) == 1:
+        return _channel(channels[0])
+    return "[" + ", ".join(_channel(i) for i in channels) + "]"
+
+
+def _outputs(outputs: Sequence[Sequence[int]]) -> str:
+    return "[" + ", ".join("[" + ", ".join(_channel(i) for i in o) + "]" for o in outputs) + "]"
+
+
+def _signature(call: Call) -> list[str]:
+    """Comment lines: the functionality, its inputs and outputs."""
+    ins = ", ".join(call_text(d) for d in call.input_data) or "no input"
+    outs = ", ".join(call_text(d) for d in call.output_data) or "no output"
+    line = f"    # {call.functionality}: {ins} -> {outs}"
+    if len(line) <= WIDTH:
+        return [line]
+    return [f"    # {call.functionality}", f"    #   in: {ins}", f"    #   out: {outs}"]
+
+
+def _statement(indent: str, head: str, args: str) -> list[str]:
+    """``head(args)`` on one line, or with ``args`` on a line of their own."""
+    line = f"{indent}{head}({args})"
+    if len(line) <= WIDTH:
+        return [line]
+    return [f"{indent}{head}(", f"{indent}    {args}", f"{indent})"]
+
+
+def to_python(part: RobotPart, title: str) -> str:
+    """The module of one robot; ``title`` says which configuration it is part of."""
+    robot = part.robot
+    ind = part.individual
+    lines = [
+        f'"""{robot}\'s part of a configuration, as Python (thesis 5.3; cfgplan emit).',
+        "",
+        f"{title}.",
+        "The individual configuration (5.4):",
+        "",
+        *("    " + x for x in ind.text().splitlines()),
+        "",
+        f"configure() creates {robot}'s channels (the LET of 5.3) and returns the cycle",
+        "(the LAMBDA): one call to each functionality, in sorted order (5.1). Run:",
+        "",
+        f"    python {module_name(robot)}.py --impl IMPL [--cycles N] [--rate HZ] [--trace]",
+        "",
+        "IMPL is a module name or a .py file declaring the implementations with",
+        "@functionality (cfgplan.runtime). Alone, this robot's global channels reach",
+        "no other robot; run_all.py runs every robot of the configuration in one process.",
+        '"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "from cfgplan.runtime import Cycle, Robot, robot_main",
+        "",
+        f"ROBOT = {_str(robot)}",
+        "",
+        "",
+        "def configure(robot: Robot) -> Cycle:",
+        f'    """{robot}\'s channels and functionalities; returns one cycle."""',
+    ]
+    if ind.channels:
+        lines.append(f"    # LET: the channels CH-1 .. CH-{len(ind.channels)} (5.2.2, 5.3)")
+    for i, ch in enumerate(ind.channels):
+        data = _tuple(ch.data)
+        ends = f"{_str(ch.source)}, {_str(ch.target)}, {data}"
+        if ch.kind == "local":
+            lines += _statement("    ", f"{_channel(i)} = robot.local_channel", ends)
+        else:
+            other = ch.target_robot if ch.source_robot == robot else ch.source_robot
+            lines += _statement(
+                "    ", f"{_channel(i)} = robot.global_channel", f"{_str(other)}, {ends}"
+            )
+    lines.append("    # the wrappers of the functionalities (5.2.1), in sorted order")
+    for call in part.calls:
+        f = call.functionality
+        objects = f", {_tuple(call.objects)}" if call.objects else ""
+        lines += _signature(call)
+        head = f"{_wrapper(call)} = robot.wrapper"
+        lines += _statement("    ", head, f"{_str(f.label)}, {_str(f.name)}{objects}")
+    lines += [
+        "",
+        "    def cycle() -> None:",
+        '        """LAMBDA: each functionality once, in sorted order."""',
+    ]
+    for call in part.calls:
+        inputs = ", ".join(_input(x) for x in call.inputs)
+        lines += _statement(
+            "        ", _wrapper(call), f"inputs=[{inputs}], outputs={_outputs(call.outputs)}"
+        )
+    if not part.calls:
+        lines.append("        pass")
+    lines += [
+        "",
+        "    return cycle",
+        "",
+        "",
+        'if __name__ == "__main__":',
+        "    raise SystemExit(robot_main(ROBOT, configure))",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def run_all(parts: Sequence[RobotPart], title: str) -> str:
+    """``run_all.py``: every robot of the configuration in one process."""
+    robots = [p.robot for p in parts]
+    files = ", ".join(f"{module_name(r)}.py" for r in robots)
+    entries = [f"    ({_str(r)}, {_str(module_name(r) + '.py')})," for r in robots]
+    lines = [
+        '"""All robots of a configuration in one process (thesis 5.3; cfgplan emit).',
+        "",
+        f"{title}: {', '.join(robots)}.",
+        f"Each robot's module ({files}) creates its channels and its cycle;",
+        "here their global channels are joined by an in-process transport and the",
+        "robots run one cycle each in turn. Run:",
+        "",
+        "    python run_all.py --impl IMPL [--cycles N] [--rate HZ] [--trace]",
+        '"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "from pathlib import Path",
+        "",
+        "from cfgplan.runtime import Configure, load_module, society_main",
+        "",
+        "HERE = Path(__file__).resolve().parent",
+        "ROBOTS = (",
+        *entries,
+        ")",
+        "",
+        "",
+        "def programs() -> list[tuple[str, Configure]]:",
+        '    """Each robot and its configure function, from the modules beside this file."""',
+        "    return [(robot, load_module(HERE / file).configure) for robot, file in ROBOTS]",
+        "",
+        "",
+        'if __name__ == "__main__":',
+        "    raise SystemExit(society_main(programs()))",
+    ]
+    return "\n".join(lines) + "\n"

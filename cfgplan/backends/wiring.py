@@ -1,0 +1,149 @@
+"""Which channel feeds which input of a call, which output goes where (5.3, step 4).
+
+For each functionality of an individual configuration, step 4(b) of 5.3 looks
+for the channels whose target is the functionality and puts each "at the
+position specified by the data type": here the position of the matching
+``:in`` descriptor of the functionality operator, instantiated with the
+instance's arguments. Step 4(c) does the same for outputs and ``:out``.
+
+Decisions where the thesis is silent:
+
+* several channels feeding one input (possible once functionalities are
+  reused) are all kept, in channel order; the backends pass them as a list;
+* an input no channel feeds keeps an empty list (a configuration the planner
+  returns is information admissible, so this does not happen there);
+* when two inputs have the same descriptor, the channels fill them in order,
+  one each, the last input taking any extra ones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cfgplan.backends.divide import Individual, divide
+from cfgplan.backends.sort import sort_functionalities
+from cfgplan.configuration.describe import call_text, channel_text
+from cfgplan.configuration.model import Configuration, FunctionalityInstance
+from cfgplan.ir.model import Atom, Domain
+from cfgplan.syntax.errors import CfgplanError, error
+
+__all__ = ["Call", "Data", "RobotPart", "deploy", "wire"]
+
+Data = tuple[str, ...]
+"""An instantiated data descriptor, e.g. ``("pos", "Emil", "Door1")``."""
+
+
+@dataclass(frozen=True)
+class Call:
+    """One functionality call of an individual configuration.
+
+    ``inputs[i]`` lists the channels (0-based indexes into the robot's channel
+    list) feeding the i-th ``:in`` descriptor, ``outputs[j]`` those the j-th
+    ``:out`` descriptor is written to.
+    """
+
+    functionality: FunctionalityInstance
+    input_data: tuple[Data, ...]
+    output_data: tuple[Data, ...]
+    inputs: tuple[tuple[int, ...], ...]
+    outputs: tuple[tuple[int, ...], ...]
+
+    @property
+    def objects(self) -> tuple[str, ...]:
+        """The arguments after the robot: what the call passes quoted (5.2.1)."""
+        return self.functionality.args[1:]
+
+
+def descriptors(domain: Domain, f: FunctionalityInstance) -> tuple[tuple[Data, ...], ...]:
+    """The ``:in`` and ``:out`` descriptors of ``f``'s operator, instantiated."""
+    operator = domain.functionality((f.name, len(f.args)))
+    if operator is None:
+        raise error(
+            f"{f}: the domain has no functionality operator {f.name} with {len(f.args)} argument(s)"
+        )
+    binding = dict(zip(operator.name.args, f.args, strict=True))
+
+    def instantiate(atom: Atom) -> Data:
+        return (atom.predicate, *(binding.get(a, a) for a in atom.args))
+
+    return (
+        tuple(instantiate(a) for a in operator.inputs),
+        tuple(instantiate(a) for a in operator.outputs),
+    )
+
+
+def wire(individual: Individual, domain: Domain) -> tuple[Call, ...]:
+    """The calls of ``individual`` in its (sorted) order, with their channels."""
+    return tuple(_call(individual, domain, f) for f in individual.functionalities)
+
+
+def _call(individual: Individual, domain: Domain, f: FunctionalityInstance) -> Call:
+    input_data, output_data = descriptors(domain, f)
+    inputs: list[list[int]] = [[] for _ in input_data]
+    outputs: list[list[int]] = [[] for _ in output_data]
+    for i, ch in enumerate(individual.channels):
+        if ch.target == f.label:
+            _place(inputs, input_data, i, ch.data, f, "input", channel_text(ch))
+        if ch.source == f.label:
+            outputs[_position(output_data, ch.data, f, "output", channel_text(ch))].append(i)
+    return Call(
+        f,
+        input_data,
+        output_data,
+        tuple(tuple(x) for x in inputs),
+        tuple(tuple(x) for x in outputs),
+    )
+
+
+def _place(
+    slots: list[list[int]],
+    data: Sequence[Data],
+    channel: int,
+    carried: Data,
+    f: FunctionalityInstance,
+    what: str,
+    shown: str,
+) -> None:
+    """Put an input channel on the first empty input with its descriptor."""
+    positions = [k for k, d in enumerate(data) if d == carried]
+    if not positions:
+        raise _mismatch(data, carried, f, what, shown)
+    free = [k for k in positions if not slots[k]]
+    slots[free[0] if free else positions[-1]].append(channel)
+
+
+def _position(
+    data: Sequence[Data], carried: Data, f: FunctionalityInstance, what: str, shown: str
+) -> int:
+    for k, d in enumerate(data):
+        if d == carried:
+            return k
+    raise _mismatch(data, carried, f, what, shown)
+
+
+def _mismatch(
+    data: Sequence[Data], carried: Data, f: FunctionalityInstance, what: str, shown: str
+) -> CfgplanError:
+    have = ", ".join(call_text(d) for d in data) or "none"
+    return error(
+        f"{shown} carries {call_text(carried)}, but {f} has no such {what} (its {what}s: {have})"
+    )
+
+
+@dataclass(frozen=True)
+class RobotPart:
+    """An individual configuration with its calls wired: what a backend emits."""
+
+    individual: Individual
+    calls: tuple[Call, ...]
+
+    @property
+    def robot(self) -> str:
+        return self.individual.robot
+
+
+def deploy(config: Configuration, domain: Domain) -> tuple[RobotPart, ...]:
+    """Sort, divide and wire ``config`` (5.1, 5.3): one part per robot."""
+    order = sort_functionalities(config)
+    return tuple(RobotPart(ind, wire(ind, domain)) for ind in divide(config, order))

@@ -1,0 +1,117 @@
+"""``cfgplan emit DOMAIN STATE``: per-robot executable code for a configuration (thesis 5.1-5.3).
+
+The configuration of the given rank is sorted, divided per robot and
+translated: one file per robot (``emil.lisp`` with the LET/LAMBDA form of 5.3,
+or ``emil.py`` for :mod:`cfgplan.runtime`; plus ``run_all.py`` for Python)
+and the whole configuration description in ``configuration.txt``. Existing
+files are never overwritten without ``--force``.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from cfgplan.backends.lisp import to_lisp
+from cfgplan.backends.python import module_name, run_all, to_python
+from cfgplan.backends.wiring import RobotPart, deploy
+from cfgplan.cli.app import EXIT_NONE, app, say
+from cfgplan.cli.plan import GoalOpt, WeightsOpt, load_problem
+from cfgplan.configuration.cost import fmt
+from cfgplan.configuration.describe import call_text, to_text
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner.explain import explain
+from cfgplan.planner.search import plan
+from cfgplan.problem import Problem
+from cfgplan.syntax.errors import error
+
+
+class Lang(StrEnum):
+    lisp = "lisp"
+    python = "python"
+
+
+RankOpt = Annotated[
+    int, typer.Option("--rank", min=1, help="Which configuration, cheapest first (default 1).")
+]
+DESCRIPTION = "configuration.txt"
+RUN_ALL = "run_all.py"
+
+
+def choose(problem: Problem, rank: int) -> Configuration:
+    """The configuration of ``rank`` (1: the cheapest); exit 3 when there are fewer."""
+    configs, search = plan(problem.task, problem.goal_call, limit=rank)
+    if len(configs) < rank:
+        if not configs:
+            say("\n".join(explain(search.report, call_text(problem.goal_call))))
+        else:
+            say(f"cfgplan: only {len(configs)} configuration(s), no rank {rank}")
+        raise typer.Exit(EXIT_NONE)
+    return configs[rank - 1]
+
+
+def title(problem: Problem, config: Configuration, rank: int) -> str:
+    return f"Configuration rank {rank}, cost {fmt(config.cost)}, for {call_text(problem.goal_call)}"
+
+
+def files(problem: Problem, config: Configuration, rank: int, lang: Lang) -> dict[str, str]:
+    """File name -> text, in the order they are written."""
+    parts = deploy(config, problem.domain)
+    head = title(problem, config, rank)
+    out: dict[str, str] = {}
+    for part in parts:
+        name = module_name(part.robot) + (".lisp" if lang is Lang.lisp else ".py")
+        if name in out or name in (DESCRIPTION, RUN_ALL):
+            raise error(f"robot {part.robot}'s file {name} collides with another file")
+        out[name] = _lisp(part, head) if lang is Lang.lisp else to_python(part, head)
+    if lang is Lang.python:
+        out[RUN_ALL] = run_all(parts, head)
+    out[DESCRIPTION] = to_text(config, problem.state.media) + "\n"
+    return out
+
+
+def _lisp(part: RobotPart, head: str) -> str:
+    comments = [
+        f"{part.robot}'s executable individual configuration (thesis 5.3; cfgplan emit).",
+        f"{head}.",
+        "",
+        *part.individual.text().splitlines(),
+    ]
+    return to_lisp(part, comments)
+
+
+@app.command()
+def emit(
+    domain: Annotated[Path, typer.Argument(help="Domain file.")],
+    state: Annotated[Path, typer.Argument(help="State file (facts, media, optional goal).")],
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="Directory to write the files to.")
+    ],
+    goal: GoalOpt = None,
+    rank: RankOpt = 1,
+    weights: WeightsOpt = None,
+    lang: Annotated[Lang, typer.Option("--lang", help="Target language.")] = Lang.lisp,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite existing files.")] = False,
+) -> None:
+    """Write one executable file per robot for a configuration (thesis 5.1-5.3).
+
+    Exit codes: 0 written, 1 invalid input or existing files, 2 usage,
+    3 no configuration of that rank.
+    """
+    problem = load_problem(domain, state, goal, weights)
+    texts = files(problem, choose(problem, rank), rank, lang)
+    if output.exists() and not output.is_dir():
+        raise error(f"{output} exists and is not a directory")
+    existing = [name for name in texts if (output / name).exists()]
+    if existing and not force:
+        raise error(f"{output} already holds {', '.join(existing)}; pass --force to overwrite")
+    try:
+        output.mkdir(parents=True, exist_ok=True)
+        for name, text in texts.items():
+            (output / name).write_text(text, encoding="utf-8")
+            say(f"wrote {output / name}")
+    except OSError as exc:
+        raise error(f"cannot write to {output}: {exc.strerror}") from None

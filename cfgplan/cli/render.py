@@ -1,0 +1,111 @@
+"""``cfgplan render DOMAIN STATE -o FILE``: a configuration or a method hierarchy
+as a picture (Fig. 4.3, 6.4, 6.8, 6.11 style; ``--hierarchy``: Fig. 4.4 style).
+
+The format comes from the suffix of ``-o``: ``.dot`` (DOT source, always
+available), ``.svg`` or ``.png`` (laid out by :mod:`cfgplan.backends.render`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Literal
+
+import typer
+
+from cfgplan.backends.dot import configuration_dot
+from cfgplan.backends.dot_hierarchy import hierarchy_dot
+from cfgplan.backends.render import render as render_dot
+from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
+from cfgplan.cli.plan import GoalOpt, WeightsOpt, load_problem
+from cfgplan.configuration.cost import fmt
+from cfgplan.configuration.describe import call_text
+from cfgplan.planner.explain import explain
+from cfgplan.planner.search import plan as run_plan
+from cfgplan.problem import Problem
+from cfgplan.syntax.errors import CfgplanError, error
+
+Kind = Literal["dot", "svg", "png"]
+SUFFIXES: dict[str, Kind] = {".dot": "dot", ".svg": "svg", ".png": "png"}
+
+
+def output_format(output: Path) -> Kind:
+    """``dot``, ``svg`` or ``png`` from the file name; anything else is a usage error."""
+    kind = SUFFIXES.get(output.suffix.lower())
+    if kind is None:
+        raise typer.BadParameter(
+            f"cannot tell the format of {output.name!r}: "
+            f"the file name must end in {', '.join(SUFFIXES)}",
+            param_hint="'-o' / '--output'",
+        )
+    return kind
+
+
+def write_bytes(data: bytes, output: Path, force: bool) -> None:
+    """Write ``data`` to ``output``, refusing to overwrite it without --force."""
+    if output.exists() and not force:
+        raise error(f"{output} exists; pass --force to overwrite it")
+    try:
+        output.write_bytes(data)
+    except OSError as exc:
+        raise error(f"cannot write {output}: {exc.strerror}") from None
+
+
+def configuration_source(problem: Problem, rank: int) -> str:
+    """DOT of the configuration of the given rank; exit 3 when there is none."""
+    configs, search = run_plan(problem.task, problem.goal_call, limit=rank)
+    goal = call_text(problem.goal_call)
+    if not configs:
+        say("\n".join(explain(search.report, goal)))
+        raise typer.Exit(EXIT_NONE)
+    if len(configs) < rank:
+        say(f"cfgplan: {goal} has {len(configs)} configuration(s), none of rank {rank}")
+        raise typer.Exit(EXIT_NONE)
+    config = configs[rank - 1]
+    title = f"{goal}: rank {rank}, cost {fmt(config.cost)}"
+    return configuration_dot(config, title=title, first=problem.goal_call[1:])
+
+
+@app.command()
+def render(
+    domain: Annotated[Path, typer.Argument(help="Domain file.")],
+    state: Annotated[Path, typer.Argument(help="State file (facts, media, optional goal).")],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "-o", "--output", help="File to write; its suffix gives the format: .dot, .svg, .png."
+        ),
+    ],
+    goal: GoalOpt = None,
+    rank: Annotated[
+        int, typer.Option("--rank", min=1, help="Which configuration, 1 being the cheapest.")
+    ] = 1,
+    weights: WeightsOpt = None,
+    hierarchy: Annotated[
+        bool,
+        typer.Option(
+            "--hierarchy",
+            help="Draw the goal's hierarchy of methods and functionalities (Fig. 4.4) "
+            "instead of a configuration.",
+        ),
+    ] = False,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite the -o file.")] = False,
+) -> None:
+    """Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).
+
+    Exit codes: 0 written, 1 invalid input or existing file, 2 usage,
+    3 no configuration of that rank.
+    """
+    kind = output_format(output)
+    try:
+        if output.exists() and not force:
+            raise error(f"{output} exists; pass --force to overwrite it")
+        problem = load_problem(domain, state, goal, weights)
+        if hierarchy:
+            source = hierarchy_dot(problem.task, problem.goal_call)
+        else:
+            source = configuration_source(problem, rank)
+        data = source.encode("utf-8") if kind == "dot" else render_dot(source, kind)
+        write_bytes(data, output, force)
+    except CfgplanError as exc:
+        report(exc.diagnostics)
+        raise typer.Exit(EXIT_INPUT) from None

@@ -1,0 +1,242 @@
+"""An admissible lower bound on what a partial configuration still costs.
+
+Best-first search (search.py) orders nodes by ``cost so far + bound``. The bound
+counts only what every completion must add, so it never overestimates (and
+the first configuration found is the cheapest):
+
+- the *mandatory* functionality instances of each pending stack item: those in
+  every feasible expansion of it (a method's versions and bindings are
+  intersected), not yet in C, and their robots not yet in C;
+- channels that every completion must hold and that cannot merge with one
+  already in C: those whose two ends are known, and those whose receiving end
+  is known (one per kind, data and receiver).
+
+Sharing is accounted for by working with sets of concrete instances: two
+pending items needing ``camera(Emil)`` count it once, and nothing already in C
+counts. A pending item with no feasible expansion makes the node dead.
+
+Summaries of ground method instances depend only on the domain and the state,
+so they are computed once and memoised for the whole search.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from cfgplan.planner.match import bind_name, bindings, substitute
+from cfgplan.planner.partial import Key, Partial
+from cfgplan.planner.task import Ground, Task
+
+ChannelId = tuple[str, Ground, Key | None, Key | None]
+"""(kind, data, sender, receiver): None where the end is not known yet."""
+
+
+@dataclass(frozen=True)
+class Summary:
+    """What every feasible expansion of one ground instance contains."""
+
+    feasible: bool
+    functionalities: frozenset[Key] = frozenset()
+    channels: frozenset[ChannelId] = frozenset()
+    producers: tuple[tuple[Ground, Key | None], ...] = ()  # :out data -> certain producer
+
+    def producer(self, data: Ground) -> Key | None:
+        for d, key in self.producers:
+            if d == data:
+                return key
+        return None
+
+
+INFEASIBLE = Summary(False)
+UNKNOWN = Summary(True)  # used for an instance met again while it is being summarised
+
+
+@dataclass
+class Bound:
+    """The bound for one task; call :meth:`of` on each node."""
+
+    task: Task
+    _memo: dict[Ground, Summary] = field(default_factory=dict)
+    _active: set[Ground] = field(default_factory=set)
+
+    # -- static summaries -------------------------------------------------
+    def summary(self, call: Ground) -> Summary:
+        found = self._memo.get(call)
+        if found is not None:
+            return found
+        if call in self._active:
+            return UNKNOWN
+        self._active.add(call)
+        try:
+            result = self._summarise(call)
+        finally:
+            self._active.discard(call)
+        self._memo[call] = result
+        return result
+
+    def _summarise(self, call: Ground) -> Summary:
+        sig = (call[0], len(call) - 1)
+        schema = self.task.functionalities.get(sig)
+        if schema is not None:
+            env = bind_name(schema.params, call[1:])
+            if env is None or next(iter(bindings(self.task, schema.tests, env)), None) is None:
+                return INFEASIBLE
+            outs = tuple((substitute(o, env), call) for o in schema.outputs)
+            return Summary(True, frozenset({call}), frozenset(), outs)
+        expansions: list[tuple[frozenset[Key], frozenset[ChannelId], dict[Ground, Key | None]]] = []
+        for method in self.task.methods.get(sig, ()):
+            env0 = bind_name(method.params, call[1:])
+            if env0 is None:
+                continue
+            for env in bindings(self.task, method.tests, env0):
+                expansion = self._expansion(method, env)
+                if expansion is not None:
+                    expansions.append(expansion)
+        if not expansions:
+            return INFEASIBLE
+        funcs = frozenset.intersection(*(e[0] for e in expansions))
+        channels = _common_channels([e[1] for e in expansions])
+        first = expansions[0][2]
+        producers = tuple(
+            (data, key if all(e[2].get(data) == key for e in expansions) else None)
+            for data, key in first.items()
+        )
+        return Summary(True, funcs, channels, producers)
+
+    def _expansion(
+        self, method: object, env: dict[str, str]
+    ) -> tuple[frozenset[Key], frozenset[ChannelId], dict[Ground, Key | None]] | None:
+        from cfgplan.planner.task import MethodSchema
+
+        assert isinstance(method, MethodSchema)
+        body: dict[str, tuple[Ground, Summary, bool]] = {}
+        funcs: set[Key] = set()
+        channels: set[ChannelId] = set()
+        for label, pattern in method.body:
+            call = substitute(pattern, env)
+            if any(t[:1] == "?" for t in call[1:]):
+                return None
+            sub = self.summary(call)
+            if not sub.feasible:
+                return None
+            is_functionality = (call[0], len(call) - 1) in self.task.functionalities
+            body[label] = (call, sub, is_functionality)
+            funcs |= sub.functionalities
+            channels |= sub.channels
+        for spec in method.channels:
+            data = substitute(spec.data, env)
+            if any(t[:1] == "?" for t in data[1:]):
+                return None
+            src_call, src_sum, src_func = body[spec.source]
+            dst_call, _, dst_func = body[spec.target]
+            sender = src_call if src_func else src_sum.producer(data)
+            receiver = dst_call if dst_func else None
+            channels.add((spec.kind, data, sender, receiver))
+        producers: dict[Ground, Key | None] = {}
+        for port in method.outputs:
+            data = substitute(port.data, env)
+            call, sub, is_functionality = body[port.label]
+            producers.setdefault(data, call if is_functionality else sub.producer(data))
+        return frozenset(funcs), frozenset(channels), producers
+
+    # -- the bound of a node ----------------------------------------------
+    def of(self, node: Partial) -> float | None:
+        """A lower bound on the cost still to come, or None when no completion exists."""
+        task = self.task
+        w = task.weights
+        placed = node.labels
+        robots = {p.robot for p in node.placed}
+        needed: set[Key] = set()
+        future: set[ChannelId] = set()
+        pending: dict[int, tuple[Ground, Summary]] = {}
+        for item in node.stack:
+            sub = self.summary(item.call)
+            if not sub.feasible:
+                return None
+            pending[item.label] = (item.call, sub)
+            needed |= sub.functionalities
+            future |= sub.channels
+        by_label = {p.label: p.call for p in node.placed}
+        resolved: set[tuple[str, Ground, Key, Key]] = set()
+        for ch in node.channels:
+            src, dst = by_label.get(ch.source), by_label.get(ch.target)
+            if src is not None and dst is not None:
+                resolved.add((ch.kind, ch.data, src, dst))
+                continue
+            sender = src if src is not None else _pending_end(pending, ch.source, ch.data, task)
+            receiver = dst if dst is not None else _pending_call(pending, ch.target, task)
+            future.add((ch.kind, ch.data, sender, receiver))
+        total = 0.0
+        new_robots: set[str] = set()
+        for key in needed:
+            if key in placed:
+                continue
+            schema = task.functionalities[(key[0], len(key) - 1)]
+            total += schema.cost if schema.cost is not None else w.functionality
+            if key[1] not in robots:
+                new_robots.add(key[1])
+        total += w.robot * len(new_robots)
+        total += _channel_bound(future, resolved, w.global_, w.local)
+        return total
+
+
+def _pending_call(pending: dict[int, tuple[Ground, Summary]], label: int, task: Task) -> Key | None:
+    """The functionality a label will be, when it is a pending functionality item."""
+    entry = pending.get(label)
+    if entry is None:
+        return None
+    call = entry[0]
+    return call if (call[0], len(call) - 1) in task.functionalities else None
+
+
+def _pending_end(
+    pending: dict[int, tuple[Ground, Summary]], label: int, data: Ground, task: Task
+) -> Key | None:
+    """The certain producer of ``data`` behind a pending label, if there is one."""
+    entry = pending.get(label)
+    if entry is None:
+        return None
+    call, sub = entry
+    if (call[0], len(call) - 1) in task.functionalities:
+        return call
+    return sub.producer(data)
+
+
+def _common_channels(sets: list[frozenset[ChannelId]]) -> frozenset[ChannelId]:
+    """Channels in every expansion; where only the sender differs, keep the
+    channel with its sender unknown."""
+    exact = frozenset.intersection(*sets)
+    loose: set[ChannelId] = set(exact)
+    receivers = [{(k, d, r) for k, d, _, r in s if r is not None} for s in sets]
+    for kind, data, receiver in set.intersection(*receivers):
+        if not any(c[0] == kind and c[1] == data and c[3] == receiver for c in exact):
+            loose.add((kind, data, None, receiver))
+    return frozenset(loose)
+
+
+def _channel_bound(
+    future: Iterable[ChannelId],
+    resolved: set[tuple[str, Ground, Key, Key]],
+    w_global: float,
+    w_local: float,
+) -> float:
+    """Channels certain to be new: fully known ones not in C, plus one per
+    (kind, data, receiver) of those whose sender is unknown and that nothing
+    known could be."""
+    full: set[tuple[str, Ground, Key, Key]] = set()
+    open_ends: set[tuple[str, Ground, Key]] = set()
+    for kind, data, src, dst in future:
+        if src is not None and dst is not None:
+            if (kind, data, src, dst) not in resolved:
+                full.add((kind, data, src, dst))
+        elif src is None and dst is not None:
+            open_ends.add((kind, data, dst))
+    covered = {(k, d, r) for k, d, _, r in full} | {(k, d, r) for k, d, _, r in resolved}
+    total = 0.0
+    for kind, *_ in full:
+        total += w_global if kind == "global" else w_local
+    for kind, data, dst in open_ends:
+        if (kind, data, dst) not in covered:
+            total += w_global if kind == "global" else w_local
+    return total

@@ -1,0 +1,169 @@
+"""Where the actual functions come from (5.2.1): implementations by name.
+
+Each functionality of a configuration "has a matching functionality
+implemented on a robot". Users declare one with :func:`functionality`::
+
+    from cfgplan.runtime import functionality
+
+    @functionality("measure-door")
+    def measure_door(door: str, image: Image) -> tuple[Pos, float]:
+        ...  # object arguments first, then the inputs in :in order
+        return pos, orient  # the outputs in :out order
+
+An implementation receives the object arguments (the functionality's
+arguments after the robot, as the LISP call passes them) and then one value
+per ``:in`` descriptor, in ``:in`` order. It returns a tuple or list with one
+value per ``:out`` descriptor in ``:out`` order, or the value itself when
+there is one output; an action (no output) returns nothing. ``None`` in place
+of an output means "no data this time": that output's channels are not
+written. The robot it runs on is :func:`cfgplan.runtime.current_robot`.
+
+An optional ``precondition`` receives the object arguments and says whether
+the function may run now (5.2.1); by default it always may.
+
+:meth:`Registry.load` collects the implementations of a module given by name
+(``examples.cross_door.impl``) or by path (``examples/cross-door/impl.py``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import sys
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+from cfgplan.syntax.errors import error
+
+__all__ = ["Implementation", "Precondition", "Registry", "functionality", "load_module"]
+
+Precondition = Callable[..., bool]
+
+
+@dataclass(frozen=True)
+class Implementation:
+    """The actual function of a functionality, with its precondition."""
+
+    name: str
+    function: Callable[..., object]
+    precondition: Precondition | None = None
+
+    def __call__(self, *args: object) -> object:
+        return self.function(*args)
+
+    def allowed(self, *objects: object) -> bool:
+        """Whether the precondition holds for these object arguments."""
+        return True if self.precondition is None else bool(self.precondition(*objects))
+
+
+def functionality(
+    name: str, *, precondition: Precondition | None = None
+) -> Callable[[Callable[..., object]], Implementation]:
+    """Declare the implementation of the functionality ``name`` (a decorator)."""
+
+    def declare(function: Callable[..., object]) -> Implementation:
+        return Implementation(name, function, precondition)
+
+    return declare
+
+
+class Registry:
+    """Implementations by functionality name."""
+
+    def __init__(self, implementations: Iterable[Implementation] = (), source: str = "") -> None:
+        self.source = source
+        self._by_name: dict[str, Implementation] = {}
+        for impl in implementations:
+            if impl.name in self._by_name:
+                where = f" in {source}" if source else ""
+                raise error(f"functionality {impl.name} is implemented twice{where}")
+            self._by_name[impl.name] = impl
+
+    def names(self) -> list[str]:
+        return sorted(self._by_name)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._by_name
+
+    def lookup(self, name: str) -> Implementation:
+        """The implementation of ``name``; a clear error when there is none."""
+        impl = self._by_name.get(name)
+        if impl is None:
+            where = f" in {self.source}" if self.source else ""
+            have = ", ".join(self.names()) or "none"
+            raise error(
+                f"no implementation of functionality {name}{where} (implemented: {have})",
+                hint=f'declare one with @functionality("{name}") from cfgplan.runtime',
+            )
+        return impl
+
+    @classmethod
+    def from_module(cls, module: ModuleType) -> Registry:
+        """Every :class:`Implementation` defined at the top of ``module``."""
+        found = [v for v in vars(module).values() if isinstance(v, Implementation)]
+        return cls(found, source=getattr(module, "__file__", None) or module.__name__)
+
+    @classmethod
+    def load(cls, spec: str | Path) -> Registry:
+        """From a module name (``pkg.impl``) or a Python file (``dir/impl.py``)."""
+        text = str(spec)
+        if text.endswith(".py") or "/" in text or "\\" in text:
+            return cls.from_module(load_module(Path(text)))
+        try:
+            module = _import(text)
+        except ImportError as exc:
+            raise error(
+                f"cannot import implementations {text}: {exc}",
+                hint="give a module name importable from the current directory, "
+                "or the path of a .py file",
+            ) from None
+        return cls.from_module(module)
+
+    def require(self, names: Iterable[str]) -> None:
+        """Fail at once, naming every functionality without implementation."""
+        missing = sorted({n for n in names if n not in self._by_name})
+        if missing:
+            where = f" in {self.source}" if self.source else ""
+            raise error(
+                f"no implementation of functionalit{'y' if len(missing) == 1 else 'ies'} "
+                f"{', '.join(missing)}{where} (implemented: {', '.join(self.names()) or 'none'})",
+                hint=f'declare one with @functionality("{missing[0]}") from cfgplan.runtime',
+            )
+
+
+def _import(name: str) -> ModuleType:
+    """Import ``name``, also from the current directory (which a console script
+    does not put on sys.path)."""
+    here = str(Path.cwd())
+    if here in sys.path or "" in sys.path:
+        return importlib.import_module(name)
+    sys.path.insert(0, here)
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(here)
+
+
+def load_module(path: Path) -> ModuleType:
+    """Import a Python file by path (once per file per process)."""
+    resolved = path.resolve()
+    if not resolved.is_file():
+        raise error(f"{path}: no such Python file")
+    digest = hashlib.sha1(str(resolved).encode()).hexdigest()[:12]
+    name = f"_cfgplan_loaded_{resolved.stem.replace('-', '_')}_{digest}"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, resolved)
+    if spec is None or spec.loader is None:
+        raise error(f"{path}: cannot be loaded as a Python module")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module

@@ -1,0 +1,11 @@
+(LET ((CH-1 (make-local-channel 'Emil 'F6 'F7 '(laser-reading Emil)))
+      (CH-2 (make-local-channel 'Emil 'F7 'F4 '(angle Emil Pippi)))
+      (CH-3 (make-local-channel 'Emil 'F7 'F4 '(dist Emil Pippi)))
+      (CH-4 (make-local-channel 'Emil 'F7 'F3 '(dist Emil Pippi)))
+      (CH-5 (make-local-channel 'Emil 'F3 'F4 '(speed-diff Emil Pippi)))
+      (CH-6 (make-global-channel 'Pippi 'F7 'F5 '(dist Emil Pippi))))
+  (LAMBDA NIL
+    (PROGN (laser (LIST CH-1))
+           (meas-robot-angle-dist-laser 'Pippi CH-1 (LIST CH-2) (LIST CH-3 CH-4 CH-6))
+           (calc-robot-speed-diff 'Pippi CH-4 (LIST CH-5))
+           (stalk-robot 'Pippi CH-2 CH-3 CH-5))))

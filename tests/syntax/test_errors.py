@@ -1,0 +1,293 @@
+"""Bad input gives a positioned, readable error: ``file:line:col``, the source line
+and a caret under the offending column (reader and checker, thesis 4.4)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from cfgplan.check import check
+from cfgplan.check.evaluate import EvalFailure, holds
+from cfgplan.ir.model import Eval
+from cfgplan.syntax.errors import CfgplanError, Diagnostic, render, source_line
+from cfgplan.syntax.reader import (
+    MAX_NESTING,
+    domain_from,
+    parse,
+    read_domain,
+    read_state,
+    state_from,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+CROSS_DOOR = ROOT / "domains" / "cross-door" / "domain.lisp"
+TYPOGRAPHIC = ROOT / "tests" / "data" / "cross-door-typographic.lisp"
+
+FUNCTIONALITIES = """\
+(make-functionality :name '(camera ?r) :out '((image ?r)))
+(make-functionality :name '(measure-door ?r ?d) :in '((image ?r)) :out '((pos ?r ?d)))
+"""
+
+
+def reader_error(text: str, filename: str = "t.lisp") -> Diagnostic:
+    """The single diagnostic the reader raises for ``text``."""
+    with pytest.raises(CfgplanError) as info:
+        parse(text, filename)
+    assert len(info.value.diagnostics) == 1
+    return info.value.diagnostics[0]
+
+
+def checker_errors(text: str) -> list[Diagnostic]:
+    return [d for d in check(domain_from(parse(text, "t.lisp"))) if d.is_error]
+
+
+def assert_rendered(d: Diagnostic, text: str, line: int, column: int, message: str) -> str:
+    """``d`` is at ``line:column``, and render() shows the line with a caret there."""
+    assert d.span is not None
+    assert (d.span.file, d.span.line, d.span.column) == ("t.lisp", line, column)
+    assert message in d.message
+    out = render(d, {"t.lisp": text})
+    rows = out.splitlines()
+    assert rows[0] == f"t.lisp:{line}:{column}: {d.severity}: {d.message}"
+    quoted = source_line(text, line).expandtabs(1)
+    gutter = f"{line:>5} | "
+    assert rows[1] == gutter + quoted
+    caret_row = rows[2]
+    assert caret_row.startswith(" " * (len(gutter) - 2) + "| ")
+    assert caret_row.index("^") - len(gutter) == column - 1
+    if d.hint:
+        assert rows[3] == f"  hint: {d.hint}"
+    return out
+
+
+# -- reader errors ---------------------------------------------------------------
+
+
+def test_unbalanced_parenthesis_missing_close() -> None:
+    text = "(make-functionality :name '(camera ?r)\n  :out '((image ?r))\n"
+    d = reader_error(text)
+    out = assert_rendered(d, text, 2, 21, "a list is not closed (missing ')')")
+    assert "the '(' at line 1, column 1 is never closed" in out
+
+
+def test_unbalanced_parenthesis_one_too_many() -> None:
+    text = "(state (robot Pippi)))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 22, "unexpected ')'")
+    assert d.hint == "there is one ')' too many, or an opening '(' is missing"
+
+
+def test_missing_close_before_next_form() -> None:
+    text = "(make-functionality :name '(camera ?r) :out '((image ?r))\n" + FUNCTIONALITIES
+    d = reader_error(text)
+    assert_rendered(d, text, 2, 1, "unexpected '('")
+    assert d.hint is not None and "lacks a ')'" in d.hint
+
+
+def test_unknown_keyword() -> None:
+    text = "(make-functionality :name '(camera ?r) :output '((image ?r)))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 40, "unknown keyword :output in make-functionality")
+    assert d.hint is not None and ":out" in d.hint
+
+
+def test_keyword_in_wrong_case() -> None:
+    text = "(make-functionality :NAME '(camera ?r) :out '((image ?r)))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 21, "unknown keyword :NAME")
+    assert d.hint == "keywords are case-sensitive: write :name"
+
+
+def test_state_fact_that_is_not_an_atom() -> None:
+    text = "(state (robot Pippi)\n       Pippi)\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 2, 8, "expected a fact such as (robot Pippi), found Pippi")
+
+
+def test_state_fact_with_nested_list() -> None:
+    text = "(state (in Pippi (Room1)))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 18, "an argument of (in ...) must be a symbol or a number")
+
+
+def test_state_fact_printed_with_space_before_paren() -> None:
+    text = "(state robot(Emil), robot (Pippi))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 21, "expected a fact such as (robot Pippi), found robot")
+    assert d.hint is not None and "write robot(Pippi)" in d.hint
+
+
+def test_state_fact_with_variable() -> None:
+    text = "(state (robot ?r))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 8, "a fact holds no variables")
+
+
+@pytest.mark.parametrize("text", ["", "\n\n", "   ; only a comment\n;; and another\n"])
+def test_empty_file(text: str) -> None:
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 1, "the file is empty")
+
+
+def test_string_in_eval_is_refused_by_the_reader() -> None:
+    text = "(make-config-method :name '(m ?r)\n  :precond '((eval (delete-file \"x\")))\n"
+    text += "  :body '((?f1 (camera ?r))))\n"
+    d = reader_error(FUNCTIONALITIES + text)
+    assert_rendered(d, FUNCTIONALITIES + text, 4, 33, "unexpected character '\"'")
+    assert d.hint is not None and "no strings" in d.hint
+
+
+def test_deep_nesting_is_refused_without_recursion_error() -> None:
+    depth = 20_000
+    text = "(state " + "(" * depth + ")" * depth + ")\n"
+    d = reader_error(text)  # a RecursionError would fail the test here
+    assert d.span is not None and d.span.line == 1
+    assert f"lists nest more than {MAX_NESTING} levels deep" in d.message
+    # The innermost list deeper than the limit: MAX_NESTING + 1 levels from the bottom.
+    column = len("(state ") + depth - MAX_NESTING
+    assert_rendered(d, text, 1, column, "nest more than")
+
+
+def test_deep_unclosed_nesting_is_refused_without_recursion_error() -> None:
+    text = "(state " + "(" * 20_000
+    d = reader_error(text)
+    assert_rendered(d, text, 1, len(text) + 1, "a list is not closed")
+
+
+def test_top_level_nesting_is_a_syntax_error() -> None:
+    text = "(" * 20_000 + ")" * 20_000
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 2, "unexpected '('")
+
+
+def test_non_utf8_byte(tmp_path: Path) -> None:
+    path = tmp_path / "bad.lisp"
+    path.write_bytes(b"\xff")
+    with pytest.raises(CfgplanError) as info:
+        read_domain(path)
+    (d,) = info.value.diagnostics
+    assert d.span is not None
+    assert (d.span.file, d.span.line, d.span.column) == (str(path), 1, 1)
+    assert d.message == "invalid UTF-8 byte 0xff"
+    out = render(d, {str(path): "\ufffd"}).splitlines()
+    assert out[0] == f"{path}:1:1: error: invalid UTF-8 byte 0xff"
+    assert out[1:3] == ["    1 | \ufffd", "      | ^"]
+
+
+def test_non_utf8_byte_column_counts_characters(tmp_path: Path) -> None:
+    # Line 2 holds a three-byte ’ before the bad byte: column 11 in bytes, 9 in characters.
+    data = "(state (robot Pippi)\n  (in ’P".encode() + b"\xff" + b"))\n"
+    path = tmp_path / "bad-state.lisp"
+    path.write_bytes(data)
+    with pytest.raises(CfgplanError) as info:
+        read_state(path)
+    (d,) = info.value.diagnostics
+    assert d.span is not None and (d.span.line, d.span.column) == (2, 9)
+    text = data.decode("utf-8", errors="replace")
+    out = render(d, {str(path): text}).splitlines()
+    assert out[1] == "    2 |   (in ’P\ufffd))"
+    assert out[2].index("^") - len("    2 | ") == 8
+
+
+# -- checker errors, rendered ----------------------------------------------------
+
+
+def _method(body: str, channels: str = "") -> str:
+    return (
+        FUNCTIONALITIES
+        + "(make-config-method :name '(get-door-info ?r ?d)\n"
+        + "  :precond '((camera ?r) (door ?d))\n"
+        + (f"  :channels '({channels})\n" if channels else "")
+        + f"  :body '({body}))\n"
+    )
+
+
+def test_body_naming_an_undefined_method() -> None:
+    text = _method("(?f1 (camera ?r)) (?f2 (measure-window ?r ?d))")
+    (d,) = checker_errors(text)
+    assert_rendered(d, text, 5, 34, "no functionality or method (measure-window ...)")
+
+
+def test_channel_label_not_in_body() -> None:
+    text = _method(
+        "(?f1 (camera ?r)) (?f2 (measure-door ?r ?d))", "((local ?r) ?f1 ?f3 (image ?r))"
+    )
+    (d,) = checker_errors(text)
+    assert_rendered(d, text, 5, 15, "channel target ?f3 is not a label of the body")
+
+
+def test_channel_descriptor_not_produced() -> None:
+    text = _method(
+        "(?f1 (camera ?r)) (?f2 (measure-door ?r ?d))", "((local ?r) ?f1 ?f2 (sound ?r))"
+    )
+    found = checker_errors(text)
+    assert [d.message for d in found] == [
+        "channel data (sound ?r) is not produced by ?f1 (camera ?r)",
+        "channel data (sound ?r) is not consumed by ?f2 (measure-door ?r ?d)",
+    ]
+    out = assert_rendered(found[0], text, 5, 15, "is not produced by ?f1 (camera ?r)")
+    assert "hint: it produces (image ?r)" in out
+
+
+def test_arity_mismatch() -> None:
+    text = _method("(?f1 (camera ?r ?d)) (?f2 (measure-door ?r ?d))")
+    (d,) = checker_errors(text)
+    assert_rendered(d, text, 5, 16, "arity mismatch: (camera ...) takes 1 argument, found 2")
+
+
+@pytest.mark.parametrize(
+    ("expr", "message"),
+    [
+        ("(shell-command (quote rm))", "eval may not call shell-command"),
+        ("(exit)", "eval may not call exit"),
+        ("(print (quote pwned))", "eval may not call print"),
+        ("(progn (quit) t)", "eval may not call progn"),
+    ],
+)
+def test_eval_outside_the_safe_subset_is_reported_not_run(
+    expr: str, message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = FUNCTIONALITIES + (
+        "(make-config-method :name '(get-door-info ?r ?d)\n"
+        f"  :precond '((camera ?r) (eval {expr}))\n"
+        "  :body '((?f1 (camera ?r)) (?f2 (measure-door ?r ?d))))\n"
+    )
+    (d,) = checker_errors(text)
+    assert_rendered(d, text, 4, 26, message)
+    # Interpreting it (as the planner would) refuses it too: nothing is executed.
+    test = domain_from(parse(text, "t.lisp")).methods[0].precond[1]
+    assert isinstance(test, Eval)
+    with pytest.raises(EvalFailure, match="eval may not call"):
+        holds(test.expr, {})
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""  # print never ran; exit/quit never ran
+
+
+# -- quotes and notations that must read the same --------------------------------
+
+
+def test_typographic_quotes_read_as_plain_quotes() -> None:
+    typographic = TYPOGRAPHIC.read_text("utf-8")
+    assert "'" not in typographic and "’" in typographic and "‘" in typographic
+    assert typographic.replace("’", "'").replace("‘", "'") == CROSS_DOOR.read_text("utf-8")
+    original, _ = read_domain(CROSS_DOOR)
+    copied, _ = read_domain(TYPOGRAPHIC)
+    assert copied.model_dump() == original.model_dump()
+    assert len(copied.methods) == 7 and len(copied.functionalities) == 9
+
+
+STEP1_SEXPR = """\
+(state (robot Pippi) (robot Emil) (door Door1) (camera Emil) (camera Pippi)
+       (compass Pippi) (compass Emil) (in Pippi Room1) (in Emil Room1)
+       (in Door1 Room1) (open Door1) (connects Door1 Room1 Room2))
+(goal (do-cross-door Pippi Door1))
+"""
+
+
+def test_printed_notation_state_equals_sexpr_notation() -> None:
+    printed, text = read_state(ROOT / "domains" / "cross-door" / "state-6.2.2-step1.lisp")
+    assert "robot(Pippi)," in text  # the file really uses the printed notation
+    written = state_from(parse(STEP1_SEXPR, "step1.lisp"))
+    assert printed.model_dump() == written.model_dump()
+    assert len(printed.facts) == 12 and printed.goal is not None
