@@ -15,10 +15,10 @@ from cfgplan.syntax.reader import read_domain, read_state
 @app.command()
 def check(
     domain: Annotated[
-        Path, typer.Argument(help="Domain file: make-functionality and make-config-method forms.")
+        Path, typer.Argument(metavar="DOMAIN", help="Domain file: make-functionality and make-config-method forms.")
     ],
     state: Annotated[
-        Path | None, typer.Argument(help="State file: (state ...) and an optional (goal ...).")
+        Path | None, typer.Argument(metavar="STATE", help="State file: (state ...) and an optional (goal ...).")
     ] = None,
 ) -> None:
     """Check a domain (and a state with its goal) without planning.

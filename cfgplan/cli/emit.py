@@ -85,8 +85,8 @@ def _lisp(part: RobotPart, head: str) -> str:
 
 @app.command()
 def emit(
-    domain: Annotated[Path, typer.Argument(help="Domain file.")],
-    state: Annotated[Path, typer.Argument(help="State file (facts, media, optional goal).")],
+    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
+    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
     output: Annotated[
         Path, typer.Option("-o", "--output", help="Directory to write the files to.")
     ],

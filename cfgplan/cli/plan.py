@@ -125,8 +125,8 @@ def _lisp(problem: Problem, configs: list[Configuration]) -> str:
 
 @app.command()
 def plan(
-    domain: Annotated[Path, typer.Argument(help="Domain file.")],
-    state: Annotated[Path, typer.Argument(help="State file (facts, media, optional goal).")],
+    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
+    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
     goal: GoalOpt = None,
     k: Annotated[
         int, typer.Option("-k", min=1, help="How many configurations, cheapest first.")

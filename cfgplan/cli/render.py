@@ -67,8 +67,8 @@ def configuration_source(problem: Problem, rank: int) -> str:
 
 @app.command()
 def render(
-    domain: Annotated[Path, typer.Argument(help="Domain file.")],
-    state: Annotated[Path, typer.Argument(help="State file (facts, media, optional goal).")],
+    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
+    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
     output: Annotated[
         Path,
         typer.Option(

@@ -23,8 +23,8 @@ from cfgplan.runtime import Registry, describe, society, summary
 
 @app.command()
 def run(
-    domain: Annotated[Path, typer.Argument(help="Domain file.")],
-    state: Annotated[Path, typer.Argument(help="State file (facts, media, optional goal).")],
+    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
+    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
     impl: Annotated[
         str,
         typer.Option(

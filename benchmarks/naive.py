@@ -1,0 +1,79 @@
+"""The naive baseline: the thesis's planner as it describes itself (4.5).
+
+Depth-first over every derivation (each method version, each precondition
+binding), collecting every admissible configuration, then sorting by cost;
+ties keep the depth-first order (6.3.2). It shares the expansion step with
+cfgplan (``cfgplan.planner.partial``) so that the benchmark compares search
+strategies, not two implementations of the step.
+"""
+
+from __future__ import annotations
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner.complete import finish
+from cfgplan.planner.match import bind_name, bindings
+from cfgplan.planner.partial import Dead, Partial, expand_method, place_functionality, root
+from cfgplan.planner.search import Report
+from cfgplan.planner.task import Ground, Task
+
+
+def enumerate_all(task: Task, goal: Ground) -> list[Configuration]:
+    """Every derivation's admissible configuration, cheapest first."""
+    found: list[tuple[float, int, Configuration]] = []
+    report = Report()
+    stack: list[Partial] = [root(goal)]
+    while stack:
+        node = stack.pop()
+        if node.done:
+            config = finish(node, task, node.cost, report)
+            if config is not None:
+                found.append((node.cost, len(found), config))
+            continue
+        item = node.stack[0]
+        sig = (item.call[0], len(item.call) - 1)
+        children: list[Partial] = []
+        if sig in task.methods:
+            if item.call in item.ancestors:
+                continue
+            choice = 0
+            for method in task.methods[sig]:
+                env = bind_name(method.params, item.call[1:])
+                if env is None:
+                    continue
+                for env2 in bindings(task, method.tests, env):
+                    child = expand_method(node, item, method, env2, choice)
+                    choice += 1
+                    if not isinstance(child, Dead):
+                        children.append(child)
+        else:
+            schema = task.functionalities[sig]
+            if item.call in node.labels:
+                reused = place_functionality(node, item, schema, None, None, task)
+                if not isinstance(reused, Dead):
+                    children.append(reused)
+            else:
+                env = bind_name(schema.params, item.call[1:])
+                options = [] if env is None else list(bindings(task, schema.tests, env))
+                for index, env2 in enumerate(options):
+                    choice = index if len(options) > 1 else None
+                    child = place_functionality(node, item, schema, env2, choice, task)
+                    if not isinstance(child, Dead):
+                        children.append(child)
+        stack.extend(reversed(children))
+    found.sort(key=lambda entry: (entry[0], entry[1]))
+    return [
+        config.model_copy(update={"derivation": n})
+        for n, (_, _, config) in enumerate(found, 1)
+    ]
+
+
+def distinct(configs: list[Configuration]) -> list[Configuration]:
+    """Configurations equal up to labels listed once, first wins."""
+    seen: set[object] = set()
+    out: list[Configuration] = []
+    for config in configs:
+        ident = config.identity()
+        if ident not in seen:
+            seen.add(ident)
+            out.append(config)
+    return out
