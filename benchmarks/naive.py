@@ -12,22 +12,27 @@ from __future__ import annotations
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.complete import finish
 from cfgplan.planner.match import bind_name, bindings
-from cfgplan.planner.partial import Dead, Partial, expand_method, place_functionality, root
+from cfgplan.planner.partial import (
+    Dead,
+    Partial,
+    expand_method,
+    instantiate,
+    place_functionality,
+    root,
+)
 from cfgplan.planner.search import Report
 from cfgplan.planner.task import Ground, Task
 
 
 def enumerate_all(task: Task, goal: Ground) -> list[Configuration]:
     """Every derivation's admissible configuration, cheapest first."""
-    found: list[tuple[float, int, Configuration]] = []
+    found: list[tuple[float, int, Partial]] = []
     report = Report()
     stack: list[Partial] = [root(goal)]
     while stack:
         node = stack.pop()
         if node.done:
-            config = finish(node, task, node.cost, report)
-            if config is not None:
-                found.append((node.cost, len(found), config))
+            found.append((node.cost, len(found), node))
             continue
         item = node.stack[0]
         sig = (item.call[0], len(item.call) - 1)
@@ -41,7 +46,12 @@ def enumerate_all(task: Task, goal: Ground) -> list[Configuration]:
                 if env is None:
                     continue
                 for env2 in bindings(task, method.tests, env):
-                    child = expand_method(node, item, method, env2, choice)
+                    expansion = instantiate(method, env2, "")
+                    child = (
+                        expansion
+                        if isinstance(expansion, Dead)
+                        else expand_method(node, item, expansion, "", None, choice)
+                    )
                     choice += 1
                     if not isinstance(child, Dead):
                         children.append(child)
@@ -61,10 +71,12 @@ def enumerate_all(task: Task, goal: Ground) -> list[Configuration]:
                         children.append(child)
         stack.extend(reversed(children))
     found.sort(key=lambda entry: (entry[0], entry[1]))
-    return [
-        config.model_copy(update={"derivation": n})
-        for n, (_, _, config) in enumerate(found, 1)
-    ]
+    configs: list[Configuration] = []
+    for cost, _, node in found:  # admissibility last, configurations built once sorted
+        config = finish(node, task, cost, report)
+        if config is not None:
+            configs.append(config.model_copy(update={"derivation": len(configs) + 1}))
+    return configs
 
 
 def distinct(configs: list[Configuration]) -> list[Configuration]:

@@ -9,16 +9,16 @@ import typer
 
 from cfgplan.check import check as run_checks
 from cfgplan.cli.app import EXIT_INPUT, app, report
+from cfgplan.cli.plan import DomainArg
 from cfgplan.syntax.reader import read_domain, read_state
 
 
 @app.command()
 def check(
-    domain: Annotated[
-        Path, typer.Argument(metavar="DOMAIN", help="Domain file: make-functionality and make-config-method forms.")
-    ],
+    domain: DomainArg,
     state: Annotated[
-        Path | None, typer.Argument(metavar="STATE", help="State file: (state ...) and an optional (goal ...).")
+        Path | None,
+        typer.Argument(metavar="STATE", help="State file: facts, media, optional (goal ...)."),
     ] = None,
 ) -> None:
     """Check a domain (and a state with its goal) without planning.

@@ -19,7 +19,7 @@ from cfgplan.backends.lisp import to_lisp
 from cfgplan.backends.python import module_name, run_all, to_python
 from cfgplan.backends.wiring import RobotPart, deploy
 from cfgplan.cli.app import EXIT_NONE, app, say
-from cfgplan.cli.plan import GoalOpt, WeightsOpt, load_problem
+from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text, to_text
 from cfgplan.configuration.model import Configuration
@@ -85,8 +85,8 @@ def _lisp(part: RobotPart, head: str) -> str:
 
 @app.command()
 def emit(
-    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
-    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
+    domain: DomainArg,
+    state: StateArg,
     output: Annotated[
         Path, typer.Option("-o", "--output", help="Directory to write the files to.")
     ],

@@ -37,6 +37,16 @@ def weights_option(text: str | None) -> Weights | None:
         raise typer.BadParameter(str(exc)) from None
 
 
+DomainArg = Annotated[
+    Path,
+    typer.Argument(
+        metavar="DOMAIN", help="Domain file: make-functionality and make-config-method forms."
+    ),
+]
+StateArg = Annotated[
+    Path,
+    typer.Argument(metavar="STATE", help="State file: facts, media and an optional (goal ...)."),
+]
 GoalOpt = Annotated[
     str | None,
     typer.Option(
@@ -125,8 +135,8 @@ def _lisp(problem: Problem, configs: list[Configuration]) -> str:
 
 @app.command()
 def plan(
-    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
-    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
+    domain: DomainArg,
+    state: StateArg,
     goal: GoalOpt = None,
     k: Annotated[
         int, typer.Option("-k", min=1, help="How many configurations, cheapest first.")

@@ -16,7 +16,7 @@ from cfgplan.backends.dot import configuration_dot
 from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.backends.render import render as render_dot
 from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
-from cfgplan.cli.plan import GoalOpt, WeightsOpt, load_problem
+from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text
 from cfgplan.planner.explain import explain
@@ -67,8 +67,8 @@ def configuration_source(problem: Problem, rank: int) -> str:
 
 @app.command()
 def render(
-    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
-    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
+    domain: DomainArg,
+    state: StateArg,
     output: Annotated[
         Path,
         typer.Option(

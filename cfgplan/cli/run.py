@@ -9,7 +9,6 @@ received, then per functionality how often it ran; ``--trace`` prints every call
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -17,14 +16,14 @@ import typer
 from cfgplan.backends.wiring import deploy
 from cfgplan.cli.app import app
 from cfgplan.cli.emit import RankOpt, choose, title
-from cfgplan.cli.plan import GoalOpt, WeightsOpt, load_problem
+from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.runtime import Registry, describe, society, summary
 
 
 @app.command()
 def run(
-    domain: Annotated[Path, typer.Argument(metavar="DOMAIN", help="Domain file.")],
-    state: Annotated[Path, typer.Argument(metavar="STATE", help="State file (facts, media, optional goal).")],
+    domain: DomainArg,
+    state: StateArg,
     impl: Annotated[
         str,
         typer.Option(

@@ -141,8 +141,12 @@ class Bound:
         return frozenset(funcs), frozenset(channels), producers
 
     # -- the bound of a node ----------------------------------------------
-    def of(self, node: Partial) -> float | None:
-        """A lower bound on the cost still to come, or None when no completion exists."""
+    def of(self, node: Partial, estimate: bool = True) -> float | None:
+        """A lower bound on the cost still to come, or None when no completion
+        exists; with ``estimate`` False only the latter is decided (and 0 returned)."""
+        if not estimate:
+            feasible = all(self.summary(item.call).feasible for item in node.stack)
+            return 0.0 if feasible else None
         task = self.task
         w = task.weights
         placed = node.labels

@@ -89,32 +89,61 @@ def _cycle(node: Partial) -> Dead | None:
     )
 
 
+def _postconditions(node: Partial) -> tuple[str, ...]:
+    post = (show(a) if positive else f"(not {show(a)})" for positive, a in node.effects)
+    return tuple(dict.fromkeys(post))
+
+
+def identity(node: Partial) -> object:
+    """:meth:`Configuration.identity` of the node's configuration, without building it."""
+    key = {p.label: p.call for p in node.placed}
+    channels = frozenset(
+        (ch.kind, key[ch.source], key[ch.target], ch.data, ch.bandwidth) for ch in node.channels
+    )
+    return frozenset(key.values()), channels, frozenset(_postconditions(node))
+
+
 def build(node: Partial, total: float, task: Task) -> Configuration:
-    """The configuration of a finished node, in the thesis's list order."""
+    """The configuration of a finished node, in the thesis's list order.
+
+    The planner's own data is already valid, so the models are constructed
+    without validation (it is the hot path of listing many configurations).
+    """
     located = node.located
-    functionalities = tuple(
-        FunctionalityInstance(label=_label(p.label), name=p.call[0], args=p.call[1:])
-        for p in reversed(node.placed)
-    )
-    channels = tuple(
-        Channel(
-            kind="global" if ch.kind == "global" else "local",
-            source=_label(ch.source),
-            target=_label(ch.target),
-            source_robot=located[ch.source].robot,
-            target_robot=located[ch.target].robot,
-            data=ch.data,
-            bandwidth=ch.bandwidth,
-        )
-        for ch in node.channels
-    )
-    post = tuple(show(a) if positive else f"(not {show(a)})" for positive, a in node.effects)
-    return Configuration(
-        functionalities=functionalities,
-        channels=channels,
-        postconditions=tuple(dict.fromkeys(post)),
+    cache = task.models  # the models are immutable: configurations share them
+    functionalities = []
+    for p in reversed(node.placed):
+        fkey = (p.label, p.call)
+        made = cache.get(fkey)
+        if made is None:
+            made = cache[fkey] = FunctionalityInstance.model_construct(
+                label=_label(p.label), name=p.call[0], args=p.call[1:]
+            )
+        functionalities.append(made)
+    channels = []
+    for ch in node.channels:
+        src, dst = located[ch.source].robot, located[ch.target].robot
+        ckey = (ch.kind, ch.source, ch.target, src, dst, ch.data, ch.bandwidth)
+        made = cache.get(ckey)
+        if made is None:
+            made = cache[ckey] = Channel.model_construct(
+                kind="global" if ch.kind == "global" else "local",
+                source=_label(ch.source),
+                target=_label(ch.target),
+                source_robot=src,
+                target_robot=dst,
+                data=ch.data,
+                bandwidth=ch.bandwidth,
+            )
+        channels.append(made)
+    return Configuration.model_construct(
+        functionalities=tuple(functionalities),
+        channels=tuple(channels),
+        postconditions=_postconditions(node),
         cost=total,
         weights=task.weights,
+        media=(),
+        derivation=0,
     )
 
 

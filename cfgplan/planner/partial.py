@@ -22,7 +22,7 @@ Key = Ground
 """A functionality instance's identity: ``("camera", "Emil")``."""
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: cheaper to build; never mutated
 class Item:
     """A method or functionality instance waiting on the stack."""
 
@@ -31,7 +31,7 @@ class Item:
     ancestors: frozenset[Ground]  # method instances above it: the recursion guard
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: cheaper to build; never mutated
 class Channel:
     """A channel between two labels; resolved once both are functionalities."""
 
@@ -43,7 +43,7 @@ class Channel:
     bandwidth: float | None
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: cheaper to build; never mutated
 class Placed:
     """A functionality instance in the configuration, located at ``robot``
     (its first argument), with its inputs and outputs instantiated."""
@@ -66,7 +66,7 @@ class Dead:
     condition: str = "causal"
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: cheaper to build; never mutated
 class Partial:
     """A node of the search: a configuration under construction."""
 
@@ -79,6 +79,8 @@ class Partial:
     next_label: int
     path: tuple[int, ...]  # the choices made: orders equal costs as the thesis does
     cost: float  # of the settled part; see the module docstring of search.py
+    robots: frozenset[str]  # where the placed functionalities run
+    resolved: frozenset[ChannelKey]  # channels whose two ends are placed
 
     @property
     def done(self) -> bool:
@@ -97,6 +99,8 @@ def root(goal: Ground) -> Partial:
         next_label=2,
         path=(),
         cost=0.0,
+        robots=frozenset(),
+        resolved=frozenset(),
     )
 
 
@@ -117,18 +121,27 @@ def _touching(channels: tuple[Channel, ...], label: int) -> list[int]:
     return [i for i, ch in enumerate(channels) if ch.source == label or ch.target == label]
 
 
+ChannelKey = tuple[str, int, int, Ground]
+"""A resolved channel's identity: kind, sender label, receiver label, data."""
+
+
 def _settle(
-    channels: tuple[Channel, ...], located: dict[int, Placed], touching: list[int], task: Task
-) -> tuple[tuple[Channel, ...], float] | Dead:
+    channels: tuple[Channel, ...],
+    located: dict[int, Placed],
+    touching: list[int],
+    resolved: frozenset[ChannelKey],
+    task: Task,
+) -> tuple[tuple[Channel, ...], float, frozenset[ChannelKey]] | Dead:
     """The channels at ``touching`` (indices) may just have got both ends
     placed: check their location, merge each with an identical channel already
     resolved (same kind, ends and data; the larger bandwidth is kept), and
-    return the cost the newly resolved ones add."""
+    return the channels, the cost the newly resolved ones add, and the
+    identities of all resolved channels."""
     if not touching:
-        return channels, 0.0
+        return channels, 0.0, resolved
     out = list(channels)
-    existing: dict[tuple[str, int, int, Ground], int] | None = None
-    dropped: set[int] = set()
+    new: set[ChannelKey] = set()
+    dropped: list[int] = []
     added = 0.0
     for i in touching:
         ch = channels[i]
@@ -144,39 +157,44 @@ def _settle(
                 f"{describe_call(dst.call)} on {dst.robot}",
                 condition="location",
             )
-        if existing is None:
-            existing = {
-                (c.kind, c.source, c.target, c.data): j
-                for j, c in enumerate(channels)
-                if j not in touching and c.source in located and c.target in located
-            }
         ident = (ch.kind, ch.source, ch.target, ch.data)
-        j = existing.get(ident)
-        if j is None:
-            existing[ident] = i
+        if ident not in resolved and ident not in new:
+            new.add(ident)
             added += task.weights.global_ if ch.kind == "global" else task.weights.local
             continue
+        # An identical channel is already there (rare): keep it, drop this one.
+        j = next(
+            j
+            for j, c in enumerate(out)
+            if j != i and j not in dropped and (c.kind, c.source, c.target, c.data) == ident
+            and c.source in located and c.target in located
+        )
         kept = out[j]
         if ch.bandwidth is not None and (kept.bandwidth is None or ch.bandwidth > kept.bandwidth):
             out[j] = replace(kept, bandwidth=ch.bandwidth)
-        dropped.add(i)
+        dropped.append(i)
     if dropped:
         out = [c for i, c in enumerate(out) if i not in dropped]
-    return tuple(out), added
+    return tuple(out), added, resolved | new if new else resolved
 
 
-def expand_method(
-    node: Partial, item: Item, method: MethodSchema, env: Bindings, choice: int
-) -> Partial | Dead:
-    """Step 3 of 4.5: fresh labels, add the method's channels, push its body,
-    and re-wire channels at the expanded instance through ``:in``/``:out``."""
-    where = f"{describe_call(item.call)}, version {method.version}"
-    fresh: dict[str, int] = {}
-    label = node.next_label
-    for body_label, _ in method.body:
-        fresh[body_label] = label
-        label += 1
-    block: list[Channel] = []
+@dataclass(frozen=True, slots=True)
+class Expansion:
+    """A method version instantiated with one binding, labels as offsets from
+    the first fresh label; the same for every node that expands it."""
+
+    size: int
+    channels: tuple[tuple[str, Ground, int, int, Ground, float | None], ...]
+    body: tuple[Ground, ...]
+    outputs: dict[Ground, tuple[int, float | None]]  # data -> (offset, bandwidth)
+    inputs: dict[Ground, tuple[int, ...]]  # data -> offsets
+    effects: tuple[tuple[bool, Ground], ...]
+
+
+def instantiate(method: MethodSchema, env: Bindings, where: str) -> Expansion | Dead:
+    """Instantiate a method version under ``env`` (step 3a of 4.5), once."""
+    offset = {body_label: i for i, (body_label, _) in enumerate(method.body)}
+    channels = []
     for spec in method.channels:
         data = _instantiate(spec.data, env, where)
         robots = _instantiate(("robots", *spec.robots), env, where)
@@ -184,48 +202,65 @@ def expand_method(
             return data
         if isinstance(robots, Dead):
             return robots
-        block.append(
-            Channel(
-                spec.kind, robots[1:], fresh[spec.source], fresh[spec.target], data, spec.bandwidth
-            )
+        channels.append(
+            (spec.kind, robots[1:], offset[spec.source], offset[spec.target], data, spec.bandwidth)
         )
-    rewired: list[Channel] = []
-    for ch in node.channels:
-        if ch.source == item.label:
-            port = next((p for p in method.outputs if substitute(p.data, env) == ch.data), None)
-            if port is None:
-                return Dead(
-                    where,
-                    f"no :out entry produces {show(ch.data)}",
-                    method.span,
-                    condition="information",
-                )
-            bandwidth = ch.bandwidth
-            if bandwidth is None and ch.kind == "global":
-                bandwidth = port.bandwidth  # a global channel allocates the :out's bandwidth
-            rewired.append(replace(ch, source=fresh[port.label], bandwidth=bandwidth))
-        elif ch.target == item.label:
-            ports = [p for p in method.inputs if substitute(p.data, env) == ch.data]
-            if not ports:
-                return Dead(
-                    where,
-                    f"no :in entry consumes {show(ch.data)}",
-                    method.span,
-                    condition="information",
-                )
-            rewired.extend(replace(ch, target=fresh[p.label]) for p in ports)
-        else:
-            rewired.append(ch)
-    ancestors = item.ancestors | {item.call}
-    pushed: list[Item] = []
-    for body_label, call in method.body:
+    body = []
+    for _, call in method.body:
         ground = _instantiate(call, env, where)
         if isinstance(ground, Dead):
             return ground
-        pushed.append(Item(fresh[body_label], ground, ancestors))
-    effects = list(node.effects)
-    for eff in method.effects:
-        effects.append((eff.positive, substitute(eff.pattern, env)))
+        body.append(ground)
+    outputs: dict[Ground, tuple[int, float | None]] = {}
+    for port in method.outputs:
+        outputs.setdefault(substitute(port.data, env), (offset[port.label], port.bandwidth))
+    inputs: dict[Ground, tuple[int, ...]] = {}
+    for port in method.inputs:
+        data = substitute(port.data, env)
+        inputs[data] = (*inputs.get(data, ()), offset[port.label])
+    effects = tuple((eff.positive, substitute(eff.pattern, env)) for eff in method.effects)
+    return Expansion(len(method.body), tuple(channels), tuple(body), outputs, inputs, effects)
+
+
+def expand_method(
+    node: Partial, item: Item, expansion: Expansion, where: str, span: Span | None, choice: int
+) -> Partial | Dead:
+    """Step 3 of 4.5: fresh labels, add the method's channels, push its body,
+    and re-wire channels at the expanded instance through ``:in``/``:out``."""
+    first = node.next_label
+    block = [
+        Channel(kind, robots, first + src, first + dst, data, bandwidth)
+        for kind, robots, src, dst, data, bandwidth in expansion.channels
+    ]
+    rewired: list[Channel] = []
+    expanded = item.label
+    for ch in node.channels:
+        if ch.source == expanded:
+            port = expansion.outputs.get(ch.data)
+            if port is None:
+                return Dead(
+                    where, f"no :out entry produces {show(ch.data)}", span, condition="information"
+                )
+            bandwidth = ch.bandwidth
+            if bandwidth is None and ch.kind == "global":
+                bandwidth = port[1]  # a global channel allocates the :out's bandwidth
+            rewired.append(
+                Channel(ch.kind, ch.robots, first + port[0], ch.target, ch.data, bandwidth)
+            )
+        elif ch.target == expanded:
+            offsets = expansion.inputs.get(ch.data)
+            if not offsets:
+                return Dead(
+                    where, f"no :in entry consumes {show(ch.data)}", span, condition="information"
+                )
+            rewired.extend(
+                Channel(ch.kind, ch.robots, ch.source, first + k, ch.data, ch.bandwidth)
+                for k in offsets
+            )
+        else:
+            rewired.append(ch)
+    ancestors = item.ancestors | {item.call}
+    pushed = tuple(Item(first + i, call, ancestors) for i, call in enumerate(expansion.body))
     # Fresh labels are not placed yet: no channel got resolved, nothing to settle.
     return Partial(
         stack=(*pushed, *node.stack[1:]),
@@ -233,10 +268,12 @@ def expand_method(
         labels=node.labels,
         located=node.located,
         channels=(*block, *rewired),
-        effects=tuple(effects),
-        next_label=label,
+        effects=(*node.effects, *expansion.effects) if expansion.effects else node.effects,
+        next_label=first + expansion.size,
         path=(*node.path, choice),
         cost=node.cost,
+        robots=node.robots,
+        resolved=node.resolved,
     )
 
 
@@ -258,38 +295,48 @@ def place_functionality(
         channels = tuple(
             ch
             if ch.source != old and ch.target != old
-            else replace(
-                ch,
-                source=existing if ch.source == old else ch.source,
-                target=existing if ch.target == old else ch.target,
+            else Channel(
+                ch.kind,
+                ch.robots,
+                existing if ch.source == old else ch.source,
+                existing if ch.target == old else ch.target,
+                ch.data,
+                ch.bandwidth,
             )
             for ch in node.channels
         )
-        settled = _settle(channels, node.located, _touching(node.channels, old), task)
+        touching = _touching(node.channels, old)
+        settled = _settle(channels, node.located, touching, node.resolved, task)
         if isinstance(settled, Dead):
             return settled
         return replace(
-            node, stack=node.stack[1:], channels=settled[0], path=path, cost=node.cost + settled[1]
+            node,
+            stack=node.stack[1:],
+            channels=settled[0],
+            path=path,
+            cost=node.cost + settled[1],
+            resolved=settled[2],
         )
     assert env is not None
-    args = env  # the name's bindings extended by the preconditions'
-    new = Placed(
-        item.label,
-        item.call,
-        schema,
-        item.call[1],
-        tuple(substitute(i, args) for i in schema.inputs),
-        tuple(substitute(o, args) for o in schema.outputs),
-    )
+    io = task.io.get(item.call)
+    if io is None:
+        io = task.io[item.call] = (
+            tuple(substitute(i, env) for i in schema.inputs),
+            tuple(substitute(o, env) for o in schema.outputs),
+        )
+    new = Placed(item.label, item.call, schema, item.call[1], *io)
     located = dict(node.located)
     located[item.label] = new
-    settled = _settle(node.channels, located, _touching(node.channels, item.label), task)
+    touching = _touching(node.channels, item.label)
+    settled = _settle(node.channels, located, touching, node.resolved, task)
     if isinstance(settled, Dead):
         return settled
     w = task.weights
     added = settled[1] + (schema.cost if schema.cost is not None else w.functionality)
-    if all(p.robot != new.robot for p in node.placed):
+    robots = node.robots
+    if new.robot not in robots:
         added += w.robot
+        robots = robots | {new.robot}
     effects = list(node.effects)
     for eff in schema.effects:
         effects.append((eff.positive, substitute(eff.pattern, env)))
@@ -305,4 +352,21 @@ def place_functionality(
         next_label=node.next_label,
         path=path,
         cost=node.cost + added,
+        robots=robots,
+        resolved=settled[2],
     )
+
+
+def canonical(node: Partial) -> object:
+    """The node up to labels: placed instances, channels, stack and P. Two nodes
+    with the same canonical form have the same completions (up to labels)."""
+    names: dict[int, object] = {p.label: p.call for p in node.placed}
+    for index, item in enumerate(node.stack):
+        names[item.label] = index
+    channels = frozenset(
+        (ch.kind, ch.robots, names[ch.source], names[ch.target], ch.data, ch.bandwidth)
+        for ch in node.channels
+    )
+    stack = tuple((item.call, item.ancestors) for item in node.stack)
+    placed = frozenset(p.call for p in node.placed)
+    return placed, channels, stack, frozenset(node.effects)

@@ -18,18 +18,21 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.bound import Bound
-from cfgplan.planner.complete import finish
-from cfgplan.planner.match import bind_name, bindings, why_not
+from cfgplan.planner.complete import finish, identity
+from cfgplan.planner.match import Bindings, bind_name, bindings, why_not
 from cfgplan.planner.partial import (
     Dead,
+    Expansion,
     Item,
     Partial,
+    canonical,
     describe_call,
     expand_method,
+    instantiate,
     place_functionality,
     root,
 )
-from cfgplan.planner.task import Ground, Task
+from cfgplan.planner.task import Ground, MethodSchema, Task
 
 
 @dataclass
@@ -40,6 +43,7 @@ class Stats:
     expansions: int = 0
     derivations: int = 0
     duplicates: int = 0
+    merged: int = 0  # partial configurations reached again by another order
     rejected: int = 0
     seconds: float = 0.0
     complete: bool = True  # False when a limit stopped the search early
@@ -71,10 +75,14 @@ class Search:
         time_limit: float | None = None,
         progress: Progress | None = None,
         bound: bool = True,
+        estimate: bool = True,
     ) -> None:
         self.task = task
         self.bound = Bound(task) if bound else None
         self.pruned = 0  # nodes the bound proved to have no completion
+        # Listing everything, a cost estimate cannot stop the search early:
+        # then the bound only cuts nodes without completion.
+        self.estimate = estimate
         self.goal = goal
         self.distinct = distinct
         self.time_limit = time_limit
@@ -82,6 +90,8 @@ class Search:
         self.stats = Stats()
         self.report = Report()
         self._seen: set[object] = set()
+        self._closed: set[object] = set()
+        self._expansions: dict[object, Expansion | Dead] = {}
         self._heap: list[tuple[float, tuple[int, ...], Partial]] = []
         self._start = 0.0
 
@@ -100,6 +110,11 @@ class Search:
             total, _, node = heapq.heappop(self._heap)
             self.stats.nodes += 1
             if node.done:
+                ident = identity(node) if self.distinct else None
+                if ident is not None and ident in self._seen:
+                    self.stats.derivations += 1
+                    self.stats.duplicates += 1
+                    continue
                 config = finish(node, self.task, total, self.report)
                 self.stats.seconds = time.perf_counter() - self._start
                 if config is None:
@@ -107,14 +122,18 @@ class Search:
                     continue
                 self.stats.derivations += 1
                 config = config.model_copy(update={"derivation": self.stats.derivations})
-                if self.distinct:
-                    ident = config.identity()
-                    if ident in self._seen:
-                        self.stats.duplicates += 1
-                        continue
+                if ident is not None:
                     self._seen.add(ident)
                 yield config
                 continue
+            if self.distinct:
+                # The same partial configuration reached by another order of
+                # choices has the same completions: only the first one counts.
+                key = canonical(node)
+                if key in self._closed:
+                    self.stats.merged += 1
+                    continue
+                self._closed.add(key)
             self._expand(node)
         self.stats.seconds = time.perf_counter() - self._start
 
@@ -146,9 +165,15 @@ class Search:
                 )
                 continue
             found = False
+            where = f"{describe_call(item.call)}, version {method.version}"
             for env2 in bindings(self.task, method.tests, env):
                 found = True
-                child = expand_method(node, item, method, env2, choice)
+                expansion = self._instantiated(method, env2, where)
+                child = (
+                    expansion
+                    if isinstance(expansion, Dead)
+                    else expand_method(node, item, expansion, where, method.span, choice)
+                )
                 choice += 1
                 if isinstance(child, Dead):
                     self.report.note(child)
@@ -164,6 +189,13 @@ class Search:
                     )
                 )
 
+    def _instantiated(self, method: MethodSchema, env: Bindings, where: str) -> Expansion | Dead:
+        key = (method.name, method.version, len(method.params), tuple(sorted(env.items())))
+        found = self._expansions.get(key)
+        if found is None:
+            found = self._expansions[key] = instantiate(method, env, where)
+        return found
+
     def _push_settled(self, node: Partial) -> None:
         """Place the functionalities on top of the stack, then queue the node
         (one per precondition binding when a functionality has several)."""
@@ -173,7 +205,7 @@ class Search:
             if current.done or _is_method(self.task, current.stack[0]):
                 priority = current.cost
                 if self.bound is not None and not current.done:
-                    rest = self.bound.of(current)
+                    rest = self.bound.of(current, self.estimate)
                     if rest is None:
                         self.pruned += 1
                         continue
@@ -240,7 +272,14 @@ def plan(
     progress: Progress | None = None,
 ) -> tuple[list[Configuration], Search]:
     """The ``limit`` cheapest admissible configurations (all when None)."""
-    search = Search(task, goal, distinct=distinct, time_limit=time_limit, progress=progress)
+    search = Search(
+        task,
+        goal,
+        distinct=distinct,
+        time_limit=time_limit,
+        progress=progress,
+        estimate=limit is not None,
+    )
     found: list[Configuration] = []
     for config in search:
         found.append(config)

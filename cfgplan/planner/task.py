@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import (
@@ -110,6 +111,10 @@ class Task:
     media: tuple[Medium, ...]
     weights: Weights
     state_names: frozenset[str] = field(default_factory=frozenset)
+    io: dict[Ground, tuple[tuple[Ground, ...], tuple[Ground, ...]]] = field(default_factory=dict)
+    """Memo: a functionality instance's inputs and outputs, instantiated."""
+    models: dict[tuple[object, ...], Any] = field(default_factory=dict)
+    """Memo: result models (immutable) shared by the configurations built."""
 
 
 def pattern(atom: Atom) -> Pattern:

@@ -462,7 +462,12 @@ def test_distinct_is_derivations_without_repeats(example: Generated) -> None:
             seen.add(config.identity())
             expected.append(config)
     assert [(c.cost, c.identity()) for c in distinct] == [(c.cost, c.identity()) for c in expected]
-    assert distinct == expected  # labels, channel order and derivation numbers too
+    # Labels and channel order too. Derivation numbers differ: in distinct mode the
+    # search skips partial configurations reached again, so it completes fewer.
+    def unnumbered(configs: list[Configuration]) -> list[Configuration]:
+        return [c.model_copy(update={"derivation": 0}) for c in configs]
+
+    assert unnumbered(distinct) == unnumbered(expected)
 
 
 @PROPERTY
