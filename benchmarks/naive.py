@@ -65,8 +65,8 @@ def enumerate_all(task: Task, goal: Ground) -> list[Configuration]:
                 env = bind_name(schema.params, item.call[1:])
                 options = [] if env is None else list(bindings(task, schema.tests, env))
                 for index, env2 in enumerate(options):
-                    choice = index if len(options) > 1 else None
-                    child = place_functionality(node, item, schema, env2, choice, task)
+                    branch = index if len(options) > 1 else None
+                    child = place_functionality(node, item, schema, env2, branch, task)
                     if not isinstance(child, Dead):
                         children.append(child)
         stack.extend(reversed(children))

@@ -87,6 +87,7 @@ def _stats(search: Search) -> dict[str, object]:
         "duplicates": s.duplicates,
         "rejected": s.rejected,
         "exhausted": s.complete,
+        "stopped": search.stopped or None,
     }
 
 
@@ -104,7 +105,7 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
     for rank, c in enumerate(configs, 1):
         row = [
             str(rank),
-            fmt(c.cost),
+            fmt(c.cost) + ("" if c.proven else " *"),
             ", ".join(c.robots),
             str(len(c.functionalities)),
             str(c.local_channels),
@@ -120,6 +121,8 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
     ).print(table)
     if not problem.state.media:
         buffer.write("note: the state declares no media: communication admissibility not checked\n")
+    if any(not c.proven for c in configs):
+        buffer.write("* not proven optimal: the search was stopped before it could prove it\n")
     return buffer.getvalue()
 
 
@@ -128,7 +131,7 @@ def _lisp(problem: Problem, configs: list[Configuration]) -> str:
     if not problem.state.media:
         parts.append(";; the state declares no media: communication admissibility not checked")
     for rank, c in enumerate(configs, 1):
-        parts.append(f";; rank {rank}")
+        parts.append(f";; rank {rank}" + ("" if c.proven else ", not proven optimal"))
         parts.append(to_text(c, problem.state.media))
     return "\n".join(parts) + "\n"
 
@@ -187,8 +190,9 @@ def plan(
     )
     if verbose:
         _verbose(search)
-    if search.stats.complete is False and time_limit is not None and not configs:
-        say(f"cfgplan: no configuration found within {fmt(time_limit)} s")
+    if search.stopped:
+        found = f"{len(configs)} configuration(s)" if configs else "nothing"
+        say(f"cfgplan: search stopped ({search.stopped}); reporting {found} found so far")
     if not configs:
         say("\n".join(explain(search.report, call_text(problem.goal_call))))
         raise typer.Exit(EXIT_NONE)

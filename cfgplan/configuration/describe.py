@@ -76,6 +76,7 @@ def to_dict(config: Configuration, rank: int) -> dict[str, Any]:
         "cost": _number(config.cost),
         "robots": config.robots,
         "derivation": config.derivation,
+        "proven": config.proven,
         "functionalities": [
             {"id": f.label, "name": f.name, "args": list(f.args), "robot": f.robot}
             for f in config.functionalities

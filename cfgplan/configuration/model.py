@@ -71,6 +71,7 @@ class Configuration(BaseModel):
     weights: Weights = Weights()
     media: tuple[Assignment, ...] = ()
     derivation: int = 0  # which derivation (1-based, in thesis order) produced it
+    proven: bool = True  # False: found by a dive after the search was stopped early
 
     @property
     def robots(self) -> list[str]:

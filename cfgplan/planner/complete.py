@@ -144,6 +144,7 @@ def build(node: Partial, total: float, task: Task) -> Configuration:
         weights=task.weights,
         media=(),
         derivation=0,
+        proven=True,
     )
 
 

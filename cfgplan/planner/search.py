@@ -94,15 +94,17 @@ class Search:
         self._expansions: dict[object, Expansion | Dead] = {}
         self._heap: list[tuple[float, tuple[int, ...], Partial]] = []
         self._start = 0.0
+        self.stopped = ""  # why the search stopped early: "time limit", "interrupted"
 
     def __iter__(self) -> Iterator[Configuration]:
         self._start = time.perf_counter()
-        self._push_settled(root(self.goal))
+        self._queue(self.settled(root(self.goal)))
         next_tick = 1.0
         while self._heap:
             elapsed = time.perf_counter() - self._start
             if self.time_limit is not None and elapsed > self.time_limit:
                 self.stats.complete = False
+                self.stopped = "time limit"
                 break
             if self.progress is not None and elapsed > next_tick:
                 self.progress(self.stats, elapsed)
@@ -134,11 +136,25 @@ class Search:
                     self.stats.merged += 1
                     continue
                 self._closed.add(key)
-            self._expand(node)
+            self._queue(self.children(node))
         self.stats.seconds = time.perf_counter() - self._start
 
-    def _expand(self, node: Partial) -> None:
-        """Branch on the method on top of the stack: each version, each binding."""
+    def _queue(self, entries: Iterator[tuple[float, Partial]]) -> None:
+        for priority, node in entries:
+            heapq.heappush(self._heap, (priority, node.path, node))
+
+    @property
+    def frontier(self) -> list[tuple[float, Partial]]:
+        """The open nodes, best first."""
+        return [(priority, node) for priority, _, node in sorted(self._heap, key=lambda e: e[:2])]
+
+    def finished(self, node: Partial, total: float) -> Configuration | None:
+        """The admissible configuration of a node whose stack is empty, or None."""
+        return finish(node, self.task, total, self.report)
+
+    def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
+        """Branch on the method on top of the stack: each version, each binding;
+        yields the settled children with their priorities."""
         item = node.stack[0]
         versions = self.task.methods.get((item.call[0], len(item.call) - 1), ())
         self.stats.expansions += 1
@@ -178,7 +194,7 @@ class Search:
                 if isinstance(child, Dead):
                     self.report.note(child)
                     continue
-                self._push_settled(child)
+                yield from self.settled(child)
             if not found:
                 failure = why_not(self.task, method.tests, env, method.params)
                 self.report.note(
@@ -196,9 +212,9 @@ class Search:
             found = self._expansions[key] = instantiate(method, env, where)
         return found
 
-    def _push_settled(self, node: Partial) -> None:
-        """Place the functionalities on top of the stack, then queue the node
-        (one per precondition binding when a functionality has several)."""
+    def settled(self, node: Partial) -> Iterator[tuple[float, Partial]]:
+        """Place the functionalities on top of the stack; yield the node with its
+        priority (one per precondition binding when a functionality has several)."""
         todo = [node]
         while todo:
             current = todo.pop()
@@ -210,7 +226,7 @@ class Search:
                         self.pruned += 1
                         continue
                     priority += rest
-                heapq.heappush(self._heap, (priority, current.path, current))
+                yield priority, current
                 continue
             item = current.stack[0]
             schema = self.task.functionalities.get((item.call[0], len(item.call) - 1))
@@ -281,11 +297,22 @@ def plan(
         estimate=limit is not None,
     )
     found: list[Configuration] = []
-    for config in search:
-        found.append(config)
-        if limit is not None and len(found) >= limit:
-            search.stats.complete = False
-            break
+    try:
+        for config in search:
+            found.append(config)
+            if limit is not None and len(found) >= limit:
+                search.stats.complete = False
+                break
+    except KeyboardInterrupt:
+        search.stats.complete = False
+        search.stopped = "interrupted"
+    if search.stopped and not found:
+        # Stopped before the cheapest was proven: dive for any configuration.
+        from cfgplan.planner.dive import dive
+
+        guess = dive(search)
+        if guess is not None:
+            found.append(guess)
     if not found and search.pruned and search.stats.complete:
         # The bound cut branches without meeting their dead ends; search them
         # without it, so the report can say why nothing is admissible.

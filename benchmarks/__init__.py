@@ -1,0 +1,1 @@
+"""Benchmarks: domain families, the naive baseline, the table (``python -m benchmarks.run``)."""
