@@ -6,7 +6,9 @@ the first configuration found is the cheapest):
 
 - the *mandatory* functionality instances of each pending stack item: those in
   every feasible expansion of it (a method's versions and bindings are
-  intersected), not yet in C, and their robots not yet in C;
+  intersected), not yet in C;
+- the robots every feasible expansion of a pending item runs something on
+  (intersected the same way), not yet in C;
 - channels that every completion must hold and that cannot merge with one
   already in C: those whose two ends are known, and those whose receiving end
   is known (one per kind, data and receiver).
@@ -38,6 +40,7 @@ class Summary:
 
     feasible: bool
     functionalities: frozenset[Key] = frozenset()
+    robots: frozenset[str] = frozenset()  # where some functionality runs, in every expansion
     channels: frozenset[ChannelId] = frozenset()
     producers: tuple[tuple[Ground, Key | None], ...] = ()  # :out data -> certain producer
 
@@ -46,6 +49,16 @@ class Summary:
             if d == data:
                 return key
         return None
+
+
+@dataclass(frozen=True)
+class Expanded:
+    """One expansion of a method: what it certainly contains."""
+
+    functionalities: frozenset[Key]
+    robots: frozenset[str]
+    channels: frozenset[ChannelId]
+    producers: dict[Ground, Key | None]
 
 
 INFEASIBLE = Summary(False)
@@ -83,8 +96,8 @@ class Bound:
             if env is None or next(iter(bindings(self.task, schema.tests, env)), None) is None:
                 return INFEASIBLE
             outs = tuple((substitute(o, env), call) for o in schema.outputs)
-            return Summary(True, frozenset({call}), frozenset(), outs)
-        expansions: list[tuple[frozenset[Key], frozenset[ChannelId], dict[Ground, Key | None]]] = []
+            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs)
+        expansions: list[Expanded] = []
         for method in self.task.methods.get(sig, ()):
             env0 = bind_name(method.params, call[1:])
             if env0 is None:
@@ -95,23 +108,23 @@ class Bound:
                     expansions.append(expansion)
         if not expansions:
             return INFEASIBLE
-        funcs = frozenset.intersection(*(e[0] for e in expansions))
-        channels = _common_channels([e[1] for e in expansions])
-        first = expansions[0][2]
+        funcs = frozenset.intersection(*(e.functionalities for e in expansions))
+        robots = frozenset.intersection(*(e.robots for e in expansions))
+        channels = _common_channels([e.channels for e in expansions])
+        first = expansions[0].producers
         producers = tuple(
-            (data, key if all(e[2].get(data) == key for e in expansions) else None)
+            (data, key if all(e.producers.get(data) == key for e in expansions) else None)
             for data, key in first.items()
         )
-        return Summary(True, funcs, channels, producers)
+        return Summary(True, funcs, robots, channels, producers)
 
-    def _expansion(
-        self, method: object, env: dict[str, str]
-    ) -> tuple[frozenset[Key], frozenset[ChannelId], dict[Ground, Key | None]] | None:
+    def _expansion(self, method: object, env: dict[str, str]) -> Expanded | None:
         from cfgplan.planner.task import MethodSchema
 
         assert isinstance(method, MethodSchema)
         body: dict[str, tuple[Ground, Summary, bool]] = {}
         funcs: set[Key] = set()
+        robots: set[str] = set()
         channels: set[ChannelId] = set()
         for label, pattern in method.body:
             call = substitute(pattern, env)
@@ -123,6 +136,7 @@ class Bound:
             is_functionality = (call[0], len(call) - 1) in self.task.functionalities
             body[label] = (call, sub, is_functionality)
             funcs |= sub.functionalities
+            robots |= sub.robots
             channels |= sub.channels
         for spec in method.channels:
             data = substitute(spec.data, env)
@@ -138,7 +152,7 @@ class Bound:
             data = substitute(port.data, env)
             call, sub, is_functionality = body[port.label]
             producers.setdefault(data, call if is_functionality else sub.producer(data))
-        return frozenset(funcs), frozenset(channels), producers
+        return Expanded(frozenset(funcs), frozenset(robots), frozenset(channels), producers)
 
     # -- the bound of a node ----------------------------------------------
     def of(self, node: Partial, estimate: bool = True) -> float | None:
@@ -152,6 +166,7 @@ class Bound:
         placed = node.labels
         robots = {p.robot for p in node.placed}
         needed: set[Key] = set()
+        new_robots: set[str] = set()
         future: set[ChannelId] = set()
         pending: dict[int, tuple[Ground, Summary]] = {}
         for item in node.stack:
@@ -160,6 +175,7 @@ class Bound:
                 return None
             pending[item.label] = (item.call, sub)
             needed |= sub.functionalities
+            new_robots |= sub.robots
             future |= sub.channels
         by_label = {p.label: p.call for p in node.placed}
         resolved: set[tuple[str, Ground, Key, Key]] = set()
@@ -172,15 +188,12 @@ class Bound:
             receiver = dst if dst is not None else _pending_call(pending, ch.target, task)
             future.add((ch.kind, ch.data, sender, receiver))
         total = 0.0
-        new_robots: set[str] = set()
         for key in needed:
             if key in placed:
                 continue
             schema = task.functionalities[(key[0], len(key) - 1)]
             total += schema.cost if schema.cost is not None else w.functionality
-            if key[1] not in robots:
-                new_robots.add(key[1])
-        total += w.robot * len(new_robots)
+        total += w.robot * len(new_robots - robots)
         total += _channel_bound(future, resolved, w.global_, w.local)
         return total
 
