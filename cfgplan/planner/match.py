@@ -68,16 +68,14 @@ def _passes(task: Task, test: Test, env: Bindings) -> bool:
         return False
 
 
-def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bindings]:
-    """Every extension of ``env`` satisfying ``tests``, depth-first, facts in state order."""
-    if not tests:
-        yield env
-        return
+def _walk(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[tuple[int, Bindings]]:
+    """Depth-first over the tests, facts in state order: every (number of tests
+    passed, bindings) reached; the complete ones have ``len(tests)``."""
     stack: list[tuple[int, Bindings]] = [(0, env)]
     while stack:
         index, current = stack.pop()
+        yield index, current
         if index == len(tests):
-            yield current
             continue
         test = tests[index]
         if test.kind == "atom":
@@ -89,6 +87,17 @@ def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bin
             stack.extend((index + 1, m) for m in reversed(matches))
         elif _passes(task, test, current):
             stack.append((index + 1, current))
+
+
+def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bindings]:
+    """Every extension of ``env`` satisfying ``tests``, depth-first, facts in state order."""
+    if not tests:
+        yield env
+        return
+    done = len(tests)
+    for index, current in _walk(task, tests, env):
+        if index == done:
+            yield current
 
 
 @dataclass(frozen=True)
@@ -110,23 +119,9 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
     """Explain why :func:`bindings` yields nothing: the deepest test reached
     and the first binding it failed under (variables of the name omitted)."""
     best: tuple[int, Bindings] = (0, env)
-    stack: list[tuple[int, Bindings]] = [(0, env)]
-    while stack:
-        index, current = stack.pop()
+    for index, current in _walk(task, tests, env):
         if index > best[0]:
             best = (index, current)
-        if index == len(tests):
-            continue
-        test = tests[index]
-        if test.kind == "atom":
-            matches = [
-                m
-                for f in _candidates(task, test.pattern)
-                if (m := _unify(test.pattern, f, current)) is not None
-            ]
-            stack.extend((index + 1, m) for m in reversed(matches))
-        elif _passes(task, test, current):
-            stack.append((index + 1, current))
     index, current = best
     test = tests[min(index, len(tests) - 1)]
     named = {k: v for k, v in current.items() if k in params}
