@@ -292,29 +292,33 @@ def place_functionality(
     path = node.path if choice is None else (*node.path, choice)
     if existing is not None:
         old = item.label
-        channels = tuple(
-            ch
-            if ch.source != old and ch.target != old
-            else Channel(
-                ch.kind,
-                ch.robots,
-                existing if ch.source == old else ch.source,
-                existing if ch.target == old else ch.target,
-                ch.data,
-                ch.bandwidth,
-            )
-            for ch in node.channels
-        )
-        touching = _touching(node.channels, old)
-        settled = _settle(channels, node.located, touching, node.resolved, task)
+        relabelled = list(node.channels)
+        touching = []
+        for i, ch in enumerate(relabelled):
+            if ch.source == old or ch.target == old:
+                touching.append(i)
+                relabelled[i] = Channel(
+                    ch.kind,
+                    ch.robots,
+                    existing if ch.source == old else ch.source,
+                    existing if ch.target == old else ch.target,
+                    ch.data,
+                    ch.bandwidth,
+                )
+        settled = _settle(tuple(relabelled), node.located, touching, node.resolved, task)
         if isinstance(settled, Dead):
             return settled
-        return replace(
-            node,
+        return Partial(
             stack=node.stack[1:],
+            placed=node.placed,
+            labels=node.labels,
+            located=node.located,
             channels=settled[0],
+            effects=node.effects,
+            next_label=node.next_label,
             path=path,
             cost=node.cost + settled[1],
+            robots=node.robots,
             resolved=settled[2],
         )
     assert env is not None
