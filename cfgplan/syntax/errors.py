@@ -45,9 +45,15 @@ def error(message: str, span: Span | None = None, hint: str | None = None) -> Cf
     return CfgplanError([Diagnostic("error", message, span, hint)])
 
 
+def lines_of(text: str) -> list[str]:
+    """Lines as Lark counts them: split at "\\n" only (a form feed or a
+    "\\r" alone does not start a line), without the line breaks."""
+    return [line.removesuffix("\r") for line in text.split("\n")]
+
+
 def source_line(text: str, line: int) -> str:
     """The 1-based ``line`` of ``text``, without its line break ('' if absent)."""
-    lines = text.splitlines()
+    lines = lines_of(text)
     if 1 <= line <= len(lines):
         return lines[line - 1]
     return ""
@@ -66,7 +72,7 @@ def render(diagnostic: Diagnostic, sources: Mapping[str, str]) -> str:
         out = [f"{span.file}:{span.line}:{span.column}: {head}"]
         text = sources.get(span.file)
         # Quote the line if the file has it (an empty file has an empty line 1).
-        if text is not None and 1 <= span.line <= max(1, len(text.splitlines())):
+        if text is not None and 1 <= span.line <= max(1, len(lines_of(text))):
             line = source_line(text, span.line).expandtabs(1)
             width = 1
             if span.end_line == span.line and span.end_column > span.column:

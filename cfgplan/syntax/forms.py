@@ -88,6 +88,12 @@ def atom(node: Sx, what: str = "an atom such as (camera ?r)") -> Atom:
     if not head.is_symbol:
         raise error(f"an atom starts with a name, found {head}", head.span)
     for arg in args:
+        if arg.is_list and arg.head() == "quote":
+            raise error(
+                f"a quote inside ({head.text} ...): the arguments of an atom are not quoted",
+                arg.span,
+                f"write {arg.items[1] if len(arg.items) > 1 else 'the symbol'} without the quote",
+            )
         if arg.is_list:
             raise error(
                 f"an argument of ({head.text} ...) must be a symbol or a number, found a list",

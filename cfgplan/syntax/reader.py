@@ -27,7 +27,7 @@ from lark.visitors import Transformer_NonRecursive
 
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
-from cfgplan.syntax.errors import CfgplanError, error
+from cfgplan.syntax.errors import CfgplanError, error, lines_of
 from cfgplan.syntax.sx import Sx
 
 MAX_NESTING = 64
@@ -173,7 +173,9 @@ def _syntax_error(exc: UnexpectedInput, filename: str, text: str) -> CfgplanErro
     if isinstance(exc, UnexpectedEOF) or (
         isinstance(exc, UnexpectedToken) and exc.token.type == "$END"
     ):
-        lines = text.splitlines() or [""]
+        lines = lines_of(text)
+        while len(lines) > 1 and not lines[-1].strip():
+            lines.pop()  # point at the end of the last line with text
         line, column = len(lines), len(lines[-1]) + 1
         message = "unexpected end of file: a list is not closed (missing ')')"
         span = Span(file=filename, line=line, column=column, end_line=line, end_column=column)

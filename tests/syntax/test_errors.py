@@ -291,3 +291,24 @@ def test_printed_notation_state_equals_sexpr_notation() -> None:
     written = state_from(parse(STEP1_SEXPR, "step1.lisp"))
     assert printed.model_dump() == written.model_dump()
     assert len(printed.facts) == 12 and printed.goal is not None
+
+
+def test_quoted_argument_in_a_fact_is_named() -> None:
+    """Text copied from the PDF may quote a symbol inside a fact: say so."""
+    text = "(state (robot ’Pippi))"
+    with pytest.raises(CfgplanError) as caught:
+        parse(text, "s.lisp")
+    (diag,) = caught.value.diagnostics
+    assert diag.span is not None and (diag.span.line, diag.span.column) == (1, 15)
+    assert "the arguments of an atom are not quoted" in diag.message
+    assert diag.hint == "write Pippi without the quote"
+
+
+def test_form_feed_does_not_start_a_line() -> None:
+    """Lark counts lines at \\n only; the quoted line and caret must agree with it."""
+    text = "(state\x0c(robot ?x))"
+    with pytest.raises(CfgplanError) as caught:
+        parse(text, "s.lisp")
+    out = render(caught.value.diagnostics[0], {"s.lisp": text})
+    assert out.splitlines()[0].startswith("s.lisp:1:8: error")
+    assert out.split("\n")[1] == "    1 | (state\x0c(robot ?x))"
