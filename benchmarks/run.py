@@ -2,10 +2,11 @@
 
 Each figure is measured in a fresh subprocess (so peak memory is that run's
 own): planning time in-process and warm (the best of a few repeats after one
-untimed run; one repeat when that run took over 2 s), and the peak resident memory of the process. cfgplan and the
-naive baseline (benchmarks/naive.py: every derivation, then sort) run side
-by side on the same machine in the same invocation; the ratio column is
-baseline time / cfgplan time for the cheapest configuration.
+untimed run; one repeat when that run took over 2 s), and the peak resident
+memory of the process. cfgplan and the naive baseline (benchmarks/naive.py:
+every derivation, then sort) run side by side on the same machine in the same
+invocation; the ratio column is baseline time / cfgplan time for the cheapest
+configuration.
 """
 
 from __future__ import annotations
