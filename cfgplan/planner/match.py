@@ -53,14 +53,25 @@ def bind_name(params: Pattern, args: Ground) -> Bindings | None:
     return env
 
 
-def _candidates(task: Task, p: Pattern) -> tuple[Ground, ...]:
-    return task.facts_by_predicate.get((p[0], len(p) - 1), ())
+def _candidates(task: Task, p: Pattern, env: Bindings | None = None) -> tuple[Ground, ...]:
+    """The facts that may match ``p``: those of its predicate, narrowed by the
+    argument (constant or bound variable) with the fewest facts, in state order."""
+    arity = len(p) - 1
+    best = task.facts_by_predicate.get((p[0], arity), ())
+    for position, term in enumerate(p[1:], 1):
+        value = (env.get(term) if env is not None else None) if term[:1] == "?" else term
+        if value is not None and len(best) > 1:
+            narrowed = task.facts_by_argument.get((p[0], arity, position, value), ())
+            if len(narrowed) < len(best):
+                best = narrowed
+    return best
 
 
 def _passes(task: Task, test: Test, env: Bindings) -> bool:
     if test.kind == "not":
         return not any(
-            _unify(test.pattern, f, env) is not None for f in _candidates(task, test.pattern)
+            _unify(test.pattern, f, env) is not None
+            for f in _candidates(task, test.pattern, env)
         )
     try:
         return holds(test.expr, env)
@@ -81,7 +92,7 @@ def _walk(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[tuple[
         if test.kind == "atom":
             matches = [
                 m
-                for f in _candidates(task, test.pattern)
+                for f in _candidates(task, test.pattern, current)
                 if (m := _unify(test.pattern, f, current)) is not None
             ]
             stack.extend((index + 1, m) for m in reversed(matches))

@@ -32,7 +32,7 @@ from cfgplan.planner.partial import (
     place_functionality,
     root,
 )
-from cfgplan.planner.task import Ground, MethodSchema, Task
+from cfgplan.planner.task import FunctionalitySchema, Ground, MethodSchema, Task
 
 
 @dataclass
@@ -92,6 +92,7 @@ class Search:
         self._seen: set[object] = set()
         self._closed: set[object] = set()
         self._expansions: dict[object, Expansion | Dead] = {}
+        self._matches: dict[tuple[int, Ground], list[Bindings]] = {}
         self._heap: list[tuple[float, tuple[int, ...], Partial]] = []
         self._start = 0.0
         self.stopped = ""  # why the search stopped early: "time limit", "interrupted"
@@ -182,7 +183,7 @@ class Search:
                 continue
             found = False
             where = f"{describe_call(item.call)}, version {method.version}"
-            for env2 in bindings(self.task, method.tests, env):
+            for env2 in self._bindings(method, item.call, env):
                 found = True
                 expansion = self._instantiated(method, env2, where)
                 child = (
@@ -204,6 +205,17 @@ class Search:
                         failure.span or method.span,
                     )
                 )
+
+    def _bindings(
+        self, schema: MethodSchema | FunctionalitySchema, call: Ground, env: Bindings
+    ) -> list[Bindings]:
+        """The precondition bindings of a schema for a call: the state does not
+        change during the search, so they are matched once per call."""
+        key = (id(schema), call)
+        found = self._matches.get(key)
+        if found is None:
+            found = self._matches[key] = list(bindings(self.task, schema.tests, env))
+        return found
 
     def _instantiated(self, method: MethodSchema, env: Bindings, where: str) -> Expansion | Dead:
         key = (method.name, method.version, len(method.params), tuple(sorted(env.items())))
@@ -258,7 +270,7 @@ class Search:
                     )
                 )
                 continue
-            options = list(bindings(self.task, schema.tests, env))
+            options = self._bindings(schema, item.call, env)
             if not options:
                 failure = why_not(self.task, schema.tests, env, schema.params)
                 self.report.note(Dead(describe_call(item.call), failure.describe(), schema.span))

@@ -107,6 +107,8 @@ class Task:
     methods: dict[tuple[str, int], tuple[MethodSchema, ...]]
     facts: tuple[Ground, ...]
     facts_by_predicate: dict[tuple[str, int], tuple[Ground, ...]]
+    facts_by_argument: dict[tuple[str, int, int, str], tuple[Ground, ...]]
+    """(predicate, arity, position, value) -> the facts with that argument, in state order."""
     fact_set: frozenset[Ground]
     media: tuple[Medium, ...]
     weights: Weights
@@ -219,12 +221,17 @@ def compile_task(domain: Domain, state: State, weights: Weights | None = None) -
     by_pred: dict[tuple[str, int], list[Ground]] = {}
     for fact in facts:
         by_pred.setdefault((fact[0], len(fact) - 1), []).append(fact)
+    by_arg: dict[tuple[str, int, int, str], list[Ground]] = {}
+    for fact in facts:
+        for position, value in enumerate(fact[1:], 1):
+            by_arg.setdefault((fact[0], len(fact) - 1, position, value), []).append(fact)
     names = {t for fact in facts for t in fact}
     return Task(
         functionalities=functionalities,
         methods={k: tuple(v) for k, v in methods.items()},
         facts=facts,
         facts_by_predicate={k: tuple(v) for k, v in by_pred.items()},
+        facts_by_argument={k: tuple(v) for k, v in by_arg.items()},
         fact_set=frozenset(facts),
         media=state.media,
         weights=weights or Weights(),
