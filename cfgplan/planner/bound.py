@@ -23,7 +23,7 @@ so they are computed once and memoised for the whole search.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Set
 from dataclasses import dataclass, field
 
 from cfgplan.planner.match import bind_name, bindings, substitute
@@ -43,6 +43,8 @@ class Summary:
     robots: frozenset[str] = frozenset()  # where some functionality runs, in every expansion
     channels: frozenset[ChannelId] = frozenset()
     producers: tuple[tuple[Ground, Key | None], ...] = ()  # :out data -> certain producer
+    minimum: float = 0.0  # the least its functionalities can cost, if none is in C yet
+    wiring: float = 0.0  # the least the channels of its expansions can cost, likewise
 
     def producer(self, data: Ground) -> Key | None:
         for d, key in self.producers:
@@ -59,6 +61,8 @@ class Expanded:
     robots: frozenset[str]
     channels: frozenset[ChannelId]
     producers: dict[Ground, Key | None]
+    minimum: float
+    wiring: float
 
 
 INFEASIBLE = Summary(False)
@@ -72,6 +76,9 @@ class Bound:
     task: Task
     _memo: dict[Ground, Summary] = field(default_factory=dict)
     _active: set[Ground] = field(default_factory=set)
+    _names: dict[tuple[str, int], tuple[frozenset[str], frozenset[str]]] = field(
+        default_factory=dict
+    )
 
     # -- static summaries -------------------------------------------------
     def summary(self, call: Ground) -> Summary:
@@ -96,7 +103,8 @@ class Bound:
             if env is None or next(iter(bindings(self.task, schema.tests, env)), None) is None:
                 return INFEASIBLE
             outs = tuple((substitute(o, env), call) for o in schema.outputs)
-            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs)
+            weight = schema.cost if schema.cost is not None else self.task.weights.functionality
+            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, weight)
         expansions: list[Expanded] = []
         for method in self.task.methods.get(sig, ()):
             env0 = bind_name(method.params, call[1:])
@@ -116,7 +124,9 @@ class Bound:
             (data, key if all(e.producers.get(data) == key for e in expansions) else None)
             for data, key in first.items()
         )
-        return Summary(True, funcs, robots, channels, producers)
+        minimum = min(e.minimum for e in expansions)
+        wiring = min(e.wiring for e in expansions)
+        return Summary(True, funcs, robots, channels, producers, minimum, wiring)
 
     def _expansion(self, method: object, env: dict[str, str]) -> Expanded | None:
         from cfgplan.planner.task import MethodSchema
@@ -152,7 +162,94 @@ class Bound:
             data = substitute(port.data, env)
             call, sub, is_functionality = body[port.label]
             producers.setdefault(data, call if is_functionality else sub.producer(data))
-        return Expanded(frozenset(funcs), frozenset(robots), frozenset(channels), producers)
+        parts = [(self.names(call), sub.minimum) for call, sub, _ in body.values()]
+        w = self.task.weights
+        own = {(c.kind, substitute(c.data, env)) for c in method.channels}
+        own_cost = float(sum(w.global_ if kind == "global" else w.local for kind, _ in own))
+        wires: list[tuple[Set[str], float]] = [({data[0] for _, data in own}, own_cost)]
+        wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
+        return Expanded(
+            frozenset(funcs),
+            frozenset(robots),
+            frozenset(channels),
+            producers,
+            _least(parts),
+            _least(wires),
+        )
+
+    def names(self, call: Ground) -> frozenset[str]:
+        """The functionality names an instance can reach through method bodies."""
+        return self._reach(call)[0]
+
+    def data_names(self, call: Ground) -> frozenset[str]:
+        """The data predicates of the channels its expansions can create."""
+        return self._reach(call)[1]
+
+    def _reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str]]:
+        sig = (call[0], len(call) - 1)
+        found = self._names.get(sig)
+        if found is not None:
+            return found
+        names: set[str] = set()
+        data: set[str] = set()
+        seen = {sig}
+        todo = [sig]
+        while todo:
+            current = todo.pop()
+            if current in self.task.functionalities:
+                names.add(current[0])
+                continue
+            for method in self.task.methods.get(current, ()):
+                data.update(c.data[0] for c in method.channels)
+                for _, pattern in method.body:
+                    child = (pattern[0], len(pattern) - 1)
+                    if child not in seen:
+                        seen.add(child)
+                        todo.append(child)
+        result = self._names[sig] = (frozenset(names), frozenset(data))
+        return result
+
+    def _deepest(self, node: Partial, pending: dict[int, tuple[Ground, Summary]]) -> float:
+        """What the pending items must still add in functionalities, by their
+        minimums: items that can reach no common functionality name add up
+        (less what C already has of those names); the others count once."""
+        w = self.task.weights
+        have: dict[str, float] = {}
+        for p in node.placed:
+            cost = p.schema.cost if p.schema.cost is not None else w.functionality
+            have[p.call[0]] = have.get(p.call[0], 0.0) + cost
+        parts = []
+        for call, sub in pending.values():
+            names = self.names(call)
+            reusable = sum(cost for name, cost in have.items() if name in names)
+            parts.append((names, max(0.0, sub.minimum - reusable)))
+        return _least(parts)
+
+    def _widest(
+        self,
+        pending: dict[int, tuple[Ground, Summary]],
+        future: set[ChannelId],
+        resolved: set[tuple[str, Ground, Key, Key]],
+    ) -> float:
+        """What must still be added in channels: the channels already waiting
+        for their ends (``future``), and each pending item's least wiring (less
+        the resolved channels with data it can carry); parts whose data
+        predicates differ cannot merge, so they add up."""
+        w = self.task.weights
+        have: dict[str, float] = {}
+        for kind, data, _, _ in resolved:
+            have[data[0]] = have.get(data[0], 0.0) + (w.global_ if kind == "global" else w.local)
+        parts = [
+            (
+                frozenset(data[0] for _, data, _, _ in future),
+                _channel_bound(future, resolved, w.global_, w.local),
+            )
+        ]
+        for call, sub in pending.values():
+            names = self.data_names(call)
+            reusable = sum(cost for name, cost in have.items() if name in names)
+            parts.append((names, max(0.0, sub.wiring - reusable)))
+        return _least(parts)
 
     # -- the bound of a node ----------------------------------------------
     def of(self, node: Partial, estimate: bool = True) -> float | None:
@@ -193,9 +290,28 @@ class Bound:
                 continue
             schema = task.functionalities[(key[0], len(key) - 1)]
             total += schema.cost if schema.cost is not None else w.functionality
+        total = max(total, self._deepest(node, pending))
         total += w.robot * len(new_robots - robots)
-        total += _channel_bound(future, resolved, w.global_, w.local)
+        total += self._widest(pending, future, resolved)
         return total
+
+
+def _least(parts: Iterable[tuple[Set[str], float]]) -> float:
+    """The least the functionalities of one expansion can cost: body items
+    whose reachable names are disjoint cannot share an instance, so their
+    minimums add; items that may share count as the largest of them."""
+    groups: list[tuple[set[str], float]] = []
+    for names, least in parts:
+        merged_names, merged_least = set(names), least
+        rest = []
+        for group_names, group_least in groups:
+            if group_names & merged_names:
+                merged_names |= group_names
+                merged_least = max(merged_least, group_least)
+            else:
+                rest.append((group_names, group_least))
+        groups = [*rest, (merged_names, merged_least)]
+    return sum(least for _, least in groups)
 
 
 def _pending_call(pending: dict[int, tuple[Ground, Summary]], label: int, task: Task) -> Key | None:
