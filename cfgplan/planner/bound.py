@@ -11,11 +11,18 @@ the first configuration found is the cheapest):
   (intersected the same way), not yet in C;
 - channels that every completion must hold and that cannot merge with one
   already in C: those whose two ends are known, and those whose receiving end
-  is known (one per kind, data and receiver).
+  is known (one per kind, data and receiver);
+- at least, for the functionalities and for the channels, the least any
+  expansion of each pending item creates (its ``minimum`` and ``wiring``),
+  less what C already has under the names that item can reach. Items that can
+  reach no common functionality name (or channel data predicate) cannot share
+  an instance, so their parts add up; items that can share count once (the
+  largest). This is what sees the cost of a deep hierarchy below a method.
 
-Sharing is accounted for by working with sets of concrete instances: two
-pending items needing ``camera(Emil)`` count it once, and nothing already in C
-counts. A pending item with no feasible expansion makes the node dead.
+Sharing is accounted for by working with sets of concrete instances or of
+names: two pending items needing ``camera(Emil)`` count it once, and nothing
+already in C counts. A pending item with no feasible expansion makes the node
+dead.
 
 Summaries of ground method instances depend only on the domain and the state,
 so they are computed once and memoised for the whole search.
@@ -74,11 +81,15 @@ class Bound:
     """The bound for one task; call :meth:`of` on each node."""
 
     task: Task
-    _memo: dict[Ground, Summary] = field(default_factory=dict)
     _active: set[Ground] = field(default_factory=set)
-    _names: dict[tuple[str, int], tuple[frozenset[str], frozenset[str]]] = field(
-        default_factory=dict
-    )
+
+    def __post_init__(self) -> None:
+        # Summaries depend on the task alone: they are kept with it, so every
+        # search of the same task (-k 1, then --all, ...) computes them once.
+        self._memo: dict[Ground, Summary] = self.task.summaries
+        self._names: dict[tuple[str, int], tuple[frozenset[str], frozenset[str]]] = (
+            self.task.reach
+        )
 
     # -- static summaries -------------------------------------------------
     def summary(self, call: Ground) -> Summary:

@@ -117,6 +117,10 @@ class Task:
     """Memo: a functionality instance's inputs and outputs, instantiated."""
     models: dict[tuple[object, ...], Any] = field(default_factory=dict)
     """Memo: result models (immutable) shared by the configurations built."""
+    summaries: dict[Ground, Any] = field(default_factory=dict)
+    """Memo of bound.py: what every expansion of a ground instance contains."""
+    reach: dict[tuple[str, int], Any] = field(default_factory=dict)
+    """Memo of bound.py: the names a signature can reach through method bodies."""
 
 
 def pattern(atom: Atom) -> Pattern:
