@@ -11,9 +11,9 @@ from pathlib import Path
 
 from cfgplan.check import check
 from cfgplan.configuration.cost import Weights
+from cfgplan.diagnostics import CfgplanError, Diagnostic, error
 from cfgplan.ir.model import Domain, Goal, Span, State
 from cfgplan.planner.task import Ground, Task, compile_task, pattern
-from cfgplan.syntax.errors import CfgplanError, Diagnostic, error
 from cfgplan.syntax.reader import parse, read_domain, read_state
 
 GOAL_SOURCE = "--goal"

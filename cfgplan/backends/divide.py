@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from cfgplan.configuration.describe import channel_text
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
-from cfgplan.syntax.errors import error
+from cfgplan.diagnostics import error
 
 __all__ = ["Individual", "divide"]
 

@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from cfgplan.backends.dot import call, new_graph, term
+from cfgplan.diagnostics import error
 from cfgplan.ir.model import SExpr, is_variable
 from cfgplan.planner.task import MethodSchema, Task, Test
-from cfgplan.syntax.errors import error
 
 METHOD = {"fillcolor": "gray80"}
 FUNCTIONALITY = {"fillcolor": "white"}

@@ -26,7 +26,7 @@ import tempfile
 from collections.abc import Iterator
 from typing import Any, Literal
 
-from cfgplan.syntax.errors import error
+from cfgplan.diagnostics import error
 
 Format = Literal["svg", "png"]
 FORMATS: tuple[Format, ...] = ("svg", "png")

@@ -16,7 +16,7 @@ F115, F114), so that is the rule here.
 from __future__ import annotations
 
 from cfgplan.configuration.model import Configuration, FunctionalityInstance
-from cfgplan.syntax.errors import error
+from cfgplan.diagnostics import error
 
 __all__ = ["sort_functionalities"]
 

@@ -25,8 +25,8 @@ from cfgplan.backends.divide import Individual, divide
 from cfgplan.backends.sort import sort_functionalities
 from cfgplan.configuration.describe import call_text, channel_text
 from cfgplan.configuration.model import Configuration, FunctionalityInstance
+from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.ir.model import Atom, Domain
-from cfgplan.syntax.errors import CfgplanError, error
 
 __all__ = ["Call", "Data", "RobotPart", "deploy", "wire"]
 

@@ -1,6 +1,6 @@
 """The static checker: mistakes in a domain, state and goal found before planning.
 
-:func:`check` returns :class:`~cfgplan.syntax.errors.Diagnostic` objects sorted by
+:func:`check` returns :class:`~cfgplan.diagnostics.Diagnostic` objects sorted by
 file position. It covers the well-formedness the thesis takes for granted:
 functionalities with inputs or outputs (3.2), calls that resolve by name and
 arity (4.4, 4.5), channels and ``:in``/``:out`` ports between body labels whose
@@ -24,6 +24,7 @@ from cfgplan.check.messages import (
     where,
 )
 from cfgplan.check.unify import Signature, caller_equations, instantiate, match
+from cfgplan.diagnostics import Diagnostic, Severity
 from cfgplan.ir.model import (
     Atom,
     BodyItem,
@@ -39,7 +40,6 @@ from cfgplan.ir.model import (
     State,
     Term,
 )
-from cfgplan.syntax.errors import Diagnostic, Severity
 
 Side = Literal["out", "in"]
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 from cfgplan.check.unify import Signature
+from cfgplan.diagnostics import Diagnostic
 from cfgplan.ir.model import Condition, Eval, SExpr, Span
-from cfgplan.syntax.errors import Diagnostic
 
 
 def sexpr_text(expr: SExpr) -> str:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import typer
 
-from cfgplan.syntax.errors import CfgplanError, Diagnostic, render_all
+from cfgplan.diagnostics import CfgplanError, Diagnostic, render_all
 
 app = typer.Typer(
     name="cfgplan",

@@ -23,10 +23,10 @@ from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_prob
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text, to_text
 from cfgplan.configuration.model import Configuration
+from cfgplan.diagnostics import error
 from cfgplan.planner.explain import explain
 from cfgplan.planner.search import plan
 from cfgplan.problem import Problem
-from cfgplan.syntax.errors import error
 
 
 class Lang(StrEnum):

@@ -15,11 +15,11 @@ from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_json, to_text
 from cfgplan.configuration.model import Configuration
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.planner.explain import explain
 from cfgplan.planner.search import Search, Stats
 from cfgplan.planner.search import plan as run_plan
 from cfgplan.problem import GOAL_SOURCE, Problem, load
-from cfgplan.syntax.errors import CfgplanError
 
 
 class Format(StrEnum):

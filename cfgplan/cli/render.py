@@ -19,10 +19,10 @@ from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text
+from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.planner.explain import explain
 from cfgplan.planner.search import plan as run_plan
 from cfgplan.problem import Problem
-from cfgplan.syntax.errors import CfgplanError, error
 
 Kind = Literal["dot", "svg", "png"]
 SUFFIXES: dict[str, Kind] = {".dot": "dot", ".svg": "svg", ".png": "png"}

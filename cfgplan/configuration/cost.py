@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict
 
-from cfgplan.syntax.errors import error
+from cfgplan.diagnostics import error
 
 
 class Weights(BaseModel):

@@ -19,8 +19,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal
 
+from cfgplan.diagnostics import error
 from cfgplan.runtime.transport import Transport
-from cfgplan.syntax.errors import error
 
 __all__ = ["Channel", "Operation", "channel_id", "make_global_channel", "make_local_channel"]
 

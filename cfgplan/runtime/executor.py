@@ -22,12 +22,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 from cfgplan.backends.wiring import RobotPart
+from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.runtime.channel import Channel, make_global_channel, make_local_channel
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.trace import describe, summary
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.wrapper import Event, Input, Wrapper
-from cfgplan.syntax.errors import CfgplanError, error
 
 __all__ = [
     "Configure",

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
-from cfgplan.syntax.errors import error
+from cfgplan.diagnostics import error
 
 __all__ = ["Implementation", "Precondition", "Registry", "functionality", "load_module"]
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol
 
-from cfgplan.syntax.errors import error
+from cfgplan.diagnostics import error
 
 __all__ = ["InProcessTransport", "Receiver", "Transport"]
 

@@ -20,9 +20,9 @@ from contextvars import ContextVar
 from dataclasses import dataclass, replace
 from typing import Literal
 
+from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.registry import Implementation
-from cfgplan.syntax.errors import CfgplanError, error
 
 __all__ = ["Event", "Input", "Wrapper", "current_robot"]
 

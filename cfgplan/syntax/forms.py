@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
+from cfgplan.diagnostics import error
 from cfgplan.ir.model import (
     Atom,
     BodyItem,
@@ -29,7 +30,6 @@ from cfgplan.ir.model import (
     Span,
     State,
 )
-from cfgplan.syntax.errors import error
 from cfgplan.syntax.sx import Sx
 
 FUNCTIONALITY_KEYWORDS = (":name", ":in", ":out", ":precond", ":postcond", ":cost", ":freq")

@@ -2,7 +2,7 @@
 each grammar rule straight to an :class:`Sx` node or an IR object.
 
 Entry points: :func:`read_domain` and :func:`read_state` (files or text).
-Errors are :class:`~cfgplan.syntax.errors.CfgplanError` with a span, built from
+Errors are :class:`~cfgplan.diagnostics.CfgplanError` with a span, built from
 Lark's ``UnexpectedInput`` for syntax errors.
 """
 
@@ -25,9 +25,9 @@ from lark.exceptions import (
 )
 from lark.visitors import Transformer_NonRecursive
 
+from cfgplan.diagnostics import CfgplanError, error, lines_of
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
-from cfgplan.syntax.errors import CfgplanError, error, lines_of
 from cfgplan.syntax.sx import Sx
 
 MAX_NESTING = 64

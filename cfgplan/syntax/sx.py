@@ -70,7 +70,7 @@ def _atom_value(node: Sx) -> SExpr:
     if node.kind == "number":
         text = node.text
         if len(text) > 4000:
-            from cfgplan.syntax.errors import error
+            from cfgplan.diagnostics import error
 
             raise error("this number has more than 4000 characters", node.span)
         return float(text) if "." in text else int(text)

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 import cfgplan.cli.emit  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
-from cfgplan.syntax.errors import CfgplanError
+from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import CROSS, DOMAINS, GOLDEN, UPDATE
 
 ARGS = [str(DOMAINS / CROSS[0]), str(DOMAINS / CROSS[1])]

@@ -29,9 +29,9 @@ from cfgplan.backends.dot import (
 from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.cli.app import app
 from cfgplan.configuration.model import Configuration
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.planner.search import plan
 from cfgplan.problem import Problem, load
-from cfgplan.syntax.errors import CfgplanError
 
 ROOT = Path(__file__).resolve().parents[2]
 GOLDEN = ROOT / "tests" / "golden"

@@ -10,8 +10,8 @@ from cfgplan.backends.divide import Individual
 from cfgplan.backends.lisp import to_lisp
 from cfgplan.backends.wiring import RobotPart, deploy, wire
 from cfgplan.configuration.model import Channel, FunctionalityInstance
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.ir.model import Atom, Domain, Functionality
-from cfgplan.syntax.errors import CfgplanError
 from tests.backends.support import (
     carry_bar_33,
     check_golden,

@@ -13,9 +13,9 @@ import cfgplan.cli.render  # noqa: F401  (registers the command)
 from cfgplan.backends import render as engine
 from cfgplan.backends.render import render
 from cfgplan.cli.app import app
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.planner.search import plan
 from cfgplan.problem import load
-from cfgplan.syntax.errors import CfgplanError
 
 ROOT = Path(__file__).resolve().parents[2]
 CROSS = ("domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp")

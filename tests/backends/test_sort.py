@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from cfgplan.backends.sort import sort_functionalities
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
-from cfgplan.syntax.errors import CfgplanError
+from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import (
     THESIS_FUNCTIONALITIES,
     THESIS_SORTED,

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from cfgplan.check import check
+from cfgplan.diagnostics import Diagnostic, render_all
 from cfgplan.ir.model import Atom, Goal
-from cfgplan.syntax.errors import Diagnostic, render_all
 from cfgplan.syntax.reader import domain_from, parse, read_domain, read_state, state_from
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -45,11 +45,11 @@ from cfgplan.configuration.admissible import problems, satisfying
 from cfgplan.configuration.cost import Weights
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Configuration
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.ir.model import Atom, Domain, Functionality, Method, Negation
 from cfgplan.planner.search import plan
 from cfgplan.planner.task import compile_task
 from cfgplan.problem import Problem, load
-from cfgplan.syntax.errors import CfgplanError
 from cfgplan.syntax.reader import SourceFile, parse, state_from
 
 # -- generated problems ---------------------------------------------------------

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.runtime import InProcessTransport, make_global_channel, make_local_channel
-from cfgplan.syntax.errors import CfgplanError
 
 
 def test_one_slot_newer_data_overwrites_and_the_last_operation_is_kept() -> None:

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.runtime import Registry, functionality
-from cfgplan.syntax.errors import CfgplanError
 from tests.backends.support import EXAMPLE_IMPL
 
 MODULE = """

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from cfgplan.diagnostics import CfgplanError
 from cfgplan.runtime import Implementation, Wrapper, current_robot, make_local_channel
 from cfgplan.runtime.channel import Channel
-from cfgplan.syntax.errors import CfgplanError
 
 
 class Spy:

@@ -9,8 +9,8 @@ import pytest
 
 from cfgplan.check import check
 from cfgplan.check.evaluate import EvalFailure, holds
+from cfgplan.diagnostics import CfgplanError, Diagnostic, render, source_line
 from cfgplan.ir.model import Eval
-from cfgplan.syntax.errors import CfgplanError, Diagnostic, render, source_line
 from cfgplan.syntax.reader import (
     MAX_NESTING,
     domain_from,

@@ -24,8 +24,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Domain, State
-from cfgplan.syntax.errors import CfgplanError, Diagnostic
 from cfgplan.syntax.printer import print_domain, print_state
 from cfgplan.syntax.reader import SourceFile, domain_from, parse, state_from
 
