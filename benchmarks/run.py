@@ -1,5 +1,8 @@
 """The benchmark suite: ``python -m benchmarks.run`` prints a table.
 
+``--against REV`` prints instead one table comparing this cfgplan with the one
+at git revision REV, each instance planned by both in turn by this harness.
+
 Each figure is measured in a fresh subprocess (so peak memory is that run's
 own): planning time in-process and warm (the best of a few repeats after one
 untimed run; one repeat when that run took over 2 s), and the peak resident
@@ -16,12 +19,14 @@ import json
 import os
 import platform
 import resource
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -65,22 +70,32 @@ def problem_files(instance: Instance, folder: Path) -> tuple[Path, Path]:
     return folder / "domain.lisp", folder / "state.lisp"
 
 
+def _planner(mode: str) -> Any:
+    """What to time: cfgplan's ``plan`` (wherever this version of cfgplan keeps
+    it: ``--against`` runs this harness on an older cfgplan) or the baseline."""
+    if mode == "baseline":
+        from benchmarks.naive import enumerate_all
+
+        return enumerate_all
+    try:
+        from cfgplan.planner import plan
+    except ImportError:  # before the planner package exported it
+        from cfgplan.planner.search import plan  # type: ignore[no-redef,attr-defined]
+    limit = {"top1": 1, "top10": 10, "all": None}[mode]
+    return lambda task, goal: plan(task, goal, limit=limit)[0]
+
+
 def measure(instance: Instance, mode: str, repeat: int) -> dict[str, object]:
     """One measurement, in this process: mode is top1, top10, all or baseline."""
-    from benchmarks.naive import enumerate_all
-    from cfgplan.planner.search import plan
     from cfgplan.problem import load
 
     with tempfile.TemporaryDirectory() as tmp:
         domain, state = problem_files(instance, Path(tmp))
         problem = load(domain, state)
+    planner = _planner(mode)
 
     def once() -> tuple[int, float | None]:
-        if mode == "baseline":
-            configs = enumerate_all(problem.task, problem.goal_call)
-        else:
-            limit = {"top1": 1, "top10": 10, "all": None}[mode]
-            configs, _ = plan(problem.task, problem.goal_call, limit=limit)
+        configs = planner(problem.task, problem.goal_call)
         return len(configs), (configs[0].cost if configs else None)
 
     start = time.perf_counter()
@@ -96,17 +111,39 @@ def measure(instance: Instance, mode: str, repeat: int) -> dict[str, object]:
     return {"seconds": min(times), "peak_mib": peak, "count": count, "best": best}
 
 
-def run_one(instance: Instance, mode: str, repeat: int) -> dict[str, object]:
-    """Measure in a fresh subprocess."""
+def run_one(
+    instance: Instance, mode: str, repeat: int, against: Path | None = None
+) -> dict[str, object]:
+    """Measure in a fresh subprocess; with ``against`` (a folder made by
+    :func:`checkout`), the cfgplan of that older version runs under this harness."""
     index = INSTANCES.index(instance)
-    out = subprocess.run(
-        [sys.executable, "-m", "benchmarks.run", "--one", str(index), mode, str(repeat)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=True,
-    )
+    command = [sys.executable, "-m", "benchmarks.run", "--one", str(index), mode, str(repeat)]
+    cwd = ROOT
+    if against is not None:
+        # The harness alone in one folder, then the old tree: `benchmarks`
+        # is imported from here, `cfgplan` from there.
+        code = (
+            f"import sys; sys.path[:0] = [{str(against / 'harness')!r}, "
+            f"{str(against / 'tree')!r}]; sys.argv[0] = 'benchmarks.run'; "
+            "from benchmarks.run import main; main()"
+        )
+        command = [sys.executable, "-c", code, "--one", str(index), mode, str(repeat)]
+        cwd = against
+    out = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=True)
     return json.loads(out.stdout)  # type: ignore[no-any-return]
+
+
+def checkout(rev: str, folder: Path) -> Path:
+    """``folder`` with the tree of ``rev`` (a git revision of this repository)
+    in ``tree/`` and this benchmark harness in ``harness/``."""
+    (folder / "tree").mkdir(parents=True)
+    archive = subprocess.run(
+        ["git", "archive", "--format=tar", rev], cwd=ROOT, capture_output=True, check=True
+    ).stdout
+    subprocess.run(["tar", "-x", "-C", str(folder / "tree")], input=archive, check=True)
+    shutil.copytree(ROOT / "benchmarks", folder / "harness" / "benchmarks")
+    (folder / "harness" / "domains").symlink_to(ROOT / "domains")  # the same inputs
+    return folder
 
 
 def machine() -> str:
@@ -136,6 +173,11 @@ def main() -> None:
     parser.add_argument("--only", help="run the instances whose name contains this text")
     parser.add_argument("--no-baseline", action="store_true", help="skip the naive baseline")
     parser.add_argument("--repeat", type=int, default=5, help="timed repeats (best is kept)")
+    parser.add_argument(
+        "--against",
+        metavar="REV",
+        help="compare with cfgplan at this git revision, run side by side by this harness",
+    )
     args = parser.parse_args()
     if args.one:
         index, mode, repeat = args.one
@@ -143,6 +185,10 @@ def main() -> None:
         return
     print(f"machine: {machine()}")
     print("times: planning in-process, warm, best of repeats; memory: peak RSS of the process\n")
+    if args.against:
+        with tempfile.TemporaryDirectory() as tmp:
+            compare(args.against, checkout(args.against, Path(tmp)), args.only, args.repeat)
+        return
     columns = [
         "instance",
         "configs",
@@ -182,6 +228,40 @@ def main() -> None:
             f"{_f(every['peak_mib']):.0f}" if every else "-",
             f"{_f(base['peak_mib']):.0f}" if base else "-",
         ]
+        print("| " + " | ".join(row) + " |", flush=True)
+
+
+def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
+    """One table: each instance planned by cfgplan at ``rev`` and by this
+    cfgplan, alternately, in fresh processes; ratios are this / ``rev``."""
+    modes = [("top1", "top-1"), ("top10", "top-10"), ("all", "all distinct")]
+    columns = ["instance", "configs"]
+    for _, name in modes:
+        columns += [f"{name} ms {rev}", f"{name} ms", "ratio"]
+    columns += [f"MiB {rev}", "MiB"]
+    print("| " + " | ".join(columns) + " |")
+    print("|" + "---|" * len(columns))
+    for instance in INSTANCES:
+        if only and only not in instance.name:
+            continue
+        row = [instance.name]
+        cells: list[str] = []
+        peak = ("-", "-")
+        count = "-"
+        for mode, _ in modes:
+            if mode == "all" and not instance.all_distinct:
+                cells += ["-", "-", "-"]
+                continue
+            old = run_one(instance, mode, repeat, against)
+            new = run_one(instance, mode, repeat)
+            if (old["count"], old["best"]) != (new["count"], new["best"]):
+                raise SystemExit(f"{instance.name} {mode}: {rev} and this cfgplan disagree")
+            ratio = _f(new["seconds"]) / _f(old["seconds"])
+            cells += [ms(old["seconds"]), ms(new["seconds"]), f"{ratio:.2f}"]
+            peak = (f"{_f(old['peak_mib']):.0f}", f"{_f(new['peak_mib']):.0f}")
+            if mode == "all":
+                count = str(new["count"])
+        row += [count, *cells, *peak]
         print("| " + " | ".join(row) + " |", flush=True)
 
 

@@ -25,7 +25,7 @@ from typing import Any
 from cfgplan.backends.dot import call, new_graph, term
 from cfgplan.diagnostics import error
 from cfgplan.ir.model import SExpr, is_variable
-from cfgplan.planner.task import MethodSchema, Task, Test
+from cfgplan.planner.task import MethodSchema, Task, Test, TestKind
 
 METHOD = {"fillcolor": "gray80"}
 FUNCTIONALITY = {"fillcolor": "white"}
@@ -120,7 +120,7 @@ def _variables(method: MethodSchema) -> list[str]:
 
 
 def _test_terms(test: Test) -> list[str]:
-    if test.kind != "eval":
+    if test.kind is not TestKind.EVAL:
         return list(test.pattern[1:])
     terms: list[str] = []
     stack: list[SExpr] = [test.expr]
@@ -137,11 +137,11 @@ def version_label(method: MethodSchema, env: dict[str, str]) -> str:
     """``version 2`` and its preconditions, one a line: what tells versions apart."""
     lines = [f"version {method.version}"]
     for test in method.tests:
-        if test.kind == "eval":
+        if test.kind is TestKind.EVAL:
             lines.append("eval " + _sexpr(test.expr, env))
         else:
             atom = call(test.pattern[0], [env.get(a, a) for a in test.pattern[1:]])
-            lines.append(f"not {atom}" if test.kind == "not" else atom)
+            lines.append(f"not {atom}" if test.kind is TestKind.NOT else atom)
     return "<" + "<BR/>".join(html.escape(line) for line in lines) + ">"
 
 

@@ -139,15 +139,18 @@ class _Checker:
                 "a sensing resource has :out, an action resource :in, "
                 "a processing functionality both (3.2)",
             )
+        # A call binds the name's variables; its preconditions' atoms may bind
+        # more (4.5: the outputs of (loc ?r) with (in ?r ?room) name the room).
         named = set(f.name.variables())
+        named.update(v for c in f.precond if isinstance(c, Atom) for v in c.variables())
         for d in (*f.inputs, *f.outputs):
             for v in dict.fromkeys(d.variables()):
                 if v not in named:
                     self.report(
                         "warning",
-                        f"{v} in {d} does not occur in the name {f.name}",
+                        f"{v} in {d} occurs neither in the name {f.name} nor in a precondition",
                         d.span,
-                        "a call binds only the variables of the name",
+                        "a call binds the variables of the name; its preconditions may bind more",
                     )
         self._conditions(f.name, f.precond)
 

@@ -24,8 +24,8 @@ from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import error
+from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
-from cfgplan.planner.search import plan
 from cfgplan.problem import Problem
 
 

@@ -16,9 +16,9 @@ from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_json, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError
+from cfgplan.planner import BestFirst, Stats
+from cfgplan.planner import plan as run_plan
 from cfgplan.planner.explain import explain
-from cfgplan.planner.search import Search, Stats
-from cfgplan.planner.search import plan as run_plan
 from cfgplan.problem import GOAL_SOURCE, Problem, load
 
 
@@ -78,7 +78,7 @@ def _progress(stats: Stats, elapsed: float) -> None:
     say(f"planning... {elapsed:.1f} s, {stats.nodes:,} nodes, {stats.derivations:,} derivations")
 
 
-def _stats(search: Search) -> dict[str, object]:
+def _stats(search: BestFirst) -> dict[str, object]:
     s = search.stats
     return {
         "nodes": s.nodes,
@@ -87,7 +87,7 @@ def _stats(search: Search) -> dict[str, object]:
         "duplicates": s.duplicates,
         "rejected": s.rejected,
         "exhausted": s.complete,
-        "stopped": search.stopped or None,
+        "stopped": search.stopped.value if search.stopped else None,
     }
 
 
@@ -192,7 +192,7 @@ def plan(
         _verbose(search)
     if search.stopped:
         found = f"{len(configs)} configuration(s)" if configs else "nothing"
-        say(f"cfgplan: search stopped ({search.stopped}); reporting {found} found so far")
+        say(f"cfgplan: search stopped ({search.stopped.value}); reporting {found} found so far")
     if not configs:
         say("\n".join(explain(search.report, call_text(problem.goal_call))))
         raise typer.Exit(EXIT_NONE)
@@ -205,7 +205,7 @@ def plan(
     write_output(text, output, force)
 
 
-def _verbose(search: Search) -> None:
+def _verbose(search: BestFirst) -> None:
     s = search.stats
     say(
         f"search: {s.nodes} nodes, {s.expansions} method expansions, {s.derivations} derivations, "
@@ -213,6 +213,6 @@ def _verbose(search: Search) -> None:
     )
     for dead in search.report.dead.values():
         where = f" ({dead.span})" if dead.span is not None else ""
-        say(f"  dead end: {dead.where}{where}: {dead.condition}: {dead.reason}")
-    for condition, reason in search.report.rejected:
-        say(f"  rejected: {condition}: {reason}")
+        say(f"  dead end: {dead.where}{where}: {dead.condition.value}: {dead.reason}")
+    for dead in search.report.rejected:
+        say(f"  rejected: {dead.condition.value}: {dead.describe()}")

@@ -20,8 +20,8 @@ from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_prob
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text
 from cfgplan.diagnostics import CfgplanError, error
+from cfgplan.planner import plan as run_plan
 from cfgplan.planner.explain import explain
-from cfgplan.planner.search import plan as run_plan
 from cfgplan.problem import Problem
 
 Kind = Literal["dot", "svg", "png"]

@@ -80,6 +80,10 @@ def _atom(atom: Atom) -> Ground:
     return (atom.predicate, *atom.args)
 
 
+def _subst(atom: Ground, env: Mapping[str, str]) -> Ground:
+    return tuple(env.get(t, t) for t in atom)
+
+
 def satisfying(conditions: Sequence[Condition], facts: Sequence[Ground], env: Env) -> Iterator[Env]:
     """Every binding extending ``env`` under which ``conditions`` hold in ``facts``.
 
@@ -181,13 +185,29 @@ class _Checker:
             if env is None:
                 self.report("domain", f"{_call(f)} does not match the schema {schema.name}")
                 continue
-            self.schemas[label] = (schema, env)
-            if next(satisfying(schema.precond, self.facts, env), None) is None:
+            options = list(satisfying(schema.precond, self.facts, env))
+            if not options:
                 conditions = " ".join(_condition_text(c) for c in schema.precond)
                 self.report(
                     "causal",
                     f"the preconditions of {_call(f)} do not hold in the state: {conditions}",
                 )
+            self.schemas[label] = (schema, self._fitting(label, schema, options) or env)
+
+    def _fitting(self, label: str, schema: Functionality, options: list[Env]) -> Env | None:
+        """The first binding of the preconditions under which the instance's
+        ports match its channels: its preconditions may bind variables its
+        inputs and outputs use (``(loc ?r)`` with ``(in ?r ?room)`` produces
+        ``(pos ?r ?room)``), and the configuration does not record the binding.
+        None when no binding fits (the checks below then report it)."""
+        sent = {ch.data for ch in self.config.channels if ch.source == label}
+        received = {ch.data for ch in self.config.channels if ch.target == label}
+        for env in options:
+            outputs = {_subst(_atom(a), env) for a in schema.outputs}
+            inputs = {_subst(_atom(a), env) for a in schema.inputs}
+            if sent <= outputs and inputs == received:
+                return env
+        return options[0] if options else None
 
     def _ports(self, label: str, side: str) -> list[Ground] | None:
         """The instantiated inputs or outputs of a resolved instance, else None."""
@@ -195,7 +215,7 @@ class _Checker:
             return None
         schema, env = self.schemas[label]
         atoms = schema.inputs if side == "in" else schema.outputs
-        return [tuple(env.get(t, t) for t in _atom(a)) for a in atoms]
+        return [_subst(_atom(a), env) for a in atoms]
 
     # channels -----------------------------------------------------------------
 

@@ -1,8 +1,8 @@
 """An admissible lower bound on what a partial configuration still costs.
 
-Best-first search (search.py) orders nodes by ``cost so far + bound``. The bound
-counts only what every completion must add, so it never overestimates (and
-the first configuration found is the cheapest):
+Best-first search (:mod:`cfgplan.planner.search`) orders nodes by ``cost so
+far + bound``. The bound counts only what every completion must add, so it
+never overestimates (and the first configuration found is the cheapest):
 
 - the *mandatory* functionality instances of each pending stack item: those in
   every feasible expansion of it (a method's versions and bindings are
@@ -24,18 +24,22 @@ names: two pending items needing ``camera(Emil)`` count it once, and nothing
 already in C counts. A pending item with no feasible expansion makes the node
 dead.
 
-Summaries of ground method instances depend only on the domain and the state,
-so they are computed once and memoised for the whole search.
+The :class:`Bound` owns its caches: the summary of each ground instance and
+the names each signature reaches depend only on the task, so one Bound serves
+every search of a task. Summaries are computed without recursion (a method
+hierarchy may be thousands of levels deep): :meth:`Bound.summary` runs the
+summarising generators on an explicit stack.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Set
+from collections.abc import Generator, Iterable, Set
 from dataclasses import dataclass, field
 
-from cfgplan.planner.match import bind_name, bindings, substitute
+from cfgplan.planner.match import bindings
 from cfgplan.planner.partial import Key, Partial
-from cfgplan.planner.task import Ground, Task
+from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
+from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
 
 ChannelId = tuple[str, Ground, Key | None, Key | None]
 """(kind, data, sender, receiver): None where the end is not known yet."""
@@ -73,56 +77,79 @@ class Expanded:
 
 
 INFEASIBLE = Summary(False)
-UNKNOWN = Summary(True)  # used for an instance met again while it is being summarised
+UNKNOWN = Summary(True)
+"""The summary of an instance met again inside its own expansion.
+
+It claims the least possible: feasible, nothing certain, costing nothing.
+Summaries are intersections (of contents) and minimums (of costs) over
+expansions, so a part that claims less can only make the summaries built on
+it claim less: they stay below what every real expansion contains and costs,
+and the bound stays admissible. Claiming *feasible* is the optimistic side
+too: the search prunes the recursion on its own path, but another version
+may still complete, and the bound must not cut a node that has a completion.
+"""
+
+Summarising = Generator[Ground, Summary, Summary]
+"""A summary being made: it yields each call whose summary it needs, is sent
+that summary, and returns its own."""
 
 
 @dataclass
 class Bound:
-    """The bound for one task; call :meth:`of` on each node."""
+    """The bound for one task; :meth:`estimate` on each node."""
 
     task: Task
-    _active: set[Ground] = field(default_factory=set)
+    _memo: dict[Ground, Summary] = field(default_factory=dict)
+    _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(
+        default_factory=dict
+    )
 
-    def __post_init__(self) -> None:
-        # Summaries depend on the task alone: they are kept with it, so every
-        # search of the same task (-k 1, then --all, ...) computes them once.
-        self._memo: dict[Ground, Summary] = self.task.summaries
-        self._names: dict[tuple[str, int], tuple[frozenset[str], frozenset[str]]] = (
-            self.task.reach
-        )
-
-    # -- static summaries -------------------------------------------------
+    # -- static summaries of ground instances -------------------------------
     def summary(self, call: Ground) -> Summary:
+        """What every feasible expansion of ``call`` contains (memoised)."""
         found = self._memo.get(call)
         if found is not None:
             return found
-        if call in self._active:
-            return UNKNOWN
-        self._active.add(call)
-        try:
-            result = self._summarise(call)
-        finally:
-            self._active.discard(call)
-        self._memo[call] = result
-        return result
+        frames: list[tuple[Ground, Summarising]] = [(call, self._summarise(call))]
+        active = {call}
+        reply: Summary | None = None
+        while frames:
+            current, making = frames[-1]
+            try:
+                need = making.send(reply)  # type: ignore[arg-type]  # None starts it
+            except StopIteration as made:
+                self._memo[current] = made.value
+                active.discard(current)
+                frames.pop()
+                reply = made.value
+                continue
+            reply = self._memo.get(need)
+            if reply is None:
+                if need in active:
+                    reply = UNKNOWN  # see UNKNOWN: recursion is summarised as unknown
+                else:
+                    active.add(need)
+                    frames.append((need, self._summarise(need)))
+        return self._memo[call]
 
-    def _summarise(self, call: Ground) -> Summary:
-        sig = (call[0], len(call) - 1)
-        schema = self.task.functionalities.get(sig)
+    def _summarise(self, call: Ground) -> Summarising:
+        schema = self.task.functionality(call)
         if schema is not None:
             env = bind_name(schema.params, call[1:])
             if env is None or next(iter(bindings(self.task, schema.tests, env)), None) is None:
                 return INFEASIBLE
+            # Outputs that use a variable its preconditions bind stay open
+            # (not ground), so they name no certain producer: weaker, still a bound.
             outs = tuple((substitute(o, env), call) for o in schema.outputs)
-            weight = schema.cost if schema.cost is not None else self.task.weights.functionality
-            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, weight)
+            cost = self.task.functionality_cost(schema)
+            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost)
         expansions: list[Expanded] = []
-        for method in self.task.methods.get(sig, ()):
+        for method in self.task.versions(call):
             env0 = bind_name(method.params, call[1:])
             if env0 is None:
                 continue
             for env in bindings(self.task, method.tests, env0):
-                expansion = self._expansion(method, env)
+                expansion = yield from self._expansion(method, env)
                 if expansion is not None:
                     expansions.append(expansion)
         if not expansions:
@@ -139,29 +166,27 @@ class Bound:
         wiring = min(e.wiring for e in expansions)
         return Summary(True, funcs, robots, channels, producers, minimum, wiring)
 
-    def _expansion(self, method: object, env: dict[str, str]) -> Expanded | None:
-        from cfgplan.planner.task import MethodSchema
-
-        assert isinstance(method, MethodSchema)
+    def _expansion(
+        self, method: MethodSchema, env: Bindings
+    ) -> Generator[Ground, Summary, Expanded | None]:
         body: dict[str, tuple[Ground, Summary, bool]] = {}
         funcs: set[Key] = set()
         robots: set[str] = set()
         channels: set[ChannelId] = set()
         for label, pattern in method.body:
             call = substitute(pattern, env)
-            if any(t[:1] == "?" for t in call[1:]):
+            if not is_ground(call):
                 return None
-            sub = self.summary(call)
+            sub = yield call
             if not sub.feasible:
                 return None
-            is_functionality = (call[0], len(call) - 1) in self.task.functionalities
-            body[label] = (call, sub, is_functionality)
+            body[label] = (call, sub, not self.task.is_method(call))
             funcs |= sub.functionalities
             robots |= sub.robots
             channels |= sub.channels
         for spec in method.channels:
             data = substitute(spec.data, env)
-            if any(t[:1] == "?" for t in data[1:]):
+            if not is_ground(data):
                 return None
             src_call, src_sum, src_func = body[spec.source]
             dst_call, _, dst_func = body[spec.target]
@@ -174,9 +199,8 @@ class Bound:
             call, sub, is_functionality = body[port.label]
             producers.setdefault(data, call if is_functionality else sub.producer(data))
         parts = [(self.names(call), sub.minimum) for call, sub, _ in body.values()]
-        w = self.task.weights
         own = {(c.kind, substitute(c.data, env)) for c in method.channels}
-        own_cost = float(sum(w.global_ if kind == "global" else w.local for kind, _ in own))
+        own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
         wires: list[tuple[Set[str], float]] = [({data[0] for _, data in own}, own_cost)]
         wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
         return Expanded(
@@ -188,6 +212,7 @@ class Bound:
             _least(wires),
         )
 
+    # -- what a signature can reach ---------------------------------------------
     def names(self, call: Ground) -> frozenset[str]:
         """The functionality names an instance can reach through method bodies."""
         return self._reach(call)[0]
@@ -198,7 +223,7 @@ class Bound:
 
     def _reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str]]:
         sig = (call[0], len(call) - 1)
-        found = self._names.get(sig)
+        found = self._reached.get(sig)
         if found is not None:
             return found
         names: set[str] = set()
@@ -217,62 +242,19 @@ class Bound:
                     if child not in seen:
                         seen.add(child)
                         todo.append(child)
-        result = self._names[sig] = (frozenset(names), frozenset(data))
+        result = self._reached[sig] = (frozenset(names), frozenset(data))
         return result
 
-    def _deepest(self, node: Partial, pending: dict[int, tuple[Ground, Summary]]) -> float:
-        """What the pending items must still add in functionalities, by their
-        minimums: items that can reach no common functionality name add up
-        (less what C already has of those names); the others count once."""
-        w = self.task.weights
-        have: dict[str, float] = {}
-        for p in node.placed:
-            cost = p.schema.cost if p.schema.cost is not None else w.functionality
-            have[p.call[0]] = have.get(p.call[0], 0.0) + cost
-        parts = []
-        for call, sub in pending.values():
-            names = self.names(call)
-            reusable = sum(cost for name, cost in have.items() if name in names)
-            parts.append((names, max(0.0, sub.minimum - reusable)))
-        return _least(parts)
+    # -- the bound of a node ----------------------------------------------------
+    def feasible(self, node: Partial) -> float | None:
+        """0 when every pending item may still complete, else None (no
+        completion): what ``--all`` needs, where no estimate can stop early."""
+        return 0.0 if all(self.summary(item.call).feasible for item in node.stack) else None
 
-    def _widest(
-        self,
-        pending: dict[int, tuple[Ground, Summary]],
-        future: set[ChannelId],
-        resolved: set[tuple[str, Ground, Key, Key]],
-    ) -> float:
-        """What must still be added in channels: the channels already waiting
-        for their ends (``future``), and each pending item's least wiring (less
-        the resolved channels with data it can carry); parts whose data
-        predicates differ cannot merge, so they add up."""
-        w = self.task.weights
-        have: dict[str, float] = {}
-        for kind, data, _, _ in resolved:
-            have[data[0]] = have.get(data[0], 0.0) + (w.global_ if kind == "global" else w.local)
-        parts = [
-            (
-                frozenset(data[0] for _, data, _, _ in future),
-                _channel_bound(future, resolved, w.global_, w.local),
-            )
-        ]
-        for call, sub in pending.values():
-            names = self.data_names(call)
-            reusable = sum(cost for name, cost in have.items() if name in names)
-            parts.append((names, max(0.0, sub.wiring - reusable)))
-        return _least(parts)
-
-    # -- the bound of a node ----------------------------------------------
-    def of(self, node: Partial, estimate: bool = True) -> float | None:
-        """A lower bound on the cost still to come, or None when no completion
-        exists; with ``estimate`` False only the latter is decided (and 0 returned)."""
-        if not estimate:
-            feasible = all(self.summary(item.call).feasible for item in node.stack)
-            return 0.0 if feasible else None
+    def estimate(self, node: Partial) -> float | None:
+        """A lower bound on the cost still to come, or None when no completion exists."""
         task = self.task
-        w = task.weights
         placed = node.labels
-        robots = {p.robot for p in node.placed}
         needed: set[Key] = set()
         new_robots: set[str] = set()
         future: set[ChannelId] = set()
@@ -295,16 +277,58 @@ class Bound:
             sender = src if src is not None else _pending_end(pending, ch.source, ch.data, task)
             receiver = dst if dst is not None else _pending_call(pending, ch.target, task)
             future.add((ch.kind, ch.data, sender, receiver))
-        total = 0.0
+        mandatory = 0.0
         for key in needed:
-            if key in placed:
-                continue
-            schema = task.functionalities[(key[0], len(key) - 1)]
-            total += schema.cost if schema.cost is not None else w.functionality
-        total = max(total, self._deepest(node, pending))
-        total += w.robot * len(new_robots - robots)
+            if key not in placed:
+                schema = task.functionalities[(key[0], len(key) - 1)]
+                mandatory += task.functionality_cost(schema)
+        # Two lower bounds on the functionalities still to add, counted two ways
+        # (certain instances; least cost per group of items that cannot share).
+        # Either may be the larger, and both may count the same instance, so
+        # they cannot be added up: their max is a lower bound.
+        total = max(mandatory, self._deepest(node, pending))
+        total += task.weights.robot * len(new_robots - node.robots)
         total += self._widest(pending, future, resolved)
         return total
+
+    def _deepest(self, node: Partial, pending: dict[int, tuple[Ground, Summary]]) -> float:
+        """What the pending items must still add in functionalities, by their
+        minimums: items that can reach no common functionality name add up
+        (less what C already has of those names); the others count once."""
+        have: dict[str, float] = {}
+        for p in node.placed:
+            have[p.call[0]] = have.get(p.call[0], 0.0) + self.task.functionality_cost(p.schema)
+        parts = []
+        for call, sub in pending.values():
+            names = self.names(call)
+            reusable = sum(cost for name, cost in have.items() if name in names)
+            parts.append((names, max(0.0, sub.minimum - reusable)))
+        return _least(parts)
+
+    def _widest(
+        self,
+        pending: dict[int, tuple[Ground, Summary]],
+        future: set[ChannelId],
+        resolved: set[tuple[str, Ground, Key, Key]],
+    ) -> float:
+        """What must still be added in channels: the channels already waiting
+        for their ends (``future``), and each pending item's least wiring (less
+        the resolved channels with data it can carry); parts whose data
+        predicates differ cannot merge, so they add up."""
+        have: dict[str, float] = {}
+        for kind, data, _, _ in resolved:
+            have[data[0]] = have.get(data[0], 0.0) + self.task.channel_cost(kind)
+        parts = [
+            (
+                frozenset(data[0] for _, data, _, _ in future),
+                _channel_bound(future, resolved, self.task),
+            )
+        ]
+        for call, sub in pending.values():
+            names = self.data_names(call)
+            reusable = sum(cost for name, cost in have.items() if name in names)
+            parts.append((names, max(0.0, sub.wiring - reusable)))
+        return _least(parts)
 
 
 def _least(parts: Iterable[tuple[Set[str], float]]) -> float:
@@ -331,7 +355,7 @@ def _pending_call(pending: dict[int, tuple[Ground, Summary]], label: int, task: 
     if entry is None:
         return None
     call = entry[0]
-    return call if (call[0], len(call) - 1) in task.functionalities else None
+    return None if task.is_method(call) else call
 
 
 def _pending_end(
@@ -342,7 +366,7 @@ def _pending_end(
     if entry is None:
         return None
     call, sub = entry
-    if (call[0], len(call) - 1) in task.functionalities:
+    if not task.is_method(call):
         return call
     return sub.producer(data)
 
@@ -360,10 +384,7 @@ def _common_channels(sets: list[frozenset[ChannelId]]) -> frozenset[ChannelId]:
 
 
 def _channel_bound(
-    future: Iterable[ChannelId],
-    resolved: set[tuple[str, Ground, Key, Key]],
-    w_global: float,
-    w_local: float,
+    future: Iterable[ChannelId], resolved: set[tuple[str, Ground, Key, Key]], task: Task
 ) -> float:
     """Channels certain to be new: fully known ones not in C, plus one per
     (kind, data, receiver) of those whose sender is unknown and that nothing
@@ -377,10 +398,8 @@ def _channel_bound(
         elif src is None and dst is not None:
             open_ends.add((kind, data, dst))
     covered = {(k, d, r) for k, d, _, r in full} | {(k, d, r) for k, d, _, r in resolved}
-    total = 0.0
-    for kind, *_ in full:
-        total += w_global if kind == "global" else w_local
+    total = sum(task.channel_cost(kind) for kind, *_ in full)
     for kind, data, dst in open_ends:
         if (kind, data, dst) not in covered:
-            total += w_global if kind == "global" else w_local
+            total += task.channel_cost(kind)
     return total

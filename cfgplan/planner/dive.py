@@ -2,35 +2,48 @@
 Ctrl-C) before it has proven any configuration cheapest, dive depth-first from
 the open nodes, cheapest child first, to find *some* admissible configuration.
 It is marked as not proven optimal.
+
+A plain function over the search's parts: the open nodes, how to expand one
+and how to finish a complete one.
 """
 
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING
+from collections.abc import Callable, Iterable
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.planner.partial import Partial
 
-if TYPE_CHECKING:
-    from cfgplan.planner.search import Search
+Expand = Callable[[Partial], Iterable[tuple[float, Partial]]]
+Finish = Callable[[Partial, float], Configuration | None]
 
 
-def dive(search: Search, budget: int = 50_000, seconds: float = 5.0) -> Configuration | None:
-    """The first admissible configuration met by a greedy depth-first dive,
-    within ``budget`` nodes and ``seconds``; None when none is met."""
-    deadline = time.perf_counter() + seconds
-    stack = list(reversed(search.frontier))  # the best open node on top
+def dive(
+    frontier: list[tuple[float, Partial]],
+    expand: Expand,
+    finish: Finish,
+    *,
+    budget: int = 50_000,
+    deadline: float | None = None,
+) -> Configuration | None:
+    """The first admissible configuration met by a greedy depth-first dive from
+    ``frontier`` (best first), within ``budget`` nodes and before ``deadline``
+    (a :func:`time.perf_counter` value); None when none is met."""
+    stack = list(reversed(frontier))  # the best open node on top
     spent = 0
     try:
-        while stack and spent < budget and time.perf_counter() < deadline:
+        while stack and spent < budget:
+            if deadline is not None and time.perf_counter() > deadline:
+                return None
             total, node = stack.pop()
             spent += 1
             if node.done:
-                config = search.finished(node, total)
+                config = finish(node, total)
                 if config is not None:
                     return config.model_copy(update={"proven": False, "derivation": 0})
                 continue
-            children = sorted(search.children(node), key=lambda entry: (entry[0], entry[1].path))
+            children = sorted(expand(node), key=lambda entry: (entry[0], entry[1].path))
             stack.extend(reversed(children))
     except KeyboardInterrupt:
         return None

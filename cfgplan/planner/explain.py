@@ -2,24 +2,13 @@
 
 Every dead end the search met is kept (first occurrence, in the order met):
 method versions whose preconditions no binding satisfies, with the first
-failing condition and its bindings; channels that end on the wrong robot;
+failing condition and its bindings; channels that end on the wrong robots;
 and configurations rejected after expansion (information, cycles, media).
 """
 
 from __future__ import annotations
 
-from cfgplan.planner.search import Report
-
-_CONDITION_NAMES = {
-    "causal": "precondition",
-    "binding": "unbound variable",
-    "information": "information admissibility",
-    "location": "channel location",
-    "cycle": "cycle",
-    "recursion": "recursion",
-    "domain": "domain",
-    "communication": "communication admissibility",
-}
+from cfgplan.planner.report import Condition, Report
 
 
 def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
@@ -28,18 +17,17 @@ def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
     shown = 0
     for dead in report.dead.values():
         where = f" ({dead.span})" if dead.span is not None else ""
-        kind = _CONDITION_NAMES.get(dead.condition, dead.condition)
-        lines.append(f"  {dead.where}{where}: {kind}: {dead.reason}")
+        lines.append(f"  {dead.where}{where}: {dead.condition.value}: {dead.reason}")
         shown += 1
         if shown >= limit:
             break
-    rejected: dict[tuple[str, str], int] = {}
-    for condition, reason in report.rejected:
-        rejected[(condition, reason)] = rejected.get((condition, reason), 0) + 1
+    rejected: dict[tuple[Condition, str], int] = {}
+    for dead in report.rejected:
+        seen = (dead.condition, dead.describe())
+        rejected[seen] = rejected.get(seen, 0) + 1
     for (condition, reason), count in rejected.items():
         times = f" ({count} configurations)" if count > 1 else ""
-        kind = _CONDITION_NAMES.get(condition, condition)
-        lines.append(f"  rejected after expansion{times}: {kind}: {reason}")
+        lines.append(f"  rejected after expansion{times}: {condition.value}: {reason}")
     hidden = len(report.dead) - shown
     if hidden > 0:
         lines.append(f"  ... and {hidden} more dead ends (--verbose lists them all)")

@@ -1,59 +1,24 @@
 """Matching preconditions against the world state (thesis 4.5, step 2b).
 
 :func:`bindings` yields every binding of a schema's preconditions, facts taken
-in state order: the backtrack points of the planner. When none exists,
-:func:`why_not` names the first condition that failed and the bindings it
-failed under, for the "why nothing was found" report.
+in state order: the backtrack points of the planner. Identical bindings are
+one binding (the state is a set). When none exists, :func:`why_not` names the
+first condition that failed and the bindings it failed under, for the "why
+nothing was found" report.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.ir.model import Span, is_variable
-from cfgplan.planner.task import Ground, Pattern, Task, Test, show
-
-Bindings = dict[str, str]
-
-
-def substitute(p: Pattern, env: Mapping[str, str]) -> Ground:
-    """Replace bound variables of ``p`` (unbound ones stay as they are)."""
-    return tuple(env.get(t, t) if t[:1] == "?" else t for t in p)
+from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind, show
+from cfgplan.planner.unify import Bindings, substitute, unify
 
 
-def _unify(p: Pattern, fact: Ground, env: Bindings) -> Bindings | None:
-    """Extend ``env`` so that ``p`` equals ``fact``, or None."""
-    new: Bindings | None = None
-    for term, value in zip(p[1:], fact[1:], strict=True):
-        if term[:1] == "?":
-            bound = env.get(term) if new is None else new.get(term, env.get(term))
-            if bound is None:
-                if new is None:
-                    new = dict(env)
-                new[term] = value
-            elif bound != value:
-                return None
-        elif term != value:
-            return None
-    return new if new is not None else env
-
-
-def bind_name(params: Pattern, args: Ground) -> Bindings | None:
-    """Match a schema's name parameters against a call's arguments: a variable
-    binds (a repeated one must get the same value), a constant must be equal."""
-    env: Bindings = {}
-    for param, arg in zip(params, args, strict=True):
-        if param[:1] == "?":
-            if env.setdefault(param, arg) != arg:
-                return None
-        elif param != arg:
-            return None
-    return env
-
-
-def _candidates(task: Task, p: Pattern, env: Bindings | None = None) -> tuple[Ground, ...]:
+def candidates(task: Task, p: Pattern, env: Bindings | None = None) -> tuple[Ground, ...]:
     """The facts that may match ``p``: those of its predicate, narrowed by the
     argument (constant or bound variable) with the fewest facts, in state order."""
     arity = len(p) - 1
@@ -67,11 +32,12 @@ def _candidates(task: Task, p: Pattern, env: Bindings | None = None) -> tuple[Gr
     return best
 
 
-def _passes(task: Task, test: Test, env: Bindings) -> bool:
-    if test.kind == "not":
+def passes(task: Task, test: Test, env: Bindings) -> bool:
+    """A ``not`` or ``eval`` test under ``env`` (an eval that cannot be
+    evaluated, e.g. ``<`` on a symbol, is false)."""
+    if test.kind is TestKind.NOT:
         return not any(
-            _unify(test.pattern, f, env) is not None
-            for f in _candidates(task, test.pattern, env)
+            unify(test.pattern, f, env) is not None for f in candidates(task, test.pattern, env)
         )
     try:
         return holds(test.expr, env)
@@ -89,19 +55,21 @@ def _walk(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[tuple[
         if index == len(tests):
             continue
         test = tests[index]
-        if test.kind == "atom":
+        if test.kind is TestKind.ATOM:
             matches = [
                 m
-                for f in _candidates(task, test.pattern, current)
-                if (m := _unify(test.pattern, f, current)) is not None
+                for f in candidates(task, test.pattern, current)
+                if (m := unify(test.pattern, f, current)) is not None
             ]
             stack.extend((index + 1, m) for m in reversed(matches))
-        elif _passes(task, test, current):
+        elif passes(task, test, current):
             stack.append((index + 1, current))
 
 
 def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bindings]:
-    """Every extension of ``env`` satisfying ``tests``, depth-first, facts in state order."""
+    """Every extension of ``env`` satisfying ``tests``, depth-first, facts in
+    state order. Distinct facts give distinct bindings (every variable of an
+    atom is bound by it), so no binding is repeated."""
     if not tests:
         yield env
         return
@@ -126,6 +94,13 @@ class Failure:
         return f"{self.detail or 'no fact matches'} {self.condition}{where}"
 
 
+_DETAIL = {
+    TestKind.ATOM: "no fact matches",
+    TestKind.NOT: "a fact matches the negated",
+    TestKind.EVAL: "false:",
+}
+
+
 def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern) -> Failure:
     """Explain why :func:`bindings` yields nothing: the deepest test reached
     and the first binding it failed under (variables of the name omitted)."""
@@ -136,7 +111,7 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
     index, current = best
     test = tests[min(index, len(tests) - 1)]
     named = {k: v for k, v in current.items() if k in params}
-    if test.kind == "eval":
+    if test.kind is TestKind.EVAL:
         # An eval is shown as written, with every variable it mentions.
         condition = test.text
         shown = tuple((k, v) for k, v in current.items() if _mentions(test, k))
@@ -144,10 +119,8 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
         # An atom is shown with the name's variables filled in, the others listed.
         condition = show(substitute(test.pattern, named))
         shown = tuple((k, v) for k, v in current.items() if k not in params and _mentions(test, k))
-    detail = {"atom": "no fact matches", "not": "a fact matches the negated", "eval": "false:"}[
-        test.kind
-    ]
-    if test.kind == "atom":
+    detail = _DETAIL[test.kind]
+    if test.kind is TestKind.ATOM:
         hint = _case_hint(task, test.pattern, current)
         if hint:
             detail = f"no fact matches ({hint})"
@@ -155,7 +128,7 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
 
 
 def _mentions(test: Test, var: str) -> bool:
-    if test.kind != "eval":
+    if test.kind is not TestKind.EVAL:
         return var in test.pattern
     return var in test.text.replace("(", " ").replace(")", " ").split()
 

@@ -1,14 +1,21 @@
 """The planning task: a domain and a state compiled into plain, fast structures.
 
 Like pyperplan's task model, this is what search works on: tuples and dicts,
-no pydantic on the hot path. Built once by :func:`compile_task`.
+no pydantic on the hot path. Built once by :func:`compile_task` and frozen:
+the search, the grounding memo and the bound keep their own caches
+(:mod:`cfgplan.planner.ground`, :mod:`cfgplan.planner.bound`), never here.
+
+The world state is a *set* of facts (4.4): a fact written twice is one fact,
+so it gives one binding, one derivation. State order (first occurrence) is
+kept: it orders the bindings, hence the derivations at equal cost (6.3.2).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from enum import Enum
+from types import MappingProxyType
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import (
@@ -28,17 +35,30 @@ from cfgplan.ir.model import (
 )
 
 Ground = tuple[str, ...]
-"""A ground atom as a tuple: ``("in", "Pippi", "Room1")``."""
+"""A ground atom or call as a tuple: ``("in", "Pippi", "Room1")``."""
 
 Pattern = tuple[str, ...]
 """An atom with variables: ``("in", "?r", "?room")``."""
+
+Signature = tuple[str, int]
+"""Name and arity: what identifies a method or functionality (4.5)."""
+
+
+class TestKind(Enum):
+    """What a compiled precondition does."""
+
+    ATOM = "atom"  # match a fact, binding free variables
+    NOT = "not"  # no fact matches
+    EVAL = "eval"  # the safe (eval ...) subset holds
 
 
 @dataclass(frozen=True, slots=True)
 class Test:
     """One compiled precondition: an atom to match, a negation or an eval."""
 
-    kind: str  # "atom" | "not" | "eval"
+    __test__ = False  # not a pytest test class
+
+    kind: TestKind
     pattern: Pattern = ()
     expr: SExpr = ""
     span: Span | None = None
@@ -98,29 +118,42 @@ class MethodSchema:
     body: tuple[tuple[str, Pattern], ...]
     span: Span | None
 
+    @property
+    def signature(self) -> Signature:
+        return (self.name, len(self.params))
 
-@dataclass
+
+@dataclass(frozen=True, eq=False)
 class Task:
-    """Everything the search needs, indexed for lookup."""
+    """Everything the search needs, indexed for lookup; never changed once built."""
 
-    functionalities: dict[tuple[str, int], FunctionalitySchema]
-    methods: dict[tuple[str, int], tuple[MethodSchema, ...]]
+    functionalities: Mapping[Signature, FunctionalitySchema]
+    methods: Mapping[Signature, tuple[MethodSchema, ...]]
     facts: tuple[Ground, ...]
-    facts_by_predicate: dict[tuple[str, int], tuple[Ground, ...]]
-    facts_by_argument: dict[tuple[str, int, int, str], tuple[Ground, ...]]
+    """The state's facts, each once, in order of first occurrence."""
+    facts_by_predicate: Mapping[Signature, tuple[Ground, ...]]
+    facts_by_argument: Mapping[tuple[str, int, int, str], tuple[Ground, ...]]
     """(predicate, arity, position, value) -> the facts with that argument, in state order."""
-    fact_set: frozenset[Ground]
     media: tuple[Medium, ...]
     weights: Weights
-    state_names: frozenset[str] = field(default_factory=frozenset)
-    io: dict[Ground, tuple[tuple[Ground, ...], tuple[Ground, ...]]] = field(default_factory=dict)
-    """Memo: a functionality instance's inputs and outputs, instantiated."""
-    models: dict[tuple[object, ...], Any] = field(default_factory=dict)
-    """Memo: result models (immutable) shared by the configurations built."""
-    summaries: dict[Ground, Any] = field(default_factory=dict)
-    """Memo of bound.py: what every expansion of a ground instance contains."""
-    reach: dict[tuple[str, int], Any] = field(default_factory=dict)
-    """Memo of bound.py: the names a signature can reach through method bodies."""
+    state_names: frozenset[str]
+    """Every symbol of the state: for "differs only in case" hints."""
+
+    def is_method(self, call: Ground) -> bool:
+        return (call[0], len(call) - 1) in self.methods
+
+    def functionality(self, call: Ground) -> FunctionalitySchema | None:
+        return self.functionalities.get((call[0], len(call) - 1))
+
+    def versions(self, call: Ground) -> tuple[MethodSchema, ...]:
+        return self.methods.get((call[0], len(call) - 1), ())
+
+    def functionality_cost(self, schema: FunctionalitySchema) -> float:
+        """The functionality's ``:cost``, else the functionality weight (3.5)."""
+        return schema.cost if schema.cost is not None else self.weights.functionality
+
+    def channel_cost(self, kind: str) -> float:
+        return self.weights.global_ if kind == "global" else self.weights.local
 
 
 def pattern(atom: Atom) -> Pattern:
@@ -134,7 +167,8 @@ def show(p: Sequence[str]) -> str:
 
 def _tests(conditions: Sequence[Condition], bound: set[str]) -> tuple[Test, ...]:
     """Order preconditions so every ``not`` and ``eval`` runs once its variables
-    are bound by the name or an earlier atom (atoms keep their order)."""
+    are bound by the name or an earlier atom (atoms keep their order): an
+    ``eval`` written before the atom that binds its variable is postponed."""
     known = set(bound)
     ordered: list[Test] = []
     waiting: list[tuple[set[str], Test]] = []
@@ -147,15 +181,15 @@ def _tests(conditions: Sequence[Condition], bound: set[str]) -> tuple[Test, ...]
 
     for cond in conditions:
         if isinstance(cond, Atom):
-            ordered.append(Test("atom", pattern(cond), span=cond.span, text=str(cond)))
+            ordered.append(Test(TestKind.ATOM, pattern(cond), span=cond.span, text=str(cond)))
             known.update(cond.variables())
             release()
         elif isinstance(cond, Negation):
-            test = Test("not", pattern(cond.atom), span=cond.span, text=str(cond))
+            test = Test(TestKind.NOT, pattern(cond.atom), span=cond.span, text=str(cond))
             waiting.append((set(cond.atom.variables()), test))
             release()
         elif isinstance(cond, Eval):
-            test = Test("eval", expr=cond.expr, span=cond.span, text=_eval_text(cond.expr))
+            test = Test(TestKind.EVAL, expr=cond.expr, span=cond.span, text=_eval_text(cond.expr))
             waiting.append((set(cond.variables()), test))
             release()
     ordered.extend(test for _, test in waiting)
@@ -214,30 +248,27 @@ def _method(m: Method, version: int) -> MethodSchema:
 
 def compile_task(domain: Domain, state: State, weights: Weights | None = None) -> Task:
     """Compile a checked domain and a state into a :class:`Task`."""
-    functionalities: dict[tuple[str, int], FunctionalitySchema] = {}
+    functionalities: dict[Signature, FunctionalitySchema] = {}
     for f in domain.functionalities:
         functionalities.setdefault(f.name.signature, _functionality(f))
-    methods: dict[tuple[str, int], list[MethodSchema]] = {}
+    methods: dict[Signature, list[MethodSchema]] = {}
     for m in domain.methods:
         versions = methods.setdefault(m.name.signature, [])
         versions.append(_method(m, len(versions) + 1))
-    facts = tuple(pattern(a) for a in state.facts)
-    by_pred: dict[tuple[str, int], list[Ground]] = {}
-    for fact in facts:
-        by_pred.setdefault((fact[0], len(fact) - 1), []).append(fact)
+    facts = tuple(dict.fromkeys(pattern(a) for a in state.facts))  # a set, in state order
+    by_pred: dict[Signature, list[Ground]] = {}
     by_arg: dict[tuple[str, int, int, str], list[Ground]] = {}
     for fact in facts:
+        by_pred.setdefault((fact[0], len(fact) - 1), []).append(fact)
         for position, value in enumerate(fact[1:], 1):
             by_arg.setdefault((fact[0], len(fact) - 1, position, value), []).append(fact)
-    names = {t for fact in facts for t in fact}
     return Task(
-        functionalities=functionalities,
-        methods={k: tuple(v) for k, v in methods.items()},
+        functionalities=MappingProxyType(functionalities),
+        methods=MappingProxyType({k: tuple(v) for k, v in methods.items()}),
         facts=facts,
-        facts_by_predicate={k: tuple(v) for k, v in by_pred.items()},
-        facts_by_argument={k: tuple(v) for k, v in by_arg.items()},
-        fact_set=frozenset(facts),
+        facts_by_predicate=MappingProxyType({k: tuple(v) for k, v in by_pred.items()}),
+        facts_by_argument=MappingProxyType({k: tuple(v) for k, v in by_arg.items()}),
         media=state.media,
         weights=weights or Weights(),
-        state_names=frozenset(names),
+        state_names=frozenset(t for fact in facts for t in fact),
     )

@@ -9,7 +9,7 @@ import re
 from pathlib import Path
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -30,7 +30,7 @@ from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.cli.app import app
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -14,7 +14,7 @@ from cfgplan.backends import render as engine
 from cfgplan.backends.render import render
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
 from cfgplan.problem import load
 
 ROOT = Path(__file__).resolve().parents[2]

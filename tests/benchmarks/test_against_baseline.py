@@ -11,7 +11,7 @@ import pytest
 from benchmarks.families import relay, wall
 from benchmarks.naive import distinct, enumerate_all
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]

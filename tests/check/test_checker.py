@@ -370,8 +370,17 @@ def test_body_call_variable_bound_by_nothing_is_a_warning_once() -> None:
 def test_functionality_variable_not_in_name_is_a_warning() -> None:
     text = "(make-functionality :name '(camera ?r) :out '((image ?r ?q)))\n"
     d = only(run(text), "warning")
-    assert d.message == "?q in (image ?r ?q) does not occur in the name (camera ?r)"
+    assert d.message == (
+        "?q in (image ?r ?q) occurs neither in the name (camera ?r) nor in a precondition"
+    )
     assert loc(d) == at(text, "(image") == "1:47"
+
+
+def test_functionality_output_bound_by_its_precondition_is_fine() -> None:
+    """(loc ?r) with (in ?r ?room) produces (pos ?r ?room): the precondition
+    binds ?room when the functionality is placed (4.5, 2a), so no warning."""
+    text = "(make-functionality :name '(loc ?r) :precond '((in ?r ?room)) :out '((pos ?r ?room)))\n"
+    assert run(text) == []
 
 
 # -- preconditions ---------------------------------------------------------------

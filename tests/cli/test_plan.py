@@ -159,3 +159,18 @@ def test_verbose_goes_to_stderr(cfgplan: Run) -> None:
 def test_readme_quick_start_example_exists() -> None:
     readme = (ROOT / "README.md").read_text()
     assert "cfgplan plan domains/cross-door/domain.lisp" in readme
+
+
+def test_self_loop_is_a_cycle_not_a_traceback(cfgplan: Run, tmp_path: Path) -> None:
+    """Issue 8: a channel from a method instance to itself (``?f1 ?f1``) is
+    re-wired at both ends into a functionality feeding itself: a cycle (5.1),
+    so nothing is admissible: exit 3 and the cycle named (before: a KeyError
+    traceback with exit 1)."""
+    from tests.planner.test_reproducers import SELF_LOOP
+
+    (tmp_path / "d.lisp").write_text(SELF_LOOP)
+    (tmp_path / "s.lisp").write_text("(state (robot r1)) (goal (do r1))\n")
+    out = cfgplan("plan", str(tmp_path / "d.lisp"), str(tmp_path / "s.lisp"))
+    assert out.returncode == 3, out.stderr
+    assert "Traceback" not in out.stderr
+    assert "cycle: configuration: its channels form a cycle through F5 flt(r1)" in out.stderr

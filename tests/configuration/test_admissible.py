@@ -16,7 +16,7 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.cost import Weights
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
 from cfgplan.ir.model import Atom, Eval, Negation, State
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]

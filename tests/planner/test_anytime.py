@@ -12,7 +12,8 @@ from pathlib import Path
 
 from benchmarks.families import wall
 from cfgplan.configuration.admissible import problems
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
+from cfgplan.planner.report import StopReason
 from cfgplan.problem import load
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -30,7 +31,7 @@ def test_time_limit_returns_a_configuration_marked_not_proven(tmp_path: Path) ->
     finds an admissible configuration, marked as not proven optimal."""
     p = load(*big(tmp_path))
     configs, search = plan(p.task, p.goal_call, limit=None, time_limit=0)
-    assert search.stopped == "time limit"
+    assert search.stopped is StopReason.TIME_LIMIT
     assert len(configs) == 1 and not configs[0].proven
     assert problems(configs[0], p.domain, p.state) == []
 

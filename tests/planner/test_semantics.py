@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.planner import BestFirst, plan
 from cfgplan.planner.explain import explain
-from cfgplan.planner.search import Search, plan
+from cfgplan.planner.report import Condition
 from cfgplan.problem import Problem, load
 
 
@@ -17,7 +18,7 @@ def setup(tmp_path: Path, domain: str, state: str) -> Problem:
     return load(d, s)
 
 
-def solve(p: Problem, distinct: bool = True) -> tuple[list[Configuration], Search]:
+def solve(p: Problem, distinct: bool = True) -> tuple[list[Configuration], BestFirst]:
     return plan(p.task, p.goal_call, limit=None, distinct=distinct)
 
 
@@ -85,7 +86,7 @@ def test_recursion_is_pruned(tmp_path: Path) -> None:
     p = setup(tmp_path, domain, "(state (robot A)) (goal (go A))")
     configs, search = solve(p)
     assert [c.cost for c in configs] == [13]
-    assert any(d.condition == "recursion" for d in search.report.dead.values())
+    assert any(d.condition is Condition.RECURSION for d in search.report.dead.values())
 
 
 def test_functionality_preconditions_bind_and_branch(tmp_path: Path) -> None:

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
+from cfgplan.planner.report import Condition
 from cfgplan.planner.task import compile_task
 from cfgplan.problem import Problem, load
 
@@ -262,7 +263,9 @@ def test_section_4_6_overflow(tmp_path: Path) -> None:
     p = load(DOMAINS / "cross-door/domain-bandwidth.lisp", state)
     configs, search = plan(p.task, p.goal_call, limit=None)
     assert 44 not in costs(configs)
-    reasons = [r for cond, r in search.report.rejected if cond == "communication"]
+    reasons = [
+        d.reason for d in search.report.rejected if d.condition is Condition.COMMUNICATION
+    ]
     assert reasons and "socket Emil->Pippi (capacity 25) overflows" in reasons[0]
     assert "need 30, 5 more than it carries" in reasons[0]
 

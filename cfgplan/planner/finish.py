@@ -3,67 +3,75 @@ admissible (3.5) and return it.
 
 Causal admissibility and channel locations were checked as the configuration
 grew; here remain information (every input fed), cycles (5.1) and, when the
-state declares media, communication (4.6).
+state declares media, communication (4.6). :func:`finish` returns the
+:class:`Configuration`, or the :class:`DeadEnd` saying which condition it broke.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, field
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
-from cfgplan.planner.partial import Dead, Partial, describe_call
-from cfgplan.planner.task import Task, show
+from cfgplan.planner.partial import Partial, describe_call
+from cfgplan.planner.report import Condition, DeadEnd
+from cfgplan.planner.task import Ground, Task, show
 
-if TYPE_CHECKING:
-    from cfgplan.planner.search import Report
+
+@dataclass
+class Models:
+    """Result models already built, keyed by everything they hold: the models
+    are immutable, so the configurations of one search share them."""
+
+    functionalities: dict[tuple[int, Ground], FunctionalityInstance] = field(default_factory=dict)
+    channels: dict[tuple[object, ...], Channel] = field(default_factory=dict)
 
 
 def _label(n: int) -> str:
     return f"F{n}"
 
 
-def _information(node: Partial) -> Dead | None:
+def _information(node: Partial) -> DeadEnd | None:
     """Every input of every functionality has a channel carrying its descriptor,
-    from a functionality that produces it."""
+    from a functionality that produces it; a sender runs at least as often as
+    its receiver when both declare ``:freq``."""
     located = node.located
     fed: set[tuple[int, tuple[str, ...]]] = set()
     for ch in node.channels:
         src = located[ch.source]
         if ch.data not in src.outputs:
-            return Dead(
-                describe_call(src.call),
-                f"does not produce {show(ch.data)}",
-                condition="information",
+            return DeadEnd(
+                describe_call(src.call), f"does not produce {show(ch.data)}", None,
+                Condition.INFORMATION,
             )
         dst = located[ch.target]
         if ch.data not in dst.inputs:
-            return Dead(
-                describe_call(dst.call),
-                f"does not consume {show(ch.data)}",
-                condition="information",
+            return DeadEnd(
+                describe_call(dst.call), f"does not consume {show(ch.data)}", None,
+                Condition.INFORMATION,
             )
         slow = src.schema.freq, dst.schema.freq
         if slow[0] is not None and slow[1] is not None and slow[0] < slow[1]:
-            return Dead(
+            return DeadEnd(
                 describe_call(src.call),
                 f"runs at {slow[0]:g} Hz but feeds {describe_call(dst.call)} at {slow[1]:g} Hz",
-                condition="information",
+                None,
+                Condition.INFORMATION,
             )
         fed.add((ch.target, ch.data))
     for p in node.placed:
         for need in p.inputs:
             if (p.label, need) not in fed:
-                return Dead(
-                    describe_call(p.call),
-                    f"input {show(need)} is fed by no channel",
-                    condition="information",
+                return DeadEnd(
+                    describe_call(p.call), f"input {show(need)} is fed by no channel", None,
+                    Condition.INFORMATION,
                 )
     return None
 
 
-def _cycle(node: Partial) -> Dead | None:
-    """A cycle among the functionalities (the sort of 5.1 would fail)."""
+def _cycle(node: Partial) -> DeadEnd | None:
+    """A cycle among the functionalities (the sort of 5.1 would fail), named by
+    the functionalities on it (a channel from a functionality to itself is one)."""
     succ: dict[int, set[int]] = {p.label: set() for p in node.placed}
     indegree = dict.fromkeys(succ, 0)
     for ch in node.channels:
@@ -81,15 +89,35 @@ def _cycle(node: Partial) -> Dead | None:
                 ready.append(m)
     if seen == len(succ):
         return None
-    on_cycle = sorted(_label(n) for n, d in indegree.items() if d > 0)
-    return Dead(
-        "configuration",
-        "its channels form a cycle through " + ", ".join(on_cycle),
-        condition="cycle",
-    )
+    stuck = {n for n, d in indegree.items() if d > 0}
+    on_cycle = _on_cycle(succ, stuck)
+    names = ", ".join(f"{_label(n)} {describe_call(node.located[n].call)}" for n in on_cycle)
+    return DeadEnd("configuration", f"its channels form a cycle through {names}", None,
+                   Condition.CYCLE)
 
 
-def _postconditions(node: Partial) -> tuple[str, ...]:
+def _on_cycle(succ: dict[int, set[int]], stuck: set[int]) -> list[int]:
+    """One cycle among ``stuck`` (the nodes the sort could not take), in the
+    order of its channels, starting at its lowest label. Every stuck node has
+    a stuck predecessor, so walking backwards from any of them must repeat."""
+    pred: dict[int, int] = {}
+    for n in sorted(stuck):
+        for m in sorted(succ[n]):
+            if m in stuck:
+                pred.setdefault(m, n)
+    walk: list[int] = []
+    current = min(stuck)
+    while current not in walk:
+        walk.append(current)
+        current = pred[current]
+    cycle = walk[walk.index(current):]
+    cycle.reverse()  # walked backwards: now in channel order
+    start = cycle.index(min(cycle))
+    return cycle[start:] + cycle[:start]
+
+
+def postconditions(node: Partial) -> tuple[str, ...]:
+    """P as the thesis prints it: atoms and ``(not ATOM)``, each once, in order."""
     post = (show(a) if positive else f"(not {show(a)})" for positive, a in node.effects)
     return tuple(dict.fromkeys(post))
 
@@ -100,33 +128,33 @@ def identity(node: Partial) -> object:
     channels = frozenset(
         (ch.kind, key[ch.source], key[ch.target], ch.data, ch.bandwidth) for ch in node.channels
     )
-    return frozenset(key.values()), channels, frozenset(_postconditions(node))
+    return frozenset(key.values()), channels, frozenset(postconditions(node))
 
 
-def build(node: Partial, total: float, task: Task) -> Configuration:
+def build(node: Partial, total: float, task: Task, models: Models) -> Configuration:
     """The configuration of a finished node, in the thesis's list order.
 
     The planner's own data is already valid, so the models are constructed
-    without validation (it is the hot path of listing many configurations).
+    without validation (it is the hot path of listing many configurations);
+    ``models`` shares the immutable parts between configurations.
     """
     located = node.located
-    cache = task.models  # the models are immutable: configurations share them
-    functionalities = []
+    functionalities: list[FunctionalityInstance] = []
     for p in reversed(node.placed):
         fkey = (p.label, p.call)
-        made = cache.get(fkey)
+        made = models.functionalities.get(fkey)
         if made is None:
-            made = cache[fkey] = FunctionalityInstance.model_construct(
+            made = models.functionalities[fkey] = FunctionalityInstance.model_construct(
                 label=_label(p.label), name=p.call[0], args=p.call[1:]
             )
         functionalities.append(made)
-    channels = []
+    channels: list[Channel] = []
     for ch in node.channels:
         src, dst = located[ch.source].robot, located[ch.target].robot
         ckey = (ch.kind, ch.source, ch.target, src, dst, ch.data, ch.bandwidth)
-        made = cache.get(ckey)
-        if made is None:
-            made = cache[ckey] = Channel.model_construct(
+        cmade = models.channels.get(ckey)
+        if cmade is None:
+            cmade = models.channels[ckey] = Channel.model_construct(
                 kind="global" if ch.kind == "global" else "local",
                 source=_label(ch.source),
                 target=_label(ch.target),
@@ -135,11 +163,11 @@ def build(node: Partial, total: float, task: Task) -> Configuration:
                 data=ch.data,
                 bandwidth=ch.bandwidth,
             )
-        channels.append(made)
+        channels.append(cmade)
     return Configuration.model_construct(
         functionalities=tuple(functionalities),
         channels=tuple(channels),
-        postconditions=_postconditions(node),
+        postconditions=postconditions(node),
         cost=total,
         weights=task.weights,
         media=(),
@@ -158,19 +186,18 @@ def demands(config: Configuration) -> list[Demand | None]:
     ]
 
 
-def finish(node: Partial, task: Task, total: float, report: Report) -> Configuration | None:
-    """The admissible configuration of a finished node, or None (reason reported)."""
+def finish(
+    node: Partial, task: Task, total: float, models: Models | None = None
+) -> Configuration | DeadEnd:
+    """The admissible configuration of a finished node, or why it is not."""
     for dead in (_information(node), _cycle(node)):
         if dead is not None:
-            report.rejected.append((dead.condition, f"{dead.where}: {dead.reason}"))
-            return None
-    config = build(node, total, task)
+            return dead
+    config = build(node, total, task, Models() if models is None else models)
     if task.media:
         result = assign(demands(config), task.media)
-        if not result.ok:
-            report.rejected.append(("communication", result.problem))
-            return None
-        assert result.assignment is not None
+        if result.assignment is None:
+            return DeadEnd("", result.problem, None, Condition.COMMUNICATION)
         config = config.model_copy(
             update={
                 "media": tuple(

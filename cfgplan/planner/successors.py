@@ -1,0 +1,115 @@
+"""The step of the planner (thesis 4.5): the children of a partial configuration.
+
+:func:`successors` takes the item on top of the stack and yields what 4.5 does
+with it, in the thesis's order:
+
+- a method instance (step 2b, 3): one child per version (domain order) and per
+  binding of its preconditions (state order): the backtrack points;
+- a functionality instance (step 2a): reused if it already exists in C, else
+  added, once per binding of its own preconditions (several bindings branch
+  like a method's: they may give different outputs or postconditions).
+
+Each branch that cannot go on is yielded as a :class:`DeadEnd` with its
+reason. The best-first search, the greedy dive and the naive baseline
+(``benchmarks/naive.py``) all grow nodes with this one function.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from cfgplan.planner.ground import Grounder
+from cfgplan.planner.match import why_not
+from cfgplan.planner.partial import (
+    Item,
+    Partial,
+    describe_call,
+    expand_method,
+    place_functionality,
+    reuse_functionality,
+)
+from cfgplan.planner.report import Condition, DeadEnd
+from cfgplan.planner.task import FunctionalitySchema, Ground, MethodSchema
+from cfgplan.planner.unify import bind_name
+
+Child = Partial | DeadEnd
+
+
+def successors(grounder: Grounder, node: Partial) -> Iterator[Child]:
+    """The children of ``node`` (whose stack is not empty), in 4.5's order."""
+    item = node.stack[0]
+    versions = grounder.task.versions(item.call)
+    if versions:
+        yield from _expand(grounder, node, item, versions)
+    else:
+        yield from _place(grounder, node, item)
+
+
+def _expand(
+    grounder: Grounder, node: Partial, item: Item, versions: tuple[MethodSchema, ...]
+) -> Iterator[Child]:
+    if item.call in item.ancestors:
+        yield DeadEnd(
+            describe_call(item.call),
+            "it recurs on its own expansion path",
+            condition=Condition.RECURSION,
+        )
+        return
+    choice = 0
+    for method in versions:
+        where = f"{describe_call(item.call)}, version {method.version}"
+        options = grounder.method_bindings(method, item.call)
+        if not options:
+            yield _no_binding(grounder, method, item.call, where)
+            continue
+        for env in options:
+            expansion = grounder.expansion(method, env, where)
+            if isinstance(expansion, DeadEnd):
+                yield expansion
+            else:
+                yield expand_method(node, item, expansion, where, method.span, choice)
+            choice += 1
+
+
+def _place(grounder: Grounder, node: Partial, item: Item) -> Iterator[Child]:
+    task = grounder.task
+    schema = task.functionality(item.call)
+    if schema is None:
+        yield DeadEnd(
+            describe_call(item.call),
+            "is neither a method nor a functionality",
+            condition=Condition.DOMAIN,
+        )
+        return
+    existing = node.labels.get(item.call)
+    if existing is not None:
+        yield reuse_functionality(node, item, existing, task)
+        return
+    options = grounder.functionality_bindings(schema, item.call)
+    if not options:
+        yield _no_binding(grounder, schema, item.call, describe_call(item.call))
+        return
+    for index, env in enumerate(options):
+        instance = grounder.instance(schema, env)
+        choice = index if len(options) > 1 else None
+        yield place_functionality(
+            node, item, schema, instance.io, instance.effects, choice, task
+        )
+
+
+def _no_binding(
+    grounder: Grounder, schema: MethodSchema | FunctionalitySchema, call: Ground, where: str
+) -> DeadEnd:
+    """Why a schema does not apply to ``call``: its name does not match, or the
+    first precondition no binding got past."""
+    env = bind_name(schema.params, call[1:])
+    if env is None:
+        if isinstance(schema, MethodSchema):
+            reason = f"its name ({schema.name} {' '.join(schema.params)}) does not match"
+            return DeadEnd(where, reason, schema.span, Condition.BINDING)
+        reason = f"does not match the functionality ({schema.name} {' '.join(schema.params)})"
+        return DeadEnd(where, reason, schema.span, Condition.DOMAIN)
+    failure = grounder.failure(
+        schema, call, lambda: why_not(grounder.task, schema.tests, env, schema.params)
+    )
+    return DeadEnd(where, failure.describe(), failure.span or schema.span)

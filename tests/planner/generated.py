@@ -1,0 +1,474 @@
+"""Random small planning problems in the thesis's shape, for property tests.
+
+Each example is a generated domain and state, written as text in the thesis's
+syntax and read, checked and compiled as :func:`cfgplan.problem.load` does
+(:func:`solve`; a test confirms it gives what ``load`` gives on files), so a
+failing example shrinks to a reproducer that can be pasted into files and run
+with ``cfgplan plan``.
+
+The domains have the thesis's shape: sensing functionalities (no inputs),
+processing functionalities with one or two inputs, one action functionality
+(no outputs), and three levels of methods (``do-task`` -> ``get-needJ`` ->
+``get-dK``) with one to three versions each, preconditions over random facts
+(``(hasK R1)``, ``(in R1 Room1)``, ``(broken R2)``, evals), local and global
+channels, bandwidths and media. Now and then they also hold what a planner
+gets wrong most easily: a channel from a method instance to itself (re-wired
+at both ends into a cycle), a functionality whose output uses a variable its
+own precondition binds (a localizer in a doorway: one binding per room), a
+method ``:in`` that feeds two body items (fan-out), one channel written twice
+with two bandwidths, and one call twice in a body. Most are solvable, some
+are not.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
+
+from cfgplan.check import check
+from cfgplan.configuration.cost import Weights
+from cfgplan.configuration.model import Configuration
+from cfgplan.diagnostics import CfgplanError
+from cfgplan.ir.model import Domain
+from cfgplan.planner import plan
+from cfgplan.planner.task import compile_task
+from cfgplan.problem import Problem, load
+from cfgplan.syntax.reader import SourceFile, parse, state_from
+
+
+@dataclass(frozen=True)
+class Generated:
+    """A domain and a state as source text, with the weights to plan with."""
+
+    domain: str
+    state: str
+    weights: Weights
+
+    def __str__(self) -> str:
+        return (
+            f";; weights: {self.weights}\n;; domain.lisp\n{self.domain}\n"
+            f";; state.lisp\n{self.state}"
+        )
+
+
+@dataclass(frozen=True)
+class Processor:
+    """A processing functionality ``(pJ-P ?h ?r)`` running on ``?h`` that turns
+    sensor data of ``?h`` and/or ``?r`` into ``(needJ ?r)``."""
+
+    name: str
+    inputs: tuple[tuple[int, str], ...]  # (sensor k, "?h" or "?r")
+
+
+def _list(items: Sequence[str]) -> str:
+    return "(" + " ".join(items) + ")"
+
+
+def _bandwidth(draw: st.DrawFn) -> str:
+    value = draw(st.sampled_from([None, None, 5, 10, 20, 50]))
+    return "" if value is None else f" {value}"
+
+
+def _functionality(
+    name: str,
+    *,
+    inputs: Sequence[str] = (),
+    outputs: Sequence[str] = (),
+    precond: Sequence[str] = (),
+    postcond: Sequence[str] = (),
+    cost: int | None = None,
+) -> str:
+    parts = [f"(make-functionality :name '{name}"]
+    if precond:
+        parts.append(f"  :precond '{_list(precond)}")
+    if inputs:
+        parts.append(f"  :in '{_list(inputs)}")
+    if outputs:
+        parts.append(f"  :out '{_list(outputs)}")
+    if postcond:
+        parts.append(f"  :postcond '{_list(postcond)}")
+    if cost is not None:
+        parts.append(f"  :cost {cost}")
+    return "\n".join(parts) + ")"
+
+
+def _method(
+    name: str,
+    *,
+    precond: list[str],
+    inputs: list[str],
+    outputs: list[str],
+    channels: list[str],
+    body: list[str],
+    postcond: list[str],
+) -> str:
+    parts = [f"(make-config-method :name '{name}"]
+    if precond:
+        parts.append(f"  :precond '{_list(precond)}")
+    if inputs:
+        parts.append(f"  :in '{_list(inputs)}")
+    if outputs:
+        parts.append(f"  :out '{_list(outputs)}")
+    if channels:
+        parts.append(f"  :channels '{_list(channels)}")
+    if postcond:
+        parts.append(f"  :postcond '{_list(postcond)}")
+    parts.append(f"  :body '{_list(body)}")
+    return "\n".join(parts) + ")"
+
+
+def _some(draw: st.DrawFn, options: list[str], most: int = 2) -> list[str]:
+    """A few of ``options``, in their order."""
+    chosen = draw(st.lists(st.sampled_from(options), max_size=most, unique=True))
+    return [o for o in options if o in chosen]
+
+
+@st.composite
+def generated(draw: st.DrawFn) -> Generated:
+    robots = [f"R{i}" for i in range(1, draw(st.integers(2, 4)) + 1)]
+    sensors = list(range(1, draw(st.integers(1, 3)) + 1))
+    needs = list(range(1, draw(st.integers(1, 2)) + 1))
+    forms: list[str] = []
+
+    # The world state: robots in rooms, some sensors, some broken.
+    facts = [f"robot({r})" for r in robots]
+    for r in robots:  # in one room, now and then in the doorway between both
+        rooms = draw(st.sampled_from([[1], [2], [1], [2], [1, 2]]))
+        facts += [f"in({r}, Room{n})" for n in rooms]
+        battery = draw(st.sampled_from([None, 5, 50, 50]))
+        if battery is not None:
+            facts.append(f"battery({r}, {battery})")
+    for k in sensors:
+        facts += [f"has{k}({r})" for r in robots if draw(st.integers(0, 4)) > 0]
+    facts += [f"broken({r})" for r in robots if draw(st.integers(0, 4)) == 0]
+    if draw(st.booleans()):  # media: between every two robots, or a few links
+        pairs = [(a, b) for a in robots for b in robots if a != b]
+        if draw(st.booleans()):
+            pairs = draw(st.lists(st.sampled_from(pairs), max_size=6))
+        for a, b in pairs:
+            capacity = draw(st.sampled_from([0, 10, 30, 100, 100]))
+            facts.append(f"medium(link, {a}, {b}, {capacity})")
+
+    # Sensing resources and filters.
+    for k in sensors:
+        guard = draw(st.sampled_from(["", "has", "has", "room", "battery"]))
+        forms.append(
+            _functionality(
+                f"(sens{k} ?r)",
+                outputs=[f"(d{k} ?r)"],
+                precond={
+                    "": [],
+                    "has": [f"(has{k} ?r)"],
+                    "room": [f"(has{k} ?r)", "(in ?r ?room)"],  # a binding per room
+                    "battery": ["(battery ?r ?b)", "(eval (> ?b 20))"],
+                }[guard],
+                postcond=["(watched ?room)"] if guard == "room" else [],
+                cost=draw(st.sampled_from([None, None, None, 0, 2])),
+            )
+        )
+        forms.append(_functionality(f"(filt{k} ?r)", inputs=[f"(d{k} ?r)"], outputs=[f"(d{k} ?r)"]))
+
+    # Processing functionalities: one or two per need.
+    processors: dict[int, list[Processor]] = {}
+    wrappers: dict[str, str] = {}
+    for j in needs:
+        processors[j] = []
+        for p in range(1, draw(st.integers(1, 2)) + 1):
+            ks = draw(st.lists(st.sampled_from(sensors), min_size=1, max_size=2, unique=True))
+            inputs = tuple((k, draw(st.sampled_from(["?h", "?r"]))) for k in ks)
+            proc = Processor(f"p{j}-{p}", inputs)
+            processors[j].append(proc)
+            forms.append(
+                _functionality(
+                    f"({proc.name} ?h ?r)",
+                    inputs=[f"(d{k} {who})" for k, who in inputs],
+                    outputs=[f"(need{j} ?r)"],
+                    precond=draw(
+                        st.sampled_from(
+                            [
+                                [],
+                                ["(robot ?h)"],
+                                ["(not (broken ?h))"],
+                                ["(battery ?h ?b)", "(eval (>= ?b 10))"],
+                            ]
+                        )
+                    ),
+                    cost=draw(st.sampled_from([None, None, None, 1, 3])),
+                )
+            )
+            if draw(st.booleans()):  # a method around it, fed through :in ports
+                wrappers[proc.name] = f"w{j}-{p}"
+                forms.append(
+                    _method(
+                        f"(w{j}-{p} ?h ?r)",
+                        precond=[],
+                        inputs=[f"(?p (d{k} {who}))" for k, who in inputs],
+                        outputs=[f"(?p (need{j} ?r))"],
+                        channels=[],
+                        body=[f"(?p ({proc.name} ?h ?r))"],
+                        postcond=[],
+                    )
+                )
+
+    # The action resource; sometimes it also needs the robot's position, which a
+    # localizer produces under the binding of its own precondition (in ?r ?room):
+    # a robot in the doorway gets one binding per room, each with other outputs.
+    located = draw(st.integers(0, 3)) == 0
+    if located:
+        forms.append(
+            _functionality("(loc ?r)", precond=["(in ?r ?room)"], outputs=["(pos ?r ?room)"])
+        )
+    forms.append(
+        _functionality(
+            "(act ?r)",
+            inputs=[f"(need{j} ?r)" for j in needs] + (["(pos ?r ?where)"] if located else []),
+            precond=_some(draw, ["(robot ?r)", "(not (broken ?r))"], 1)
+            + (["(in ?r ?where)"] if located else []),
+            postcond=_some(draw, ["(done ?r)", "(not (idle ?r))"]),
+        )
+    )
+    # A monitor that listens to need 1 beside the action (fan-out through :in).
+    forms.append(_functionality("(mon ?r)", inputs=["(need1 ?r)"]))
+
+    # Level 0: get-dK, sensor alone or sensor and filter; now and then a version
+    # whose filter, behind a method with :in and :out on one descriptor, gets a
+    # channel to itself: re-wired at both ends it is a cycle (4.5 3d, 5.1).
+    for k in sensors:
+        versions = []
+        if draw(st.integers(0, 5)) == 0:
+            forms.append(
+                _method(
+                    f"(loop{k} ?x)",
+                    precond=[],
+                    inputs=[f"(?g (d{k} ?x))"],
+                    outputs=[f"(?g (d{k} ?x))"],
+                    channels=[],
+                    body=[f"(?g (filt{k} ?x))"],
+                    postcond=[],
+                )
+            )
+            versions.append(
+                _method(
+                    f"(get-d{k} ?x)",
+                    precond=[],
+                    inputs=[],
+                    outputs=[f"(?f2 (d{k} ?x))"],
+                    channels=[
+                        f"((local ?x) ?f1 ?f2 (d{k} ?x))",
+                        f"((local ?x) ?f2 ?f2 (d{k} ?x))",
+                    ],
+                    body=[f"(?f1 (sens{k} ?x))", f"(?f2 (loop{k} ?x))"],
+                    postcond=[],
+                )
+            )
+        for filtered in draw(st.lists(st.booleans(), min_size=1, max_size=2)):
+            precond = _some(draw, [f"(has{k} ?x)", "(robot ?x)", "(not (broken ?x))"])
+            if filtered:
+                versions.append(
+                    _method(
+                        f"(get-d{k} ?x)",
+                        precond=precond,
+                        inputs=[],
+                        outputs=[f"(?f2 (d{k} ?x){_bandwidth(draw)})"],
+                        channels=[f"((local ?x) ?f1 ?f2 (d{k} ?x))"],
+                        body=[f"(?f1 (sens{k} ?x))", f"(?f2 (filt{k} ?x))"],
+                        postcond=[],
+                    )
+                )
+            else:
+                versions.append(
+                    _method(
+                        f"(get-d{k} ?x)",
+                        precond=precond,
+                        inputs=[],
+                        outputs=[f"(?f1 (d{k} ?x))"],
+                        channels=[],
+                        body=[f"(?f1 (sens{k} ?x))"],
+                        postcond=[],
+                    )
+                )
+        forms.extend(versions)
+
+    # Level 1: get-needJ ?h ?r, a processor on ?h fed from ?h (local) or ?r (global).
+    for j in needs:
+        versions = []
+        for _ in range(draw(st.integers(1, 3))):
+            proc = draw(st.sampled_from(processors[j]))
+            precond = _some(
+                draw,
+                [
+                    "(robot ?h)",
+                    "(in ?h ?room)",
+                    f"(has{draw(st.sampled_from(sensors))} ?h)",
+                    "(not (broken ?h))",
+                    "(eval (not (eql (quote ?h) (quote ?r))))",
+                ],
+                3,
+            )
+            if "(in ?h ?room)" in precond:
+                precond.insert(precond.index("(in ?h ?room)") + 1, "(in ?r ?room)")
+            wrapper = wrappers.get(proc.name)
+            if wrapper is not None and draw(st.booleans()):
+                body = [f"(?f0 ({wrapper} ?h ?r))"]
+            else:
+                body = [f"(?f0 ({proc.name} ?h ?r))"]
+            channels = []
+            for i, (k, who) in enumerate(proc.inputs, start=1):
+                direct = draw(st.integers(0, 3)) == 0
+                body.append(f"(?f{i} ({'sens' if direct else 'get-d'}{k} {who}))")
+                if who == "?h":
+                    channels.append(f"((local ?h) ?f{i} ?f0 (d{k} ?h))")
+                elif draw(st.integers(0, 7)) == 0:  # a slip: only right when ?h is ?r
+                    channels.append(f"((local ?h) ?f{i} ?f0 (d{k} ?r))")
+                else:
+                    channels.append(f"((global ?r ?h) ?f{i} ?f0 (d{k} ?r){_bandwidth(draw)})")
+            versions.append(
+                _method(
+                    f"(get-need{j} ?h ?r)",
+                    precond=precond,
+                    inputs=[],
+                    outputs=[f"(?f0 (need{j} ?r){_bandwidth(draw)})"],
+                    channels=channels,
+                    body=body,
+                    postcond=_some(draw, ["(busy ?h)", f"(got{j} ?r)"], 1),
+                )
+            )
+        if draw(st.integers(0, 3)) == 0:  # a repeated version: repeated derivations
+            versions.append(draw(st.sampled_from(versions)))
+        forms.extend(versions)
+
+    # The action wrapped in a method with :in ports, sometimes.
+    wrapped = not located and draw(st.booleans())  # do-act has no :in for the position
+    if wrapped:
+        for _ in range(draw(st.integers(1, 2))):
+            monitored = draw(st.integers(0, 2)) == 0  # need1 fans out to a monitor too
+            forms.append(
+                _method(
+                    "(do-act ?r)",
+                    precond=_some(draw, ["(robot ?r)", "(not (idle ?r))"], 1),
+                    inputs=[f"(?a (need{j} ?r))" for j in needs]
+                    + (["(?m (need1 ?r))"] if monitored else []),
+                    outputs=[],
+                    channels=[],
+                    body=["(?a (act ?r))"] + (["(?m (mon ?r))"] if monitored else []),
+                    postcond=[],
+                )
+            )
+
+    # Level 2: do-task ?r, each need from ?r itself or from a helper ?h.
+    for _ in range(draw(st.integers(1, 3))):
+        helped = [draw(st.booleans()) for _ in needs]
+        precond = _some(draw, ["(robot ?r)", "(not (broken ?r))"], 1)
+        if any(helped):
+            precond.append("(robot ?h)")
+            precond += _some(
+                draw,
+                [
+                    "(in ?h ?room)",
+                    "(not (broken ?h))",
+                    "(eval (not (eql (quote ?h) (quote ?r))))",
+                ],
+            )
+            if "(in ?h ?room)" in precond:
+                precond.insert(precond.index("(in ?h ?room)") + 1, "(in ?r ?room)")
+        body = [f"(?f0 ({'do-act' if wrapped else 'act'} ?r))"]
+        channels = []
+        for j, help_ in zip(needs, helped, strict=True):
+            body.append(f"(?f{j} (get-need{j} {'?h' if help_ else '?r'} ?r))")
+            if help_:
+                channel = f"((global ?h ?r) ?f{j} ?f0 (need{j} ?r)"
+                channels.append(f"{channel}{_bandwidth(draw)})")
+            else:
+                channel = f"((local ?r) ?f{j} ?f0 (need{j} ?r)"
+                channels.append(f"{channel})")
+            if draw(st.integers(0, 5)) == 0:  # the same channel again, other bandwidth
+                channels.append(f"{channel} {draw(st.sampled_from([1, 7, 40]))})")
+        if draw(st.integers(0, 4)) == 0:  # the same call twice in one body
+            twice = draw(st.sampled_from([f"(get-d{sensors[0]} ?r)", f"(sens{sensors[0]} ?r)"]))
+            body += [f"(?t1 {twice})", f"(?t2 {twice})"]
+        if located:
+            precond.append("(in ?r ?where)")
+            body.append("(?fl (loc ?r))")
+            channels.append("((local ?r) ?fl ?f0 (pos ?r ?where))")
+        forms.append(
+            _method(
+                "(do-task ?r)",
+                precond=precond,
+                inputs=[],
+                outputs=[],
+                channels=channels,
+                body=body,
+                postcond=[],
+            )
+        )
+
+    weights = draw(
+        st.one_of(
+            st.just(Weights()),
+            st.builds(
+                Weights,
+                robot=st.integers(0, 10),
+                global_=st.integers(0, 3),
+                local=st.integers(0, 2),
+                functionality=st.integers(0, 2),
+            ),
+        )
+    )
+    state = f"(state {', '.join(facts)})\n\n(goal (do-task R1))\n"
+    return Generated("\n".join(forms) + "\n", state, weights)
+
+
+def load_generated(example: Generated) -> Problem:
+    """Write the example to files and read them with :func:`cfgplan.problem.load`."""
+    with tempfile.TemporaryDirectory() as tmp:
+        domain, state = Path(tmp) / "domain.lisp", Path(tmp) / "state.lisp"
+        domain.write_text(example.domain, encoding="utf-8")
+        state.write_text(example.state, encoding="utf-8")
+        return load(domain, state, None, example.weights)
+
+
+@cache
+def _form(text: str) -> SourceFile:
+    return parse(text, "domain.lisp")
+
+
+def solve(example: Generated) -> Problem:
+    """What :func:`load_generated` returns, faster: the generated domains share
+    most of their forms, so each form is parsed once (parsing dominates the
+    run time of these tests). Then checked and compiled as load() does."""
+    forms = [_form("(make-" + f) for f in ("\n" + example.domain).split("\n(make-")[1:]]
+    domain = Domain(
+        functionalities=tuple(f for form in forms for f in form.functionalities),
+        methods=tuple(m for form in forms for m in form.methods),
+    )
+    state = state_from(parse(example.state, "state.lisp"))
+    assert state.goal is not None
+    diagnostics = check(domain, state, state.goal)
+    if any(d.is_error for d in diagnostics):
+        raise CfgplanError(diagnostics)
+    task = compile_task(domain, state, example.weights)
+    sources = {"domain.lisp": example.domain, "state.lisp": example.state}
+    return Problem(domain, state, state.goal, task, sources)
+
+
+def run(problem: Problem, *, limit: int | None = None, distinct: bool) -> list[Configuration]:
+    configs, _ = plan(problem.task, problem.goal_call, limit=limit, distinct=distinct)
+    return configs
+
+
+PROPERTY = settings(
+    derandomize=True,
+    max_examples=100,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+
+
+def load_text(domain: str, state: str, weights: Weights | None = None) -> Problem:
+    return load_generated(Generated(domain, state, weights or Weights()))

@@ -1,0 +1,93 @@
+"""The heuristic of the best-first search (cfgplan.planner.bound).
+
+The bound must never exceed what a node still costs: checked against the
+true cheapest completion, found by exhaustive depth-first search below the
+node, on generated problems. And it must work on hierarchies far deeper than
+Python's recursion limit.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from hypothesis import given
+
+from cfgplan.planner import plan
+from cfgplan.planner.bound import Bound
+from cfgplan.planner.ground import Grounder
+from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.successors import successors
+from tests.planner.generated import PROPERTY, Generated, generated, load_text, solve
+
+NODES = 25  # nodes checked per example
+
+
+def least_completion(grounder: Grounder, node: Partial) -> float | None:
+    """The cost of the cheapest complete derivation below ``node``, admissible
+    or not (the bound ignores admissibility), or None when there is none."""
+    best: float | None = None
+    stack = [node]
+    while stack:
+        current = stack.pop()
+        if current.done:
+            best = current.cost if best is None else min(best, current.cost)
+            continue
+        stack.extend(c for c in successors(grounder, current) if isinstance(c, Partial))
+    return best
+
+
+def some_nodes(grounder: Grounder, goal: tuple[str, ...]) -> list[Partial]:
+    """The first nodes of the search tree, breadth first."""
+    out: list[Partial] = []
+    queue = [root(goal)]
+    while queue and len(out) < NODES:
+        node = queue.pop(0)
+        if node.done:
+            continue
+        out.append(node)
+        queue.extend(c for c in successors(grounder, node) if isinstance(c, Partial))
+    return out
+
+
+@PROPERTY
+@given(generated())
+def test_the_bound_never_exceeds_the_cheapest_completion(example: Generated) -> None:
+    problem = solve(example)
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    for node in some_nodes(grounder, problem.goal_call):
+        truth = least_completion(grounder, node)
+        estimate, feasible = bound.estimate(node), bound.feasible(node)
+        if truth is None:
+            continue  # nothing to stay below; None is allowed, not required
+        assert estimate is not None and feasible is not None, "cut a node with a completion"
+        assert estimate <= truth - node.cost + 1e-9
+        assert feasible == 0.0
+
+
+def chain(depth: int) -> str:
+    """``m0 -> m1 -> ... -> sense``: one method a level, each passing data up."""
+    forms = [
+        "(make-functionality :name '(sense ?r) :out '((d ?r)))",
+        "(make-functionality :name '(act ?r) :in '((d ?r)))",
+    ]
+    for level in range(depth):
+        below = f"(m{level + 1} ?r)" if level + 1 < depth else "(sense ?r)"
+        forms.append(
+            f"(make-config-method :name '(m{level} ?r) :out '((?f (d ?r))) :body '((?f {below})))"
+        )
+    forms.append(
+        "(make-config-method :name '(go ?r) :channels '(((local ?r) ?s ?a (d ?r)))"
+        " :body '((?s (m0 ?r)) (?a (act ?r))))"
+    )
+    return "\n".join(forms) + "\n"
+
+
+def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
+    """Issue 9, item 4: a chain of methods deeper than Python's recursion limit
+    is summarised and planned without recursion (before: RecursionError in
+    the bound at about 330 levels)."""
+    depth = sys.getrecursionlimit() + 200
+    problem = load_text(chain(depth), "(state (robot A)) (goal (go A))")
+    assert Bound(problem.task).summary(("m0", "A")).minimum == 1.0
+    (config,), _ = plan(problem.task, problem.goal_call)
+    assert config.cost == 10 + 2 + 1
