@@ -64,7 +64,7 @@ def divide(config: Configuration, order: Sequence[FunctionalityInstance]) -> tup
     """
     if sorted(f.label for f in order) != sorted(f.label for f in config.functionalities):
         raise error("divide: the sorted order does not hold the configuration's functionalities")
-    robots = dict.fromkeys(config.robots)
+    robots = dict.fromkeys(config.agents)
     for ch in config.channels:
         robots.update(dict.fromkeys(r for r in robots_of(ch) if r not in robots))
     return tuple(

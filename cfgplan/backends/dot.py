@@ -66,7 +66,7 @@ def new_graph(name: str, title: str = "") -> Any:
 def robot_order(config: Configuration, first: Sequence[str] = ()) -> list[str]:
     """The configuration's robots, those named in ``first`` (e.g. the goal's
     arguments) ahead, so the goal's robot is white as in Fig. 4.3 and 6.11."""
-    robots = config.robots
+    robots = config.agents
     ahead = [r for r in dict.fromkeys(first) if r in robots]
     return ahead + [r for r in robots if r not in ahead]
 

@@ -59,7 +59,7 @@ WeightsOpt = Annotated[
     str | None,
     typer.Option(
         "--weights",
-        help="Cost weights, e.g. robot=10,global=3,local=1,functionality=1 "
+        help="Cost weights, e.g. robot=10,global=3,local=1,functionality=1,device=10 "
         "(the thesis's, and the default). A functionality's :cost replaces its weight.",
     ),
 ]
@@ -96,6 +96,9 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
     table.add_column("rank", justify="right")
     table.add_column("cost", justify="right")
     table.add_column("robots")
+    devices = any(c.devices for c in configs)
+    if devices:
+        table.add_column("devices")
     table.add_column("functionalities", justify="right")
     table.add_column("local", justify="right")
     table.add_column("global", justify="right")
@@ -107,6 +110,7 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
             str(rank),
             fmt(c.cost) + ("" if c.proven else " *"),
             ", ".join(c.robots),
+            *([", ".join(c.devices)] if devices else []),
             str(len(c.functionalities)),
             str(c.local_channels),
             str(c.global_channels),

@@ -4,7 +4,8 @@ A configuration ``<F, Ch>`` is admissible in a world state when every input of
 every functionality is fed by a channel from a functionality that produces it
 (information), the preconditions of every functionality hold in the state
 (causal), and the media can carry the global channels (communication, 3.5 and
-4.6). Its cost is ``10·robots + 3·global + local + functionalities`` (3.5).
+4.6). Its cost is ``10·robots + 3·global + local + functionalities`` (3.5),
+an agent the state declares ``(device X)`` weighted as a device.
 
 The planner claims all of this for what it returns ("information and causal
 admissibility are guaranteed implicitly by the planning algorithm", 4.6). This
@@ -368,8 +369,16 @@ class _Checker:
         w = self.weights if self.weights is not None else self.config.weights
         if self.weights is not None and self.config.weights != self.weights:
             self.report("cost", f"the configuration records weights {self.config.weights}, not {w}")
-        robots = {f.args[0] for f in self.config.functionalities if f.args}
-        total = w.robot * len(robots)
+        agents = {f.args[0] for f in self.config.functionalities if f.args}
+        devices = {fact[1] for fact in self.facts if fact[0] == "device" and len(fact) == 2}
+        robots = agents - devices
+        total = w.robot * len(robots) + w.device * len(agents & devices)
+        if set(self.config.devices) != agents & devices:
+            self.report(
+                "cost",
+                f"the configuration lists devices {sorted(self.config.devices)}, but the state "
+                f"declares {sorted(agents & devices)} of its agents devices",
+            )
         for ch in self.config.channels:
             total += w.global_ if ch.kind == "global" else w.local
         for f in self.config.functionalities:
@@ -380,7 +389,9 @@ class _Checker:
             self.report(
                 "cost",
                 f"the configuration says {fmt(self.config.cost)}, but its parts cost "
-                f"{fmt(total)} ({len(robots)} robots, {self.config.global_channels} global "
+                f"{fmt(total)} ({len(robots)} robots, "
+                + (f"{len(agents & devices)} devices, " if agents & devices else "")
+                + f"{self.config.global_channels} global "
                 f"and {self.config.local_channels} local channels, "
                 f"{len(self.config.functionalities)} functionalities; weights {w})",
             )

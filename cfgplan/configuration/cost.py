@@ -1,5 +1,9 @@
 """The cost of a configuration (thesis 3.5): ``10·robots + 3·global + local +
-functionalities``, with settable weights and per-functionality ``:cost``."""
+functionalities``, with settable weights and per-functionality ``:cost``.
+
+Beyond the thesis, an agent the state declares ``(device X)`` (a ceiling
+camera, a door with a sensor) is weighted by ``device`` instead of ``robot``;
+both default to 10, so the thesis's numbers do not change."""
 
 from __future__ import annotations
 
@@ -17,19 +21,27 @@ class Weights(BaseModel):
     global_: float = 3
     local: float = 1
     functionality: float = 1
+    device: float = 10
 
     def __str__(self) -> str:
         return (
             f"robot={fmt(self.robot)},global={fmt(self.global_)},"
-            f"local={fmt(self.local)},functionality={fmt(self.functionality)}"
+            f"local={fmt(self.local)},functionality={fmt(self.functionality)},"
+            f"device={fmt(self.device)}"
         )
 
 
-_NAMES = {"robot": "robot", "global": "global_", "local": "local", "functionality": "functionality"}
+_NAMES = {
+    "robot": "robot",
+    "global": "global_",
+    "local": "local",
+    "functionality": "functionality",
+    "device": "device",
+}
 
 
 def parse_weights(text: str) -> Weights:
-    """Read ``robot=10,global=3,local=1,functionality=1`` (any subset, any order)."""
+    """Read ``robot=10,global=3,local=1,functionality=1,device=10`` (any subset, any order)."""
     values: dict[str, float] = {}
     for part in filter(None, (p.strip() for p in text.split(","))):
         key, sep, value = part.partition("=")

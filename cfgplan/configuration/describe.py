@@ -12,8 +12,9 @@ The text form is the thesis's own::
     )
 
 A local channel names its robot, a global one sender then receiver; the
-bandwidth follows the data when one is declared. ``Postconditions:`` and
-``Media:`` sections are added when there is something to show.
+bandwidth follows the data when one is declared. ``Postconditions:``,
+``Media:`` and ``Devices:`` (agents the state declares devices) are added
+when there is something to show.
 """
 
 from __future__ import annotations
@@ -62,6 +63,8 @@ def to_text(config: Configuration, media: Sequence[Medium] = (), title: str = ""
                 f"    medium({medium.type}, {medium.sender}, {medium.receiver}, "
                 f"{fmt(medium.capacity)}): load {fmt(load)}"
             )
+    if config.devices:
+        lines.append(f"  Devices: {', '.join(config.devices)}")
     lines.append(f"  Cost: {fmt(config.cost)}")
     lines.append(")")
     return "\n".join(lines)
@@ -75,6 +78,7 @@ def to_dict(config: Configuration, rank: int) -> dict[str, Any]:
         "rank": rank,
         "cost": _number(config.cost),
         "robots": config.robots,
+        "devices": list(config.devices),
         "derivation": config.derivation,
         "proven": config.proven,
         "functionalities": [

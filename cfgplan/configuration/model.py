@@ -72,14 +72,18 @@ class Configuration(BaseModel):
     media: tuple[Assignment, ...] = ()
     derivation: int = 0  # which derivation (1-based, in thesis order) produced it
     proven: bool = True  # False: found by a dive after the search was stopped early
+    devices: tuple[str, ...] = ()  # its agents the state declares (device X)
+
+    @property
+    def agents(self) -> list[str]:
+        """Where its functionalities run (robots and devices), each once, in
+        order of first appearance in the functionality list."""
+        return list(dict.fromkeys(f.robot for f in self.functionalities))
 
     @property
     def robots(self) -> list[str]:
-        """Distinct locations, in order of first appearance in the functionality list."""
-        seen: dict[str, None] = {}
-        for f in self.functionalities:
-            seen.setdefault(f.robot, None)
-        return list(seen)
+        """Its agents that are robots (not devices), in the order of :attr:`agents`."""
+        return [a for a in self.agents if a not in self.devices]
 
     @property
     def global_channels(self) -> int:

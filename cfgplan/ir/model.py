@@ -145,9 +145,11 @@ class Port(Node):
 
 class ChannelSpec(Node):
     """A channel a method creates: ``((local ?r) ?f1 ?f2 (image ?r) [bw])`` or
-    ``((global ?from ?to) ?f1 ?f2 (pos ?r ?d) [bw])`` (3.4, 4.4)."""
+    ``((global ?from ?to) ?f1 ?f2 (pos ?r ?d) [bw])`` (3.4, 4.4), or, beyond
+    the thesis, ``((any ?from ?to) ...)``: local when ``?from`` and ``?to``
+    are the same agent once instantiated, global otherwise."""
 
-    kind: Literal["local", "global"]
+    kind: Literal["local", "global", "any"]
     robots: tuple[Term, ...]
     source: str
     target: str

@@ -36,6 +36,7 @@ from __future__ import annotations
 from collections.abc import Generator, Iterable, Set
 from dataclasses import dataclass, field
 
+from cfgplan.planner.ground import channel_kind
 from cfgplan.planner.match import bindings
 from cfgplan.planner.partial import Key, Partial
 from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
@@ -184,22 +185,25 @@ class Bound:
             funcs |= sub.functionalities
             robots |= sub.robots
             channels |= sub.channels
+        own: set[tuple[str, Ground]] = set()
         for spec in method.channels:
             data = substitute(spec.data, env)
-            if not is_ground(data):
+            ends = substitute(("robots", *spec.robots), env)
+            if not is_ground(data) or not is_ground(ends):
                 return None
+            kind = channel_kind(spec.kind, ends[1:])[0]
+            own.add((kind, data))
             src_call, src_sum, src_func = body[spec.source]
             dst_call, _, dst_func = body[spec.target]
             sender = src_call if src_func else src_sum.producer(data)
             receiver = dst_call if dst_func else None
-            channels.add((spec.kind, data, sender, receiver))
+            channels.add((kind, data, sender, receiver))
         producers: dict[Ground, Key | None] = {}
         for port in method.outputs:
             data = substitute(port.data, env)
             call, sub, is_functionality = body[port.label]
             producers.setdefault(data, call if is_functionality else sub.producer(data))
         parts = [(self.names(call), sub.minimum) for call, sub, _ in body.values()]
-        own = {(c.kind, substitute(c.data, env)) for c in method.channels}
         own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
         wires: list[tuple[Set[str], float]] = [({data[0] for _, data in own}, own_cost)]
         wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
@@ -287,7 +291,7 @@ class Bound:
         # Either may be the larger, and both may count the same instance, so
         # they cannot be added up: their max is a lower bound.
         total = max(mandatory, self._deepest(node, pending))
-        total += task.weights.robot * len(new_robots - node.robots)
+        total += sum(task.agent_cost(agent) for agent in new_robots - node.robots)
         total += self._widest(pending, future, resolved)
         return total
 

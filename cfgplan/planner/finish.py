@@ -164,6 +164,7 @@ def build(node: Partial, total: float, task: Task, models: Models) -> Configurat
                 bandwidth=ch.bandwidth,
             )
         channels.append(cmade)
+    agents = dict.fromkeys(f.args[0] for f in functionalities)
     return Configuration.model_construct(
         functionalities=tuple(functionalities),
         channels=tuple(channels),
@@ -173,6 +174,7 @@ def build(node: Partial, total: float, task: Task, models: Models) -> Configurat
         media=(),
         derivation=0,
         proven=True,
+        devices=tuple(a for a in agents if a in task.devices),
     )
 
 

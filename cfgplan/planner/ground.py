@@ -74,6 +74,16 @@ def _ground(p: Pattern, env: Bindings, where: str) -> Ground | DeadEnd:
     return ground
 
 
+def channel_kind(declared: str, robots: Ground) -> tuple[str, Ground]:
+    """What a channel is once its robots are known: ``(any A B)`` is
+    ``(local A)`` when A is B and ``(global A B)`` otherwise (an extension
+    beyond the thesis); ``local`` and ``global`` stay what they say, so a
+    declared global channel between ends on one robot stays global (6.4's 53)."""
+    if declared != "any":
+        return declared, robots
+    return ("local", robots[:1]) if robots[0] == robots[1] else ("global", robots)
+
+
 def instantiate(method: MethodSchema, env: Bindings, where: str) -> Expansion | DeadEnd:
     """Instantiate a method version under ``env`` (step 3a of 4.5)."""
     offset = {body_label: i for i, (body_label, _) in enumerate(method.body)}
@@ -85,8 +95,9 @@ def instantiate(method: MethodSchema, env: Bindings, where: str) -> Expansion | 
         robots = _ground(("robots", *spec.robots), env, where)
         if isinstance(robots, DeadEnd):
             return robots
+        kind, ends = channel_kind(spec.kind, robots[1:])
         channels.append(
-            (spec.kind, robots[1:], offset[spec.source], offset[spec.target], data, spec.bandwidth)
+            (kind, ends, offset[spec.source], offset[spec.target], data, spec.bandwidth)
         )
     body = []
     for _, call in method.body:

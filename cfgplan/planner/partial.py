@@ -231,7 +231,7 @@ def place_functionality(
     added += task.functionality_cost(schema)
     robots = node.robots
     if new.robot not in robots:
-        added += task.weights.robot
+        added += task.agent_cost(new.robot)
         robots = robots | {new.robot}
     labels = dict(node.labels)
     labels[item.call] = item.label

@@ -95,7 +95,7 @@ class PortSchema:
 
 @dataclass(frozen=True, slots=True)
 class ChannelSchema:
-    kind: str  # "local" | "global"
+    kind: str  # "local" | "global" | "any" (decided when instantiated)
     robots: Pattern
     source: str
     target: str
@@ -136,6 +136,8 @@ class Task:
     """(predicate, arity, position, value) -> the facts with that argument, in state order."""
     media: tuple[Medium, ...]
     weights: Weights
+    devices: frozenset[str]
+    """Agents the state declares ``(device X)``: weighted as devices, not robots."""
     state_names: frozenset[str]
     """Every symbol of the state: for "differs only in case" hints."""
 
@@ -154,6 +156,10 @@ class Task:
 
     def channel_cost(self, kind: str) -> float:
         return self.weights.global_ if kind == "global" else self.weights.local
+
+    def agent_cost(self, agent: str) -> float:
+        """What running something on ``agent`` costs: a robot's or a device's weight."""
+        return self.weights.device if agent in self.devices else self.weights.robot
 
 
 def pattern(atom: Atom) -> Pattern:
@@ -270,5 +276,6 @@ def compile_task(domain: Domain, state: State, weights: Weights | None = None) -
         facts_by_argument=MappingProxyType({k: tuple(v) for k, v in by_arg.items()}),
         media=state.media,
         weights=weights or Weights(),
+        devices=frozenset(fact[1] for fact in facts if fact[0] == "device" and len(fact) == 2),
         state_names=frozenset(t for fact in facts for t in fact),
     )

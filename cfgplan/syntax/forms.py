@@ -183,24 +183,37 @@ def port(node: Sx) -> Port:
     )
 
 
+CHANNEL_KINDS = {
+    "local": "(local ?robot)",
+    "global": "(global ?from ?to)",
+    "any": "(any ?from ?to)",
+}
+"""The channel kinds (3.4, 4.4) and how each names its robots. ``any`` is an
+extension beyond the thesis: local when ``?from`` and ``?to`` are one agent,
+global otherwise."""
+
+
 def channel(node: Sx) -> ChannelSpec:
-    """``((local ?r) ?f1 ?f2 (image ?r) [bw])`` or ``((global ?a ?b) ...)``."""
+    """``((local ?r) ?f1 ?f2 (image ?r) [bw])``, ``((global ?a ?b) ...)`` or
+    ``((any ?a ?b) ...)``."""
     where = "a channel ((local ?r) ?f1 ?f2 (descriptor ...) [bandwidth])"
     if not node.is_list or len(node.items) < 4:
         raise error(f"expected {where}, found {node}", node.span)
     kind_node, src, dst, data, *_ = node.items
-    kind = atom(kind_node, "(local ?r) or (global ?from ?to)")
-    if kind.predicate not in ("local", "global"):
+    kind = atom(kind_node, "(local ?r), (global ?from ?to) or (any ?from ?to)")
+    if kind.predicate not in CHANNEL_KINDS:
         hint = None
-        if kind.predicate.lower() in ("local", "global"):
+        if kind.predicate.lower() in CHANNEL_KINDS:
             hint = f"symbols are case-sensitive: write {kind.predicate.lower()}"
-        raise error(f"a channel is local or global, found {kind.predicate}", kind_node.span, hint)
-    want = 1 if kind.predicate == "local" else 2
+        raise error(
+            f"a channel is local, global or any, found {kind.predicate}", kind_node.span, hint
+        )
+    form = CHANNEL_KINDS[kind.predicate]
+    want = len(form.split()) - 1
     if kind.arity != want:
-        form = "(local ?robot)" if want == 1 else "(global ?from ?to)"
         raise error(f"{kind.predicate} takes {want} robot(s): {form}", kind_node.span)
     return ChannelSpec(
-        kind="local" if kind.predicate == "local" else "global",
+        kind=kind.predicate,
         robots=kind.args,
         source=_label(src, where),
         target=_label(dst, where),

@@ -51,7 +51,7 @@ def solved(domain: str, state: str) -> tuple[Problem, tuple[Configuration, ...]]
 
 def test_every_bundled_domain_is_covered() -> None:
     assert len(PAIRS) >= 7
-    assert {d.parent.name for d, _ in PAIRS} == {"build-wall", "carry-bar", "cross-door"}
+    assert {d.parent.name for d, _ in PAIRS} == {"build-wall", "carry-bar", "cross-door", "docking"}
     assert any(s.name == MEDIA_STATE for _, s in PAIRS)
 
 
@@ -159,7 +159,8 @@ def test_changed_cost() -> None:
     found = check(problem, config.model_copy(update={"cost": 43.0}))
     assert found == [
         "cost: the configuration says 43, but its parts cost 44 (2 robots, 3 global and "
-        "7 local channels, 8 functionalities; weights robot=10,global=3,local=1,functionality=1)"
+        "7 local channels, 8 functionalities; weights robot=10,global=3,local=1,functionality=1,"
+        "device=10)"
     ]
 
 
