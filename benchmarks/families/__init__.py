@@ -1,0 +1,20 @@
+"""Scalable domain families for the benchmarks (thesis 7.2-7.3: many robots).
+
+Each generator returns the text of a domain and of a state with its goal,
+for ``python -m benchmarks.run`` and the tests:
+
+- ``wall(K, N, L)``, ``relay(D, W, V)``: the shapes the search was first tuned on;
+- ``ecology(N, R, C)``, ``media_tight(N, R, C)``, ``fusion(M, V, P, H)``,
+  ``chain(D)``, ``delegation(N)``: structures it was not (issue 11): covering
+  with shared robots and devices, tight media, weighted covering with
+  ``:cost``, long plateaus of equal cost, recursion.
+"""
+
+from benchmarks.families.chain import chain
+from benchmarks.families.delegation import delegation
+from benchmarks.families.ecology import ecology, media_tight
+from benchmarks.families.fusion import fusion
+from benchmarks.families.relay import relay
+from benchmarks.families.wall import wall
+
+__all__ = ["chain", "delegation", "ecology", "fusion", "media_tight", "relay", "wall"]
