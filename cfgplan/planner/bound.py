@@ -255,6 +255,13 @@ class Bound:
         completion): what ``--all`` needs, where no estimate can stop early."""
         return 0.0 if all(self.summary(item.call).feasible for item in node.stack) else None
 
+    def certain_agents(self, node: Partial) -> frozenset[str]:
+        """Agents some pending item runs something on in every expansion."""
+        agents: set[str] = set()
+        for item in node.stack:
+            agents |= self.summary(item.call).robots
+        return frozenset(agents)
+
     def estimate(self, node: Partial) -> float | None:
         """A lower bound on the cost still to come, or None when no completion exists."""
         task = self.task

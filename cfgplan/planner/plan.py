@@ -18,22 +18,37 @@ from cfgplan.planner.bound import Bound
 from cfgplan.planner.dive import dive
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Partial
+from cfgplan.planner.partition import Partition
 from cfgplan.planner.report import StopReason
-from cfgplan.planner.search import BestFirst, Progress
+from cfgplan.planner.search import BestFirst, Heuristic, Progress
 from cfgplan.planner.task import Ground, Task
 
 DIVE_SECONDS = 5.0
 """How long the greedy dive may look for a configuration after a stop."""
 
-_parts: WeakKeyDictionary[Task, tuple[Grounder, Bound]] = WeakKeyDictionary()
+_parts: WeakKeyDictionary[Task, tuple[Grounder, Bound, Partition]] = WeakKeyDictionary()
 
 
-def parts(task: Task) -> tuple[Grounder, Bound]:
-    """The grounding memo and the bound of ``task``, made once per task."""
+def parts(task: Task) -> tuple[Grounder, Bound, Partition]:
+    """The grounding memo and the bounds of ``task``, made once per task."""
     found = _parts.get(task)
     if found is None:
-        found = _parts[task] = (Grounder(task), Bound(task))
+        grounder = Grounder(task)
+        found = _parts[task] = (grounder, Bound(task), Partition(grounder))
     return found
+
+
+def combined(bound: Bound, partition: Partition) -> Heuristic:
+    """The larger of the two admissible bounds (a maximum of lower bounds is one)."""
+
+    def estimate(node: Partial) -> float | None:
+        first = bound.estimate(node)
+        if first is None:
+            return None
+        second = partition.estimate(node, bound.certain_agents(node))
+        return None if second is None else max(first, second)
+
+    return estimate
 
 
 def _no_bound(node: Partial) -> float:
@@ -51,10 +66,10 @@ def plan(
 ) -> tuple[list[Configuration], BestFirst]:
     """The ``limit`` cheapest admissible configurations (all when None), and
     the search that found them (its stats, report and stop reason)."""
-    grounder, bound = parts(task)
+    grounder, bound, partition = parts(task)
     # Listing everything, a cost estimate cannot stop the search early: then
     # the bound only cuts nodes without completion.
-    heuristic = bound.estimate if limit is not None else bound.feasible
+    heuristic = combined(bound, partition) if limit is not None else bound.feasible
     search = BestFirst(grounder, goal, heuristic, distinct, time_limit, progress)
     found: list[Configuration] = []
     try:

@@ -16,6 +16,8 @@ from cfgplan.planner import plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.partition import Partition
+from cfgplan.planner.plan import combined
 from cfgplan.planner.successors import successors
 from tests.planner.generated import PROPERTY, Generated, generated, load_text, solve
 
@@ -51,17 +53,25 @@ def some_nodes(grounder: Grounder, goal: tuple[str, ...]) -> list[Partial]:
 
 @PROPERTY
 @given(generated())
-def test_the_bound_never_exceeds_the_cheapest_completion(example: Generated) -> None:
+def test_the_bounds_never_exceed_the_cheapest_completion(example: Generated) -> None:
+    """Both bounds (bound.py, partition.py) and the search's maximum of them."""
     problem = solve(example)
     grounder, bound = Grounder(problem.task), Bound(problem.task)
+    partition = Partition(grounder)
+    heuristic = combined(bound, partition)
     for node in some_nodes(grounder, problem.goal_call):
         truth = least_completion(grounder, node)
-        estimate, feasible = bound.estimate(node), bound.feasible(node)
+        estimates = [
+            bound.estimate(node),
+            partition.estimate(node, bound.certain_agents(node)),
+            heuristic(node),
+        ]
         if truth is None:
             continue  # nothing to stay below; None is allowed, not required
-        assert estimate is not None and feasible is not None, "cut a node with a completion"
-        assert estimate <= truth - node.cost + 1e-9
-        assert feasible == 0.0
+        assert bound.feasible(node) == 0.0
+        for estimate in estimates:
+            assert estimate is not None, "cut a node with a completion"
+            assert estimate <= truth - node.cost + 1e-9
 
 
 def chain(depth: int) -> str:
