@@ -41,6 +41,7 @@ __all__ = [
 
 MAX_DEPTH = 64
 RULE = "JSON: None, bool, int, float, str, list, tuple, dict with str keys"
+_SCALARS = frozenset({type(None), bool, int, float, str})
 
 
 class ValueRuleError(RunError):
@@ -92,10 +93,12 @@ def check(value: object) -> None:
                         "(keys must be str)",
                         type_name(key),
                     )
-                stack.append((sub, f"{path}[{key!r}]", depth + 1))
+                if type(sub) not in _SCALARS:
+                    stack.append((sub, f"{path}[{key!r}]", depth + 1))
         else:
             for k, sub in enumerate(item):
-                stack.append((sub, f"{path}[{k}]", depth + 1))
+                if type(sub) not in _SCALARS:  # the common case costs one look-up
+                    stack.append((sub, f"{path}[{k}]", depth + 1))
 
 
 def _conversion(item: object) -> str:

@@ -5,8 +5,8 @@ each robot program opens one Zenoh session in *peer* mode (no router) and:
 
 * declares itself with a liveliness token, ``cfgplan/<society>/<robot>/alive``;
 * subscribes to each global channel into it, on the key of
-  :mod:`cfgplan.runtime.keys`, keeping only the newest message (a one-slot
-  ring: the channel of 5.2.2 holds one item) until the robot's loop polls;
+  :mod:`cfgplan.runtime.keys`, keeping only the newest message per channel
+  (the channel of 5.2.2 holds one item) until the robot's loop polls;
 * publishes each write on a global channel out of it to the key of the robot
   at the other end (``express``: sent at once, not batched);
 * watches the liveliness tokens of the robots it exchanges data with, and
@@ -31,6 +31,7 @@ from __future__ import annotations
 import json
 import queue
 import re
+import threading
 from collections.abc import Collection
 from dataclasses import dataclass
 from types import ModuleType
@@ -160,7 +161,11 @@ class ZenohTransport:
         except z.ZError as exc:
             raise RunError(f"cannot open the Zenoh session: {_reason(exc)}") from None
         self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
-        self._subscribers: list[tuple[Any, Receiver]] = []
+        self._subscribers: list[Any] = []
+        self._receivers: dict[str, Receiver] = {}
+        self._newest: dict[str, bytes] = {}  # per key, what arrived since the last poll
+        self._lock = threading.Lock()
+        self._arrived = threading.Event()
         self._publishers: dict[str, Any] = {}
         self._arrivals: queue.SimpleQueue[tuple[str, bool]] = queue.SimpleQueue()
         self._watch: tuple[frozenset[str], Presence] | None = None
@@ -170,10 +175,16 @@ class ZenohTransport:
     def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
         if robot != self.robot:
             raise RunError(f"this Zenoh session carries {self.robot}'s channels, not {robot}'s")
-        subscriber = self._session.declare_subscriber(
-            channel_key(self.society, robot, key), self._z.handlers.RingChannel(1)
-        )
-        self._subscribers.append((subscriber, receiver))
+        where = channel_key(self.society, robot, key)
+        self._receivers[where] = receiver
+        self._subscribers.append(self._session.declare_subscriber(where, self._on_sample))
+
+    def _on_sample(self, sample: Any) -> None:
+        """On a Zenoh thread: keep the newest message of its channel for :meth:`poll`."""
+        payload = sample.payload.to_bytes()
+        with self._lock:
+            self._newest[str(sample.key_expr)] = payload
+        self._arrived.set()
 
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         where = channel_key(self.society, robot, key)
@@ -198,11 +209,17 @@ class ZenohTransport:
         if self._watch is not None and name in self._watch[0]:
             self._arrivals.put((name, sample.kind == self._z.SampleKind.PUT))
 
+    def wait(self, timeout: float) -> bool:
+        """Block until a message has arrived (then :meth:`poll` hands it over),
+        at most ``timeout`` seconds; whether one did."""
+        return self._arrived.wait(timeout)
+
     def poll(self) -> None:
-        for subscriber, receiver in self._subscribers:
-            sample = subscriber.try_recv()
-            if sample is not None:
-                receiver(sample.payload.to_bytes())
+        with self._lock:
+            newest, self._newest = self._newest, {}
+            self._arrived.clear()
+        for where, payload in newest.items():
+            self._receivers[where](payload)
         while self._watch is not None:
             try:
                 name, alive = self._arrivals.get_nowait()
