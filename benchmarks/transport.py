@@ -206,17 +206,17 @@ def main(argv: list[str] | None = None) -> None:
     print()
     print(
         "| payload | transport | round trip median µs | p99 µs | writes/s | new values seen/s |"
-        " median round trip vs in-process |"
+        " round trip / in-process | values seen / in-process |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for name, size, local, remote in rows:
-        base = statistics.median(local[0])
+        base, base_seen = statistics.median(local[0]), local[2]
         for label, (times, sent, seen) in (("in-process", local), ("Zenoh", remote)):
             median = statistics.median(times)
             p99 = statistics.quantiles(times, n=100)[98]
             print(
                 f"| {name} ({size} B) | {label} | {_us(median)} | {_us(p99)} | {sent:,.0f} | "
-                f"{seen:,.0f} | {median / base:,.0f}x |"
+                f"{seen:,.0f} | {median / base:.1f}x | {seen / base_seen:.2f}x |"
             )
 
 

@@ -165,8 +165,8 @@ class Staleness(Event):
             data=list(self.channel.data),
             **{"from": self.source_robot},
             age=round(self.age, 6),
-            period=self.period,
-            limit=self.limit,
+            period=round(self.period, 6),
+            limit=round(self.limit, 6),
         )
         return out
 
