@@ -14,11 +14,13 @@ writes, so both behave the same. :func:`execute` runs the loop of
 
 Exit status: 0 when the run ended as asked; 1 when a functionality failed
 (raised, exited, returned what could not be written, overran its budget) or
-the trace could not be written.
+the trace or the console could not be written (the run goes on without them).
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import signal
 import sys
 import threading
@@ -62,19 +64,36 @@ class Printer:
         self.out = out
         self.err = err
         self.failed = False
+        self.lost: str | None = None  # why the console could not be written to
         self._faults: dict[str, int] = {}
         self._warned: set[tuple[str, str]] = set()
+        self._dead: set[int] = set()
+
+    def say(self, text: str, stream: TextIO | None = None) -> None:
+        """A line on ``stream`` (default: ``out``); a stream that cannot be
+        written to (closed pipe, full disk) is given up, not fatal."""
+        stream = self.out if stream is None else stream
+        if id(stream) in self._dead:
+            return
+        try:
+            print(text, file=stream, flush=True)
+        except (OSError, ValueError) as exc:
+            self._dead.add(id(stream))
+            what = "standard output" if stream is self.out else "standard error"
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            self.lost = self.lost or f"cannot write to {what}: {reason}"
+            _silence(stream)
 
     def __call__(self, event: Event) -> None:
         if isinstance(event, Call):
             self._call(event)
             return
         if isinstance(event, Lifecycle) and event.what == "error":
-            print(f"cfgplan: {notice(event)}", file=self.err, flush=True)
+            self.say(f"cfgplan: {notice(event)}", self.err)
             return
         line = notice(event)
         if line is not None:
-            print(line, file=self.out, flush=True)
+            self.say(line)
 
     def _call(self, event: Call) -> None:
         if event.status in ("error", "timeout"):
@@ -84,16 +103,14 @@ class Printer:
         if not (self.verbose or (event.action and event.status == "ran")):
             return
         problems: list[str] = []
-        line = describe(event, problems)
-        print(line, file=self.out, flush=True)
+        self.say(describe(event, problems))
         for problem in problems:
             if (event.label, problem) not in self._warned:
                 self._warned.add((event.label, problem))
-                print(
+                self.say(
                     f"cfgplan: warning: {event.label} {event.name} on {event.robot}: {problem} "
                     f"(implementations: {self.source})",
-                    file=self.err,
-                    flush=True,
+                    self.err,
                 )
 
     def _fault(self, event: Call) -> None:
@@ -101,14 +118,24 @@ class Printer:
         seen = self._faults.get(key, 0) + 1
         self._faults[key] = seen
         if seen <= FAULTS_SHOWN:
-            print(f"cfgplan: {describe(event)} [{self.source}]", file=self.err, flush=True)
+            self.say(f"cfgplan: {describe(event)} [{self.source}]", self.err)
         if seen == FAULTS_SHOWN:
-            print(
+            self.say(
                 f"cfgplan: further failures of {event.label} {event.name} on {event.robot} "
                 "are only counted (summary; --trace has each)",
-                file=self.err,
-                flush=True,
+                self.err,
             )
+
+
+def _silence(stream: TextIO) -> None:
+    """Point a standard stream that failed at the null device, so that the
+    interpreter's own flush at exit does not fail on it again."""
+    if stream not in (sys.stdout, sys.stderr):
+        return
+    with contextlib.suppress(OSError, ValueError):
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, stream.fileno())
+        os.close(null)
 
 
 @contextmanager
@@ -181,15 +208,15 @@ def execute(
         if trace is not None:
             trace.close()
     for line in summary(society.wrappers):
-        print(line, file=out)
+        printer.say(line)
     transport = society.transport
     if transport is not None and transport.undelivered:
-        print(
+        printer.say(
             f"note: {transport.undelivered} value(s) sent to robots not in this process were "
             "dropped (the in-process transport joins only robots run together)",
-            file=err,
+            err,
         )
-    if trace is not None and trace.failed:
-        print(f"cfgplan: error: {trace.failed}", file=err)
-        return 1
-    return 1 if printer.failed else 0
+    problems = [p for p in (trace.failed if trace else None, printer.lost) if p]
+    for problem in problems:
+        printer.say(f"cfgplan: error: {problem}", err)
+    return 1 if problems or printer.failed else 0

@@ -188,3 +188,32 @@ def test_a_robot_alone_over_zenoh_waits_and_stops_after_its_duration(
     assert out.returncode == 0, out.stderr
     assert "Emil F12 measure-robot-orient-compass(Emil, Pippi): ran in 0 of " in out.stdout
     assert "waits for global-orient(Pippi)" in out.stdout
+
+
+def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None:
+    """stdout to a full disk, or to a pipe closed early: no traceback."""
+    args = [str(emitted / "run_all.py"), "--impl", str(EXAMPLE_IMPL), "--rate", "0"]
+    if Path("/dev/full").exists():
+        with open("/dev/full", "w") as full:
+            out = subprocess.run(
+                [sys.executable, *args, "--cycles", "5"],
+                cwd=ROOT,
+                stdout=full,
+                stderr=subprocess.PIPE,
+                text=True,
+                timeout=60,
+            )
+        assert out.returncode == 1
+        assert out.stderr == (
+            "cfgplan: error: cannot write to standard output: No space left on device\n"
+        )
+    piped = subprocess.run(
+        f"{sys.executable} {' '.join(args)} --cycles 2000 | head -n 1",
+        shell=True,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert piped.stdout.startswith("cycle 2: Pippi F3 cross-door(Pippi, Door1) received ")
+    assert "Traceback" not in piped.stderr and "Exception ignored" not in piped.stderr
