@@ -68,26 +68,30 @@ def _run_options(parser: argparse.ArgumentParser) -> None:
     add("--impl", required=True, help="implementations: a module name (pkg.impl) or a .py file")
     add(
         "--rate",
+        metavar="HZ",
         type=_number(0, False, "must be 0 or more"),
         default=10.0,
         help="cycles per second for functionalities without :freq (default 10; "
         "0: every functionality in every cycle, no pause)",
     )
-    add("--cycles", type=_count, default=0, help="stop after N cycles (default 0: no limit)")
+    add("--cycles", metavar="N", type=_count, default=0, help="stop after N cycles (0: no limit)")
     add(
         "--duration",
+        metavar="S",
         type=_number(0, True, "must be more than 0"),
         default=None,
         help="stop after S seconds (default: until interrupted)",
     )
     add(
         "--stale-periods",
+        metavar="K",
         type=_number(0, True, "must be more than 0"),
         default=3.0,
         help="an input not refreshed for K periods of its sender is stale (default 3)",
     )
     add(
         "--budget",
+        metavar="S",
         type=_number(0, False, "must be 0 or more"),
         default=DEFAULT_BUDGET,
         help=f"seconds one call may take before it is reported as blocked "
@@ -108,6 +112,7 @@ def _network_options(parser: argparse.ArgumentParser) -> None:
     )
     add(
         "--society",
+        metavar="NAME",
         default=DEFAULT_SOCIETY,
         help=f"keeps societies on one network apart (default {DEFAULT_SOCIETY})",
     )
@@ -131,6 +136,7 @@ def _network_options(parser: argparse.ArgumentParser) -> None:
     add("--zenoh-config", metavar="FILE", help="a Zenoh configuration file (JSON5) for the rest")
     add(
         "--lease",
+        metavar="S",
         type=_number(0, True, "must be more than 0"),
         default=None,
         help=f"seconds after which a frozen robot is reported lost (default {DEFAULT_LEASE:g})",

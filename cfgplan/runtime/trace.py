@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-from cfgplan.runtime.events import Call, Data, Event, Lifecycle, Presence, Staleness, Transfer
+from cfgplan.runtime.events import Call, Data, Event, Lifecycle, Presence, Staleness
 from cfgplan.runtime.values import safe_repr
 from cfgplan.runtime.wrapper import Stats, Wrapper
 
@@ -137,9 +137,7 @@ def notice(event: Event) -> str | None:
         return f"{head} {event.label}: input {call_text(event.channel.data)} is fresh again"
     if isinstance(event, Lifecycle) and event.what == "error":
         return f"{head}: {dict(event.info).get('message', '')}"
-    if isinstance(event, Transfer):
-        return None
-    return None
+    return None  # calls have describe(); sends, receives, start and stop go to the trace
 
 
 def summary(wrappers: Iterable[Wrapper]) -> list[str]:
