@@ -171,11 +171,10 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
         robot = Robot(name, registry, transport).configure(configure)
         shared = transport if isinstance(transport, InProcessTransport) else None
         return execute(Society([robot], shared), options_of(args), source=registry.source)
-    except RunError as exc:
+    except (RunError, KeyboardInterrupt) as exc:
         if transport is not None:
             transport.close()
-        print(exc.render(), file=sys.stderr)
-        return 1
+        return _failed(exc)
 
 
 def zenoh_options(args: argparse.Namespace) -> ZenohOptions:
@@ -210,6 +209,15 @@ def society_main(
     try:
         registry = Registry.load(args.impl)
         return execute(assemble(programs, registry), options_of(args), source=registry.source)
-    except RunError as exc:
-        print(exc.render(), file=sys.stderr)
-        return 1
+    except (RunError, KeyboardInterrupt) as exc:
+        return _failed(exc)
+
+
+def _failed(exc: RunError | KeyboardInterrupt) -> int:
+    """Exit status 1 for a user error (said compiler style), 130 for Ctrl-C
+    before the robots started (once running, Ctrl-C stops them cleanly)."""
+    if isinstance(exc, KeyboardInterrupt):
+        print("interrupted", file=sys.stderr)
+        return 130
+    print(exc.render(), file=sys.stderr)
+    return 1
