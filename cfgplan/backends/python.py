@@ -7,12 +7,15 @@ and the wrappers of its functionalities (5.2.1), and returns the *cycle*
 (the ``LAMBDA``): one call per functionality in sorted order, passing one
 entry per ``:in`` descriptor and one list of channels per ``:out``
 descriptor, as the LISP call does. An input fed by several channels gets a
-list, an input without channel ``None``. Run as a script, the module executes
-that robot alone (``python emil.py --impl IMPL --cycles 10 --rate 5``).
+list, an input without channel ``None``; a functionality whose operator has
+a ``:freq`` (3.2) gets it (``freq=10``). Run as a script, the module runs that
+robot in its own process, its global channels over Zenoh to the other
+robots' processes (``python emil.py --impl IMPL --listen tcp/0.0.0.0:7447``;
+the options are those of :func:`cfgplan.runtime.robot_main`).
 
-Because the in-process transport only joins robots of one process, a
-``run_all.py`` is emitted too: it loads every robot's module and runs them
-together. The text is deterministic: no dates, no paths.
+A ``run_all.py`` is emitted too: it loads every robot's module and runs them
+together in one process, joined by the in-process transport. The text is
+deterministic: no dates, no paths.
 """
 
 from __future__ import annotations
@@ -40,6 +43,11 @@ def _str(text: str) -> str:
 def _tuple(items: Sequence[str]) -> str:
     inner = ", ".join(_str(x) for x in items)
     return f"({inner},)" if len(items) == 1 else f"({inner})"
+
+
+def _number(x: float) -> str:
+    """``10`` rather than ``10.0``; exact otherwise."""
+    return str(int(x)) if float(x).is_integer() else repr(float(x))
 
 
 def _channel(index: int) -> str:
@@ -94,13 +102,15 @@ def to_python(part: RobotPart, title: str) -> str:
         *("    " + x for x in ind.text().splitlines()),
         "",
         f"configure() creates {robot}'s channels (the LET of 5.3) and returns the cycle",
-        "(the LAMBDA): one call to each functionality, in sorted order (5.1). Run:",
+        "(the LAMBDA): one call to each functionality, in sorted order (5.1). Run this",
+        "robot in a process of its own, its global channels over Zenoh (5.2.2):",
         "",
-        f"    python {module_name(robot)}.py --impl IMPL [--cycles N] [--rate HZ] [--trace]",
+        f"    python {module_name(robot)}.py --impl IMPL [--listen ENDPOINT] [--connect ENDPOINT]",
+        "        [--society NAME] [--rate HZ] [--cycles N] [--duration S] [--trace FILE]",
         "",
         "IMPL is a module name or a .py file declaring the implementations with",
-        "@functionality (cfgplan.runtime). Alone, this robot's global channels reach",
-        "no other robot; run_all.py runs every robot of the configuration in one process.",
+        "@functionality (cfgplan.runtime); --help lists every option. run_all.py runs",
+        "every robot of the configuration in one process.",
         '"""',
         "",
         "from __future__ import annotations",
@@ -129,6 +139,8 @@ def to_python(part: RobotPart, title: str) -> str:
     for call in part.calls:
         f = call.functionality
         objects = f", {_tuple(call.objects)}" if call.objects else ""
+        if call.freq is not None:
+            objects += f", freq={_number(call.freq)}"
         lines += _signature(call)
         head = f"{_wrapper(call)} = robot.wrapper"
         lines += _statement("    ", head, f"{_str(f.label)}, {_str(f.name)}{objects}")
@@ -168,7 +180,7 @@ def run_all(parts: Sequence[RobotPart], title: str) -> str:
         "here their global channels are joined by an in-process transport and the",
         "robots run one cycle each in turn. Run:",
         "",
-        "    python run_all.py --impl IMPL [--cycles N] [--rate HZ] [--trace]",
+        "    python run_all.py --impl IMPL [--rate HZ] [--cycles N] [--duration S] [--trace FILE]",
         '"""',
         "",
         "from __future__ import annotations",

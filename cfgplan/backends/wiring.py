@@ -40,7 +40,8 @@ class Call:
 
     ``inputs[i]`` lists the channels (0-based indexes into the robot's channel
     list) feeding the i-th ``:in`` descriptor, ``outputs[j]`` those the j-th
-    ``:out`` descriptor is written to.
+    ``:out`` descriptor is written to. ``freq`` is the operator's ``:freq``
+    (3.2), if it has one.
     """
 
     functionality: FunctionalityInstance
@@ -48,6 +49,7 @@ class Call:
     output_data: tuple[Data, ...]
     inputs: tuple[tuple[int, ...], ...]
     outputs: tuple[tuple[int, ...], ...]
+    freq: float | None = None
 
     @property
     def objects(self) -> tuple[str, ...]:
@@ -87,12 +89,14 @@ def _call(individual: Individual, domain: Domain, f: FunctionalityInstance) -> C
             _place(inputs, input_data, i, ch.data, f, "input", channel_text(ch))
         if ch.source == f.label:
             outputs[_position(output_data, ch.data, f, "output", channel_text(ch))].append(i)
+    operator = domain.functionality((f.name, len(f.args)))
     return Call(
         f,
         input_data,
         output_data,
         tuple(tuple(x) for x in inputs),
         tuple(tuple(x) for x in outputs),
+        None if operator is None else operator.freq,
     )
 
 

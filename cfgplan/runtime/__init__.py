@@ -4,23 +4,33 @@ The basic components of 5.2: the :class:`Channel` (one slot, newer data
 overwrites, last operation read or write; local or global behind one
 interface), the :class:`Wrapper` that runs a functionality's actual function
 only on fresh input, the :class:`Registry` of actual functions users declare
-with :func:`functionality`, a :class:`Transport` for global channels, and the
-:class:`Robot` / :class:`Society` that run individual configurations cycle by
-cycle. Code written by ``cfgplan emit --lang python`` uses these.
+with :func:`functionality`, a :class:`Transport` for global channels (in
+process, or :class:`~cfgplan.runtime.zenoh_transport.ZenohTransport` across
+processes and hosts), and the :class:`Robot` / :class:`Society` that run
+individual configurations cycle by cycle. Code written by ``cfgplan emit
+--lang python`` uses these.
+
+Importing this package is light: no planner, IR, pydantic, lark or Zenoh (a
+robot runs its emitted program with only this); Zenoh is imported when a
+Zenoh transport is opened.
 """
 
 from cfgplan.runtime.channel import Channel, make_global_channel, make_local_channel
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.events import Call, Event, Lifecycle, Presence, Staleness, Transfer
 from cfgplan.runtime.executor import (
     Configure,
     Cycle,
+    Listener,
     Robot,
     Society,
     assemble,
     build,
-    robot_main,
     society,
-    society_main,
 )
+from cfgplan.runtime.launch import RunOptions, execute
+from cfgplan.runtime.main import robot_main, society_main
+from cfgplan.runtime.part import CallSpec, ChannelSpec, Part
 from cfgplan.runtime.registry import (
     Implementation,
     Registry,
@@ -28,25 +38,38 @@ from cfgplan.runtime.registry import (
     load_module,
 )
 from cfgplan.runtime.trace import describe, show, summary
-from cfgplan.runtime.transport import InProcessTransport, Transport
-from cfgplan.runtime.wrapper import Event, Wrapper, current_robot
+from cfgplan.runtime.transport import ChannelKey, InProcessTransport, Transport
+from cfgplan.runtime.wrapper import Wrapper, current_robot
 
 __all__ = [
+    "Call",
+    "CallSpec",
     "Channel",
+    "ChannelKey",
+    "ChannelSpec",
     "Configure",
     "Cycle",
     "Event",
     "Implementation",
     "InProcessTransport",
+    "Lifecycle",
+    "Listener",
+    "Part",
+    "Presence",
     "Registry",
     "Robot",
+    "RunError",
+    "RunOptions",
     "Society",
+    "Staleness",
+    "Transfer",
     "Transport",
     "Wrapper",
     "assemble",
     "build",
     "current_robot",
     "describe",
+    "execute",
     "functionality",
     "load_module",
     "make_global_channel",

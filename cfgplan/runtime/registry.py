@@ -23,6 +23,9 @@ the function may run now (5.2.1); by default it always may.
 
 :meth:`Registry.load` collects the implementations of a module given by name
 (``examples.cross_door.impl``) or by path (``examples/cross-door/impl.py``).
+Whatever goes wrong while importing it — a syntax error, an exception, a
+``sys.exit`` — is reported as the implementation file's fault, with the file
+and line, never as a traceback.
 """
 
 from __future__ import annotations
@@ -31,12 +34,13 @@ import hashlib
 import importlib
 import importlib.util
 import sys
+import traceback
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
-from cfgplan.diagnostics import error
+from cfgplan.runtime.errors import RunError, printable
 
 __all__ = ["Implementation", "Precondition", "Registry", "functionality", "load_module"]
 
@@ -79,7 +83,7 @@ class Registry:
         for impl in implementations:
             if impl.name in self._by_name:
                 where = f" in {source}" if source else ""
-                raise error(f"functionality {impl.name} is implemented twice{where}")
+                raise RunError(f"functionality {impl.name} is implemented twice{where}")
             self._by_name[impl.name] = impl
 
     def names(self) -> list[str]:
@@ -94,7 +98,7 @@ class Registry:
         if impl is None:
             where = f" in {self.source}" if self.source else ""
             have = ", ".join(self.names()) or "none"
-            raise error(
+            raise RunError(
                 f"no implementation of functionality {name}{where} (implemented: {have})",
                 hint=f'declare one with @functionality("{name}") from cfgplan.runtime',
             )
@@ -115,11 +119,15 @@ class Registry:
         try:
             module = _import(text)
         except ImportError as exc:
-            raise error(
-                f"cannot import implementations {text}: {exc}",
-                hint="give a module name importable from the current directory, "
-                "or the path of a .py file",
-            ) from None
+            if exc.name is not None and text.startswith(exc.name):
+                raise RunError(
+                    f"cannot import implementations {text}: {exc}",
+                    hint="give a module name importable from the current directory, "
+                    "or the path of a .py file",
+                ) from None
+            raise _import_fault(text, exc) from None
+        except (Exception, SystemExit) as exc:
+            raise _import_fault(text, exc) from None
         return cls.from_module(module)
 
     def require(self, names: Iterable[str]) -> None:
@@ -127,7 +135,7 @@ class Registry:
         missing = sorted({n for n in names if n not in self._by_name})
         if missing:
             where = f" in {self.source}" if self.source else ""
-            raise error(
+            raise RunError(
                 f"no implementation of functionalit{'y' if len(missing) == 1 else 'ies'} "
                 f"{', '.join(missing)}{where} (implemented: {', '.join(self.names()) or 'none'})",
                 hint=f'declare one with @functionality("{missing[0]}") from cfgplan.runtime',
@@ -151,19 +159,49 @@ def load_module(path: Path) -> ModuleType:
     """Import a Python file by path (once per file per process)."""
     resolved = path.resolve()
     if not resolved.is_file():
-        raise error(f"{path}: no such Python file")
+        raise RunError(f"{path}: no such Python file")
     digest = hashlib.sha1(str(resolved).encode()).hexdigest()[:12]
     name = f"_cfgplan_loaded_{resolved.stem.replace('-', '_')}_{digest}"
     if name in sys.modules:
         return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, resolved)
     if spec is None or spec.loader is None:
-        raise error(f"{path}: cannot be loaded as a Python module")
+        raise RunError(f"{path}: cannot be loaded as a Python module")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     try:
         spec.loader.exec_module(module)
+    except (Exception, SystemExit) as exc:
+        del sys.modules[name]
+        raise _import_fault(str(path), exc, resolved) from None
     except BaseException:
         del sys.modules[name]
         raise
     return module
+
+
+def _import_fault(shown: str, exc: BaseException, path: Path | None = None) -> RunError:
+    """Importing the implementations ``shown`` failed: where, and why."""
+    if isinstance(exc, SyntaxError):
+        file = shown if path is not None and exc.filename == str(path) else exc.filename
+        return RunError(
+            f"the implementations in {shown} do not compile: {printable(str(exc.msg))}",
+            file=file,
+            line=exc.lineno,
+            column=exc.offset,
+        )
+    frames = traceback.extract_tb(exc.__traceback__)
+    mine = [f for f in frames if path is not None and f.filename == str(path)]
+    spot = mine[-1] if mine else (frames[-1] if frames else None)
+    if isinstance(exc, SystemExit):
+        what = f"called sys.exit({printable(repr(exc.code))})"
+    else:
+        what = f"raised {type(exc).__name__}: {printable(str(exc))[:200]}"
+    if spot is None:
+        return RunError(f"importing the implementations {shown} {what}")
+    file = shown if path is not None and spot.filename == str(path) else spot.filename
+    return RunError(
+        f"importing the implementations {shown} {what}",
+        file=file,
+        line=spot.lineno,
+    )

@@ -2,72 +2,163 @@
 
 Values are shown compactly and deterministically: floats with three
 decimals, tuples, lists and dicts element by element, anything else by its
-``repr``.
+``repr`` — cut to a readable length, control characters escaped. A value
+that contains itself shows ``...`` where it recurs; one whose ``__repr__``
+raises shows a placeholder, and :func:`show` says what went wrong so the
+printer can blame the implementation.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-from cfgplan.configuration.describe import call_text
-from cfgplan.runtime.wrapper import Event
+from cfgplan.runtime.events import Call, Data, Event, Lifecycle, Presence, Staleness
+from cfgplan.runtime.values import safe_repr
+from cfgplan.runtime.wrapper import Stats, Wrapper
 
-__all__ = ["describe", "show", "summary"]
+__all__ = ["call_text", "describe", "notice", "show", "show_checked", "summary"]
+
+DEPTH = 12  # containers shown this deep, then "..."
+WIDTH = 400  # characters of one value, then "…"
+
+
+def call_text(atom: Sequence[str]) -> str:
+    """``pos(Pippi, Door1)``: the thesis's printed notation of an atom."""
+    return f"{atom[0]}({', '.join(atom[1:])})"
 
 
 def show(value: object) -> str:
     """``(1.500, -0.250)`` for a pair of floats; ``{'Door1': (...)}`` for a dict."""
+    return show_checked(value)[0]
+
+
+def show_checked(value: object) -> tuple[str, str | None]:
+    """:func:`show`, and what was wrong with the value's ``__repr__`` if anything."""
+    problems: list[str] = []
+    text = _show(value, set(), 0, problems)
+    if len(text) > WIDTH:
+        text = text[: WIDTH - 1] + "…"
+    return text, (problems[0] if problems else None)
+
+
+def _show(value: object, open_ids: set[int], depth: int, problems: list[str]) -> str:
     if isinstance(value, bool) or value is None:
         return repr(value)
     if isinstance(value, float):
         text = f"{value:.3f}"
         return "0.000" if text == "-0.000" else text
+    if type(value) in (tuple, list, dict):
+        if id(value) in open_ids or depth >= DEPTH:
+            return "..."
+        open_ids.add(id(value))
+        try:
+            return _container(value, open_ids, depth, problems)
+        finally:
+            open_ids.discard(id(value))
+    text, problem = safe_repr(value, WIDTH)
+    if problem is not None:
+        problems.append(problem)
+    return text
+
+
+def _container(value: object, open_ids: set[int], depth: int, problems: list[str]) -> str:
+    def inner(items: Iterable[object]) -> str:
+        return ", ".join(_show(v, open_ids, depth + 1, problems) for v in items)
+
     if isinstance(value, tuple):
-        inner = ", ".join(show(v) for v in value)
-        return f"({inner},)" if len(value) == 1 else f"({inner})"
+        return f"({inner(value)},)" if len(value) == 1 else f"({inner(value)})"
     if isinstance(value, list):
-        return "[" + ", ".join(show(v) for v in value) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{show(k)}: {show(v)}" for k, v in value.items()) + "}"
-    return repr(value)
+        return f"[{inner(value)}]"
+    assert isinstance(value, dict)
+    pairs = (
+        f"{_show(k, open_ids, depth + 1, problems)}: {_show(v, open_ids, depth + 1, problems)}"
+        for k, v in value.items()
+    )
+    return "{" + ", ".join(pairs) + "}"
 
 
-def _pairs(pairs: Iterable[tuple[tuple[str, ...], object]]) -> str:
-    return ", ".join(f"{call_text(d)} = {'(no data)' if v is None else show(v)}" for d, v in pairs)
+def _pairs(pairs: Iterable[tuple[Data, object]], problems: list[str]) -> str:
+    out = []
+    for d, v in pairs:
+        if v is None:
+            out.append(f"{call_text(d)} = (no data)")
+            continue
+        text, problem = show_checked(v)
+        if problem is not None:
+            problems.append(f"{call_text(d)}: {problem}")
+        out.append(f"{call_text(d)} = {text}")
+    return ", ".join(out)
 
 
-def describe(event: Event) -> str:
-    """One line: ``cycle 2: Pippi F3 cross-door(Pippi, Door1) received pos(...) = ...``."""
-    head = (
+def _head(event: Call) -> str:
+    return (
         f"cycle {event.cycle}: {event.robot} {event.label} {call_text((event.name, *event.args))}"
     )
+
+
+def describe(event: Call, problems: list[str] | None = None) -> str:
+    """One line: ``cycle 2: Pippi F3 cross-door(Pippi, Door1) received pos(...) = ...``.
+
+    ``problems`` collects what was wrong with a value shown (a failing ``__repr__``).
+    """
+    found: list[str] = [] if problems is None else problems
+    head = _head(event)
     if event.status == "waiting":
         return f"{head} waits for " + ", ".join(call_text(d) for d in event.waiting)
+    if event.status == "stale":
+        return f"{head} does not run: stale " + ", ".join(call_text(d) for d in event.stale)
     if event.status == "precondition":
         return f"{head} does not run: precondition false"
+    if event.status == "busy":
+        return f"{head} does not run: its last call is still running"
+    if event.status in ("error", "timeout"):
+        return f"{head} failed: {event.error}"
     if event.action:
-        return f"{head} received {_pairs(event.inputs)}".rstrip()
+        return f"{head} received {_pairs(event.inputs, found)}".rstrip()
     parts = []
     if event.inputs:
-        parts.append(f"read {_pairs(event.inputs)}")
-    parts.append(f"wrote {_pairs(event.outputs)}")
+        parts.append(f"read {_pairs(event.inputs, found)}")
+    parts.append(f"wrote {_pairs(event.outputs, found)}")
     return f"{head} " + "; ".join(parts)
 
 
-def summary(events: Sequence[Event]) -> list[str]:
-    """Per functionality, in order of first call: how many cycles it ran."""
-    order: dict[tuple[str, str], list[Event]] = {}
-    for e in events:
-        order.setdefault((e.robot, e.label), []).append(e)
-    lines = []
-    for seen in order.values():
-        last = seen[-1]
-        ran = sum(1 for e in seen if e.status == "ran")
-        line = f"{last.robot} {last.label} {call_text((last.name, *last.args))}: "
-        line += f"ran in {ran} of {len(seen)} cycles"
-        if ran == 0 and last.status == "waiting":
-            line += "; waits for " + ", ".join(call_text(d) for d in last.waiting)
-        elif ran == 0 and last.status == "precondition":
-            line += "; precondition false"
-        lines.append(line)
-    return lines
+def notice(event: Event) -> str | None:
+    """A line for an event that is not a call, worth telling a user; else ``None``."""
+    head = f"cycle {event.cycle}: {event.robot}"
+    if isinstance(event, Presence):
+        return f"{head}: robot {event.other} {'seen' if event.alive else 'lost'}"
+    if isinstance(event, Staleness):
+        if event.state == "stale":
+            return (
+                f"{head} {event.label}: input {call_text(event.channel.data)} from "
+                f"{event.source_robot} is stale (no new data for {event.age:.2f} s, "
+                f"over {event.limit:g} s)"
+            )
+        return f"{head} {event.label}: input {call_text(event.channel.data)} is fresh again"
+    if isinstance(event, Lifecycle) and event.what == "error":
+        return f"{head}: {dict(event.info).get('message', '')}"
+    return None  # calls have describe(); sends, receives, start and stop go to the trace
+
+
+def summary(wrappers: Iterable[Wrapper]) -> list[str]:
+    """Per functionality, in the order given: how often it ran, and what kept it from running."""
+    return [_line(w, w.stats) for w in wrappers if w.stats.calls]
+
+
+def _line(w: Wrapper, stats: Stats) -> str:
+    ran = stats.by_status.get("ran", 0)
+    line = f"{w.robot} {w.label} {call_text((w.name, w.robot, *w.objects))}: "
+    line += f"ran in {ran} of {stats.calls} cycles"
+    last = stats.last
+    if ran == 0 and last is not None and last.status == "waiting":
+        line += "; waits for " + ", ".join(call_text(d) for d in last.waiting)
+    elif ran == 0 and last is not None and last.status == "precondition":
+        line += "; precondition false"
+    for status, what in (("stale", "refused stale input"), ("timeout", "timed out")):
+        n = stats.by_status.get(status, 0)
+        if n:
+            line += f"; {what} {n} time{'s' if n > 1 else ''}"
+    failed = stats.by_status.get("error", 0)
+    if failed:
+        line += f"; failed {failed} time{'s' if failed > 1 else ''}, last: {stats.last_error}"
+    return line

@@ -2,60 +2,104 @@
 
 In the thesis a write on a global channel "copies the data to the instance at
 [the other robot] through a socket connection". A :class:`Transport` is that
-connection, reduced to what a channel needs: the receiving end *attaches*
-itself under the channel's id, the writing end *sends* a value to a robot.
+connection, reduced to what a robot needs:
 
-:class:`InProcessTransport` connects robots that run in one process (``cfgplan
-run``, the emitted ``run_all.py``): a send is delivered at once. A value sent to
-a robot that is not in the process is dropped and counted, nothing more; a
-networked transport (sockets between robots) is not written yet.
+* the receiving end of a channel *attaches* a receiver under the channel's
+  :class:`ChannelKey`; the writing end *sends* the encoded message (an
+  envelope, :mod:`cfgplan.runtime.values`) to the robot at the other end;
+* :meth:`Transport.poll` hands over what arrived, on the robot's own thread,
+  once per pass of its loop — the newest message per channel only (the one
+  slot of 5.2.2);
+* :meth:`Transport.watch` reports the robots it exchanges data with as they
+  appear and disappear; :meth:`Transport.close` ends the connection.
+
+:class:`InProcessTransport` joins robots that run in one process (``cfgplan
+run``, the emitted ``run_all.py``): a send is delivered at once; a message for
+a robot that is not in the process is dropped and counted. Robots of one
+process live and stop together, so it reports no presence.
+:class:`~cfgplan.runtime.zenoh_transport.ZenohTransport` joins robots across
+processes and hosts.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Protocol
+from collections.abc import Callable, Collection
+from typing import NamedTuple, Protocol
 
-from cfgplan.diagnostics import error
+from cfgplan.runtime.errors import RunError
 
-__all__ = ["InProcessTransport", "Receiver", "Transport"]
+__all__ = ["ChannelKey", "InProcessTransport", "Presence", "Receiver", "Transport"]
 
-Receiver = Callable[[object], None]
-"""What the receiving end of a channel does with a value that arrives."""
+
+class ChannelKey(NamedTuple):
+    """What both ends of a channel agree on: its source and target
+    functionalities and its data, e.g. ``F10->F12 (global-orient Pippi)``."""
+
+    source: str
+    target: str
+    data: tuple[str, ...]
+
+    def __str__(self) -> str:
+        return f"{self.source}->{self.target} ({' '.join(self.data)})"
+
+
+Receiver = Callable[[bytes], None]
+"""What the receiving end of a channel does with a message that arrives."""
+
+Presence = Callable[[str, bool], None]
+"""Told ``(robot, True)`` when a robot appears, ``(robot, False)`` when it is lost."""
 
 
 class Transport(Protocol):
     """The connection global channels write through."""
 
-    def attach(self, robot: str, channel_id: str, receiver: Receiver) -> None:
-        """Deliver values sent to ``channel_id`` on ``robot`` to ``receiver``."""
+    def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
+        """Deliver messages sent to channel ``key`` on ``robot`` to ``receiver``."""
 
-    def send(self, channel_id: str, robot: str, value: object) -> None:
-        """Send ``value`` to the end of ``channel_id`` that lives on ``robot``."""
+    def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
+        """Send ``payload`` to the end of channel ``key`` that lives on ``robot``."""
+
+    def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
+        """Tell ``report`` (at :meth:`poll`) when one of ``partners`` appears or is lost."""
+
+    def poll(self) -> None:
+        """Hand over what arrived since the last poll: the newest message per
+        channel to its receiver, appearances and losses to their watchers."""
+
+    def close(self) -> None:
+        """End the connection (other robots see this robot leave)."""
 
 
 class InProcessTransport:
     """All robots in one process: :meth:`send` delivers synchronously."""
 
     def __init__(self) -> None:
-        self._receivers: dict[tuple[str, str], Receiver] = {}
+        self._receivers: dict[tuple[str, ChannelKey], Receiver] = {}
         self.sent = 0
         self.undelivered = 0
 
-    def attach(self, robot: str, channel_id: str, receiver: Receiver) -> None:
-        key = (robot, channel_id)
-        if key in self._receivers:
-            raise error(f"channel {channel_id} is created twice on {robot}")
-        self._receivers[key] = receiver
+    def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
+        if (robot, key) in self._receivers:
+            raise RunError(f"channel {key} is created twice on {robot}")
+        self._receivers[(robot, key)] = receiver
 
-    def send(self, channel_id: str, robot: str, value: object) -> None:
+    def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         self.sent += 1
-        self.deliver(channel_id, robot, value)
+        self.deliver(key, robot, payload)
 
-    def deliver(self, channel_id: str, robot: str, value: object) -> None:
-        """Hand ``value`` to the end attached on ``robot``; drop it if there is none."""
-        receiver = self._receivers.get((robot, channel_id))
+    def deliver(self, key: ChannelKey, robot: str, payload: bytes) -> None:
+        """Hand ``payload`` to the end attached on ``robot``; drop it if there is none."""
+        receiver = self._receivers.get((robot, key))
         if receiver is None:
             self.undelivered += 1
             return
-        receiver(value)
+        receiver(payload)
+
+    def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
+        """Nothing to report: robots of one process come and go together."""
+
+    def poll(self) -> None:
+        """Nothing waits: every send was delivered at once."""
+
+    def close(self) -> None:
+        """Nothing to close."""

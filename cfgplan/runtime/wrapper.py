@@ -9,28 +9,52 @@ output to all of its channels; otherwise it returns without running it.
 An input entry is a channel, a list of channels (several feed it; it is fresh
 when one of them is, and the first fresh one in the list gives the value, all
 fresh ones being read) or ``None`` (nothing feeds it: the function never runs).
-Each call returns an :class:`Event` saying what happened.
+
+Beyond the thesis, for running on real robots:
+
+* **Frequency (3.2, Freq).** A wrapper with a period runs only when it is
+  due; with none (``--rate 0``) it runs in every cycle.
+* **Staleness.** An input whose data has not been refreshed for more than
+  ``stale_periods`` periods of its sender is *stale*: the wrapper does not run
+  on it, and says so (a :class:`~cfgplan.runtime.events.Staleness` event when
+  an input goes stale or is fresh again, and the call's status ``stale``).
+* **Faults stay with their functionality.** An exception, ``sys.exit``, a
+  wrong number of outputs or a value that cannot travel on a global channel
+  is reported as the call's ``error``; nothing is written, so the
+  functionality's outputs go stale, and the robot goes on.
+* **Time budget.** With a budget the function runs on its own
+  :class:`~cfgplan.runtime.worker.Worker` thread; a call over budget is
+  reported (``timeout``) and the functionality is skipped (``busy``) until it
+  returns.
+
+Each call returns a :class:`~cfgplan.runtime.events.Call` saying what happened
+(``None`` when the wrapper was not due).
 """
 
 from __future__ import annotations
 
+import math
+import time
+import traceback
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass, replace
-from typing import Literal
+from dataclasses import dataclass, field
 
-from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.runtime.channel import Channel
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.events import Call, Data, Event, Staleness, Status, Transfer
 from cfgplan.runtime.registry import Implementation
+from cfgplan.runtime.values import ValueRuleError, encode, safe_repr, type_name
+from cfgplan.runtime.worker import Worker
 
-__all__ = ["Event", "Input", "Wrapper", "current_robot"]
+__all__ = ["Input", "Stats", "Wrapper", "current_robot", "running_on"]
 
 Input = Channel | Sequence[Channel] | None
-Data = tuple[str, ...]
-Status = Literal["ran", "waiting", "precondition"]
+Record = Callable[[Event], Event]
 
 _robot: ContextVar[str] = ContextVar("cfgplan_robot")
+_REFUSED = object()  # the precondition said no
 
 
 def current_robot() -> str:
@@ -38,7 +62,7 @@ def current_robot() -> str:
     try:
         return _robot.get()
     except LookupError:
-        raise error("current_robot() is only known while a functionality runs") from None
+        raise RunError("current_robot() is only known while a functionality runs") from None
 
 
 @contextmanager
@@ -50,25 +74,21 @@ def running_on(robot: str) -> Iterator[None]:
         _robot.reset(token)
 
 
-@dataclass(frozen=True)
-class Event:
-    """One call of a wrapper: what ran, or what it waited for.
+@dataclass
+class Stats:
+    """How a wrapper's calls went, kept whole however long the run (the summary)."""
 
-    ``inputs`` pairs each input's descriptor with the value read (``ran``);
-    ``waiting`` lists the descriptors without fresh data; ``outputs`` pairs
-    each output's descriptor with the value written (``None``: not written).
-    """
+    calls: int = 0
+    by_status: dict[str, int] = field(default_factory=dict)
+    last: Call | None = None
+    last_error: str = ""
 
-    robot: str
-    label: str
-    name: str
-    args: tuple[str, ...]
-    status: Status
-    inputs: tuple[tuple[Data, object], ...] = ()
-    waiting: tuple[Data, ...] = ()
-    outputs: tuple[tuple[Data, object], ...] = ()
-    action: bool = False
-    cycle: int = 0
+    def count(self, event: Call) -> None:
+        self.calls += 1
+        self.by_status[event.status] = self.by_status.get(event.status, 0) + 1
+        self.last = event
+        if event.status == "error":
+            self.last_error = event.error
 
 
 def _channels(entry: Input) -> list[Channel]:
@@ -83,6 +103,23 @@ def _data(channels: Sequence[Channel], what: str, k: int) -> Data:
     return channels[0].data if channels else (f"{what}-{k + 1}",)
 
 
+def where(exc: BaseException) -> str:
+    """`` (impl.py:70 in camera)``: where an exception was raised."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    if not frames:
+        return ""
+    last = frames[-1]
+    return f" ({last.filename}:{last.lineno} in {last.name})"
+
+
+def fault(exc: BaseException) -> str:
+    """What an implementation's exception says, in one line."""
+    if isinstance(exc, SystemExit):
+        return f"the implementation called sys.exit({safe_repr(exc.code)[0]})"
+    text = safe_repr(exc)[0] if not str(exc) else str(exc)
+    return f"the implementation raised {type(exc).__name__}: {text}{where(exc)}"
+
+
 class Wrapper:
     """The wrapper of functionality ``label`` (``name``) on ``robot``."""
 
@@ -93,7 +130,10 @@ class Wrapper:
         name: str,
         objects: Sequence[str],
         implementation: Implementation,
-        record: Callable[[Event], Event] | None = None,
+        record: Record | None = None,
+        *,
+        freq: float | None = None,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.robot = robot
         self.label = label
@@ -101,55 +141,199 @@ class Wrapper:
         self.objects = tuple(objects)
         self.implementation = implementation
         self.record = record  # sees (and may complete) every event, e.g. with the cycle
-
-    def __call__(self, inputs: Sequence[Input], outputs: Sequence[Sequence[Channel]]) -> Event:
-        event = self._call(inputs, outputs)
-        return event if self.record is None else self.record(event)
+        self.freq = freq if freq is not None and freq > 0 else None
+        self.clock = clock  # a robot's wrappers see the time of its cycle
+        self.period: float | None = None  # None: runs in every cycle
+        self.next_due = 0.0
+        self.budget: float | None = None  # None: runs on the robot's thread
+        self.stale_periods = 3.0
+        self.stats = Stats()
+        self._worker: Worker | None = None
 
     def __str__(self) -> str:
         return f"{self.label}: {self.name}({', '.join((self.robot, *self.objects))})"
 
-    def _call(self, inputs: Sequence[Input], outputs: Sequence[Sequence[Channel]]) -> Event:
+    def schedule(
+        self, rate: float, now: float, budget: float | None = None, stale_periods: float = 3.0
+    ) -> None:
+        """Run at ``:freq`` or else ``rate`` per second from ``now`` (``rate`` 0:
+        in every cycle); calls get ``budget`` seconds (``None``: no limit)."""
+        self.period = None if rate <= 0 else 1.0 / (self.freq or rate)
+        self.next_due = now
+        self.budget = budget
+        self.stale_periods = stale_periods
+
+    def due(self, now: float) -> bool:
+        return self.period is None or now >= self.next_due - 1e-9
+
+    def __call__(
+        self, inputs: Sequence[Input], outputs: Sequence[Sequence[Channel]]
+    ) -> Call | None:
+        now = self.clock()
+        if not self.due(now):
+            return None
+        if self.period is not None:
+            self.next_due += self.period
+            if self.next_due <= now:  # fell behind: skip the missed turns, keep the beat
+                self.next_due += (math.floor((now - self.next_due) / self.period) + 1) * self.period
+        event = self._call(inputs, outputs, now)
+        self.stats.count(event)
+        return self._emit(event)
+
+    def _emit(self, event: Call) -> Call:
+        if self.record is None:
+            return event
+        done = self.record(event)
+        assert isinstance(done, Call)
+        return done
+
+    def _event(self, status: Status, **fields: object) -> Call:
+        return Call(
+            robot=self.robot,
+            t=time.time(),
+            label=self.label,
+            name=self.name,
+            args=(self.robot, *self.objects),
+            status=status,
+            **fields,  # type: ignore[arg-type]
+        )
+
+    def _call(
+        self, inputs: Sequence[Input], outputs: Sequence[Sequence[Channel]], now: float
+    ) -> Call:
         feeds = [_channels(x) for x in inputs]
         data = [_data(chs, "input", k) for k, chs in enumerate(feeds)]
-        out_data = [_data(chs, "output", k) for k, chs in enumerate(outputs)]
-        base = Event(
-            self.robot,
-            self.label,
-            self.name,
-            (self.robot, *self.objects),
-            "waiting",
-            action=not outputs,
-        )
-        stale = tuple(
+        action = not outputs
+        if self._worker is not None and self._worker.busy:
+            return self._event("busy", action=action)
+        stale = self._staleness(feeds, data, now)
+        if stale:
+            return self._event("stale", stale=stale, action=action)
+        waiting = tuple(
             d for d, chs in zip(data, feeds, strict=True) if not any(c.fresh for c in chs)
         )
-        if stale:
-            return replace(base, waiting=stale)
-        with running_on(self.robot):
-            try:
-                if not self.implementation.allowed(*self.objects):
-                    return replace(base, status="precondition")
-                values = [_read(chs) for chs in feeds]
-                result = self.implementation(*self.objects, *values)
-            except CfgplanError:
-                raise
-            except Exception as exc:
-                raise error(
-                    f"{self} on {self.robot}: the implementation or its precondition raised "
-                    f"{type(exc).__name__}: {exc}"
-                ) from exc
-        produced = self._split(result, len(outputs))
-        for value, channels in zip(produced, outputs, strict=True):
+        if waiting:
+            return self._event("waiting", waiting=waiting, action=action)
+        fresh = [[c for c in chs if c.fresh] for chs in feeds]
+        values = [chs[0].peek() for chs in fresh]
+        status, result, duration = self._invoke(values)
+        if status == "precondition":
+            return self._event("precondition", action=action)
+        for chs in fresh:  # the function has seen them: the last operation is a read
+            for ch in chs:
+                ch.read()
+        read = tuple(zip(data, values, strict=True))
+        if status != "ran":
+            return self._event(
+                status, inputs=read, action=action, error=str(result), duration=duration
+            )
+        out_data = [_data(chs, "output", k) for k, chs in enumerate(outputs)]
+        try:
+            produced = self._split(result, len(outputs))
+            encoded = [
+                self._encode(v, chs, d)
+                for v, chs, d in zip(produced, outputs, out_data, strict=True)
+            ]
+        except RunError as exc:
+            return self._event(
+                "error", inputs=read, action=action, error=exc.message, duration=duration
+            )
+        for value, text, channels in zip(produced, encoded, outputs, strict=True):
             if value is not None:
                 for ch in channels:
-                    ch.write(value)
-        return replace(
-            base,
-            status="ran",
-            inputs=tuple(zip(data, values, strict=True)),
+                    ch.write(value, period=self.period, now=now, encoded=text)
+                    if ch.remote and self.record is not None:
+                        assert ch.other is not None
+                        self.record(
+                            Transfer(
+                                robot=self.robot,
+                                t=time.time(),
+                                direction="send",
+                                channel=ch.key,
+                                other=ch.other,
+                                value=value,
+                                seq=ch.seq,
+                            )
+                        )
+        return self._event(
+            "ran",
+            inputs=read,
             outputs=tuple(zip(out_data, produced, strict=True)),
+            action=action,
+            duration=duration,
         )
+
+    def _staleness(
+        self, feeds: list[list[Channel]], data: list[Data], now: float
+    ) -> tuple[Data, ...]:
+        """The inputs whose data is all stale; reports each channel going stale or fresh."""
+        stale: list[Data] = []
+        for d, chs in zip(data, feeds, strict=True):
+            written = [c for c in chs if c.refreshed is not None]
+            flags = [c.stale(now, self.stale_periods) for c in written]
+            for ch, is_stale in zip(written, flags, strict=True):
+                if is_stale != ch.stale_reported:
+                    ch.stale_reported = is_stale
+                    self._report_staleness(ch, now, is_stale)
+            if written and all(flags):
+                stale.append(d)
+        return tuple(stale)
+
+    def _report_staleness(self, ch: Channel, now: float, is_stale: bool) -> None:
+        if self.record is None:
+            return
+        period = ch.period if ch.period is not None else 0.0
+        self.record(
+            Staleness(
+                robot=self.robot,
+                t=time.time(),
+                state="stale" if is_stale else "fresh",
+                label=self.label,
+                channel=ch.key,
+                source_robot=ch.other if ch.remote and ch.other else self.robot,
+                age=ch.age(now) or 0.0,
+                period=period,
+                limit=self.stale_periods * period,
+            )
+        )
+
+    def _invoke(self, values: list[object]) -> tuple[Status, object, float]:
+        """Precondition and function; (status, result or message, seconds)."""
+        impl, objects = self.implementation, self.objects
+
+        def job() -> object:
+            if not impl.allowed(*objects):
+                return _REFUSED
+            return impl(*objects, *values)
+
+        started = time.perf_counter()
+        if self.budget is None:
+            with running_on(self.robot):
+                try:
+                    result = job()
+                except (Exception, SystemExit) as exc:
+                    return "error", fault(exc), time.perf_counter() - started
+        else:
+            if self._worker is None:
+                self._worker = Worker(f"cfgplan {self.robot} {self}", self._on_worker)
+            kind, result = self._worker.run(job, self.budget)
+            if kind == "overran":
+                return (
+                    "timeout",
+                    f"the call took longer than its time budget of {self.budget:g} s; "
+                    "skipped until it returns",
+                    time.perf_counter() - started,
+                )
+            if kind == "raised":
+                assert isinstance(result, BaseException)
+                return "error", fault(result), time.perf_counter() - started
+        if result is _REFUSED:
+            return "precondition", None, 0.0
+        return "ran", result, time.perf_counter() - started
+
+    def _on_worker(self) -> None:
+        """On the worker thread, before its first call: whose robot it is."""
+        _robot.set(self.robot)
 
     def _split(self, result: object, n: int) -> list[object]:
         """The outputs in :out order (one value when there is one output)."""
@@ -160,14 +344,21 @@ class Wrapper:
         if result is None:
             return [None] * n
         if not isinstance(result, tuple | list) or len(result) != n:
-            raise error(
-                f"{self} on {self.robot}: the implementation must return {n} outputs "
-                f"(a tuple in :out order), not {result!r}"
+            raise RunError(
+                f"the implementation must return {n} outputs "
+                f"(a tuple in :out order), not {safe_repr(result, 80)[0]}"
             )
         return list(result)
 
-
-def _read(channels: Sequence[Channel]) -> object:
-    fresh = [c for c in channels if c.fresh]
-    values = [c.read() for c in fresh]
-    return values[0]
+    def _encode(self, value: object, channels: Sequence[Channel], data: Data) -> str | None:
+        """The JSON of an output that goes to another robot (checked before anything is written)."""
+        if value is None or not any(c.remote for c in channels):
+            return None
+        try:
+            return encode(value)
+        except ValueRuleError as exc:
+            raise RunError(
+                f"output {data[0]}({', '.join(data[1:])}) goes to "
+                f"another robot, but {exc.message} (type {type_name(value)})",
+                hint=exc.hint,
+            ) from None

@@ -25,6 +25,7 @@ Run the cost-44 configuration with::
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from cfgplan.runtime import current_robot, functionality
 
@@ -79,7 +80,10 @@ def _sighting(image: Image, name: str) -> Sighting | None:
     sees = image["sees"]
     assert isinstance(sees, dict)
     found = sees.get(name)
-    return found if isinstance(found, tuple) else None
+    if not isinstance(found, tuple | list):  # a list when the image crossed a global channel
+        return None
+    x, y, orient = found
+    return (x, y, orient)
 
 
 @functionality("measure-door")
@@ -140,6 +144,7 @@ def transform_info(
 
 
 @functionality("cross-door")
-def cross_door(door: str, pos: Pos, orient: float) -> None:
-    """The action: here it only records the door's pose relative to the robot."""
-    RECEIVED.append((current_robot(), door, pos, orient))
+def cross_door(door: str, pos: Sequence[float], orient: float) -> None:
+    """The action: here it only records the door's pose relative to the robot
+    (``pos`` comes over a global channel, as JSON: a list)."""
+    RECEIVED.append((current_robot(), door, (pos[0], pos[1]), orient))

@@ -14,7 +14,8 @@ import pytest
 from cfgplan.backends.python import module_name, run_all, to_python
 from cfgplan.backends.wiring import RobotPart, deploy
 from cfgplan.configuration.model import Configuration
-from cfgplan.problem import Problem
+from cfgplan.planner.search import plan
+from cfgplan.problem import Problem, load
 from cfgplan.runtime import Registry, assemble, load_module
 from tests.backends.support import (
     EXAMPLE_IMPL,
@@ -92,13 +93,13 @@ def test_emitted_cross_door_44_runs_and_pippi_receives_the_door(tmp_path: Path) 
     programs = load_module(tmp_path / "run_all.py").programs()
     society = assemble(programs, Registry.load(EXAMPLE_IMPL))
     society.run(3)
-    received = [e for e in society.events if e.label == "F3" or e.name == "cross-door"]
+    received = [e for e in society.calls if e.name == "cross-door"]
     assert [e.status for e in received] == ["waiting", "ran", "ran"]
     (pos_data, pos), (orient_data, orient) = received[1].inputs
     assert pos_data == ("pos", "Pippi", "Door1")
     assert orient_data == ("orient", "Pippi", "Door1")
     want_pos, want_orient = _expected_door_relative_to_pippi()
-    assert isinstance(pos, tuple) and isinstance(orient, float)
+    assert isinstance(pos, list) and isinstance(orient, float)  # JSON: a tuple arrives as a list
     assert pos == pytest.approx(want_pos, abs=1e-9)
     assert orient == pytest.approx(want_orient, abs=1e-9)
     # not a degenerate example: the door is off Pippi's axes and turned
@@ -110,42 +111,42 @@ def test_emitted_run_all_as_a_script(tmp_path: Path) -> None:
     _emit(deploy(config, problem.domain), "t", tmp_path)
     (pos, orient) = _expected_door_relative_to_pippi()
     (label,) = [f.label for f in config.functionalities if f.name == "cross-door"]
-    out = subprocess.run(
+    out = _script(tmp_path / "run_all.py")
+    assert out.returncode == 0, out.stderr
+    assert (
+        f"cycle 2: Pippi {label} cross-door(Pippi, Door1) received pos(Pippi, Door1) = "
+        f"[{pos[0]:.3f}, {pos[1]:.3f}], orient(Pippi, Door1) = {orient:.3f}"
+    ) in out.stdout.splitlines()
+
+
+def _script(script: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
         [
             sys.executable,
-            str(tmp_path / "run_all.py"),
+            str(script),
             "--impl",
             str(EXAMPLE_IMPL),
             "--cycles",
             "2",
             "--rate",
             "0",
+            *extra,
         ],
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=60,
     )
-    assert out.returncode == 0, out.stderr
-    assert (
-        f"cycle 2: Pippi {label} cross-door(Pippi, Door1) received pos(Pippi, Door1) = "
-        f"({pos[0]:.3f}, {pos[1]:.3f}), orient(Pippi, Door1) = {orient:.3f}"
-    ) in out.stdout.splitlines()
 
 
 def _alone(script: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, str(script), "--impl", str(EXAMPLE_IMPL), "--cycles", "2", "--rate", "0"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    return _script(script, "--transport", "inprocess")
 
 
 def test_one_robot_alone_reaches_no_other(tmp_path: Path) -> None:
-    """python emil.py: Pippi's compass never arrives, so Emil waits for it;
-    python pippi.py: its compass readings for Emil are dropped, and said so."""
+    """python emil.py --transport inprocess: Pippi's compass never arrives, so
+    Emil waits for it; pippi.py: its compass readings for Emil are dropped, and
+    said so. (Over Zenoh, the default: tests/runtime/test_network.py.)"""
     problem, config = cross_door_44()
     _emit(deploy(config, problem.domain), "t", tmp_path)
     emil = _alone(tmp_path / "emil.py")
@@ -157,3 +158,30 @@ def test_one_robot_alone_reaches_no_other(tmp_path: Path) -> None:
     assert pippi.returncode == 0, pippi.stderr
     assert "compass(Pippi): ran in 2 of 2 cycles" in pippi.stdout
     assert "note: 2 value(s) sent to robots not in this process were dropped" in pippi.stderr
+
+
+FREQ_DOMAIN = """
+(make-functionality :name '(laser ?r) :out '((scan ?r)) :freq 20)
+(make-functionality :name '(follow ?r) :in '((scan ?r)) :freq 2.5)
+(make-functionality :name '(log ?r) :in '((scan ?r)))
+(make-config-method :name '(do-follow ?r)
+  :channels '(((local ?r) ?f1 ?f2 (scan ?r)) ((local ?r) ?f1 ?f3 (scan ?r)))
+  :body '((?f1 (laser ?r)) (?f2 (follow ?r)) (?f3 (log ?r))))
+"""
+
+
+def test_a_freq_of_the_domain_reaches_the_emitted_wrapper(tmp_path: Path) -> None:
+    """3.2: Freq. The emitted code passes it on; the runtime runs at it."""
+    (tmp_path / "domain.lisp").write_text(FREQ_DOMAIN)
+    (tmp_path / "state.lisp").write_text("(state (robot Ada)) (goal (do-follow Ada))")
+    problem = load(tmp_path / "domain.lisp", tmp_path / "state.lisp")
+    configs, _ = plan(problem.task, problem.goal_call, limit=1)
+    (part,) = deploy(configs[0], problem.domain)
+    text = to_python(part, "t")
+    compile(text, "ada.py", "exec")
+    wrappers = [line.strip() for line in text.splitlines() if "= robot.wrapper(" in line]
+    assert [w.split("robot.wrapper")[1] for w in wrappers] == [
+        '("F2", "laser", freq=20)',
+        '("F4", "log")',
+        '("F3", "follow", freq=2.5)',
+    ]

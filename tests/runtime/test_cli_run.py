@@ -1,20 +1,27 @@
-"""``cfgplan run``: the configuration executed in process (chapter 5)."""
+"""``cfgplan run``: the configuration executed in process, or one robot's part (chapter 5)."""
 
 from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
 
 from typer.testing import CliRunner
 
 import cfgplan.cli.run  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
-from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, cross_door_44
+from cfgplan.diagnostics import CfgplanError
+from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT, cross_door_44
 
 ARGS = [str(DOMAINS / CROSS[0]), str(DOMAINS / CROSS[1])]
+FAST = ["--impl", str(EXAMPLE_IMPL), "--rate", "0"]
 
 
 def test_run_prints_what_cross_door_received() -> None:
     _, config = cross_door_44()
     (label,) = [f.label for f in config.functionalities if f.name == "cross-door"]
-    result = CliRunner().invoke(app, ["run", *ARGS, "--impl", str(EXAMPLE_IMPL), "--cycles", "3"])
+    result = CliRunner().invoke(app, ["run", *ARGS, *FAST, "--cycles", "3"])
     assert result.exit_code == 0, result.output
     lines = result.output.splitlines()
     assert (
@@ -24,15 +31,15 @@ def test_run_prints_what_cross_door_received() -> None:
     received = [line for line in lines if " received " in line]
     assert [line.split(":")[0] for line in received] == ["cycle 2", "cycle 3"]
     assert received[0].startswith(
-        f"cycle 2: Pippi {label} cross-door(Pippi, Door1) received pos(Pippi, Door1) = ("
+        f"cycle 2: Pippi {label} cross-door(Pippi, Door1) received pos(Pippi, Door1) = ["
     )
     assert f"Pippi {label} cross-door(Pippi, Door1): ran in 2 of 3 cycles" in lines
 
 
-def test_run_trace_shows_every_call_and_rank_2_runs_too() -> None:
+def test_run_verbose_shows_every_call_and_rank_2_runs_too() -> None:
     """Rank 2 (cost 47, cameras only, Fig. 6.4) runs on the same implementations."""
     result = CliRunner().invoke(
-        app, ["run", *ARGS, "--impl", str(EXAMPLE_IMPL), "--rank", "2", "--cycles", "2", "--trace"]
+        app, ["run", *ARGS, *FAST, "--rank", "2", "--cycles", "2", "--verbose"]
     )
     assert result.exit_code == 0, result.output
     assert "cost 47" in result.output.splitlines()[0]
@@ -41,6 +48,43 @@ def test_run_trace_shows_every_call_and_rank_2_runs_too() -> None:
         "cross-door(Pippi, Door1) waits for pos(Pippi, Door1), orient(Pippi, Door1)"
         in result.output
     )
+
+
+def test_run_writes_the_trace_and_refuses_to_overwrite_it(tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    args = ["run", *ARGS, *FAST, "--cycles", "2", "--trace", str(trace)]
+    assert CliRunner().invoke(app, args).exit_code == 0
+    lines = [json.loads(x) for x in trace.read_text().splitlines()]
+    assert [e["event"] for e in lines[:2]] == ["start", "start"]
+    assert lines[-1] == {**lines[-1], "event": "stop", "robot": "Emil", "reason": "cycles"}
+    assert all({"event", "robot", "t"} <= set(e) for e in lines)
+    calls = [e for e in lines if e["event"] == "call"]
+    assert len(calls) == 2 * 8
+    before = trace.read_bytes()
+    again = CliRunner().invoke(app, args)
+    assert again.exit_code == 1
+    assert isinstance(again.exception, CfgplanError)
+    assert "exists; pass --force to overwrite it" in str(again.exception)
+    assert trace.read_bytes() == before
+    assert CliRunner().invoke(app, [*args, "--force"]).exit_code == 0
+
+
+def test_run_one_robot_and_what_is_refused() -> None:
+    alone = CliRunner().invoke(
+        app, ["run", *ARGS, *FAST, "--robot", "Emil", "--transport", "inprocess", "--cycles", "2"]
+    )
+    assert alone.exit_code == 0, alone.output
+    assert ": Emil; 2 cycle(s)" in alone.output.splitlines()[0]
+    assert "waits for global-orient(Pippi)" in alone.output
+    unknown = CliRunner().invoke(app, ["run", *ARGS, *FAST, "--robot", "Ada"])
+    assert unknown.exit_code == 1
+    assert str(unknown.exception) == (
+        "no robot Ada in this configuration (its robots: Pippi, Emil)"
+    )
+    usage = CliRunner().invoke(app, ["run", *ARGS, *FAST, "--transport", "zenoh"])
+    assert usage.exit_code == 2 and "--robot NAME" in usage.output
+    bad = CliRunner().invoke(app, ["run", *ARGS, *FAST, "--robot", "Emil", "--listen", "7447"])
+    assert bad.exit_code == 2 and "an endpoint is PROTOCOL/ADDRESS" in bad.output
 
 
 def test_run_without_an_implementation_fails_clearly() -> None:
@@ -58,3 +102,21 @@ def test_run_without_an_implementation_fails_clearly() -> None:
 def test_run_a_rank_that_does_not_exist_exits_3() -> None:
     result = CliRunner().invoke(app, ["run", *ARGS, "--impl", str(EXAMPLE_IMPL), "--rank", "9"])
     assert result.exit_code == 3
+
+
+def test_a_broken_implementation_file_is_shown_with_a_caret(tmp_path: Path) -> None:
+    """Issue 9, item 6: the implementation's fault, file:line:col, no traceback."""
+    impl = tmp_path / "impl.py"
+    impl.write_text("import math\nPOSE = (1.0, 2.0\n")
+    out = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "run", *ARGS, "--impl", str(impl)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode == 1
+    assert "Traceback" not in out.stderr
+    lines = out.stderr.splitlines()
+    assert lines[0].startswith(f"{impl}:2:8: error: the implementations in {impl} do not compile")
+    assert lines[1:3] == ["    2 | POSE = (1.0, 2.0", "      |        ^"]

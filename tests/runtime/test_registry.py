@@ -1,4 +1,5 @@
-"""Declaring and finding actual functions (5.2.1)."""
+"""Declaring and finding actual functions (5.2.1); implementation files that
+fail to import are reported as their own fault, never with a traceback."""
 
 from __future__ import annotations
 
@@ -7,8 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from cfgplan.diagnostics import CfgplanError
-from cfgplan.runtime import Registry, functionality
+from cfgplan.runtime import Registry, RunError, functionality
 from tests.backends.support import EXAMPLE_IMPL
 
 MODULE = """
@@ -36,15 +36,12 @@ def test_the_decorator_declares_and_the_function_still_runs() -> None:
 
 def test_a_missing_implementation_is_a_clear_error() -> None:
     registry = Registry.load(EXAMPLE_IMPL)
-    with pytest.raises(CfgplanError) as caught:
+    with pytest.raises(RunError) as caught:
         registry.lookup("laser")
     message = str(caught.value)
     assert "no implementation of functionality laser" in message
     assert "camera" in message  # what there is instead
-    assert (
-        caught.value.diagnostics[0].hint
-        == 'declare one with @functionality("laser") from cfgplan.runtime'
-    )
+    assert caught.value.hint == 'declare one with @functionality("laser") from cfgplan.runtime'
 
 
 def test_load_by_path_and_by_module_name(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -58,24 +55,70 @@ def test_load_by_path_and_by_module_name(tmp_path: Path, monkeypatch: pytest.Mon
 
 
 def test_loading_what_is_not_there() -> None:
-    with pytest.raises(CfgplanError, match="no such Python file"):
+    with pytest.raises(RunError, match="no such Python file"):
         Registry.load("no/such/impl.py")
-    with pytest.raises(CfgplanError, match="cannot import"):
+    with pytest.raises(RunError, match="cannot import"):
         Registry.load("no_such_module_for_cfgplan")
 
 
 def test_one_name_implemented_twice_is_an_error() -> None:
     a = functionality("camera")(lambda: 1)
     b = functionality("camera")(lambda: 2)
-    with pytest.raises(CfgplanError, match="implemented twice"):
+    with pytest.raises(RunError, match="implemented twice"):
         Registry([a, b])
 
 
 def test_require_names_every_missing_implementation() -> None:
     registry = Registry([functionality("camera")(lambda: 1)], source="impl.py")
     registry.require(["camera", "camera"])
-    with pytest.raises(CfgplanError) as caught:
+    with pytest.raises(RunError) as caught:
         registry.require(["laser", "camera", "sonar", "laser"])
     assert str(caught.value) == (
         "no implementation of functionalities laser, sonar in impl.py (implemented: camera)"
     )
+
+
+# Issue 9, item 6: these used to escape registry.py as tracebacks.
+
+
+def test_a_syntax_error_names_file_line_and_column(tmp_path: Path) -> None:
+    impl = tmp_path / "broken_syntax.py"
+    impl.write_text("from cfgplan.runtime import functionality\n\ndef camera(:\n    pass\n")
+    with pytest.raises(RunError) as caught:
+        Registry.load(impl)
+    err = caught.value
+    assert err.message.startswith(f"the implementations in {impl} do not compile: ")
+    assert (err.file, err.line, err.column) == (str(impl), 3, 12)
+    rendered = err.render().splitlines()
+    assert rendered[0].startswith(f"{impl}:3:12: error: ")
+    assert rendered[1:] == ["    3 | def camera(:", "      |            ^"]
+
+
+def test_an_exception_at_import_names_the_file_and_line(tmp_path: Path) -> None:
+    impl = tmp_path / "raises_at_import.py"
+    impl.write_text("import math\n\nCALIBRATION = 1 / 0\n")
+    with pytest.raises(RunError) as caught:
+        Registry.load(impl)
+    err = caught.value
+    assert err.message == (
+        f"importing the implementations {impl} raised ZeroDivisionError: division by zero"
+    )
+    assert (err.file, err.line) == (str(impl), 3)
+
+
+def test_sys_exit_at_import_is_reported(tmp_path: Path) -> None:
+    impl = tmp_path / "exits_at_import.py"
+    impl.write_text("import sys\nsys.exit('no robot here')\n")
+    with pytest.raises(RunError, match=r"called sys.exit\('no robot here'\)") as caught:
+        Registry.load(impl)
+    assert caught.value.line == 2
+
+
+def test_an_exception_in_an_imported_module_by_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (tmp_path / "impl_raising_by_name.py").write_text("raise RuntimeError('no camera attached')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(RunError, match="raised RuntimeError: no camera attached"):
+        Registry.load("impl_raising_by_name")
+    sys.modules.pop("impl_raising_by_name", None)

@@ -11,13 +11,15 @@ The individual configuration (5.4):
     )
 
 configure() creates Pippi's channels (the LET of 5.3) and returns the cycle
-(the LAMBDA): one call to each functionality, in sorted order (5.1). Run:
+(the LAMBDA): one call to each functionality, in sorted order (5.1). Run this
+robot in a process of its own, its global channels over Zenoh (5.2.2):
 
-    python pippi.py --impl IMPL [--cycles N] [--rate HZ] [--trace]
+    python pippi.py --impl IMPL [--listen ENDPOINT] [--connect ENDPOINT]
+        [--society NAME] [--rate HZ] [--cycles N] [--duration S] [--trace FILE]
 
 IMPL is a module name or a .py file declaring the implementations with
-@functionality (cfgplan.runtime). Alone, this robot's global channels reach
-no other robot; run_all.py runs every robot of the configuration in one process.
+@functionality (cfgplan.runtime); --help lists every option. run_all.py runs
+every robot of the configuration in one process.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ Each robot's module (pippi.py, emil.py) creates its channels and its cycle;
 here their global channels are joined by an in-process transport and the
 robots run one cycle each in turn. Run:
 
-    python run_all.py --impl IMPL [--cycles N] [--rate HZ] [--trace]
+    python run_all.py --impl IMPL [--rate HZ] [--cycles N] [--duration S] [--trace FILE]
 """
 
 from __future__ import annotations

@@ -1,0 +1,79 @@
+"""Where a society's data lives on the network: the Zenoh key expressions (5.2.2).
+
+One robot program per robot; robots of one *society* share a prefix, so two
+societies on one network stay apart::
+
+    cfgplan/<society>/<robot>/alive                              the robot is running
+    cfgplan/<society>/<robot>/ch/<source>/<target>/<data ...>    a global channel into <robot>
+
+``<robot>`` is the robot that *receives*; ``<source>`` and ``<target>`` are the
+channel's functionality labels and ``<data ...>`` its data descriptor, one
+chunk per element, e.g. the channel from Emil's F7 to Pippi's F3 carrying
+``(pos Pippi Door1)`` in society ``lab`` is
+``cfgplan/lab/Pippi/ch/F7/F3/pos/Pippi/Door1``. Each chunk is
+percent-encoded: letters, digits and ``_ . - + = , : ~`` stay as they are,
+any other character becomes ``%XX`` per UTF-8 byte (so ``/``, ``*``, ``$``,
+``#``, ``?``, ``@`` and ``%`` never reach Zenoh raw). A chunk is never empty.
+"""
+
+from __future__ import annotations
+
+import re
+
+from cfgplan.runtime.transport import ChannelKey
+
+__all__ = [
+    "PREFIX",
+    "alive_key",
+    "alive_pattern",
+    "channel_key",
+    "chunk",
+    "robot_of_alive",
+    "unchunk",
+]
+
+PREFIX = "cfgplan"
+_SAFE = re.compile(r"[A-Za-z0-9_.\-+=,:~]")
+_ESCAPED = re.compile(r"(?:%[0-9A-F]{2})+")
+
+
+def chunk(text: str) -> str:
+    """One key chunk for ``text``: percent-encoded, never empty."""
+    if not text:
+        return "%"  # not a valid escape, so it cannot be confused with a name
+    return "".join(
+        c if _SAFE.fullmatch(c) else "".join(f"%{b:02X}" for b in c.encode()) for c in text
+    )
+
+
+def unchunk(part: str) -> str:
+    """The text a chunk stands for (the inverse of :func:`chunk`)."""
+    if part == "%":
+        return ""
+    return _ESCAPED.sub(lambda m: bytes.fromhex(m.group(0).replace("%", "")).decode(), part)
+
+
+def channel_key(society: str, robot: str, key: ChannelKey) -> str:
+    """Where the data of channel ``key`` into ``robot`` is published."""
+    parts = [PREFIX, society, robot, "ch", key.source, key.target, *key.data]
+    return "/".join(p if i == 0 or i == 3 else chunk(p) for i, p in enumerate(parts))
+
+
+def alive_key(society: str, robot: str) -> str:
+    """The liveliness token a running robot program declares."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/alive"
+
+
+def alive_pattern(society: str) -> str:
+    """Every robot of ``society`` (for a liveliness subscriber)."""
+    return f"{PREFIX}/{chunk(society)}/*/alive"
+
+
+def robot_of_alive(key: str, society: str) -> str | None:
+    """The robot a liveliness key of ``society`` names, or ``None``."""
+    parts = key.split("/")
+    if len(parts) != 4 or parts[0] != PREFIX or parts[1] != chunk(society):
+        return None
+    if parts[3] != "alive":
+        return None
+    return unchunk(parts[2])

@@ -1,0 +1,196 @@
+"""Which values may travel on a global channel, and how (5.2.2: data copied to the other robot).
+
+The value rule: a value written on a global channel must be JSON —
+``None``, ``bool``, ``int``, ``float``, ``str``, a ``list`` or ``tuple`` of
+values, or a ``dict`` with ``str`` keys and values — at most
+:data:`MAX_DEPTH` levels deep and without referring to itself. Subclasses
+count as their base type (``numpy.float64`` is a ``float``). It arrives as
+JSON reads back: a tuple as a list, a subclass as its base type. ``NaN`` and
+``±Infinity`` are allowed and written as Python's :mod:`json` writes them.
+The rule holds for every transport, in-process too, so that what runs in one
+process runs the same across processes.
+
+A message on the wire is one JSON object, the *envelope*::
+
+    {"from": "Emil", "seq": 17, "t": 1712345678.25, "period": 0.1, "value": ...}
+
+``seq`` counts the channel's writes (gaps are messages the one slot or the
+network lost), ``t`` is the sender's clock (seconds since the epoch) and
+``period`` the sender's period in seconds (``null``: none), from which the
+receiver judges staleness (3.2).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import NamedTuple
+
+from cfgplan.runtime.errors import RunError, printable
+
+__all__ = [
+    "MAX_DEPTH",
+    "Envelope",
+    "ValueRuleError",
+    "check",
+    "encode",
+    "envelope",
+    "jsonable",
+    "open_envelope",
+    "safe_repr",
+]
+
+MAX_DEPTH = 64
+RULE = "JSON: None, bool, int, float, str, list, tuple, dict with str keys"
+_SCALARS = frozenset({type(None), bool, int, float, str})
+
+
+class ValueRuleError(RunError):
+    """A value that cannot travel on a global channel."""
+
+    def __init__(self, message: str, type_name: str) -> None:
+        super().__init__(message, hint=f"a global channel carries {RULE}")
+        self.type_name = type_name
+
+
+def type_name(value: object) -> str:
+    kind = type(value)
+    module = kind.__module__
+    return kind.__qualname__ if module == "builtins" else f"{module}.{kind.__qualname__}"
+
+
+def check(value: object) -> None:
+    """Raise :class:`ValueRuleError` (naming the type and where it sits) unless
+    ``value`` follows the value rule. Iterative: deep values cannot overflow."""
+    stack: list[tuple[object, str, int]] = [(value, "", 0)]
+    open_ids: set[int] = set()
+    while stack:
+        item, path, depth = stack.pop()
+        if depth < 0:  # leaving a container
+            open_ids.discard(-depth - 1)
+            continue
+        if item is None or isinstance(item, bool | int | float | str):
+            continue
+        where = f" at value{path}" if path else ""
+        if not isinstance(item, list | tuple | dict):
+            hint = _conversion(item)
+            raise ValueRuleError(
+                f"a value of type {type_name(item)}{where} cannot travel as JSON{hint}",
+                type_name(item),
+            )
+        if id(item) in open_ids:
+            raise ValueRuleError(f"the value refers to itself{where}", type_name(item))
+        if depth >= MAX_DEPTH:
+            raise ValueRuleError(
+                f"the value is nested deeper than {MAX_DEPTH} levels{where}", type_name(item)
+            )
+        open_ids.add(id(item))
+        stack.append((None, "", -id(item) - 1))
+        if isinstance(item, dict):
+            for key, sub in item.items():
+                if not isinstance(key, str):
+                    raise ValueRuleError(
+                        f"a dict key of type {type_name(key)}{where} cannot travel as JSON "
+                        "(keys must be str)",
+                        type_name(key),
+                    )
+                if type(sub) not in _SCALARS:
+                    stack.append((sub, f"{path}[{key!r}]", depth + 1))
+        else:
+            for k, sub in enumerate(item):
+                if type(sub) not in _SCALARS:  # the common case costs one look-up
+                    stack.append((sub, f"{path}[{k}]", depth + 1))
+
+
+def _conversion(item: object) -> str:
+    for method in ("tolist", "item"):
+        if callable(getattr(item, method, None)):
+            return f" (convert it with .{method}())"
+    return ""
+
+
+def encode(value: object) -> str:
+    """The JSON text of ``value``; :class:`ValueRuleError` when it cannot travel."""
+    check(value)
+    return json.dumps(value, separators=(",", ":"))
+
+
+def envelope(sender: str, seq: int, t: float, period: float | None, encoded: str) -> bytes:
+    """The message of one write on a global channel (``encoded``: the value's JSON)."""
+    head = json.dumps({"from": sender, "seq": seq, "t": t, "period": period})
+    return (head[:-1] + ', "value": ' + encoded + "}").encode()
+
+
+class Envelope(NamedTuple):
+    sender: str
+    seq: int
+    t: float
+    period: float | None
+    value: object
+
+
+def open_envelope(payload: bytes) -> Envelope:
+    """Read a message; :class:`RunError` when it is not a cfgplan envelope."""
+    try:
+        data = json.loads(payload)
+    except (ValueError, RecursionError) as exc:
+        raise RunError(f"a message that is not JSON ({exc})") from None
+    if not isinstance(data, dict) or "value" not in data:
+        raise RunError("a message that is not a cfgplan envelope (no value)")
+    sender, seq, t, period = (data.get(k) for k in ("from", "seq", "t", "period"))
+    if not isinstance(sender, str) or not isinstance(seq, int) or isinstance(seq, bool):
+        raise RunError("a message whose envelope lacks its sender or sequence number")
+    if not isinstance(t, int | float) or isinstance(t, bool):
+        raise RunError("a message whose envelope lacks its time")
+    if period is not None and (
+        not isinstance(period, int | float) or isinstance(period, bool) or not period > 0
+    ):
+        raise RunError(f"a message whose period is not a positive number: {period!r}")
+    return Envelope(sender, seq, float(t), None if period is None else float(period), data["value"])
+
+
+def safe_repr(value: object, limit: int = 200) -> tuple[str, str | None]:
+    """``repr(value)`` cut to ``limit`` characters with control characters
+    escaped, and ``None``; or a placeholder and what went wrong when its
+    ``__repr__`` raises (or recurses without end)."""
+    try:
+        text = repr(value)
+    except Exception as exc:  # an implementation's __repr__: anything may happen
+        problem = f"its __repr__ raised {type(exc).__name__}: {_message(exc)}"
+        return f"<{type(value).__name__} object; {problem}>", problem
+    text = printable(text)
+    return (text if len(text) <= limit else text[: limit - 1] + "…"), None
+
+
+def _message(exc: BaseException) -> str:
+    try:
+        text = str(exc)
+    except Exception:
+        return "(unprintable)"
+    return printable(text[:120])
+
+
+def jsonable(value: object) -> object:
+    """``value`` as a trace writes it: JSON as it is (tuples as lists), and in
+    place of anything else — or of what nests deeper than :data:`MAX_DEPTH`
+    or contains itself — ``{"$type": ..., "$repr": ...}``."""
+    return _jsonable(value, set(), 0)
+
+
+def _jsonable(value: object, open_ids: set[int], depth: int) -> object:
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    if isinstance(value, list | tuple | dict) and depth < MAX_DEPTH and id(value) not in open_ids:
+        open_ids.add(id(value))
+        try:
+            if isinstance(value, dict):
+                if all(isinstance(k, str) for k in value):
+                    return {k: _jsonable(v, open_ids, depth + 1) for k, v in value.items()}
+            else:
+                return [_jsonable(v, open_ids, depth + 1) for v in value]
+        finally:
+            open_ids.discard(id(value))
+    if isinstance(value, list | tuple | dict):
+        text = "..." if id(value) in open_ids or depth >= MAX_DEPTH else safe_repr(value)[0]
+    else:
+        text = safe_repr(value)[0]
+    return {"$type": type_name(value), "$repr": text}

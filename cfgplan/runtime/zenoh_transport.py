@@ -1,0 +1,235 @@
+"""Global channels over Eclipse Zenoh: each robot its own process, on one host or many (5.2.2).
+
+The thesis copies a global channel's data "through a socket connection"; here
+each robot program opens one Zenoh session in *peer* mode (no router) and:
+
+* declares itself with a liveliness token, ``cfgplan/<society>/<robot>/alive``;
+* subscribes to each global channel into it, on the key of
+  :mod:`cfgplan.runtime.keys`, keeping only the newest message per channel
+  (the channel of 5.2.2 holds one item) until the robot's loop polls;
+* publishes each write on a global channel out of it to the key of the robot
+  at the other end (``express``: sent at once, not batched);
+* watches the liveliness tokens of the robots it exchanges data with, and
+  reports each one that appears or is lost. A robot whose process dies is
+  lost as soon as its connection closes; one that freezes (a stopped process,
+  a hung machine, a cut cable) when the *lease* runs out without a word from
+  it: :data:`DEFAULT_LEASE` seconds unless set.
+
+Addressing (:class:`ZenohOptions`): ``--listen`` and ``--connect`` endpoints
+(``tcp/192.168.1.7:7447``); without them, robots find each other by
+multicast scouting on the local network, with them multicast scouting is off.
+``--society`` keeps societies on one network apart. A Zenoh configuration
+file (JSON5, Zenoh's own format) sets anything else; options given on the
+command line are applied on top of it.
+
+:mod:`zenoh` is imported only when a :class:`ZenohTransport` is made, so
+``import cfgplan.runtime`` stays light.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import re
+import threading
+from collections.abc import Collection
+from dataclasses import dataclass
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.keys import alive_key, alive_pattern, channel_key, robot_of_alive
+from cfgplan.runtime.transport import ChannelKey, Presence, Receiver
+
+if TYPE_CHECKING:
+    import zenoh
+
+__all__ = [
+    "DEFAULT_LEASE",
+    "DEFAULT_SOCIETY",
+    "ZenohOptions",
+    "ZenohTransport",
+    "endpoint_problem",
+    "zenoh_config",
+]
+
+DEFAULT_LEASE = 1.0
+"""Seconds without a word after which a frozen robot is reported lost (Zenoh's lease)."""
+
+DEFAULT_SOCIETY = "default"
+RETRY = '{"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2}'
+"""Connecting to a robot that is not up yet is retried every second at most."""
+
+ENDPOINT = re.compile(r"^[A-Za-z0-9+.-]+/\S+$")
+ENDPOINT_HINT = "e.g. tcp/127.0.0.1:7447, tcp/[::1]:7447 or tcp/robot-1.local:7447"
+
+
+def endpoint_problem(text: str) -> str | None:
+    """What is wrong with an endpoint's form (``None``: nothing Zenoh would not check)."""
+    if ENDPOINT.match(text):
+        return None
+    return f"{text!r}: an endpoint is PROTOCOL/ADDRESS ({ENDPOINT_HINT})"
+
+
+@dataclass(frozen=True)
+class ZenohOptions:
+    """How a robot program reaches the others."""
+
+    society: str = DEFAULT_SOCIETY
+    listen: tuple[str, ...] = ()
+    connect: tuple[str, ...] = ()
+    config_file: str | None = None
+    lease: float | None = None  # seconds; None: DEFAULT_LEASE, or the file's
+
+    def __post_init__(self) -> None:
+        if not self.society:
+            raise RunError("the society name is empty")
+        for option, endpoints in (("--listen", self.listen), ("--connect", self.connect)):
+            for endpoint in endpoints:
+                problem = endpoint_problem(endpoint)
+                if problem:
+                    raise RunError(f"{option} {problem}", hint=ENDPOINT_HINT)
+        if self.lease is not None and not self.lease > 0:
+            raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")
+
+
+def _zenoh() -> ModuleType:
+    try:
+        import zenoh
+    except ImportError:
+        raise RunError(
+            "the Zenoh transport needs the eclipse-zenoh package, which is not installed",
+            hint="pip install eclipse-zenoh",
+        ) from None
+    return zenoh
+
+
+def _reason(exc: BaseException) -> str:
+    """Zenoh's message without the Rust source location it appends."""
+    text = str(exc)
+    inner = re.search(r'msg: "(.*?)"', text)
+    if inner:
+        text = inner.group(1)
+    return re.sub(r" at \S+\.rs:\d+\.?", "", text).strip()
+
+
+def zenoh_config(options: ZenohOptions) -> zenoh.Config:
+    """The session configuration of a robot program."""
+    z = _zenoh()
+    config: zenoh.Config
+    if options.config_file is not None:
+        try:
+            config = z.Config.from_file(options.config_file)
+        except z.ZError as exc:
+            raise RunError(
+                f"cannot read the Zenoh configuration {options.config_file}: {_reason(exc)}"
+            ) from None
+    else:
+        config = z.Config()
+        _set(config, "mode", '"peer"', "peer mode")
+        _set(config, "connect/retry", RETRY, "the connection retry")
+    if options.listen:
+        _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
+    if options.connect:
+        _set(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
+    if options.listen or options.connect:
+        _set(config, "scouting/multicast/enabled", "false", "scouting")
+    lease = options.lease if options.lease is not None or options.config_file else DEFAULT_LEASE
+    if lease is not None:
+        _set(config, "transport/link/tx/lease", str(max(1, round(lease * 1000))), "--lease")
+    return config
+
+
+def _set(config: Any, key: str, value: str, option: str) -> None:
+    try:
+        config.insert_json5(key, value)
+    except Exception as exc:  # zenoh.ZError; zenoh is imported lazily
+        raise RunError(f"{option}: Zenoh refuses {value}: {_reason(exc)}") from None
+
+
+class ZenohTransport:
+    """One robot program's connection to its society (a Zenoh peer session)."""
+
+    def __init__(self, robot: str, options: ZenohOptions | None = None) -> None:
+        self.robot = robot
+        self.options = options or ZenohOptions()
+        self.society = self.options.society
+        z = self._z = _zenoh()
+        config = zenoh_config(self.options)
+        try:
+            self._session = z.open(config)
+        except z.ZError as exc:
+            raise RunError(f"cannot open the Zenoh session: {_reason(exc)}") from None
+        self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
+        self._subscribers: list[Any] = []
+        self._receivers: dict[str, Receiver] = {}
+        self._newest: dict[str, bytes] = {}  # per key, what arrived since the last poll
+        self._lock = threading.Lock()
+        self._arrived = threading.Event()
+        self._publishers: dict[str, Any] = {}
+        self._arrivals: queue.SimpleQueue[tuple[str, bool]] = queue.SimpleQueue()
+        self._watch: tuple[frozenset[str], Presence] | None = None
+        self._watcher: Any = None
+        self.sent = 0
+
+    def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
+        if robot != self.robot:
+            raise RunError(f"this Zenoh session carries {self.robot}'s channels, not {robot}'s")
+        where = channel_key(self.society, robot, key)
+        self._receivers[where] = receiver
+        self._subscribers.append(self._session.declare_subscriber(where, self._on_sample))
+
+    def _on_sample(self, sample: Any) -> None:
+        """On a Zenoh thread: keep the newest message of its channel for :meth:`poll`."""
+        payload = sample.payload.to_bytes()
+        with self._lock:
+            self._newest[str(sample.key_expr)] = payload
+        self._arrived.set()
+
+    def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
+        where = channel_key(self.society, robot, key)
+        publisher = self._publishers.get(where)
+        if publisher is None:
+            publisher = self._session.declare_publisher(where, express=True)
+            self._publishers[where] = publisher
+        publisher.put(payload)
+        self.sent += 1
+
+    def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
+        if not partners:
+            return
+        self._watch = (frozenset(partners), report)
+        self._watcher = self._session.liveliness().declare_subscriber(
+            alive_pattern(self.society), self._on_token, history=True
+        )
+
+    def _on_token(self, sample: Any) -> None:
+        """On a Zenoh thread: queue the change for :meth:`poll`."""
+        name = robot_of_alive(str(sample.key_expr), self.society)
+        if self._watch is not None and name in self._watch[0]:
+            self._arrivals.put((name, sample.kind == self._z.SampleKind.PUT))
+
+    def wait(self, timeout: float) -> bool:
+        """Block until a message has arrived (then :meth:`poll` hands it over),
+        at most ``timeout`` seconds; whether one did."""
+        return self._arrived.wait(timeout)
+
+    def poll(self) -> None:
+        with self._lock:
+            newest, self._newest = self._newest, {}
+            self._arrived.clear()
+        for where, payload in newest.items():
+            self._receivers[where](payload)
+        while self._watch is not None:
+            try:
+                name, alive = self._arrivals.get_nowait()
+            except queue.Empty:
+                break
+            self._watch[1](name, alive)
+
+    def close(self) -> None:
+        """Leave: the token goes, so the others see this robot lost at once."""
+        if self._session.is_closed():
+            return
+        self._token.undeclare()
+        self._session.close()

@@ -1,0 +1,48 @@
+"""Where a society's data lives on Zenoh: the documented key layout."""
+
+from __future__ import annotations
+
+import pytest
+
+from cfgplan.runtime import ChannelKey
+from cfgplan.runtime.keys import (
+    alive_key,
+    alive_pattern,
+    channel_key,
+    chunk,
+    robot_of_alive,
+    unchunk,
+)
+
+
+def test_the_key_of_a_global_channel_reads_society_robot_channel() -> None:
+    key = ChannelKey("F7", "F3", ("pos", "Pippi", "Door1"))
+    assert channel_key("lab", "Pippi", key) == "cfgplan/lab/Pippi/ch/F7/F3/pos/Pippi/Door1"
+    assert alive_key("lab", "Emil") == "cfgplan/lab/Emil/alive"
+    assert alive_pattern("lab") == "cfgplan/lab/*/alive"
+
+
+@pytest.mark.parametrize(
+    ("name", "chunked"),
+    [
+        ("cross-door", "cross-door"),
+        ("a/b", "a%2Fb"),
+        ("*", "%2A"),
+        ("$*", "%24%2A"),
+        ("#?", "%23%3F"),
+        ("@ros", "%40ros"),
+        ("100%", "100%25"),
+        ("Émil", "%C3%89mil"),
+        ("two words", "two%20words"),
+        ("", "%"),
+    ],
+)
+def test_chunks_never_carry_zenoh_syntax_and_come_back(name: str, chunked: str) -> None:
+    assert chunk(name) == chunked
+    assert unchunk(chunked) == name
+
+
+def test_a_robot_is_read_back_from_its_token_only_in_its_society() -> None:
+    assert robot_of_alive(alive_key("lab", "Ro/bot*"), "lab") == "Ro/bot*"
+    assert robot_of_alive(alive_key("lab", "Emil"), "other") is None
+    assert robot_of_alive("cfgplan/lab/Emil/ch/F1", "lab") is None

@@ -1,0 +1,219 @@
+"""The emitted programs' command line: options, faults of implementations, clean
+stops (Ctrl-C, SIGTERM) with the summary, and where --trace may write."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+import cfgplan.cli.emit  # noqa: F401  (registers the command)
+from cfgplan.cli.app import app
+from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT
+from tests.runtime.netutil import first, processes, read_trace, wait_for
+
+FAULTY = f"""
+import sys, threading
+from cfgplan.runtime import Implementation, functionality, load_module
+
+example = load_module(__import__("pathlib").Path({str(EXAMPLE_IMPL)!r}))
+globals().update(
+    {{k: v for k, v in vars(example).items()
+      if isinstance(v, Implementation) and v.name not in ("camera", "compass")}}
+)
+calls = []
+
+@functionality("camera")
+def camera():
+    calls.append(1)
+    if len(calls) == 2:
+        sys.exit(4)
+    if len(calls) == 3:
+        threading.Event().wait(60)  # blocks: over the time budget
+    return example.camera.function()
+
+@functionality("compass")
+def compass():
+    return example.compass.function()
+"""
+
+
+@pytest.fixture(scope="module")
+def emitted(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("emitted")
+    args = ["emit", *(str(DOMAINS / f) for f in CROSS), "--lang", "python", "-o", str(out)]
+    assert CliRunner().invoke(app, args).exit_code == 0
+    return out
+
+
+def _run(script: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, str(script), *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--rate", "-1"],
+        ["--cycles", "two"],
+        ["--duration", "0"],
+        ["--budget", "nan"],
+        ["--transport", "carrier-pigeon"],
+        ["--listen", "7447"],
+        ["--lease", "0"],
+    ],
+)
+def test_bad_options_are_usage_errors(emitted: Path, args: list[str]) -> None:
+    out = _run(emitted / "emil.py", "--impl", str(EXAMPLE_IMPL), *args)
+    assert out.returncode == 2
+    assert "Traceback" not in out.stderr and "error: argument" in out.stderr
+
+
+def test_faulty_implementations_are_reported_and_the_society_goes_on(
+    emitted: Path, tmp_path: Path
+) -> None:
+    """Emil's camera calls sys.exit on its second call and blocks on its third:
+    both reported, naming the functionality; the compasses and the other
+    functionalities keep running; exit status 1; no traceback."""
+    impl = tmp_path / "faulty.py"
+    impl.write_text(FAULTY)
+    trace = tmp_path / "trace.jsonl"
+    out = _run(
+        emitted / "run_all.py",
+        "--impl",
+        str(impl),
+        "--rate",
+        "0",
+        "--cycles",
+        "6",
+        "--budget",
+        "0.3",
+        "--trace",
+        str(trace),
+    )
+    assert out.returncode == 1, out.stderr
+    assert "Traceback" not in out.stderr + out.stdout
+    err = out.stderr.splitlines()
+    exited = "failed: the implementation called sys.exit(4)"
+    assert f"cfgplan: cycle 2: Emil F8 camera(Emil) {exited} [{impl}]" in err
+    assert any(
+        line.startswith(
+            "cfgplan: cycle 3: Emil F8 camera(Emil) failed: the call took longer "
+            "than its time budget of 0.3 s"
+        )
+        for line in err
+    )
+    lines = out.stdout.splitlines()
+    assert "Pippi F10 compass(Pippi): ran in 6 of 6 cycles" in lines
+    assert (
+        "Emil F8 camera(Emil): ran in 1 of 6 cycles; timed out 1 time; failed 1 time, last: "
+        "the implementation called sys.exit(4)"
+    ) in lines
+    statuses = [r["status"] for r in read_trace(trace) if r.get("functionality") == "camera"]
+    assert statuses == ["ran", "error", "timeout", "busy", "busy", "busy"]
+
+
+def test_sigterm_and_ctrl_c_stop_cleanly_with_the_summary(emitted: Path, tmp_path: Path) -> None:
+    for sig, reason in ((signal.SIGTERM, "terminated"), (signal.SIGINT, "interrupted")):
+        trace = tmp_path / f"{reason}.jsonl"
+        log = tmp_path / f"{reason}.log"
+        with processes() as running:
+            society = running.start(
+                [
+                    str(emitted / "run_all.py"),
+                    "--impl",
+                    str(EXAMPLE_IMPL),
+                    "--rate",
+                    "50",
+                    "--trace",
+                    str(trace),
+                ],
+                log,
+            )
+            wait_for("a few cycles", first(trace, lambda r: int(r["cycle"]) >= 5), 60.0)
+            os.kill(society.pid, sig)
+            assert society.wait(timeout=30) == 0
+        text = log.read_text()
+        assert "Traceback" not in text
+        assert "Pippi F3 cross-door(Pippi, Door1): ran in " in text
+        stops = [r for r in read_trace(trace) if r["event"] == "stop"]
+        assert [(r["robot"], r["reason"]) for r in stops] == [
+            ("Pippi", reason),
+            ("Emil", reason),
+        ]
+
+
+def test_the_trace_is_not_overwritten_without_force(emitted: Path, tmp_path: Path) -> None:
+    trace = tmp_path / "trace.jsonl"
+    trace.write_text("kept\n")
+    args = ["--impl", str(EXAMPLE_IMPL), "--rate", "0", "--cycles", "1", "--trace", str(trace)]
+    out = _run(emitted / "run_all.py", *args)
+    assert out.returncode == 1
+    assert out.stderr == f"error: trace file {trace} exists; pass --force to overwrite it\n"
+    assert trace.read_text() == "kept\n"
+    forced = _run(emitted / "run_all.py", *args, "--force")
+    assert forced.returncode == 0
+    assert json.loads(trace.read_text().splitlines()[0])["event"] == "start"
+
+
+def test_a_robot_alone_over_zenoh_waits_and_stops_after_its_duration(
+    emitted: Path, tmp_path: Path
+) -> None:
+    """python emil.py with nobody to talk to: it runs, waits for Pippi's
+    compass, and stops after --duration with its summary."""
+    from tests.runtime.netutil import endpoint, free_port, hermetic_config
+
+    out = _run(
+        emitted / "emil.py",
+        "--impl",
+        str(EXAMPLE_IMPL),
+        "--duration",
+        "0.5",
+        "--listen",
+        endpoint(free_port()),
+        "--zenoh-config",
+        str(hermetic_config(tmp_path)),
+    )
+    assert out.returncode == 0, out.stderr
+    assert "Emil F12 measure-robot-orient-compass(Emil, Pippi): ran in 0 of " in out.stdout
+    assert "waits for global-orient(Pippi)" in out.stdout
+
+
+def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None:
+    """stdout to a full disk, or to a pipe closed early: no traceback."""
+    args = [str(emitted / "run_all.py"), "--impl", str(EXAMPLE_IMPL), "--rate", "0"]
+    if Path("/dev/full").exists():
+        with open("/dev/full", "w") as full:
+            out = subprocess.run(
+                [sys.executable, *args, "--cycles", "5"],
+                cwd=ROOT,
+                stdout=full,
+                stderr=subprocess.PIPE,
+                text=True,
+                timeout=60,
+            )
+        assert out.returncode == 1
+        assert out.stderr == (
+            "cfgplan: error: cannot write to standard output: No space left on device\n"
+        )
+    piped = subprocess.run(
+        f"{sys.executable} {' '.join(args)} --cycles 1000 | head -n 1",
+        shell=True,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert piped.stdout.startswith("cycle 2: Pippi F3 cross-door(Pippi, Door1) received ")
+    assert "Traceback" not in piped.stderr and "Exception ignored" not in piped.stderr

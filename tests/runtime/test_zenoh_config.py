@@ -1,0 +1,72 @@
+"""How a robot program's options become its Zenoh session configuration (no network)."""
+
+from __future__ import annotations
+
+import json
+import socket
+from pathlib import Path
+
+import pytest
+
+from cfgplan.runtime import RunError
+from cfgplan.runtime.zenoh_transport import ZenohOptions, ZenohTransport, zenoh_config
+from tests.runtime.netutil import endpoint, hermetic_config
+
+
+def _get(options: ZenohOptions, key: str) -> object:
+    return json.loads(zenoh_config(options).get_json(key))  # type: ignore[no-any-return]
+
+
+def test_peer_mode_multicast_on_a_lan_and_a_lease_of_one_second() -> None:
+    options = ZenohOptions()
+    assert _get(options, "mode") == "peer"
+    assert _get(options, "scouting/multicast/enabled") is None  # Zenoh's default: on
+    assert _get(options, "transport/link/tx/lease") == 1000
+    assert _get(options, "connect/retry")["period_max_ms"] == 1000  # type: ignore[index]
+
+
+def test_endpoints_turn_multicast_scouting_off() -> None:
+    options = ZenohOptions(listen=("tcp/127.0.0.1:7447",), connect=("tcp/10.0.0.2:7447",))
+    assert _get(options, "listen/endpoints") == ["tcp/127.0.0.1:7447"]
+    assert _get(options, "connect/endpoints") == ["tcp/10.0.0.2:7447"]
+    assert _get(options, "scouting/multicast/enabled") is False
+    assert _get(ZenohOptions(connect=("udp/[::1]:7000",)), "scouting/multicast/enabled") is False
+    assert _get(ZenohOptions(lease=0.25), "transport/link/tx/lease") == 250
+
+
+def test_a_config_file_is_the_base_and_options_go_on_top(tmp_path: Path) -> None:
+    path = tmp_path / "zenoh.json5"
+    path.write_text('{ mode: "client", transport: { link: { tx: { lease: 3000 } } } }')
+    from_file = ZenohOptions(config_file=str(path))
+    assert _get(from_file, "mode") == "client"
+    assert _get(from_file, "transport/link/tx/lease") == 3000  # the file's, not ours
+    assert _get(ZenohOptions(config_file=str(path), lease=2), "transport/link/tx/lease") == 2000
+
+
+def test_what_is_refused_is_said_clearly(tmp_path: Path) -> None:
+    with pytest.raises(RunError, match="an endpoint is PROTOCOL/ADDRESS"):
+        ZenohOptions(listen=("7447",))
+    with pytest.raises(RunError, match="the lease must be a positive number"):
+        ZenohOptions(lease=0)
+    with pytest.raises(RunError, match="society name is empty"):
+        ZenohOptions(society="")
+    with pytest.raises(RunError, match=r"cannot read the Zenoh configuration .*No such file"):
+        zenoh_config(ZenohOptions(config_file=str(tmp_path / "none.json5")))
+    bad = tmp_path / "bad.json5"
+    bad.write_text("{ mode: ")
+    with pytest.raises(RunError, match="cannot read the Zenoh configuration") as caught:
+        zenoh_config(ZenohOptions(config_file=str(bad)))
+    assert ".rs:" not in str(caught.value)  # no Rust source locations
+
+
+def test_a_session_that_cannot_open_is_a_clear_error(tmp_path: Path) -> None:
+    hermetic = str(hermetic_config(tmp_path))
+    with pytest.raises(RunError, match="cannot open the Zenoh session: ") as caught:
+        ZenohTransport("Emil", ZenohOptions(listen=("tcp/127.0.0.1:x",), config_file=hermetic))
+    assert ".rs:" not in str(caught.value)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        busy = endpoint(taken.getsockname()[1])
+        with pytest.raises(RunError, match="cannot open the Zenoh session: "):
+            ZenohTransport("Emil", ZenohOptions(listen=(busy,), config_file=hermetic))
