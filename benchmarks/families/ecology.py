@@ -22,6 +22,8 @@ communication-inadmissible.
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 POSE = """\
 ;;; Ecology (benchmarks/families/ecology.py): a convoy of {n} robots, {r} rooms, {c} cameras.
 (make-functionality :name '(laser ?r) :precond '((laser ?r)) :out '((scan ?r)))
@@ -114,7 +116,7 @@ def _world(n: int, rooms: int, cameras: int, media: bool) -> list[str]:
     facts += [f"(laser {r})" for i, r in enumerate(robots) if i % 3 == 2]
     facts += [f"(camera {r})" for i, r in enumerate(robots) if i % 2 == 1]
     facts += [f"(in {a} {room[a]})" for a in [*robots, *cams]]
-    facts += [f"(next {a} {b})" for a, b in zip(robots, robots[1:], strict=False)]
+    facts += [f"(next {a} {b})" for a, b in pairwise(robots)]
     facts += [f"(last {robots[-1]})", f"(in Door1 {room['R1']})"]
     if media:  # every camera host to every member of its room
         hosts = cams + [r for i, r in enumerate(robots) if i % 2 == 1]

@@ -14,7 +14,7 @@ import pytest
 from cfgplan.backends.python import module_name, run_all, to_python
 from cfgplan.backends.wiring import RobotPart, deploy
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner.search import plan
+from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 from cfgplan.runtime import Registry, assemble, load_module
 from tests.backends.support import (
