@@ -128,12 +128,18 @@ def satisfying(conditions: Sequence[Condition], facts: Sequence[Ground], env: En
 
 class _Checker:
     def __init__(
-        self, config: Configuration, domain: Domain, state: State, weights: Weights | None
+        self,
+        config: Configuration,
+        domain: Domain,
+        state: State,
+        weights: Weights | None,
+        reliability: Mapping[Ground, float],
     ) -> None:
         self.config = config
         self.domain = domain
         self.state = state
         self.weights = weights
+        self.reliability = reliability
         self.found: list[str] = []
         self.facts = [_atom(a) for a in state.facts]
         # label -> instance (first one when a label repeats)
@@ -365,6 +371,28 @@ class _Checker:
 
     # cost ---------------------------------------------------------------------
 
+    def _reliability(self) -> float:
+        """The product of the functionalities' reliabilities and, for each
+        global channel between two robots, of the most reliable medium between
+        them (7.2; 1 where nothing is said)."""
+        product = 1.0
+        for f in self.config.functionalities:
+            schema = self.domain.functionality((f.name, len(f.args)))
+            p = self.reliability.get((f.name, *f.args))
+            if p is None:
+                p = schema.reliability if schema is not None and schema.reliability else 1.0
+            product *= p
+        best: dict[tuple[str, str], float] = {}
+        for m in self.state.media:
+            p = m.reliability if m.reliability is not None else 1.0
+            best[(m.sender, m.receiver)] = max(p, best.get((m.sender, m.receiver), 0.0))
+        for ch in self.config.channels:
+            sender = self._robot(ch.source, ch.source_robot)
+            receiver = self._robot(ch.target, ch.target_robot)
+            if ch.kind == "global" and sender != receiver:
+                product *= best.get((sender, receiver), 1.0)
+        return product
+
     def cost(self) -> None:
         w = self.weights if self.weights is not None else self.config.weights
         if self.weights is not None and self.config.weights != self.weights:
@@ -385,6 +413,15 @@ class _Checker:
             schema = self.domain.functionality((f.name, len(f.args)))
             own = schema.cost if schema is not None else None
             total += own if own is not None else w.functionality
+        product = self._reliability()
+        if not math.isclose(product, self.config.reliability, rel_tol=1e-9):
+            self.report(
+                "cost",
+                f"the configuration says reliability {self.config.reliability:g}, "
+                f"but its parts give {product:g}",
+            )
+        if w.reliability:
+            total += w.reliability * -math.log(product)
         if not math.isclose(total, self.config.cost, rel_tol=1e-9, abs_tol=1e-9):
             self.report(
                 "cost",
@@ -414,7 +451,11 @@ def _medium(m: Medium) -> str:
 
 
 def problems(
-    config: Configuration, domain: Domain, state: State, weights: Weights | None = None
+    config: Configuration,
+    domain: Domain,
+    state: State,
+    weights: Weights | None = None,
+    reliability: Mapping[Ground, float] | None = None,
 ) -> list[str]:
     """Why ``config`` is not admissible in ``state`` under ``domain`` (thesis 3.5);
     empty when it is.
@@ -423,6 +464,8 @@ def problems(
     ``causal``, ``channel``, ``location``, ``information``, ``duplicate``,
     ``cycle``, ``communication`` or ``cost``. The cost is recomputed with
     ``weights`` when given (and the configuration must record the same
-    weights), else with the configuration's own weights.
+    weights), else with the configuration's own weights; ``reliability``
+    replaces the reliability of some functionality instances, as the planner's
+    task may (:func:`cfgplan.planner.task.compile_task`).
     """
-    return _Checker(config, domain, state, weights).run()
+    return _Checker(config, domain, state, weights, reliability or {}).run()

@@ -3,7 +3,11 @@ functionalities``, with settable weights and per-functionality ``:cost``.
 
 Beyond the thesis, an agent the state declares ``(device X)`` (a ceiling
 camera, a door with a sensor) is weighted by ``device`` instead of ``robot``;
-both default to 10, so the thesis's numbers do not change."""
+both default to 10, so the thesis's numbers do not change. And reliability
+(7.2): a configuration's reliability is the product of its functionalities'
+``:reliability`` and of the media its global channels may use (the most
+reliable one between their robots); ``reliability=W`` adds ``W·(−ln
+reliability)`` to the cost (0 by default), that is ``W·(−ln p)`` for each part."""
 
 from __future__ import annotations
 
@@ -22,12 +26,14 @@ class Weights(BaseModel):
     local: float = 1
     functionality: float = 1
     device: float = 10
+    reliability: float = 0
 
     def __str__(self) -> str:
         return (
             f"robot={fmt(self.robot)},global={fmt(self.global_)},"
             f"local={fmt(self.local)},functionality={fmt(self.functionality)},"
             f"device={fmt(self.device)}"
+            + (f",reliability={fmt(self.reliability)}" if self.reliability else "")
         )
 
 
@@ -37,6 +43,7 @@ _NAMES = {
     "local": "local",
     "functionality": "functionality",
     "device": "device",
+    "reliability": "reliability",
 }
 
 
@@ -61,5 +68,7 @@ def parse_weights(text: str) -> Weights:
 
 
 def fmt(number: float) -> str:
-    """A number as the thesis prints it: 44, not 44.0."""
-    return str(int(number)) if float(number).is_integer() else repr(float(number))
+    """A number as the thesis prints it: 44, not 44.0 (at most 4 decimals:
+    a reliability term makes costs such as 44.1054)."""
+    rounded = round(float(number), 4)
+    return str(int(rounded)) if rounded.is_integer() else repr(rounded)

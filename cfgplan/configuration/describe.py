@@ -79,6 +79,7 @@ def to_dict(config: Configuration, rank: int) -> dict[str, Any]:
         "cost": _number(config.cost),
         "robots": config.robots,
         "devices": list(config.devices),
+        "reliability": config.reliability,
         "derivation": config.derivation,
         "proven": config.proven,
         "functionalities": [

@@ -73,6 +73,7 @@ class Configuration(BaseModel):
     derivation: int = 0  # which derivation (1-based, in thesis order) produced it
     proven: bool = True  # False: found by a dive after the search was stopped early
     devices: tuple[str, ...] = ()  # its agents the state declares (device X)
+    reliability: float = 1.0  # the product of its parts' reliabilities (7.2)
 
     @property
     def agents(self) -> list[str]:

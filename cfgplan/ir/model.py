@@ -132,6 +132,7 @@ class Functionality(Node):
     postcond: tuple[Effect, ...] = ()
     cost: Quantity | None = None
     freq: Quantity | None = None
+    reliability: Quantity | None = None  # the chance it works, in (0, 1] (7.2; beyond the thesis)
 
 
 class Port(Node):
@@ -195,12 +196,14 @@ class Domain(Node):
 
 
 class Medium(Node):
-    """``medium(type, from, to, capacity)``: a one-way communication medium (4.6)."""
+    """``medium(type, from, to, capacity [reliability])``: a one-way
+    communication medium (4.6); the reliability, in (0, 1], is an extension."""
 
     type: str
     sender: str
     receiver: str
     capacity: Quantity
+    reliability: Quantity | None = None
 
 
 class Goal(Node):

@@ -142,7 +142,7 @@ class Bound:
             # Outputs that use a variable its preconditions bind stay open
             # (not ground), so they name no certain producer: weaker, still a bound.
             outs = tuple((substitute(o, env), call) for o in schema.outputs)
-            cost = self.task.functionality_cost(schema)
+            cost = self.task.functionality_cost(schema, call)
             return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost)
         expansions: list[Expanded] = []
         for method in self.task.versions(call):
@@ -292,7 +292,7 @@ class Bound:
         for key in needed:
             if key not in placed:
                 schema = task.functionalities[(key[0], len(key) - 1)]
-                mandatory += task.functionality_cost(schema)
+                mandatory += task.functionality_cost(schema, key)
         # Two lower bounds on the functionalities still to add, counted two ways
         # (certain instances; least cost per group of items that cannot share).
         # Either may be the larger, and both may count the same instance, so
@@ -308,7 +308,8 @@ class Bound:
         (less what C already has of those names); the others count once."""
         have: dict[str, float] = {}
         for p in node.placed:
-            have[p.call[0]] = have.get(p.call[0], 0.0) + self.task.functionality_cost(p.schema)
+            cost = self.task.functionality_cost(p.schema, p.call)
+            have[p.call[0]] = have.get(p.call[0], 0.0) + cost
         parts = []
         for call, sub in pending.values():
             names = self.names(call)

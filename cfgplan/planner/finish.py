@@ -165,6 +165,12 @@ def build(node: Partial, total: float, task: Task, models: Models) -> Configurat
             )
         channels.append(cmade)
     agents = dict.fromkeys(f.args[0] for f in functionalities)
+    reliability = 1.0
+    for p in node.placed:
+        reliability *= task.functionality_reliability(p.schema, p.call)
+    for c in channels:
+        if c.kind == "global" and c.source_robot != c.target_robot:
+            reliability *= task.links.get((c.source_robot, c.target_robot), 1.0)
     return Configuration.model_construct(
         functionalities=tuple(functionalities),
         channels=tuple(channels),
@@ -175,6 +181,7 @@ def build(node: Partial, total: float, task: Task, models: Models) -> Configurat
         derivation=0,
         proven=True,
         devices=tuple(a for a in agents if a in task.devices),
+        reliability=reliability,
     )
 
 

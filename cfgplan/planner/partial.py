@@ -228,7 +228,7 @@ def place_functionality(
     if isinstance(settled, DeadEnd):
         return settled
     channels, added, resolved = settled
-    added += task.functionality_cost(schema)
+    added += task.functionality_cost(schema, item.call)
     robots = node.robots
     if new.robot not in robots:
         added += task.agent_cost(new.robot)
@@ -280,6 +280,8 @@ def _settle(
         if ident not in resolved and ident not in new:
             new.add(ident)
             added += task.channel_cost(ch.kind)
+            if ch.kind == "global":
+                added += task.link_cost(src.robot, dst.robot)
             continue
         # An identical channel is already there (rare): keep it, drop this one.
         j = next(

@@ -206,7 +206,7 @@ class Partition:
             if call not in node.labels:
                 schema = task.functionality(call)
                 assert schema is not None
-                cost += share(call, task.functionality_cost(schema))
+                cost += share(call, task.functionality_cost(schema, call))
             agent = call[1]
             if agent not in node.robots and agent not in certain:
                 cost += share(("@", agent), task.agent_cost(agent))

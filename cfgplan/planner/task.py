@@ -12,6 +12,7 @@ kept: it orders the bindings, hence the derivations at equal cost (6.3.2).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum
@@ -83,6 +84,7 @@ class FunctionalitySchema:
     effects: tuple[EffectSpec, ...]
     cost: float | None
     freq: float | None
+    reliability: float | None
     span: Span | None
 
 
@@ -138,6 +140,11 @@ class Task:
     weights: Weights
     devices: frozenset[str]
     """Agents the state declares ``(device X)``: weighted as devices, not robots."""
+    reliability: Mapping[Ground, float]
+    """Reliabilities of functionality instances that replace their schema's
+    (e.g. lowered after failures seen at run time)."""
+    links: Mapping[tuple[str, str], float]
+    """(sender, receiver) -> the most reliable medium's reliability (1 if unsaid)."""
     state_names: frozenset[str]
     """Every symbol of the state: for "differs only in case" hints."""
 
@@ -150,16 +157,44 @@ class Task:
     def versions(self, call: Ground) -> tuple[MethodSchema, ...]:
         return self.methods.get((call[0], len(call) - 1), ())
 
-    def functionality_cost(self, schema: FunctionalitySchema) -> float:
-        """The functionality's ``:cost``, else the functionality weight (3.5)."""
-        return schema.cost if schema.cost is not None else self.weights.functionality
+    def functionality_cost(self, schema: FunctionalitySchema, call: Ground) -> float:
+        """The functionality's ``:cost``, else the functionality weight (3.5),
+        plus ``W·(−ln p)`` for its reliability p when ``reliability=W``."""
+        cost = schema.cost if schema.cost is not None else self.weights.functionality
+        if self.weights.reliability:
+            p = self.functionality_reliability(schema, call)
+            cost += self.weights.reliability * -math.log(p)
+        return cost
+
+    def functionality_reliability(self, schema: FunctionalitySchema, call: Ground) -> float:
+        found = self.reliability.get(call)
+        if found is not None:
+            return found
+        return schema.reliability if schema.reliability is not None else 1.0
 
     def channel_cost(self, kind: str) -> float:
+        """A channel's weight (3.5); see :meth:`link_cost` for its media."""
         return self.weights.global_ if kind == "global" else self.weights.local
+
+    def link_cost(self, sender: str, receiver: str) -> float:
+        """``W·(−ln p)`` for a global channel between two robots: p is the most
+        reliable medium from ``sender`` to ``receiver`` (1 when none says)."""
+        if not self.weights.reliability or sender == receiver:
+            return 0.0
+        return self.weights.reliability * -math.log(self.links.get((sender, receiver), 1.0))
 
     def agent_cost(self, agent: str) -> float:
         """What running something on ``agent`` costs: a robot's or a device's weight."""
         return self.weights.device if agent in self.devices else self.weights.robot
+
+
+def _links(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
+    links: dict[tuple[str, str], float] = {}
+    for m in media:
+        p = m.reliability if m.reliability is not None else 1.0
+        key = (m.sender, m.receiver)
+        links[key] = max(p, links.get(key, 0.0))
+    return links
 
 
 def pattern(atom: Atom) -> Pattern:
@@ -229,6 +264,7 @@ def _functionality(f: Functionality) -> FunctionalitySchema:
         effects=_effects(f.postcond),
         cost=f.cost,
         freq=f.freq,
+        reliability=f.reliability,
         span=f.span,
     )
 
@@ -252,8 +288,14 @@ def _method(m: Method, version: int) -> MethodSchema:
     )
 
 
-def compile_task(domain: Domain, state: State, weights: Weights | None = None) -> Task:
-    """Compile a checked domain and a state into a :class:`Task`."""
+def compile_task(
+    domain: Domain,
+    state: State,
+    weights: Weights | None = None,
+    reliability: Mapping[Ground, float] | None = None,
+) -> Task:
+    """Compile a checked domain and a state into a :class:`Task`; ``reliability``
+    replaces the reliability of some functionality instances."""
     functionalities: dict[Signature, FunctionalitySchema] = {}
     for f in domain.functionalities:
         functionalities.setdefault(f.name.signature, _functionality(f))
@@ -277,5 +319,7 @@ def compile_task(domain: Domain, state: State, weights: Weights | None = None) -
         media=state.media,
         weights=weights or Weights(),
         devices=frozenset(fact[1] for fact in facts if fact[0] == "device" and len(fact) == 2),
+        reliability=MappingProxyType(dict(reliability or {})),
+        links=MappingProxyType(_links(state.media)),
         state_names=frozenset(t for fact in facts for t in fact),
     )

@@ -32,7 +32,16 @@ from cfgplan.ir.model import (
 )
 from cfgplan.syntax.sx import Sx
 
-FUNCTIONALITY_KEYWORDS = (":name", ":in", ":out", ":precond", ":postcond", ":cost", ":freq")
+FUNCTIONALITY_KEYWORDS = (
+    ":name",
+    ":in",
+    ":out",
+    ":precond",
+    ":postcond",
+    ":cost",
+    ":freq",
+    ":reliability",
+)
 METHOD_KEYWORDS = (":name", ":precond", ":postcond", ":in", ":out", ":channels", ":body")
 
 T = TypeVar("T")
@@ -122,6 +131,23 @@ def _number(node: Sx, what: str) -> float:
             f"expected a number for {what}, found {node}",
             node.span,
             "write digits with an optional fraction; quantities are not negative",
+        )
+    return value
+
+
+def probability(text: str) -> float | None:
+    """A reliability: a quantity in (0, 1]."""
+    value = quantity(text)
+    return value if value is not None and 0 < value <= 1 else None
+
+
+def _reliability(node: Sx) -> float:
+    value = probability(node.text) if node.kind == "number" else None
+    if value is None:
+        raise error(
+            f"expected a reliability for :reliability, found {node}",
+            node.span,
+            "a reliability is the chance it works: a number above 0 and at most 1, e.g. 0.95",
         )
     return value
 
@@ -247,6 +273,7 @@ def functionality(span: Span, children: Sequence[Any]) -> Functionality:
     opts = _options(form, span, children, FUNCTIONALITY_KEYWORDS)
     cost = _number(opts[":cost"].value, ":cost") if ":cost" in opts else None
     freq = _number(opts[":freq"].value, ":freq") if ":freq" in opts else None
+    reliability = _reliability(opts[":reliability"].value) if ":reliability" in opts else None
     return Functionality(
         name=_name(opts, form),
         inputs=_each(opts, ":in", "data descriptors", atom),
@@ -255,6 +282,7 @@ def functionality(span: Span, children: Sequence[Any]) -> Functionality:
         postcond=_each(opts, ":postcond", "postconditions", effect),
         cost=cost,
         freq=freq,
+        reliability=reliability,
         span=span,
     )
 
@@ -276,13 +304,13 @@ def method(span: Span, children: Sequence[Any]) -> Method:
 
 
 def _medium(fact: Atom) -> Medium:
-    if fact.arity != 4:
+    if fact.arity not in (4, 5):
         raise error(
-            "a medium is (medium TYPE FROM TO CAPACITY)",
+            "a medium is (medium TYPE FROM TO CAPACITY [RELIABILITY])",
             fact.span,
             "e.g. (medium socket Pippi Emil 200)",
         )
-    mtype, sender, receiver, capacity = fact.args
+    mtype, sender, receiver, capacity, *rest = fact.args
     cap = quantity(capacity)
     if cap is None:
         raise error(
@@ -290,7 +318,21 @@ def _medium(fact: Atom) -> Medium:
             fact.span,
             "e.g. (medium socket Pippi Emil 200)",
         )
-    return Medium(type=mtype, sender=sender, receiver=receiver, capacity=cap, span=fact.span)
+    reliability = probability(rest[0]) if rest else None
+    if rest and reliability is None:
+        raise error(
+            f"the reliability of a medium is a number above 0 and at most 1, found {rest[0]}",
+            fact.span,
+            "e.g. (medium wifi Pippi Emil 200 0.9)",
+        )
+    return Medium(
+        type=mtype,
+        sender=sender,
+        receiver=receiver,
+        capacity=cap,
+        reliability=reliability,
+        span=fact.span,
+    )
 
 
 def state(span: Span, children: Sequence[Any]) -> State:

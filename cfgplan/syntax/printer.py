@@ -224,7 +224,7 @@ def _form(head: str, name: Atom, fields: list[_Field], filled: frozenset[str]) -
 def format_functionality(f: Functionality) -> str:
     """A ``make-functionality`` form (3.2, 4.4; Appendix A).
 
-    Order: ``:name :precond :postcond :in :out :cost :freq``.
+    Order: ``:name :precond :postcond :in :out :cost :freq :reliability``.
     """
     fields: list[_Field] = [
         (":precond", [format_condition(c) for c in f.precond]),
@@ -236,6 +236,8 @@ def format_functionality(f: Functionality) -> str:
         fields.append((":cost", format_quantity(f.cost)))
     if f.freq is not None:
         fields.append((":freq", format_quantity(f.freq)))
+    if f.reliability is not None:
+        fields.append((":reliability", format_quantity(f.reliability)))
     return _form("make-functionality", f.name, fields, _FUNCTIONALITY_FILLED)
 
 
@@ -264,7 +266,10 @@ def format_medium(medium: Medium) -> str:
     # The reader takes a capacity through float(), which also accepts "nan";
     # print it back the same way rather than refuse the state.
     capacity = "nan" if math.isnan(medium.capacity) else format_quantity(medium.capacity)
-    return "(" + " ".join(("medium", medium.type, medium.sender, medium.receiver, capacity)) + ")"
+    parts = ["medium", medium.type, medium.sender, medium.receiver, capacity]
+    if medium.reliability is not None:
+        parts.append(format_quantity(medium.reliability))
+    return "(" + " ".join(parts) + ")"
 
 
 def print_domain(domain: Domain) -> str:

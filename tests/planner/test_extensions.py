@@ -8,6 +8,7 @@ weighted by ``device`` (10 by default, like a robot).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -85,3 +86,42 @@ def test_any_takes_two_robots() -> None:
     with pytest.raises(CfgplanError) as caught:
         load_text(domain, "(state (robot A)) (goal (go A))")
     assert caught.value.diagnostics[0].message == "any takes 2 robot(s): (any ?from ?to)"
+
+
+# -- reliability in the cost (7.2) ---------------------------------------------------
+
+RELIABLE = """\
+(make-functionality :name '(cam ?r) :out '((img ?r)) :reliability 0.5)
+(make-functionality :name '(sonar ?r) :out '((img ?r)) :cost 2)
+(make-functionality :name '(use ?r ?h) :in '((img ?h)))
+(make-config-method :name '(go ?r) :precond '((robot ?h))
+  :channels '(((any ?h ?r) ?s ?u (img ?h))) :body '((?s (cam ?h)) (?u (use ?r ?h))))
+(make-config-method :name '(go ?r) :channels '(((local ?r) ?s ?u (img ?r)))
+  :body '((?s (sonar ?r)) (?u (use ?r ?r))))
+"""
+
+
+def test_reliability_weight_adds_minus_log_reliability() -> None:
+    """``reliability=W`` adds ``W·(−ln p)`` per part: the camera (p = 0.5)
+    costs 1 + 2·ln 2 = 2.386 with W = 2, more than the sonar's :cost 2."""
+    state = "(state (robot A) (robot B) (medium wifi B A 100 0.8)) (goal (go A))"
+    plain = load_text(RELIABLE, state)
+    costs = [c.cost for c in plan(plain.task, plain.goal_call, limit=None)[0]]
+    assert costs == [13, 14, 25]  # cam(A), sonar(A), cam(B) over wifi
+    weighted = load_text(RELIABLE, state, Weights(reliability=2))
+    configs, _ = plan(weighted.task, weighted.goal_call, limit=None)
+    assert [round(c.cost, 4) for c in configs] == [
+        14,
+        round(13 + 2 * math.log(2), 4),
+        round(25 + 2 * math.log(2) + 2 * -math.log(0.8), 4),
+    ]
+    assert [round(c.reliability, 4) for c in configs] == [1.0, 0.5, 0.4]
+    for config in configs:
+        assert problems(config, weighted.domain, weighted.state, weighted.task.weights) == []
+
+
+@pytest.mark.parametrize("value", ["0", "1.5", "-0.2", "x"])
+def test_reliability_must_be_a_chance(value: str) -> None:
+    with pytest.raises(CfgplanError) as caught:
+        load_text(RELIABLE.replace(":reliability 0.5", f":reliability {value}"), "(state)")
+    assert "reliability" in caught.value.diagnostics[0].message
