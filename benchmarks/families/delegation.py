@@ -2,11 +2,12 @@
 
 ``(get ?r)`` senses on ``?r`` (only RN can), delegates to ``(get ?s)`` on
 any other robot ``?s`` (which sends the datum back over a global channel to a
-relay on ``?r``), or merges what two other robots ``?s`` and ``?t`` get. The
-recursion guard of 4.5 prunes a method instance only on its own expansion
-path, so the same ``(get ?s)`` is expanded again under every arrangement of
-its ancestors: the derivation tree grows much faster than N!, while the
-configurations are the few trees of relays that reach RN.
+relay on ``?r``), or, on the hub R1, merges what two other robots ``?s`` and
+``?t`` get. The recursion guard of 4.5 prunes a method instance only on its
+own expansion path, so the same ``(get ?s)`` is expanded again under every
+arrangement of its ancestors: the derivation tree grows much faster than N!,
+while the configurations are the chains of relays that reach RN, alone or
+two by two.
 """
 
 from __future__ import annotations
@@ -27,14 +28,14 @@ def delegation(n: int) -> tuple[str, str]:
   :out '((?b (d ?r))) :channels '(((global ?s ?r) ?a ?b (d ?s)))
   :body '((?a (get ?s)) (?b (relay ?r ?s))))
 (make-config-method :name '(get ?r)
-  :precond '((robot ?s) (robot ?t) (eval (not (eql '?s '?r))) (eval (not (eql '?t '?r)))
-             (eval (not (eql '?s '?t))))
+  :precond '((hub ?r) (robot ?s) (robot ?t) (eval (not (eql '?s '?r)))
+             (eval (not (eql '?t '?r))) (eval (not (eql '?s '?t))))
   :out '((?m (d ?r)))
   :channels '(((global ?s ?r) ?a ?m (d ?s)) ((global ?t ?r) ?b ?m (d ?t)))
   :body '((?a (get ?s)) (?b (get ?t)) (?m (merge ?r ?s ?t))))
 (make-config-method :name '(task ?r) :channels '(((local ?r) ?g ?a (d ?r)))
   :body '((?g (get ?r)) (?a (act ?r))))
 """
-    facts = [f"(robot R{i})" for i in range(1, n + 1)] + [f"(sensor R{n})"]
+    facts = [f"(robot R{i})" for i in range(1, n + 1)] + [f"(sensor R{n})", "(hub R1)"]
     state = "(state " + " ".join(facts) + ")\n(goal (task R1))\n"
     return domain, state

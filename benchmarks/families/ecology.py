@@ -14,10 +14,10 @@ covering problem, with many equal-cost alternatives.
 ``media_tight(N, R, C)`` adds an obstacle map per member: from its own laser,
 or from a camera in its room that either streams raw images (bandwidth 40,
 the map built on the member) or builds the map on board (one more
-functionality, bandwidth 5). Every camera host has a medium of capacity 50 to
-every member in its room, so at most one member per host can take the raw
-stream: the derivations that are cheapest on functionalities are
-communication-inadmissible.
+functionality, bandwidth 5). Every camera host has a medium of capacity 40 to
+every member in its room: a member that takes the raw stream from a host
+cannot also take its pose (5) from that host, so the derivations that are
+cheapest on functionalities are communication-inadmissible.
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ def _world(n: int, rooms: int, cameras: int, media: bool) -> list[str]:
     if media:  # every camera host to every member of its room
         hosts = cams + [r for i, r in enumerate(robots) if i % 2 == 1]
         facts += [
-            f"(medium wifi {h} {r} 50)"
+            f"(medium wifi {h} {r} 40)"
             for h in hosts
             for r in robots
             if h != r and room[h] == room[r]

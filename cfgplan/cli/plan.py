@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import io
+import json
+import sys
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -13,11 +15,10 @@ from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_output
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
-from cfgplan.configuration.describe import call_text, channel_text, to_json, to_text
+from cfgplan.configuration.describe import call_text, channel_text, to_dict, to_json, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError
-from cfgplan.planner import BestFirst, Stats
-from cfgplan.planner import plan as run_plan
+from cfgplan.planner import Run, Stats
 from cfgplan.planner.explain import explain
 from cfgplan.problem import GOAL_SOURCE, Problem, load
 
@@ -26,6 +27,7 @@ class Format(StrEnum):
     table = "table"
     lisp = "lisp"
     json = "json"
+    jsonl = "jsonl"
 
 
 def weights_option(text: str | None) -> Weights | None:
@@ -78,7 +80,7 @@ def _progress(stats: Stats, elapsed: float) -> None:
     say(f"planning... {elapsed:.1f} s, {stats.nodes:,} nodes, {stats.derivations:,} derivations")
 
 
-def _stats(search: BestFirst) -> dict[str, object]:
+def _stats(search: Run) -> dict[str, object]:
     s = search.stats
     return {
         "nodes": s.nodes,
@@ -128,6 +130,30 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
     if any(not c.proven for c in configs):
         buffer.write("* not proven optimal: the search was stopped before it could prove it\n")
     return buffer.getvalue()
+
+
+def _streamed(problem: Problem, config: Configuration, rank: int, format_: Format) -> str:
+    """One configuration as ``--format jsonl`` or ``lisp`` prints it, alone."""
+    if format_ is Format.jsonl:
+        return json.dumps(to_dict(config, rank), ensure_ascii=False) + "\n"
+    head = ""
+    if rank == 1:
+        head = f";; cfgplan: configurations for {call_text(problem.goal_call)}\n"
+        if not problem.state.media:
+            head += ";; the state declares no media: communication admissibility not checked\n"
+    shown = f";; rank {rank}" + ("" if config.proven else ", not proven optimal")
+    return head + shown + "\n" + to_text(config, problem.state.media) + "\n"
+
+
+def _summary(problem: Problem, configs: list[Configuration], search: Run) -> str:
+    """The last line of ``--format jsonl``: what was planned for, and how."""
+    doc = {
+        "goal": call_text(problem.goal_call),
+        "count": len(configs),
+        "communication_checked": bool(problem.state.media),
+        "stats": _stats(search),
+    }
+    return json.dumps(doc, ensure_ascii=False) + "\n"
 
 
 def _lisp(problem: Problem, configs: list[Configuration]) -> str:
@@ -184,14 +210,21 @@ def plan(
     Exit codes: 0 found, 1 invalid input, 2 usage, 3 no admissible configuration.
     """
     problem = load_problem(domain, state, goal, weights)
-    configs, search = run_plan(
+    search = Run(  # the time limit counts from here: planning, not reading
         problem.task,
         problem.goal_call,
-        limit=None if all_ else k,
-        distinct=not derivations,
-        time_limit=time_limit,
-        progress=_progress,
+        None if all_ else k,
+        not derivations,
+        time_limit,
+        _progress,
     )
+    stream = output is None and format_ in (Format.jsonl, Format.lisp)
+    configs = []
+    for config in search:
+        configs.append(config)
+        if stream:  # printed as soon as it is proven
+            sys.stdout.write(_streamed(problem, config, len(configs), format_))
+            sys.stdout.flush()
     if verbose:
         _verbose(search)
     if search.stopped:
@@ -200,8 +233,17 @@ def plan(
     if not configs:
         say("\n".join(explain(search.report, call_text(problem.goal_call))))
         raise typer.Exit(EXIT_NONE)
-    if format_ is Format.json:
+    if format_ is Format.jsonl:
+        summary = _summary(problem, configs, search)
+        if stream:
+            sys.stdout.write(summary)
+            return
+        text = "".join(_streamed(problem, c, i, format_) for i, c in enumerate(configs, 1))
+        text += summary
+    elif format_ is Format.json:
         text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search))
+    elif stream:
+        return  # every description went out as it was found
     elif format_ is Format.lisp:
         text = _lisp(problem, configs)
     else:
@@ -209,7 +251,7 @@ def plan(
     write_output(text, output, force)
 
 
-def _verbose(search: BestFirst) -> None:
+def _verbose(search: Run) -> None:
     s = search.stats
     say(
         f"search: {s.nodes} nodes, {s.expansions} method expansions, {s.derivations} derivations, "

@@ -36,6 +36,7 @@ from __future__ import annotations
 from collections.abc import Generator, Iterable, Set
 from dataclasses import dataclass, field
 
+from cfgplan.planner import clock
 from cfgplan.planner.ground import channel_kind
 from cfgplan.planner.match import bindings
 from cfgplan.planner.partial import Key, Partial
@@ -115,6 +116,7 @@ class Bound:
         active = {call}
         reply: Summary | None = None
         while frames:
+            clock.check()
             current, making = frames[-1]
             try:
                 need = making.send(reply)  # type: ignore[arg-type]  # None starts it

@@ -1,15 +1,15 @@
-"""An anytime answer: when the best-first search is stopped (``--time-limit``,
-Ctrl-C) before it has proven any configuration cheapest, dive depth-first from
-the open nodes, cheapest child first, to find *some* admissible configuration.
+"""An anytime answer: when a search is stopped (``--time-limit``, Ctrl-C)
+before it has proven any configuration cheapest, dive depth-first from the
+open nodes, cheapest child first, to find *some* admissible configuration.
 It is marked as not proven optimal.
 
 A plain function over the search's parts: the open nodes, how to expand one
-and how to finish a complete one.
+and how to finish a complete one. Its own time is the caller's business
+(:mod:`cfgplan.planner.clock`: expanding checks it).
 """
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Iterable
 
 from cfgplan.configuration.model import Configuration
@@ -25,17 +25,13 @@ def dive(
     finish: Finish,
     *,
     budget: int = 50_000,
-    deadline: float | None = None,
 ) -> Configuration | None:
     """The first admissible configuration met by a greedy depth-first dive from
-    ``frontier`` (best first), within ``budget`` nodes and before ``deadline``
-    (a :func:`time.perf_counter` value); None when none is met."""
+    ``frontier`` (best first), within ``budget`` nodes; None when none is met."""
     stack = list(reversed(frontier))  # the best open node on top
     spent = 0
     try:
         while stack and spent < budget:
-            if deadline is not None and time.perf_counter() > deadline:
-                return None
             total, node = stack.pop()
             spent += 1
             if node.done:

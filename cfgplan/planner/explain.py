@@ -33,4 +33,6 @@ def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
         lines.append(f"  ... and {hidden} more dead ends (--verbose lists them all)")
     if len(lines) == 1:
         lines.append("  the goal's method has no version")
+    if report.unfinished:
+        lines.append("  (the search for dead ends ran out of time: there may be more)")
     return lines

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
+from cfgplan.planner import clock
 from cfgplan.planner.partial import Partial, describe_call
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task, show
@@ -122,7 +123,12 @@ def postconditions(node: Partial) -> tuple[str, ...]:
     return tuple(dict.fromkeys(post))
 
 
-def identity(node: Partial) -> object:
+Identity = tuple[frozenset[object], frozenset[object], frozenset[object]]
+"""Functionality instances, channels (ends by instance) and P: a configuration
+without its labels."""
+
+
+def identity(node: Partial) -> Identity:
     """:meth:`Configuration.identity` of the node's configuration, without building it."""
     key = {p.label: p.call for p in node.placed}
     channels = frozenset(
@@ -204,9 +210,9 @@ def finish(
             return dead
     config = build(node, total, task, Models() if models is None else models)
     if task.media:
-        result = assign(demands(config), task.media)
+        result = assign(demands(config), task.media, clock.check)
         if result.assignment is None:
-            return DeadEnd("", result.problem, None, Condition.COMMUNICATION)
+            return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
         config = config.model_copy(
             update={
                 "media": tuple(

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.ir.model import Span, is_variable
+from cfgplan.planner import clock
 from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind, show
 from cfgplan.planner.unify import Bindings, substitute, unify
 
@@ -49,7 +50,11 @@ def _walk(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[tuple[
     """Depth-first over the tests, facts in state order: every (number of tests
     passed, bindings) reached; the complete ones have ``len(tests)``."""
     stack: list[tuple[int, Bindings]] = [(0, env)]
+    steps = 0
     while stack:
+        steps += 1
+        if not steps & 1023:
+            clock.check()  # a join of many facts may take long: the time limit holds
         index, current = stack.pop()
         yield index, current
         if index == len(tests):

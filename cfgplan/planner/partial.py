@@ -14,9 +14,12 @@ functionality keeps the label of its first instance.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
+from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Span
+from cfgplan.planner import clock
 from cfgplan.planner.ground import Expansion
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task, show
@@ -300,7 +303,26 @@ def _settle(
         dropped.append(i)
     if dropped:
         out = [c for i, c in enumerate(out) if i not in dropped]
+    if task.media and any(k == "global" for k, *_ in new):
+        overflow = _media(out, located, task)
+        if overflow is not None:
+            return overflow
     return tuple(out), added, resolved | new if new else resolved
+
+
+def _media(channels: list[Channel], located: dict[int, Placed], task: Task) -> DeadEnd | None:
+    """Communication admissibility (4.6) of the global channels whose two ends
+    are placed: they are final (a merge only raises a bandwidth), so if they
+    overflow the media now, every completion does (step 4 would reject it)."""
+    placed: list[Demand | None] = []
+    for ch in channels:
+        src, dst = located.get(ch.source), located.get(ch.target)
+        if ch.kind == "global" and src is not None and dst is not None and src.robot != dst.robot:
+            placed.append(Demand(src.robot, dst.robot, ch.bandwidth or 0.0))
+    result = assign(placed, task.media, clock.check)
+    if result.ok:
+        return None
+    return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
 
 
 def _misplaced(ch: Channel, src: Placed, dst: Placed) -> DeadEnd:
@@ -313,16 +335,30 @@ def _misplaced(ch: Channel, src: Placed, dst: Placed) -> DeadEnd:
     )
 
 
-def canonical(node: Partial) -> object:
-    """The node up to labels: placed instances, channels, stack and P. Two nodes
-    with the same canonical form have the same completions (up to labels)."""
+def canonical(node: Partial, task: Task) -> bytes:
+    """The node up to labels — placed instances, channels, stack and P — as a
+    128-bit BLAKE2 digest. Two nodes with the same canonical form have the
+    same completions (up to labels). An item's ancestors count only where they
+    can matter: those whose method can recur (:attr:`Task.recursive`); in a
+    domain without recursion the order in which items were reached is
+    forgotten. Two different forms share a digest with odds of about 2^-128
+    per pair (far below anything a run can meet); it takes 16 bytes where the
+    form takes kilobytes, so every expanded node can be remembered."""
     names: dict[int, object] = {p.label: p.call for p in node.placed}
     for index, item in enumerate(node.stack):
         names[item.label] = index
-    channels = frozenset(
-        (ch.kind, ch.robots, names[ch.source], names[ch.target], ch.data, ch.bandwidth)
+    channels = sorted(
+        repr((ch.kind, ch.robots, names[ch.source], names[ch.target], ch.data, ch.bandwidth))
         for ch in node.channels
     )
-    stack = tuple((item.call, item.ancestors) for item in node.stack)
-    placed = frozenset((p.call, p.inputs, p.outputs) for p in node.placed)
-    return placed, channels, stack, frozenset(node.effects)
+    recursive = task.recursive
+    stack = [
+        repr((item.call, sorted(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)))
+        if recursive
+        else repr(item.call)
+        for item in node.stack
+    ]
+    placed = sorted(repr((p.call, p.inputs, p.outputs)) for p in node.placed)
+    effects = sorted(map(repr, node.effects))
+    text = "\n".join("\t".join(part) for part in (placed, channels, stack, effects))
+    return hashlib.blake2b(text.encode(), digest_size=16).digest()

@@ -1,30 +1,43 @@
-"""The planner's entry point: the ``limit`` cheapest admissible configurations.
+"""The planner's entry point: the cheapest admissible configurations, ranked.
 
-:func:`plan` puts the parts together: the grounding memo and the bound of the
-task (kept per task, so that planning the same task again, e.g. ``-k 1`` then
-``--all``, grounds and summarises once), the best-first search, the greedy
-dive when the search is stopped before it has proven anything, and a search
-without the bound to explain why nothing is admissible when the bound cut
-branches before their dead ends were met.
+A :class:`Run` puts the parts together: the grounding memo and the bounds of
+the task (kept per task, so that planning the same task again, e.g. ``-k 1``
+then ``--all``, grounds and summarises once), the strategy — best-first
+search for the ``limit`` cheapest (:mod:`cfgplan.planner.search`), windows
+of depth-first walks to list them all in bounded memory
+(:mod:`cfgplan.planner.enumerate`) — the time limit, the greedy dive when a
+search is stopped before it has proven anything, and, when nothing is
+admissible, a search without the bounds to say why. Configurations come out
+of a run as they are proven, so a caller may print them at once;
+:func:`plan` collects them.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 from weakref import WeakKeyDictionary
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.planner import clock
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.dive import dive
+from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.partial import Partial
+from cfgplan.planner.grow import Grower, Heuristic, Stats
+from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
-from cfgplan.planner.report import StopReason
-from cfgplan.planner.search import BestFirst, Heuristic, Progress
+from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.task import Ground, Task
 
-DIVE_SECONDS = 5.0
-"""How long the greedy dive may look for a configuration after a stop."""
+GRACE = 0.35
+"""Seconds past the time limit the greedy dive may take when nothing was proven
+(the run ends within the limit plus half a second)."""
+
+EXPLAIN_SECONDS = 2.0
+"""The least time the search for "why nothing" may take (more if planning took more)."""
 
 _parts: WeakKeyDictionary[Task, tuple[Grounder, Bound, Partition]] = WeakKeyDictionary()
 
@@ -51,8 +64,112 @@ def combined(bound: Bound, partition: Partition) -> Heuristic:
     return estimate
 
 
+def partitioned(bound: Bound, partition: Partition) -> Heuristic:
+    """The partitioned bound, with the agents ``bound`` knows to be certain:
+    the strategies refine their priorities with it, lazily."""
+
+    def estimate(node: Partial) -> float | None:
+        return partition.estimate(node, bound.certain_agents(node))
+
+    return estimate
+
+
 def _no_bound(node: Partial) -> float:
     return 0.0
+
+
+def _order(entry: tuple[float, Partial]) -> tuple[float, tuple[int, ...]]:
+    return entry[0], entry[1].path
+
+
+@dataclass
+class Run:
+    """One planning run; iterate it for the configurations, best first."""
+
+    task: Task
+    goal: Ground
+    limit: int | None = 1
+    distinct: bool = True
+    time_limit: float | None = None
+    progress: Progress | None = None
+    started: float | None = None
+    """When the time limit started counting (perf_counter; default: now)."""
+    strategy: BestFirst | Windows = field(init=False)
+
+    def __post_init__(self) -> None:
+        grounder, bound, partition = parts(self.task)
+        refine = partitioned(bound, partition)
+        grower = Grower(grounder, bound.estimate, refine, self.distinct)
+        if self.limit is None:
+            self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
+        else:
+            self.strategy = BestFirst(grower, self.goal, self.progress)
+
+    @property
+    def stats(self) -> Stats:
+        return self.strategy.stats
+
+    @property
+    def report(self) -> Report:
+        return self.strategy.report
+
+    @property
+    def stopped(self) -> StopReason | None:
+        return self.strategy.stopped
+
+    def __iter__(self) -> Iterator[Configuration]:
+        started = time.perf_counter() if self.started is None else self.started
+        deadline = None if self.time_limit is None else started + self.time_limit
+        listed = 0
+        try:
+            with clock.limit(deadline):
+                for config in self.strategy:
+                    listed += 1
+                    yield config
+                    if self.limit is not None and listed >= self.limit:
+                        self.stats.complete = False
+                        break
+        except KeyboardInterrupt:
+            self.stats.complete = False
+            self.strategy.stopped = StopReason.INTERRUPTED
+        if self.stopped is not None and not listed:
+            guess = self._dive(deadline)
+            if guess is not None:
+                yield guess
+            return
+        if not listed and self.stats.pruned and self.stats.complete:
+            self._explain(started, deadline)
+
+    def _dive(self, deadline: float | None) -> Configuration | None:
+        """Stopped before anything was proven: dive for any configuration."""
+        end = time.perf_counter() + GRACE if deadline is None else deadline + GRACE
+        grower = self.strategy.grower
+        try:
+            with clock.limit(end):
+                if isinstance(self.strategy, BestFirst):
+                    frontier = self.strategy.frontier
+                else:  # the windows keep no frontier: dive from the start
+                    frontier = sorted(grower.settle(root(self.goal)), key=_order)
+                return dive(frontier, grower.children, grower.finish)
+        except (clock.OutOfTime, KeyboardInterrupt):
+            return None
+
+    def _explain(self, started: float, deadline: float | None) -> None:
+        """The bounds cut branches before their dead ends were met: search them
+        without the bounds, so the report can say why nothing is admissible."""
+        grounder = parts(self.task)[0]
+        explaining = BestFirst(Grower(grounder, _no_bound, None, self.distinct), self.goal)
+        spent = time.perf_counter() - started
+        end = time.perf_counter() + max(EXPLAIN_SECONDS, 2 * spent)
+        if deadline is not None:
+            end = min(end, deadline + GRACE)
+        with clock.limit(end):
+            for _ in explaining:
+                break
+        report = explaining.report
+        if explaining.stopped is not None:
+            report.unfinished = True
+        self.strategy.grower.report = report
 
 
 def plan(
@@ -63,35 +180,8 @@ def plan(
     distinct: bool = True,
     time_limit: float | None = None,
     progress: Progress | None = None,
-) -> tuple[list[Configuration], BestFirst]:
+) -> tuple[list[Configuration], Run]:
     """The ``limit`` cheapest admissible configurations (all when None), and
-    the search that found them (its stats, report and stop reason)."""
-    grounder, bound, partition = parts(task)
-    # Listing everything, a cost estimate cannot stop the search early: then
-    # the bound only cuts nodes without completion.
-    heuristic = combined(bound, partition) if limit is not None else bound.feasible
-    search = BestFirst(grounder, goal, heuristic, distinct, time_limit, progress)
-    found: list[Configuration] = []
-    try:
-        for config in search:
-            found.append(config)
-            if limit is not None and len(found) >= limit:
-                search.stats.complete = False
-                break
-    except KeyboardInterrupt:
-        search.stats.complete = False
-        search.stopped = StopReason.INTERRUPTED
-    if search.stopped is not None and not found:
-        # Stopped before the cheapest was proven: dive for any configuration.
-        deadline = time.perf_counter() + DIVE_SECONDS
-        guess = dive(search.frontier, search.children, search.finish, deadline=deadline)
-        if guess is not None:
-            found.append(guess)
-    if not found and search.stats.pruned and search.stats.complete:
-        # The bound cut branches without meeting their dead ends; search them
-        # without it, so the report can say why nothing is admissible.
-        explaining = BestFirst(grounder, goal, _no_bound, distinct)
-        for _ in explaining:
-            break
-        search.report = explaining.report
-    return found, search
+    the run that found them (its stats, report and stop reason)."""
+    run = Run(task, goal, limit, distinct, time_limit, progress)
+    return list(run), run

@@ -56,6 +56,7 @@ class Report:
 
     dead: dict[tuple[str, Condition], DeadEnd] = field(default_factory=dict)
     rejected: list[DeadEnd] = field(default_factory=list)
+    unfinished: bool = False  # the search that collected them was stopped
 
     def note(self, dead: DeadEnd) -> None:
         self.dead.setdefault((dead.where, dead.condition), dead)

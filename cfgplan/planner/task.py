@@ -16,6 +16,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum
+from functools import cached_property
 from types import MappingProxyType
 
 from cfgplan.configuration.cost import Weights
@@ -147,6 +148,38 @@ class Task:
     """(sender, receiver) -> the most reliable medium's reliability (1 if unsaid)."""
     state_names: frozenset[str]
     """Every symbol of the state: for "differs only in case" hints."""
+
+    @cached_property
+    def recursive(self) -> frozenset[Signature]:
+        """Method signatures that can reach themselves through method bodies:
+        only their instances can meet the recursion guard of 4.5."""
+        reach: dict[Signature, set[Signature]] = {}
+        for sig, versions in self.methods.items():
+            calls = {(p[0], len(p) - 1) for m in versions for _, p in m.body}
+            reach[sig] = calls & self.methods.keys()
+        found: set[Signature] = set()
+        for start in self.methods:
+            seen: set[Signature] = set()
+            todo = list(reach[start])
+            while todo:
+                sig = todo.pop()
+                if sig == start:
+                    found.add(start)
+                    break
+                if sig not in seen:
+                    seen.add(sig)
+                    todo.extend(reach[sig])
+        return frozenset(found)
+
+    @cached_property
+    def integral(self) -> bool:
+        """Every configuration costs a whole number: the weights and every
+        ``:cost`` are whole, and reliability adds nothing. Then a lower bound
+        on a cost may be rounded up."""
+        w = self.weights
+        whole = [w.robot, w.device, w.global_, w.local, w.functionality]
+        whole += [f.cost for f in self.functionalities.values() if f.cost is not None]
+        return not w.reliability and all(float(x).is_integer() for x in whole)
 
     def is_method(self, call: Ground) -> bool:
         return (call[0], len(call) - 1) in self.methods

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner import BestFirst, plan
+from cfgplan.planner import Run, plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.report import Condition
 from cfgplan.problem import Problem, load
@@ -18,7 +18,7 @@ def setup(tmp_path: Path, domain: str, state: str) -> Problem:
     return load(d, s)
 
 
-def solve(p: Problem, distinct: bool = True) -> tuple[list[Configuration], BestFirst]:
+def solve(p: Problem, distinct: bool = True) -> tuple[list[Configuration], Run]:
     return plan(p.task, p.goal_call, limit=None, distinct=distinct)
 
 

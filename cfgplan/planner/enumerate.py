@@ -1,0 +1,201 @@
+"""Listing every configuration in bounded memory: depth first, by cost windows.
+
+Best-first search (:mod:`cfgplan.planner.search`) proves configurations in
+order but keeps every open node: listing *all* of a large instance that way
+holds the whole frontier. Here ``--all`` instead walks the derivations depth
+first, in the thesis's order (4.5), keeping only the path, and collects the
+admissible configurations whose cost falls in a window ``[low, high)``;
+nodes whose bound reaches ``high`` are cut. At the end of a pass the window
+is sorted by cost, then depth-first order (6.3.2) — exactly the order the
+best-first search gives — and listed. The first window is the cheapest cost
+alone (listed as it is walked: depth-first order is then the listing order),
+the second everything else. A configuration has one cost, so it falls in
+one window: distinct configurations stay distinct across windows.
+
+When a window holds more than :data:`MOST_HELD` configurations, its upper
+edge is lowered to keep the cheaper half and the next window starts there,
+so memory stays bounded whatever the instance; the configurations listed
+are remembered (distinct mode) as 128-bit digests of their label-free form.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner import clock
+from cfgplan.planner.finish import Identity, identity
+from cfgplan.planner.grow import Grower, Heuristic, Stats
+from cfgplan.planner.partial import Partial, canonical, root
+from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.search import Progress
+from cfgplan.planner.task import Ground
+
+MOST_HELD = 100_000
+"""Configurations one window may hold before its upper edge comes down."""
+
+
+
+
+@dataclass
+class Found:
+    """A complete derivation met in a window, in depth-first order ``index``."""
+
+    cost: float
+    index: int
+    config: Configuration | None  # None: inadmissible (not counted), or a repeat
+    repeat: bool = False  # its configuration was met before in this window
+
+
+@dataclass
+class Window:
+    """The costs a pass lists, ``[low, high)``, and the least bound it cut."""
+
+    low: float
+    high: float
+    beyond: float | None = None
+
+    def cut(self, priority: float) -> bool:
+        """Is a node of this priority beyond the window? (Noted if so.)"""
+        if priority < self.high:
+            return False
+        self.beyond = priority if self.beyond is None else min(self.beyond, priority)
+        return True
+
+
+@dataclass
+class Windows:
+    """An iterator over every configuration, cheapest first, window by window."""
+
+    grower: Grower
+    goal: Ground
+    feasible: Heuristic
+    """Decides only whether a node can complete: all a window without an upper
+    edge needs, and cheaper than a bound."""
+    progress: Progress | None = None
+    stopped: StopReason | None = None
+    _start: float = field(default=0.0)
+
+    @property
+    def stats(self) -> Stats:
+        return self.grower.stats
+
+    @property
+    def report(self) -> Report:
+        return self.grower.report
+
+    def __iter__(self) -> Iterator[Configuration]:
+        self._start = time.perf_counter()
+        try:
+            yield from self._windows()
+        except clock.OutOfTime:
+            self.stats.complete = False
+            self.stopped = StopReason.TIME_LIMIT
+        self.stats.seconds = time.perf_counter() - self._start
+
+    def _windows(self) -> Iterator[Configuration]:
+        start = [(p, n) for p, n in self.grower.settle(root(self.goal))]
+        if not start:
+            return
+        low = min(p for p, _ in start)
+        window = Window(low, low + 1 if self.grower.integral else low + 1e-9)
+        while True:
+            yield from self._walk(start, window)
+            if window.beyond is None:
+                return  # nothing was cut: every derivation has been met
+            window = Window(max(window.high, window.beyond), float("inf"))
+            self.grower.heuristic, self.grower.refine = self.feasible, None
+
+    def _walk(self, start: list[tuple[float, Partial]], window: Window) -> Iterator[Configuration]:
+        """One depth-first pass over the derivations costing from ``window.low``
+        up to ``window.high`` (which may come down), listing them in order.
+        One cost level (whole costs, width 1) is listed as it is walked: the
+        depth-first order is then the listing order."""
+        grower = self.grower
+        streaming = grower.integral and window.high - window.low <= 1
+        admitted: set[bytes] = set()
+        found: list[Found] = []
+        closed: set[bytes] = set()
+        stack = list(reversed(start))
+        index = 0
+        next_tick = 1.0
+        while stack:
+            clock.check()
+            priority, node = stack.pop()
+            if window.cut(priority):
+                continue
+            if not node.done:
+                raised = grower.refined(node, priority)
+                if raised is None or window.cut(raised):
+                    continue
+            self.stats.nodes += 1
+            elapsed = time.perf_counter() - self._start
+            if self.progress is not None and elapsed > next_tick:
+                self.progress(self.stats, elapsed)
+                next_tick = elapsed + 0.5
+            if node.done:
+                index += 1
+                if priority < window.low:
+                    continue  # listed in an earlier window
+                if streaming:
+                    yield from self._list([self._found(node, priority, index, admitted)])
+                    continue
+                found.append(self._found(node, priority, index, admitted))
+                if len(found) > MOST_HELD:
+                    found, window.high = _halve(found)
+                continue
+            if grower.distinct:
+                key = canonical(node, grower.grounder.task)
+                if key in closed:
+                    continue
+                closed.add(key)
+            children = list(grower.children(node))
+            stack.extend(reversed(children))
+        found.sort(key=lambda f: (f.cost, f.index))
+        yield from self._list(found)
+
+    def _found(self, node: Partial, cost: float, index: int, admitted: set[bytes]) -> Found:
+        """A complete derivation met: finished, unless (distinct mode) its
+        configuration was admitted before in this window. Both have one cost,
+        and the walk meets derivations in depth-first order, so the first met
+        is the one listed, as in the best-first search."""
+        ident = digest(identity(node)) if self.grower.distinct else None
+        if ident is not None and ident in admitted:
+            return Found(cost, index, None, repeat=True)
+        config = self.grower.finish(node, cost)
+        if config is not None and ident is not None:
+            admitted.add(ident)
+        return Found(cost, index, config)
+
+    def _list(self, found: list[Found]) -> Iterator[Configuration]:
+        """Sorted derivations of a window, numbered as :meth:`Grower.complete`
+        numbers them (repeats counted, inadmissible ones not)."""
+        stats = self.stats
+        for f in found:
+            if f.repeat:
+                stats.derivations += 1
+                stats.duplicates += 1
+            elif f.config is not None:
+                stats.derivations += 1
+                yield f.config.model_copy(update={"derivation": stats.derivations})
+
+
+def digest(parts: Identity) -> bytes:
+    """A 128-bit BLAKE2 digest of a label-free form (a tuple of sets of
+    tuples), independent of set order. Two different forms share one with
+    odds of about 2^-128 per pair, far below anything a run can meet; it
+    takes 16 bytes where the form takes kilobytes."""
+    text = "\n".join("\t".join(sorted(map(repr, part))) for part in parts)
+    return hashlib.blake2b(text.encode(), digest_size=16).digest()
+
+
+def _halve(found: list[Found]) -> tuple[list[Found], float]:
+    """Keep the cheaper half of a window (whole cost levels): the new upper edge."""
+    costs = sorted({f.cost for f in found})
+    if len(costs) == 1:
+        return found, costs[0] + 1e-9  # one cost level: it cannot be split
+    high = costs[len(costs) // 2]
+    return [f for f in found if f.cost < high], high

@@ -1,0 +1,139 @@
+"""Growing nodes: what every search strategy does to a node it takes.
+
+A :class:`Grower` expands the method on top of a node
+(:func:`cfgplan.planner.successors.successors`), *settles* the children
+(places the functionalities on top of their stacks, so every node it hands
+back has a method on top or is complete), prices them with the bounds, and
+finishes complete nodes (4.5 step 4). It keeps what the strategies share:
+the statistics, the dead ends met (:class:`Report`), the configurations
+already listed (distinct mode) and the result models.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner import clock
+from cfgplan.planner.finish import Models, finish, identity
+from cfgplan.planner.ground import Grounder
+from cfgplan.planner.partial import Partial
+from cfgplan.planner.report import DeadEnd, Report
+from cfgplan.planner.successors import successors
+
+Heuristic = Callable[[Partial], float | None]
+"""A lower bound on what a node still costs; None when it has no completion."""
+
+
+@dataclass
+class Stats:
+    """What the search did: shown by ``--verbose`` and in JSON output."""
+
+    nodes: int = 0  # nodes taken to be expanded or finished
+    expansions: int = 0  # method instances expanded
+    derivations: int = 0  # complete derivations met (duplicates included)
+    duplicates: int = 0  # complete derivations whose configuration was listed already
+    rejected: int = 0  # complete derivations found inadmissible (4.5 step 4)
+    pruned: int = 0  # nodes the bounds proved to have no completion
+    seconds: float = 0.0
+    complete: bool = True  # False when a limit stopped the search early
+
+
+@dataclass
+class Grower:
+    """Expands, settles, prices and finishes nodes for one search."""
+
+    grounder: Grounder
+    heuristic: Heuristic
+    refine: Heuristic | None = None
+    """A costlier, stronger bound; the strategy decides when to use it."""
+    distinct: bool = True
+    stats: Stats = field(default_factory=Stats)
+    report: Report = field(default_factory=Report)
+    seen: set[object] = field(default_factory=set)  # configurations listed (distinct)
+    models: Models = field(default_factory=Models)
+
+    def __post_init__(self) -> None:
+        self.integral = self.grounder.task.integral
+
+    def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
+        """Expand the method on top of ``node``; yield its settled children with
+        their priorities (dead ends go to the report)."""
+        self.stats.expansions += 1
+        for child in successors(self.grounder, node):
+            clock.check()
+            if isinstance(child, DeadEnd):
+                self.report.note(child)
+            else:
+                yield from self.settle(child)
+
+    def settle(self, node: Partial) -> Iterator[tuple[float, Partial]]:
+        """Place the functionalities on top of the stack (one child per binding
+        when one has several); yield each node that has a method on top, or is
+        complete, with its priority: its cost, plus the bound unless complete."""
+        task = self.grounder.task
+        todo = [node]
+        while todo:
+            current = todo.pop()
+            if current.done or task.is_method(current.stack[0].call):
+                priority = current.cost
+                if not current.done:
+                    rest = self.heuristic(current)
+                    if rest is None:
+                        self.stats.pruned += 1
+                        continue
+                    priority = self.priority(current, rest)
+                yield priority, current
+                continue
+            placed: list[Partial] = []
+            for child in successors(self.grounder, current):
+                if isinstance(child, DeadEnd):
+                    self.report.note(child)
+                else:
+                    placed.append(child)
+            todo.extend(reversed(placed))
+
+    def priority(self, node: Partial, rest: float) -> float:
+        """``cost + rest``, rounded up when no configuration costs a fraction
+        (less a hair, for the float sums of shared costs)."""
+        priority = node.cost + rest
+        if self.integral:
+            priority = math.ceil(priority - 1e-6)
+        return priority
+
+    def refined(self, node: Partial, priority: float) -> float | None:
+        """The node's priority under the larger of both bounds; None: pruned."""
+        if self.refine is None:
+            return priority
+        rest = self.refine(node)
+        if rest is None:
+            self.stats.pruned += 1
+            return None
+        return max(priority, self.priority(node, rest))
+
+    def complete(self, node: Partial, total: float) -> Configuration | None:
+        """Step 4 for a complete node, in the order configurations are listed:
+        the configuration, or None (a repeat in distinct mode, or inadmissible)."""
+        ident = identity(node) if self.distinct else None
+        if ident is not None and ident in self.seen:
+            self.stats.derivations += 1
+            self.stats.duplicates += 1
+            return None
+        config = self.finish(node, total)
+        if config is None:
+            return None
+        self.stats.derivations += 1
+        if ident is not None:
+            self.seen.add(ident)
+        return config.model_copy(update={"derivation": self.stats.derivations})
+
+    def finish(self, node: Partial, total: float) -> Configuration | None:
+        """The admissible configuration of a complete node, or None (rejection reported)."""
+        result = finish(node, self.grounder.task, total, self.models)
+        if isinstance(result, DeadEnd):
+            self.stats.rejected += 1
+            self.report.reject(result)
+            return None
+        return result

@@ -1,0 +1,169 @@
+"""Search at scale (issue 11): the optimum on instances too big for the
+depth-first oracle, checked by a second, independent method; listing
+everything in bounded memory; duplicate facts; time limits.
+
+The second method is a depth-first branch and bound written here: the
+thesis's depth-first order (4.5), cut where the settled cost plus the first
+bound (bound.py alone, not the partitioned one) reaches the best cost found,
+admissibility checked by the independent checker. It shares with the planner
+only the step (successors) and that bound.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+
+from benchmarks.families import chain, delegation, ecology, fusion, media_tight, wall
+from cfgplan.configuration.admissible import problems
+from cfgplan.planner import enumerate as windows
+from cfgplan.planner import plan
+from cfgplan.planner.bound import Bound
+from cfgplan.planner.finish import finish
+from cfgplan.planner.ground import Grounder
+from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.successors import successors
+from cfgplan.problem import Problem, load
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def problem_of(texts: tuple[str, str]) -> Problem:
+    with tempfile.TemporaryDirectory() as tmp:
+        domain, state = Path(tmp) / "d.lisp", Path(tmp) / "s.lisp"
+        domain.write_text(texts[0])
+        state.write_text(texts[1])
+        return load(domain, state)
+
+
+def branch_and_bound(problem: Problem) -> float | None:
+    """The least cost of an admissible configuration, depth first."""
+    task = problem.task
+    grounder, bound = Grounder(task), Bound(task)
+    best: float | None = None
+    stack: list[Partial] = [root(problem.goal_call)]
+    while stack:
+        node = stack.pop()
+        if node.done:
+            config = finish(node, task, node.cost)
+            if not isinstance(config, Partial) and hasattr(config, "functionalities"):
+                assert problems(config, problem.domain, problem.state) == []  # type: ignore[arg-type]
+                best = node.cost if best is None else min(best, node.cost)
+            continue
+        rest = bound.estimate(node) if task.is_method(node.stack[0].call) else 0.0
+        if rest is None or (best is not None and node.cost + rest >= best):
+            continue
+        stack.extend(reversed([c for c in successors(grounder, node) if isinstance(c, Partial)]))
+    return best
+
+
+@pytest.mark.parametrize(
+    "texts",
+    [
+        ecology(10, 3, 2),
+        media_tight(5, 2, 1),
+        fusion(5, 3, 4, 3),
+        chain(12),
+        wall(3, 6, 3),
+    ],
+    ids=["ecology-10", "media-tight-5", "fusion-5", "chain-12", "wall-3-6-3"],
+)
+def test_the_cheapest_agrees_with_branch_and_bound(texts: tuple[str, str]) -> None:
+    problem = problem_of(texts)
+    (best,), _ = plan(problem.task, problem.goal_call)
+    assert problems(best, problem.domain, problem.state) == []
+    assert best.cost == branch_and_bound(problem)
+
+
+def test_listing_in_small_windows_gives_what_best_first_gives(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With room for only 50 configurations a window, --all lowers each
+    window's upper edge again and again; the list is the best-first list."""
+    problem = problem_of(wall(3, 4, 3))
+    configs, _ = plan(problem.task, problem.goal_call, limit=400)
+    monkeypatch.setattr(windows, "MOST_HELD", 50)
+    listed, _ = plan(problem.task, problem.goal_call, limit=None)
+    assert [(c.cost, c.identity(), c.derivation) for c in listed[:400]] == [
+        (c.cost, c.identity(), c.derivation) for c in configs
+    ]
+    assert len(listed) == 4236
+
+
+def test_a_fact_repeated_forty_times_costs_nothing() -> None:
+    """Issue 11: cross-door with the compass facts repeated 40 times took
+    over 300 s and 2.7 GiB; a fact written twice is one fact (4.4)."""
+    domain = ROOT / "domains/cross-door/domain.lisp"
+    text = (ROOT / "domains/cross-door/state-6.2.2-step1.lisp").read_text()
+    repeated = text.replace("compass(Pippi),", "compass(Pippi), " * 40).replace(
+        "compass(Emil),", "compass(Emil), " * 40
+    )
+    assert repeated.count("compass(Pippi)") == 40
+    with tempfile.TemporaryDirectory() as tmp:
+        state = Path(tmp) / "s.lisp"
+        state.write_text(repeated)
+        problem = load(domain, state)
+    configs, run = plan(problem.task, problem.goal_call, limit=None, time_limit=60)
+    assert run.stopped is None
+    assert [c.cost for c in configs] == [44, 47]
+
+
+JOIN = """\
+(make-functionality :name '(act ?r) :in '((d ?r)))
+(make-functionality :name '(sense ?r ?a ?b ?c ?e) :out '((d ?r)))
+(make-config-method :name '(go ?r)
+  :precond '((robot ?a) (robot ?b) (robot ?c) (robot ?e) (eval (eql '?a 'nobody)))
+  :channels '(((local ?r) ?s ?x (d ?r)))
+  :body '((?s (sense ?r ?a ?b ?c ?e)) (?x (act ?r))))
+"""
+
+
+def test_the_time_limit_holds_inside_one_expansion(tmp_path: Path) -> None:
+    """Issue 11: one method whose preconditions join four robots out of 60
+    (13 million bindings, none valid) kept a run going long after its time
+    limit. Now the expansion stops at the limit (the README reports how close)."""
+    (tmp_path / "d.lisp").write_text(JOIN)
+    robots = " ".join(f"(robot R{i})" for i in range(60))
+    (tmp_path / "s.lisp").write_text(f"(state {robots}) (goal (go R0))")
+    start = time.monotonic()
+    out = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "plan", str(tmp_path / "d.lisp"),
+         str(tmp_path / "s.lisp"), "--time-limit", "1", "--format", "json"],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )
+    elapsed = time.monotonic() - start
+    assert out.returncode == 3, out.stderr
+    assert "search stopped (time limit)" in out.stderr
+    assert elapsed < 30  # without the limit inside the expansion: minutes
+
+
+def test_all_streams_json_lines_in_rank_order(tmp_path: Path) -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "plan", "domains/build-wall/domain.lisp",
+         "domains/build-wall/state-6.4.lisp", "--all", "--format", "jsonl"],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    *rows, summary = (json.loads(line) for line in out.stdout.splitlines())
+    assert [r["rank"] for r in rows] == list(range(1, 101))
+    assert [r["cost"] for r in rows] == sorted(r["cost"] for r in rows)
+    assert (rows[0]["cost"], rows[-1]["cost"]) == (53, 81)
+    assert summary["count"] == 100 and summary["stats"]["exhausted"] is True
+
+
+def test_recursive_delegation_is_listed_whole() -> None:
+    """Recursion pruned only on its own path (4.5): every chain and pair of
+    chains of relays from the hub to the sensing robot, listed once each."""
+    problem = problem_of(delegation(4))
+    configs, run = plan(problem.task, problem.goal_call, limit=None)
+    assert run.stats.complete and run.stopped is None
+    assert len(configs) == len({c.identity() for c in configs}) == 21
+    assert configs[0].cost == 27  # R1 asks R4, which senses
+    for config in configs:
+        assert problems(config, problem.domain, problem.state) == []
