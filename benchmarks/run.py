@@ -24,55 +24,34 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+from benchmarks.instances import INSTANCES, ROOT, Instance, problem_files
+
+CAP = 60.0
+"""Seconds a run may take before it is stopped and shown as "> CAP"."""
 
 
-@dataclass(frozen=True)
-class Instance:
-    name: str
-    kind: str  # "file" | "wall" | "relay"
-    args: tuple[object, ...]
-    baseline: bool = True  # small enough for the naive baseline
-    all_distinct: bool = True  # small enough to list every distinct configuration
-
-
-INSTANCES = [
-    Instance(
-        "cross-door 6.2.2", "file", ("cross-door/domain.lisp", "cross-door/state-6.2.2-step1.lisp")
-    ),
-    Instance("carry-bar 6.3.2", "file", ("carry-bar/domain.lisp", "carry-bar/state-6.3.2.lisp")),
-    Instance("build-wall 6.4", "file", ("build-wall/domain.lisp", "build-wall/state-6.4.lisp")),
-    Instance("wall K=3 N=4 L=3", "wall", (3, 4, 3)),
-    Instance("wall K=4 N=6 L=4", "wall", (4, 6, 4)),
-    Instance("wall K=6 N=20 L=8", "wall", (6, 20, 8), baseline=False, all_distinct=False),
-    Instance("wall K=8 N=50 L=20", "wall", (8, 50, 20), baseline=False, all_distinct=False),
-    Instance("relay D=4 W=4 V=3", "relay", (4, 4, 3)),
-    Instance("relay D=5 W=5 V=3", "relay", (5, 5, 3), baseline=False),
-    Instance("relay D=8 W=10 V=4", "relay", (8, 10, 4), baseline=False, all_distinct=False),
-]
-
-
-def problem_files(instance: Instance, folder: Path) -> tuple[Path, Path]:
-    """The domain and state files of an instance (generated ones into ``folder``)."""
-    from benchmarks.families import relay, wall
-
-    if instance.kind == "file":
-        domain, state = instance.args
-        return ROOT / "domains" / str(domain), ROOT / "domains" / str(state)
-    make = wall if instance.kind == "wall" else relay
-    domain_text, state_text = make(*instance.args)  # type: ignore[arg-type]
-    (folder / "domain.lisp").write_text(domain_text)
-    (folder / "state.lisp").write_text(state_text)
-    return folder / "domain.lisp", folder / "state.lisp"
-
-
-def _planner(mode: str) -> Any:
+def _planner(mode: str, problem: Any, instance: Instance) -> Any:
     """What to time: cfgplan's ``plan`` (wherever this version of cfgplan keeps
-    it: ``--against`` runs this harness on an older cfgplan) or the baseline."""
+    it: ``--against`` runs this harness on an older cfgplan), its sequence
+    search, or the baseline."""
+    if instance.sequence:
+        from itertools import islice
+
+        from cfgplan.planner.sequence import SequenceSearch
+
+        most = {"top1": 1, "top10": 10}[mode]
+
+        def sequences(task: Any, goal: Any) -> tuple[list[Any], bool]:
+            search = SequenceSearch(problem.domain, problem.state, problem.goal_calls, task)
+            search.time_limit = CAP
+            found = [s.steps[-1].configuration.model_copy(update={"cost": s.total})
+                     for s in islice(search, most)]
+            return found, bool(search.stopped)
+
+        return sequences
     if mode == "baseline":
         from benchmarks.naive import enumerate_all
 
@@ -82,7 +61,12 @@ def _planner(mode: str) -> Any:
     except ImportError:  # before the planner package exported it
         from cfgplan.planner.search import plan  # type: ignore[no-redef,attr-defined]
     limit = {"top1": 1, "top10": 10, "all": None}[mode]
-    return lambda task, goal: plan(task, goal, limit=limit)[0]
+
+    def planned(task: Any, goal: Any) -> tuple[list[Any], bool]:
+        configs, run = plan(task, goal, limit=limit, time_limit=CAP)
+        return configs, bool(run.stopped)
+
+    return planned
 
 
 def measure(instance: Instance, mode: str, repeat: int) -> dict[str, object]:
@@ -92,23 +76,25 @@ def measure(instance: Instance, mode: str, repeat: int) -> dict[str, object]:
     with tempfile.TemporaryDirectory() as tmp:
         domain, state = problem_files(instance, Path(tmp))
         problem = load(domain, state)
-    planner = _planner(mode)
+    planner = _planner(mode, problem, instance)
 
-    def once() -> tuple[int, float | None]:
-        configs = planner(problem.task, problem.goal_call)
-        return len(configs), (configs[0].cost if configs else None)
+    def once() -> tuple[int, float | None, bool]:
+        result = planner(problem.task, problem.goal_call)
+        configs, stopped = result if isinstance(result, tuple) else (result, False)
+        return len(configs), (configs[0].cost if configs else None), stopped
 
     start = time.perf_counter()
-    count, best = once()  # warm-up, untimed
+    count, best, stopped = once()  # warm-up, untimed (fills the task's caches)
     if time.perf_counter() - start > 2.0:
         repeat = 1  # a long run: once more is enough
     times = []
-    for _ in range(repeat):
+    for _ in range(0 if stopped else repeat):
         start = time.perf_counter()
         once()
         times.append(time.perf_counter() - start)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB -> MiB on Linux
-    return {"seconds": min(times), "peak_mib": peak, "count": count, "best": best}
+    seconds = min(times) if times else None
+    return {"seconds": seconds, "peak_mib": peak, "count": count, "best": best}
 
 
 def run_one(
@@ -162,7 +148,10 @@ def machine() -> str:
 
 
 def ms(seconds: object) -> str:
-    return f"{float(seconds) * 1000:.1f}" if isinstance(seconds, (int, float)) else "-"
+    """Milliseconds; a run stopped at the cap shows as "> CAP s"."""
+    if isinstance(seconds, (int, float)):
+        return f"{float(seconds) * 1000:.1f}"
+    return f"> {CAP:g} s"
 
 
 def main() -> None:
@@ -198,6 +187,7 @@ def main() -> None:
         "all distinct ms",
         "baseline ms",
         "baseline / top-1",
+        "CLI top-1 ms",
         "MiB top-1",
         "MiB all",
         "MiB baseline",
@@ -207,28 +197,53 @@ def main() -> None:
     for instance in INSTANCES:
         if args.only and args.only not in instance.name:
             continue
-        top1 = run_one(instance, "top1", args.repeat)
-        top10 = run_one(instance, "top10", args.repeat)
-        every = run_one(instance, "all", args.repeat) if instance.all_distinct else None
-        base = None
-        if instance.baseline and not args.no_baseline:
-            base = run_one(instance, "baseline", 1)
-            if base["best"] != top1["best"]:
-                raise SystemExit(f"{instance.name}: baseline and cfgplan disagree on the best cost")
-        row = [
-            instance.name,
-            str(every["count"]) if every else "-",
-            f"{top1['best']:g}",
-            ms(top1["seconds"]),
-            ms(top10["seconds"]),
-            ms(every["seconds"]) if every else "-",
-            ms(base["seconds"]) if base else "-",
-            f"{_f(base['seconds']) / _f(top1['seconds']):,.0f}x" if base else "-",
-            f"{_f(top1['peak_mib']):.0f}",
-            f"{_f(every['peak_mib']):.0f}" if every else "-",
-            f"{_f(base['peak_mib']):.0f}" if base else "-",
-        ]
-        print("| " + " | ".join(row) + " |", flush=True)
+        print("| " + " | ".join(_row(instance, args)) + " |", flush=True)
+
+
+def _row(instance: Instance, args: argparse.Namespace) -> list[str]:
+    top1 = run_one(instance, "top1", args.repeat)
+    top10 = run_one(instance, "top10", args.repeat)
+    every = run_one(instance, "all", args.repeat) if instance.all_distinct else None
+    base = None
+    if instance.baseline and not args.no_baseline:
+        base = run_one(instance, "baseline", 1)
+        if top1["seconds"] is not None and base["best"] != top1["best"]:
+            raise SystemExit(f"{instance.name}: baseline and cfgplan disagree on the best cost")
+    ratio = "-"
+    if base and top1["seconds"]:
+        ratio = f"{_f(base['seconds']) / _f(top1['seconds']):,.0f}x"
+    best = top1["best"]
+    return [
+        instance.name,
+        str(every["count"]) if every and every["seconds"] is not None else "-",
+        f"{best:g}" if isinstance(best, (int, float)) else "-",
+        ms(top1["seconds"]),
+        ms(top10["seconds"]),
+        ms(every["seconds"]) if every else "-",
+        ms(base["seconds"]) if base else "-",
+        ratio,
+        ms(end_to_end(instance)),
+        f"{_f(top1['peak_mib']):.0f}",
+        f"{_f(every['peak_mib']):.0f}" if every else "-",
+        f"{_f(base['peak_mib']):.0f}" if base else "-",
+    ]
+
+
+def end_to_end(instance: Instance, repeat: int = 3) -> float | None:
+    """``cfgplan plan DOMAIN STATE -k 1``, process start to exit, best of a few."""
+    best: float | None = None
+    with tempfile.TemporaryDirectory() as tmp:
+        domain, state = problem_files(instance, Path(tmp))
+        command = [sys.executable, "-m", "cfgplan", "plan", str(domain), str(state), "-k", "1"]
+        command += ["--format", "json", "--time-limit", f"{CAP:g}"]
+        for _ in range(repeat):
+            start = time.perf_counter()
+            out = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+            took = time.perf_counter() - start
+            if out.returncode != 0 or json.loads(out.stdout)["stats"]["stopped"]:
+                return None
+            best = took if best is None else min(best, took)
+    return best
 
 
 def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
@@ -254,10 +269,13 @@ def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
                 continue
             old = run_one(instance, mode, repeat, against)
             new = run_one(instance, mode, repeat)
-            if (old["count"], old["best"]) != (new["count"], new["best"]):
+            finished = old["seconds"] is not None and new["seconds"] is not None
+            if finished and (old["count"], old["best"]) != (new["count"], new["best"]):
                 raise SystemExit(f"{instance.name} {mode}: {rev} and this cfgplan disagree")
-            ratio = _f(new["seconds"]) / _f(old["seconds"])
-            cells += [ms(old["seconds"]), ms(new["seconds"]), f"{ratio:.2f}"]
+            ratio = "-"
+            if old["seconds"] and new["seconds"] is not None:
+                ratio = f"{_f(new['seconds']) / _f(old['seconds']):.2f}"
+            cells += [ms(old["seconds"]), ms(new["seconds"]), ratio]
             peak = (f"{_f(old['peak_mib']):.0f}", f"{_f(new['peak_mib']):.0f}")
             if mode == "all":
                 count = str(new["count"])

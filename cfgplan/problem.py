@@ -6,6 +6,7 @@ compile); the planner and the backends take it from here.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,19 +30,30 @@ class Problem:
     task: Task
     sources: dict[str, str]
     warnings: list[Diagnostic] = field(default_factory=list)
+    goals: tuple[Goal, ...] = ()
+    """Every goal, in order: more than one for a sequence of configurations."""
+
+    def __post_init__(self) -> None:
+        if not self.goals:
+            self.goals = (self.goal,)
 
     @property
     def goal_call(self) -> Ground:
         return pattern(self.goal.call)
 
+    @property
+    def goal_calls(self) -> tuple[Ground, ...]:
+        return tuple(pattern(g.call) for g in self.goals)
 
-def parse_goal(text: str) -> Goal:
+
+def parse_goal(text: str, line: int = 1) -> Goal:
     """A goal given on the command line: ``(do-cross-door Pippi Door1)`` or
-    ``do-cross-door(Pippi, Door1)``."""
-    wrapped = f"(goal {text})"
+    ``do-cross-door(Pippi, Door1)``; ``line`` is its place among several
+    ``--goal`` options (messages quote that line of them)."""
+    wrapped = "\n" * (line - 1) + f"(goal {text})"
     source = parse(wrapped, GOAL_SOURCE)
     if len(source.goals) != 1:
-        span = Span(file=GOAL_SOURCE, line=1, column=1, end_line=1, end_column=1)
+        span = Span(file=GOAL_SOURCE, line=line, column=1, end_line=line, end_column=1)
         raise error("expected one method instance such as (do-cross-door Pippi Door1)", span)
     return source.goals[0]
 
@@ -49,30 +61,35 @@ def parse_goal(text: str) -> Goal:
 def load(
     domain_path: str | Path,
     state_path: str | Path,
-    goal_text: str | None = None,
+    goal_text: str | Sequence[str] | None = None,
     weights: Weights | None = None,
 ) -> Problem:
-    """Read and check a domain and a state; the goal comes from ``goal_text`` or
-    the state file. Raises CfgplanError (with every error found) on bad input."""
+    """Read and check a domain and a state. The goals come from ``goal_text``
+    (one, or several for a sequence), else from the state file's ``(goal ...)``
+    or ``(sequence ...)``. Raises CfgplanError (with every error found) on bad input."""
     sources: dict[str, str] = {}
     domain, text = read_domain(domain_path)
     sources[str(domain_path)] = text
     state, text = read_state(state_path)
     sources[str(state_path)] = text
-    goal: Goal | None
-    if goal_text is not None:
-        sources[GOAL_SOURCE] = f"(goal {goal_text})"
-        goal = parse_goal(goal_text)
+    texts = [goal_text] if isinstance(goal_text, str) else list(goal_text or [])
+    goals: tuple[Goal, ...]
+    if texts:
+        sources[GOAL_SOURCE] = "\n".join(f"(goal {t})" for t in texts)
+        goals = tuple(parse_goal(t, line) for line, t in enumerate(texts, 1))
     else:
-        goal = state.goal
-    if goal is None:
+        goals = (state.goal,) if state.goal is not None else state.sequence
+    if not goals:
         raise error(
             f"no goal: {state_path} has no (goal ...) form and --goal was not given",
             hint="add (goal (do-cross-door Pippi Door1)) to the state file, or pass --goal",
         )
-    diagnostics = check(domain, state, goal)
+    diagnostics: list[Diagnostic] = []
+    for goal in goals:
+        diagnostics += [d for d in check(domain, state, goal) if d not in diagnostics]
     errors = [d for d in diagnostics if d.is_error]
     if errors:
         raise CfgplanError(diagnostics)
     task = compile_task(domain, state, weights)
-    return Problem(domain, state, goal, task, sources, [d for d in diagnostics if not d.is_error])
+    warnings = [d for d in diagnostics if not d.is_error]
+    return Problem(domain, state, goals[0], task, sources, warnings, goals)

@@ -7,7 +7,8 @@ for ``python -m benchmarks.run`` and the tests:
 - ``ecology(N, R, C)``, ``media_tight(N, R, C)``, ``fusion(M, V, P, H)``,
   ``chain(D)``, ``delegation(N)``: structures it was not (issue 11): covering
   with shared robots and devices, tight media, weighted covering with
-  ``:cost``, long plateaus of equal cost, recursion.
+  ``:cost``, long plateaus of equal cost, recursion;
+- ``deliveries(S, R)``: a sequence of S configurations (issue 14).
 """
 
 from benchmarks.families.chain import chain
@@ -15,6 +16,16 @@ from benchmarks.families.delegation import delegation
 from benchmarks.families.ecology import ecology, media_tight
 from benchmarks.families.fusion import fusion
 from benchmarks.families.relay import relay
+from benchmarks.families.steps import deliveries
 from benchmarks.families.wall import wall
 
-__all__ = ["chain", "delegation", "ecology", "fusion", "media_tight", "relay", "wall"]
+__all__ = [
+    "chain",
+    "delegation",
+    "deliveries",
+    "ecology",
+    "fusion",
+    "media_tight",
+    "relay",
+    "wall",
+]

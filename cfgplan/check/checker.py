@@ -47,7 +47,8 @@ Side = Literal["out", "in"]
 def check(domain: Domain, state: State | None = None, goal: Goal | None = None) -> list[Diagnostic]:
     """All errors and warnings about ``domain`` (and ``state``, ``goal``), by file position.
 
-    ``goal`` defaults to ``state.goal``. An empty list, or warnings only, means
+    ``goal`` defaults to ``state.goal`` (or every goal of ``state.sequence``).
+    An empty list, or warnings only, means
     the planner may run.
     """
     checker = _Checker(domain)
@@ -58,9 +59,11 @@ def check(domain: Domain, state: State | None = None, goal: Goal | None = None) 
         checker.method(method)
     if state is not None:
         checker.state(state)
-    target = goal if goal is not None else (state.goal if state is not None else None)
-    if target is not None:
-        checker.goal(target)
+    if goal is not None:
+        checker.goal(goal)
+    elif state is not None:
+        for target in (state.goal,) if state.goal is not None else state.sequence:
+            checker.goal(target)
     return checker.sorted()
 
 

@@ -14,10 +14,11 @@ from rich.console import Console
 from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_output
+from cfgplan.cli.sequence import SequenceOptions, plan_sequences
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_dict, to_json, to_text
 from cfgplan.configuration.model import Configuration
-from cfgplan.diagnostics import CfgplanError
+from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.planner import Run, Stats
 from cfgplan.planner.explain import explain
 from cfgplan.problem import GOAL_SOURCE, Problem, load
@@ -57,6 +58,15 @@ GoalOpt = Annotated[
         "default: the state file's (goal ...).",
     ),
 ]
+GoalsOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--goal",
+        help="Goal method instance, e.g. '(do-cross-door Pippi Door1)'; give it several "
+        "times for a sequence of configurations, one goal after the other. "
+        "Default: the state file's (goal ...) or (sequence ...).",
+    ),
+]
 WeightsOpt = Annotated[
     str | None,
     typer.Option(
@@ -67,12 +77,31 @@ WeightsOpt = Annotated[
 ]
 
 
-def load_problem(domain: Path, state: Path, goal: str | None, weights: str | None) -> Problem:
-    """Read, check and compile; warnings go to stderr."""
-    if goal is not None:
-        remember_source(GOAL_SOURCE, f"(goal {goal})")
-    problem = load(domain, state, goal, weights_option(weights))
+def load_problem(
+    domain: Path,
+    state: Path,
+    goal: str | list[str] | None,
+    weights: str | None,
+    sequence: bool = False,
+) -> Problem:
+    """Read, check and compile; warnings go to stderr. Unless ``sequence``,
+    the command plans one configuration and refuses a sequence of goals."""
+    goals = [goal] if isinstance(goal, str) else list(goal or [])
+    if goals:
+        remember_source(GOAL_SOURCE, "\n".join(f"(goal {g})" for g in goals))
+    problem = load(domain, state, goals, weights_option(weights))
     report(problem.warnings)
+    if len(problem.goals) > 1 and not sequence:
+        raise CfgplanError(
+            [
+                Diagnostic(
+                    "error",
+                    f"{state} holds a sequence of {len(problem.goals)} goals; "
+                    "this command plans one configuration",
+                    hint="choose one with --goal; cfgplan plan plans the whole sequence",
+                )
+            ]
+        )
     return problem
 
 
@@ -170,7 +199,7 @@ def _lisp(problem: Problem, configs: list[Configuration]) -> str:
 def plan(
     domain: DomainArg,
     state: StateArg,
-    goal: GoalOpt = None,
+    goal: GoalsOpt = None,
     k: Annotated[
         int, typer.Option("-k", min=1, help="How many configurations, cheapest first.")
     ] = 10,
@@ -204,12 +233,27 @@ def plan(
         Path | None, typer.Option("-o", "--output", help="Write here, not stdout.")
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite the -o file.")] = False,
+    switch: Annotated[
+        float,
+        typer.Option(
+            "--switch",
+            min=0,
+            help="Sequences: the weight of each functionality or channel started or "
+            "stopped between two steps (default 0).",
+        ),
+    ] = 0.0,
 ) -> None:
-    """Plan ranked admissible configurations for a goal (thesis 4.5).
+    """Plan ranked admissible configurations for a goal (thesis 4.5), or
+    sequences of them for several goals in order.
 
     Exit codes: 0 found, 1 invalid input, 2 usage, 3 no admissible configuration.
     """
-    problem = load_problem(domain, state, goal, weights)
+    problem = load_problem(domain, state, goal, weights, sequence=True)
+    if len(problem.goals) > 1:
+        options = SequenceOptions(None if all_ else k, switch, time_limit, verbose, details)
+        text = plan_sequences(problem, options, format_.value)
+        write_output(text, output, force)
+        return
     search = Run(  # the time limit counts from here: planning, not reading
         problem.task,
         problem.goal_call,

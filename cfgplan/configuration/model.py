@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field
 
 from cfgplan.configuration.cost import Weights
 
@@ -74,6 +74,9 @@ class Configuration(BaseModel):
     proven: bool = True  # False: found by a dive after the search was stopped early
     devices: tuple[str, ...] = ()  # its agents the state declares (device X)
     reliability: float = 1.0  # the product of its parts' reliabilities (7.2)
+    effects: tuple[tuple[bool, tuple[str, ...]], ...] = Field(default=(), exclude=True, repr=False)
+    """P as data: (True, atom) adds the atom, (False, atom) deletes it; the
+    printed form is :attr:`postconditions`."""
 
     @property
     def agents(self) -> list[str]:

@@ -218,3 +218,4 @@ class State(Node):
     facts: tuple[Atom, ...] = ()
     media: tuple[Medium, ...] = ()
     goal: Goal | None = None
+    sequence: tuple[Goal, ...] = ()  # (sequence G1 G2 ...): goals one after the other

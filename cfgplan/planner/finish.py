@@ -188,6 +188,7 @@ def build(node: Partial, total: float, task: Task, models: Models) -> Configurat
         proven=True,
         devices=tuple(a for a in agents if a in task.devices),
         reliability=reliability,
+        effects=tuple(dict.fromkeys(node.effects)),
     )
 
 

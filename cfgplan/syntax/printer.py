@@ -289,4 +289,7 @@ def print_state(state: State) -> str:
     text = _fill("(state ", items, ")")
     if state.goal is not None:
         text += f"\n\n(goal {format_atom(state.goal.call)})"
+    if state.sequence:
+        goals = "\n          ".join(format_atom(g.call) for g in state.sequence)
+        text += f"\n\n(sequence {goals})"
     return text + "\n"

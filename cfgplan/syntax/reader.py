@@ -46,6 +46,7 @@ _TERMINAL_NAMES = {
     "MAKE_CONFIG_METHOD": "make-config-method",
     "STATE": "state",
     "GOAL": "goal",
+    "SEQUENCE": "sequence",
     "$END": "end of file",
 }
 
@@ -54,6 +55,14 @@ _TERMINAL_NAMES = {
 def grammar_text() -> str:
     """The grammar, read from the installed package data ``cfgplan.grammar``."""
     return resources.files("cfgplan.grammar").joinpath("cfgplan.lark").read_text("utf-8")
+
+
+@dataclass(frozen=True)
+class GoalSequence:
+    """``(sequence G1 G2 ...)`` as read; it becomes :attr:`State.sequence`."""
+
+    goals: tuple[Goal, ...]
+    span: Span
 
 
 @dataclass
@@ -66,6 +75,7 @@ class SourceFile:
     methods: list[Method] = field(default_factory=list)
     states: list[State] = field(default_factory=list)
     goals: list[Goal] = field(default_factory=list)
+    sequences: list[tuple[Goal, ...]] = field(default_factory=list)
     order: list[str] = field(default_factory=list)
 
 
@@ -152,6 +162,13 @@ class _ToIR(Transformer_NonRecursive[Token, Any]):
         value = next(c for c in children[1:] if isinstance(c, Sx))
         return forms.goal(self._span(meta), value)
 
+    @v_args(meta=True)
+    def sequence(self, meta: Any, children: Sequence[Any]) -> GoalSequence:
+        span = self._span(meta)
+        return GoalSequence(
+            tuple(forms.goal(c.span, c) for c in children[1:] if isinstance(c, Sx)), span
+        )
+
 
 @cache
 def _parser() -> Lark:
@@ -229,7 +246,7 @@ def _unclosed(text: str) -> tuple[int, int] | None:
 
 
 def _form_hint(word: str) -> str:
-    known = ("make-functionality", "make-config-method", "state", "goal")
+    known = ("make-functionality", "make-config-method", "state", "goal", "sequence")
     for k in known:
         if word.lower() == k:
             return f"symbols are case-sensitive: write {k}"
@@ -289,6 +306,9 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
         elif isinstance(item, Goal):
             source.goals.append(item)
             source.order.append("goal")
+        elif isinstance(item, GoalSequence):
+            source.sequences.append(item.goals)
+            source.order.append("sequence")
     return source
 
 
@@ -309,7 +329,7 @@ def read_text_file(path: str | Path) -> tuple[str, str]:
 
 def domain_from(source: SourceFile) -> Domain:
     """A Domain from a parsed file; state and goal forms do not belong there."""
-    for item in (*source.states, *source.goals):
+    for item in (*source.states, *source.goals, *(s[0] for s in source.sequences)):
         raise error(
             "a domain file holds only make-functionality and make-config-method forms",
             item.span,
@@ -336,9 +356,18 @@ def state_from(source: SourceFile) -> State:
         raise error("a second (state ...) form; a state file holds one", source.states[1].span)
     if len(source.goals) > 1:
         raise error("a second (goal ...) form; a state file holds one", source.goals[1].span)
+    if source.sequences and (source.goals or len(source.sequences) > 1):
+        where = source.sequences[-1][0].span
+        raise error(
+            "a state file holds one (goal ...) or one (sequence ...), not both",
+            where,
+            "write every goal, in order, in one (sequence G1 G2 ...)",
+        )
     state = source.states[0]
     if source.goals:
         state = state.model_copy(update={"goal": source.goals[0]})
+    if source.sequences:
+        state = state.model_copy(update={"sequence": source.sequences[0]})
     return state
 
 

@@ -1,0 +1,158 @@
+"""``cfgplan plan`` for several goals: ranked sequences of configurations.
+
+The search is :class:`cfgplan.planner.sequence.SequenceSearch`. Outputs: the
+table lists sequences with their steps; ``--format lisp`` prints each step's
+configuration description (4.4) under a step header, then the state changes
+it makes; JSON holds ``{"sequences": [{"rank", "total_cost", "steps":
+[{"goal", "state_changes", "configuration"}]}], "communication_checked",
+"stats"}`` (README, "Sequences of configurations"); ``jsonl`` one sequence a line.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass
+from itertools import islice
+from typing import Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from cfgplan.cli.app import EXIT_NONE, say
+from cfgplan.configuration.cost import fmt
+from cfgplan.configuration.describe import call_text, to_dict, to_text
+from cfgplan.planner.explain import explain
+from cfgplan.planner.sequence import PlannedSequence, SequenceSearch
+from cfgplan.problem import Problem
+
+
+@dataclass(frozen=True)
+class SequenceOptions:
+    limit: int | None  # None: every sequence
+    switch: float
+    time_limit: float | None
+    verbose: bool
+    details: bool
+
+
+def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> str:
+    """Plan, report on stderr, and return the text to print (exit 3 when none)."""
+    search = SequenceSearch(
+        problem.domain,
+        problem.state,
+        problem.goal_calls,
+        problem.task,
+        options.switch,
+        options.time_limit,
+    )
+    found = list(islice(search, options.limit) if options.limit is not None else search)
+    if search.stopped is not None:
+        say(f"cfgplan: search stopped ({search.stopped.value}); reporting {len(found)} found")
+    if not found:
+        _impossible(problem, search)
+        raise typer.Exit(EXIT_NONE)
+    if format_ == "json":
+        return json.dumps(_document(problem, found, search), indent=2, ensure_ascii=False) + "\n"
+    if format_ == "jsonl":
+        return "".join(
+            json.dumps(_sequence(s, rank), ensure_ascii=False) + "\n"
+            for rank, s in enumerate(found, 1)
+        )
+    if format_ == "lisp":
+        return _lisp(problem, found)
+    return _table(problem, found, options.details)
+
+
+def _impossible(problem: Problem, search: SequenceSearch) -> None:
+    """Say which step has no admissible configuration, and why."""
+    blocked = search.blocked()
+    if blocked is None:
+        say("no admissible sequence found")
+        return
+    step, _, report = blocked
+    goal = call_text(problem.goal_calls[step])
+    where = "in the initial state" if step == 0 else (
+        "in any state the steps before it reach; in the state the cheapest of them leaves"
+    )
+    say(f"no admissible sequence: step {step + 1}, {goal}, has no configuration {where}:")
+    say("\n".join(explain(report, goal)))
+
+
+def _sequence(planned: PlannedSequence, rank: int) -> dict[str, Any]:
+    return {
+        "rank": rank,
+        "total_cost": _number(planned.total),
+        "steps": [
+            {
+                "goal": call_text(step.goal),
+                "state_changes": list(step.changes),
+                "configuration": to_dict(step.configuration, 1),
+            }
+            for step in planned.steps
+        ],
+    }
+
+
+def _document(
+    problem: Problem, found: list[PlannedSequence], search: SequenceSearch
+) -> dict[str, Any]:
+    return {
+        "goals": [call_text(g) for g in problem.goal_calls],
+        "sequences": [_sequence(s, rank) for rank, s in enumerate(found, 1)],
+        "communication_checked": bool(problem.state.media),
+        "stats": {
+            "exhausted": search.complete,
+            "stopped": search.stopped.value if search.stopped else None,
+        },
+    }
+
+
+def _number(x: float) -> int | float:
+    return int(x) if float(x).is_integer() else x
+
+
+def _lisp(problem: Problem, found: list[PlannedSequence]) -> str:
+    goals = ", ".join(call_text(g) for g in problem.goal_calls)
+    parts = [f";; cfgplan: {len(found)} sequence(s) for {goals}"]
+    for rank, planned in enumerate(found, 1):
+        parts.append(f";; sequence {rank}, total cost {fmt(planned.total)}")
+        for i, step in enumerate(planned.steps, 1):
+            parts.append(f";; step {i}: {call_text(step.goal)}")
+            parts.append(to_text(step.configuration, problem.state.media))
+            parts += [f";; then {change}" for change in step.changes]
+    return "\n".join(parts) + "\n"
+
+
+def _table(problem: Problem, found: list[PlannedSequence], details: bool) -> str:
+    goals = " then ".join(call_text(g) for g in problem.goal_calls)
+    table = Table(title=f"Sequences for {goals}")
+    table.add_column("rank", justify="right")
+    table.add_column("total", justify="right")
+    table.add_column("step", justify="right")
+    table.add_column("goal")
+    table.add_column("cost", justify="right")
+    table.add_column("robots")
+    table.add_column("then the state changes")
+    if details:
+        table.add_column("functionality instances")
+    for rank, planned in enumerate(found, 1):
+        for i, step in enumerate(planned.steps, 1):
+            config = step.configuration
+            row = [
+                str(rank) if i == 1 else "",
+                fmt(planned.total) if i == 1 else "",
+                str(i),
+                call_text(step.goal),
+                fmt(config.cost),
+                ", ".join(config.agents),
+                "\n".join(step.changes),
+            ]
+            if details:
+                row.append("\n".join(str(f) for f in config.functionalities))
+            table.add_row(*row, end_section=i == len(planned.steps))
+    buffer = io.StringIO()
+    width = 200 if details else 120
+    Console(file=buffer, width=width, force_terminal=False, color_system=None).print(table)
+    return buffer.getvalue()

@@ -1,0 +1,296 @@
+"""Sequences of configurations: plans whose steps are configurations.
+
+The thesis plans one configuration for one step and names sequences as a
+limitation (7.2): "a configuration for removing that box would have to
+precede the configuration for getting the first box through the door". Its
+own experiment is one (6.2.2: Pippi crosses, then Emil, the operator editing
+the state in between); Lundh et al. (ECAI 2008) later planned them.
+
+Goals G1..Gn are reached in order. Step i is planned in the state step i-1's
+configuration leaves: its postconditions P applied (4.5) — every ``(not
+ATOM)`` deletes, then every atom adds (a configuration that both deletes and
+adds an atom keeps it). A functionality's postconditions are instantiated
+under the binding it was placed with, so P names what its preconditions
+bound. The cost of a sequence is the sum of its steps' costs plus, with
+``switch`` weight W (default 0), W times the functionality instances and
+channels started or stopped between consecutive configurations.
+
+Different configurations of step i can leave different states, so the
+cheapest sequence is not the cheapest step after cheapest step: this is a
+best-first search over sequences, each step's configurations coming from the
+per-step planner in cost order, lazily. Its queue holds *offers*: "the j-th
+configuration of step i after this prefix", priced at the prefix's cost plus
+that configuration's (a lower bound, as a switch costs nothing or more); an
+offer taken becomes the sequence it offers, priced in full, and makes the
+next offer. So sequences come out cheapest first; at equal cost, the one
+whose steps rank earlier, step 1 first. The per-step planner for a (step,
+state) met again is reused.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import cast
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.ir.model import Atom, Domain, State
+from cfgplan.planner import clock
+from cfgplan.planner.grow import Grower
+from cfgplan.planner.plan import Run, partitioned, parts
+from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.search import BestFirst
+from cfgplan.planner.task import Ground, Task, compile_task, show
+
+Facts = tuple[Ground, ...]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a sequence: its goal, its configuration, and the changes its
+    postconditions make to the state (which the next step is planned in)."""
+
+    goal: Ground
+    configuration: Configuration
+    changes: tuple[str, ...]  # "(not (in Pippi Room1))", "(in Pippi Room2)"
+
+
+@dataclass(frozen=True)
+class PlannedSequence:
+    """A sequence of configurations, one a goal, and what it costs in all."""
+
+    steps: tuple[Step, ...]
+    total: float
+
+
+def apply(facts: Facts, effects: Sequence[tuple[bool, Ground]]) -> tuple[Facts, tuple[str, ...]]:
+    """The state after P, and the changes it made (as the thesis prints them):
+    deletions first, then additions; facts keep their order, new ones last."""
+    deleted = {atom for positive, atom in effects if not positive}
+    kept = [f for f in facts if f not in deleted]
+    present = set(kept)
+    changes = [f"(not {show(f)})" for f in facts if f in deleted]
+    for positive, atom in effects:
+        if positive and atom not in present:
+            kept.append(atom)
+            present.add(atom)
+            if atom not in deleted:
+                changes.append(show(atom))
+    return tuple(kept), tuple(changes)
+
+
+def switching(before: Configuration, after: Configuration) -> int:
+    """Functionality instances and channels started or stopped between two
+    configurations (labels ignored)."""
+    f1, c1, _ = before.identity()
+    f2, c2, _ = after.identity()
+    return len(f1 ^ f2) + len({c[:4] for c in c1} ^ {c[:4] for c in c2})
+
+
+@dataclass
+class Ranked:
+    """The configurations of one goal in one state, in cost order, planned as
+    far as they are asked for (best-first search continued, never restarted)."""
+
+    task: Task
+    goal: Ground
+    found: list[Configuration] = field(default_factory=list)
+    search: BestFirst = field(init=False)
+    _more: Iterator[Configuration] = field(init=False)
+
+    def __post_init__(self) -> None:
+        grounder, bound, partition = parts(self.task)
+        grower = Grower(grounder, bound.estimate, partitioned(bound, partition))
+        self.search = BestFirst(grower, self.goal)
+        self._more = iter(self.search)
+
+    def get(self, j: int) -> Configuration | None:
+        while len(self.found) <= j:
+            config = next(self._more, None)
+            if self.search.stopped is not None:
+                raise clock.OutOfTime  # a step's search was stopped: so is the sequence
+            if config is None:
+                return None
+            self.found.append(config)
+        return self.found[j]
+
+
+@dataclass(order=True)
+class _Entry:
+    priority: float
+    order: tuple[int, ...]  # the rank of each step's configuration: ties by earlier steps
+    offer: bool  # an offer (False sorts first: a sequence at the same price and order)
+    prefix: tuple[int, ...] = field(compare=False)
+    cost: float = field(compare=False)  # of the prefix (for an offer) or the sequence
+
+
+@dataclass
+class SequenceSearch:
+    """An iterator over sequences, cheapest first; see the module docstring."""
+
+    domain: Domain
+    state: State
+    goals: tuple[Ground, ...]
+    task: Task
+    switch: float = 0.0
+    time_limit: float | None = None
+    stopped: StopReason | None = None
+    complete: bool = True
+    _ranked: dict[tuple[int, Facts], Ranked] = field(default_factory=dict)
+    _states: dict[tuple[int, ...], tuple[Facts, tuple[str, ...]]] = field(default_factory=dict)
+    _remaining: dict[tuple[int, Facts], float] = field(default_factory=dict)
+
+    def ranked(self, step: int, facts: Facts) -> Ranked:
+        """Step ``step``'s configurations in a state, planned once per state."""
+        key = (step, facts)
+        found = self._ranked.get(key)
+        if found is None:
+            task = self.task if step == 0 else self._task(facts)
+            found = self._ranked[key] = Ranked(task, self.goals[step])
+        return found
+
+    def _task(self, facts: Facts) -> Task:
+        atoms = tuple(Atom.model_construct(predicate=f[0], args=f[1:]) for f in facts)
+        state = self.state.model_copy(update={"facts": atoms})
+        return compile_task(self.domain, state, self.task.weights, self.task.reliability)
+
+    def state_after(self, prefix: tuple[int, ...]) -> tuple[Facts, tuple[str, ...]]:
+        """The facts after the steps of ``prefix``, and the last step's changes."""
+        found = self._states.get(prefix)
+        if found is None:
+            if not prefix:
+                found = (self.task.facts, ())
+            else:
+                facts, _ = self.state_after(prefix[:-1])
+                config = self.configuration(prefix)
+                found = apply(facts, config.effects)
+            self._states[prefix] = found
+        return found
+
+    def configuration(self, prefix: tuple[int, ...]) -> Configuration:
+        facts, _ = self.state_after(prefix[:-1])
+        config = self.ranked(len(prefix) - 1, facts).get(prefix[-1])
+        assert config is not None
+        return config
+
+    def __iter__(self) -> Iterator[PlannedSequence]:
+        deadline = None if self.time_limit is None else time.perf_counter() + self.time_limit
+        try:
+            with clock.limit(deadline):
+                yield from self._search()
+        except clock.OutOfTime:
+            self.stopped, self.complete = StopReason.TIME_LIMIT, False
+        except KeyboardInterrupt:
+            self.stopped, self.complete = StopReason.INTERRUPTED, False
+
+    def remaining(self, step: int, facts: Facts) -> float:
+        """The least the steps from ``step`` on can cost from a state (switches
+        not counted; infinite when they cannot all be reached): the search's
+        bound. Worked out over the states the steps can leave, each (step,
+        state) once, a step's configurations taken cheapest first only while
+        one could still beat the best (every later step costs 0 or more)."""
+        done = self._remaining
+        frames: list[list[object]] = [[step, facts, 0, math.inf]]
+        while frames:
+            clock.check()
+            frame = frames[-1]
+            i, here, j, best = frame
+            assert isinstance(i, int) and isinstance(j, int) and isinstance(best, float)
+            here = cast(Facts, here)
+            if (i, here) in done:
+                frames.pop()
+                continue
+            config = None if i == len(self.goals) else self.ranked(i, here).get(j)
+            if i == len(self.goals) or config is None or config.cost >= best:
+                done[(i, here)] = 0.0 if i == len(self.goals) else best
+                frames.pop()
+                continue
+            after = (i + 1, apply(here, config.effects)[0])
+            rest = done.get(after)
+            if rest is None:
+                frames.append([after[0], after[1], 0, math.inf])
+                continue
+            frame[2], frame[3] = j + 1, min(best, config.cost + rest)
+        return done[(step, facts)]
+
+    def _search(self) -> Iterator[PlannedSequence]:
+        """Best-first over sequences; a prefix is priced with :meth:`remaining`
+        (exact without switches), an offer at the prefix's cost plus its
+        configuration's alone (less or equal to what it turns out)."""
+        queue: list[_Entry] = []
+        if self.remaining(0, self.task.facts) < math.inf:
+            self._offer(queue, (), 0, 0.0)
+        while queue:
+            clock.check()
+            entry = heapq.heappop(queue)
+            if not entry.offer:
+                if len(entry.prefix) == len(self.goals):
+                    yield self._planned(entry.prefix, entry.cost)
+                else:
+                    self._offer(queue, entry.prefix, 0, entry.cost)
+                continue
+            prefix, j = entry.prefix, entry.order[-1]
+            whole = (*prefix, j)
+            config = self.configuration(whole)
+            cost = entry.cost + config.cost
+            if prefix and self.switch:
+                cost += self.switch * switching(self.configuration(prefix), config)
+            rest = self.remaining(len(whole), self.state_after(whole)[0])
+            if rest < math.inf:
+                heapq.heappush(queue, _Entry(cost + rest, whole, False, whole, cost))
+            self._offer(queue, prefix, j + 1, entry.cost)
+
+    def _offer(self, queue: list[_Entry], prefix: tuple[int, ...], j: int, cost: float) -> None:
+        """Queue the j-th configuration of the step after ``prefix``, if there is one."""
+        facts, _ = self.state_after(prefix)
+        config = self.ranked(len(prefix), facts).get(j)
+        if config is None:
+            return
+        heapq.heappush(queue, _Entry(cost + config.cost, (*prefix, j), True, prefix, cost))
+
+    def _deepest(self) -> tuple[int, ...]:
+        """The cheapest prefix among those that get furthest, found cheapest
+        first over (step, state), each once."""
+        queue: list[tuple[float, tuple[int, ...]]] = [(0.0, ())]
+        seen: set[tuple[int, Facts]] = set()
+        deepest: tuple[int, ...] = ()
+        while queue:
+            clock.check()
+            cost, prefix = heapq.heappop(queue)
+            facts = self.state_after(prefix)[0]
+            if (len(prefix), facts) in seen:
+                continue
+            seen.add((len(prefix), facts))
+            if len(prefix) > len(deepest):
+                deepest = prefix
+            if len(prefix) == len(self.goals):
+                continue
+            ranked, j = self.ranked(len(prefix), facts), 0
+            while (config := ranked.get(j)) is not None:
+                heapq.heappush(queue, (cost + config.cost, (*prefix, j)))
+                j += 1
+        return deepest
+
+    def _planned(self, prefix: tuple[int, ...], total: float) -> PlannedSequence:
+        steps = []
+        for i in range(1, len(prefix) + 1):
+            changes = self.state_after(prefix[:i])[1]
+            steps.append(Step(self.goals[i - 1], self.configuration(prefix[:i]), changes))
+        return PlannedSequence(tuple(steps), total)
+
+    def blocked(self) -> tuple[int, Task, Report] | None:
+        """When no sequence exists (the search ran to its end): the step (0-based)
+        that has no admissible configuration in any state the steps before it
+        reach, the task of the state the cheapest prefix reaching it leaves, and
+        why nothing is admissible there, as ``plan`` says it."""
+        if not self.complete or self.remaining(0, self.task.facts) < math.inf:
+            return None
+        prefix = self._deepest()
+        facts, _ = self.state_after(prefix)
+        ranked = self.ranked(len(prefix), facts)
+        run = Run(ranked.task, ranked.goal, limit=1, time_limit=5.0)
+        list(run)
+        return len(prefix), ranked.task, run.report

@@ -1,0 +1,171 @@
+"""Sequences of configurations (issue 14; thesis 7.2, 6.2.2 as one plan)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from itertools import islice, pairwise
+from pathlib import Path
+
+from hypothesis import given
+
+from cfgplan.configuration.admissible import problems
+from cfgplan.ir.model import Atom
+from cfgplan.planner import plan
+from cfgplan.planner.sequence import SequenceSearch
+from cfgplan.problem import Problem, load
+from tests.planner.generated import PROPERTY, Generated, generated, load_text, solve
+
+ROOT = Path(__file__).resolve().parents[2]
+STEPS = ROOT / "domains/cross-door/domain-steps.lisp"
+SEQUENCE = ROOT / "domains/cross-door/state-6.2.2-sequence.lisp"
+GOLDEN = ROOT / "tests/golden/sequence-6.2.2.txt"
+
+
+def search(problem: Problem, switch: float = 0.0) -> SequenceSearch:
+    return SequenceSearch(problem.domain, problem.state, problem.goal_calls, problem.task, switch)
+
+
+def test_section_6_2_2_as_one_sequence() -> None:
+    """Pippi crosses guided by Emil (44, Fig. 4.3), then Emil guided by Pippi
+    from Room2 (44, roles exchanged); then 91, 91 (one camera configuration,
+    47, Fig. 6.4 bottom) and 94."""
+    problem = load(STEPS, SEQUENCE)
+    found = list(search(problem))
+    assert [s.total for s in found] == [88, 91, 91, 94]
+    first, second = found[0].steps
+    assert (first.configuration.cost, second.configuration.cost) == (44, 44)
+    assert first.changes == ("(not (in Pippi Room1))", "(in Pippi Room2)")
+    helper = {f.name: f.args for f in second.configuration.functionalities}["transform-info"]
+    assert helper == ("Pippi", "Emil", "Door1")  # Pippi, now in Room2, guides Emil
+
+
+def test_golden_sequence_description() -> None:
+    """The three cheapest sequences of 6.2.2 as --format lisp prints them
+    (tests/golden/sequence-6.2.2.txt, checked by eye against 4.6 and Fig. 4.3)."""
+    out = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "plan", str(STEPS.relative_to(ROOT)),
+         str(SEQUENCE.relative_to(ROOT)), "-k", "3", "--format", "lisp"],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout == GOLDEN.read_text()
+
+
+TOKEN = """\
+(make-functionality :name '(sense ?r) :out '((d ?r)))
+(make-functionality :name '(fast ?r ?g) :in '((d ?r)) :postcond '((not (ok ?r)) (done ?g)))
+(make-functionality :name '(slow ?r ?g) :in '((d ?r)) :cost 4 :postcond '((done ?g)))
+(make-config-method :name '(job ?g) :precond '((robot ?r) (ok ?r))
+  :channels '(((local ?r) ?s ?x (d ?r))) :body '((?s (sense ?r)) (?x (fast ?r ?g))))
+(make-config-method :name '(job ?g) :precond '((robot ?r))
+  :channels '(((local ?r) ?s ?x (d ?r))) :body '((?s (sense ?r)) (?x (slow ?r ?g))))
+(make-config-method :name '(special ?g) :precond '((robot ?r) (ok ?r) (expert ?r))
+  :channels '(((local ?r) ?s ?x (d ?r))) :body '((?s (sense ?r)) (?x (fast ?r ?g))))
+"""
+
+
+def test_the_cheapest_first_step_is_not_the_cheapest_sequence() -> None:
+    """Step 1's cheapest configuration, first in the thesis's order, has X do
+    it fast (13), which leaves X not ok: step 2, which only an ok expert can
+    do, is then impossible. The sequence search has Y do step 1 fast (13),
+    then X step 2 (13): 26; then the slow ones first (16 + 13)."""
+    state = "(state (robot X) (robot Y) (ok X) (ok Y) (expert X)) (sequence (job A) (special B))"
+    problem = load_text(TOKEN, state)
+    first, _ = plan(problem.task, problem.goal_calls[0])
+    assert first[0].cost == 13 and first[0].agents == ["X"]  # the greedy choice
+    found = list(search(problem))
+    assert [s.total for s in found] == [26, 29, 29]
+    best = found[0]
+    assert [s.configuration.agents for s in best.steps] == [["Y"], ["X"]]
+    assert best.steps[0].changes == ("(not (ok Y))", "(done A)")
+    assert [s.steps[0].configuration.agents for s in found[1:]] == [["X"], ["Y"]]
+
+
+def test_an_impossible_step_is_named_with_its_reason() -> None:
+    """Two special jobs: the expert X can do one, not both (it is no longer ok):
+    step 2 has no configuration in any state step 1 leaves."""
+    state = "(state (robot X) (ok X) (expert X)) (sequence (special A) (special B))"
+    problem = load_text(TOKEN, state)
+    searching = search(problem)
+    assert list(searching) == []
+    blocked = searching.blocked()
+    assert blocked is not None
+    step, task, report = blocked
+    assert step == 1 and ("ok", "X") not in task.facts
+    (dead,) = report.dead.values()
+    assert dead.reason == "no fact matches (ok ?r) with ?r = X"
+
+
+def sequence_of(example: Generated) -> Problem:
+    """The generated problem with a second goal: do the task for R2 after R1."""
+    problem = solve(example)
+    goal = problem.goal.model_copy(update={"call": Atom(predicate="do-task", args=("R2",))})
+    return Problem(
+        problem.domain, problem.state, problem.goal, problem.task, problem.sources,
+        goals=(problem.goal, goal),
+    )
+
+
+@PROPERTY
+@given(generated())
+def test_one_goal_sequences_are_plans(example: Generated) -> None:
+    problem = solve(example)
+    configs, _ = plan(problem.task, problem.goal_call, limit=5)
+    sequences = list(islice(search(problem), 5))
+    assert [s.total for s in sequences] == [c.cost for c in configs]
+    assert [s.steps[0].configuration for s in sequences] == configs
+
+
+@PROPERTY
+@given(generated())
+def test_sequences_come_cheapest_first_and_every_step_is_admissible(example: Generated) -> None:
+    problem = sequence_of(example)
+    found = list(islice(search(problem), 12))
+    for before, after in pairwise(found):
+        assert before.total <= after.total
+    for planned in found:
+        state = problem.state
+        assert planned.total == sum(s.configuration.cost for s in planned.steps)
+        for step in planned.steps:
+            assert problems(step.configuration, problem.domain, state) == []
+            facts = [(a.predicate, *a.args) for a in state.facts]
+            kept = [f for f in facts if f"(not {_show(f)})" not in step.changes]
+            added = [c for c in step.changes if not c.startswith("(not ")]
+            atoms = [*kept, *(tuple(c[1:-1].split()) for c in added)]
+            state = state.model_copy(
+                update={"facts": tuple(Atom(predicate=a[0], args=a[1:]) for a in atoms)}
+            )
+
+
+def _show(fact: tuple[str, ...]) -> str:
+    return "(" + " ".join(fact) + ")"
+
+
+def test_json_schema_of_sequences() -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "plan", str(STEPS.relative_to(ROOT)),
+         str(SEQUENCE.relative_to(ROOT)), "-k", "2", "--format", "json"],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert list(doc) == ["goals", "sequences", "communication_checked", "stats"]
+    first = doc["sequences"][0]
+    assert (first["rank"], first["total_cost"]) == (1, 88)
+    assert [s["goal"] for s in first["steps"]] == doc["goals"]
+    assert first["steps"][0]["state_changes"] == ["(not (in Pippi Room1))", "(in Pippi Room2)"]
+    assert first["steps"][1]["configuration"]["cost"] == 44
+
+
+def test_goals_given_on_the_command_line_make_a_sequence() -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "plan", str(STEPS.relative_to(ROOT)),
+         "domains/cross-door/state-6.2.2-step1.lisp", "--goal", "(do-cross-door Pippi Door1)",
+         "--goal", "(do-cross-door Emil Door1)", "--format", "jsonl", "-k", "1"],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )
+    # step1's door is only in Room1: Emil's helper in Room2 cannot see it
+    assert out.returncode == 3, out.stderr
+    assert "step 2, do-cross-door(Emil, Door1), has no configuration" in out.stderr
