@@ -34,7 +34,7 @@ from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground
 
-MOST_HELD = 100_000
+MOST_HELD = 250_000
 """Configurations one window may hold before its upper edge comes down."""
 
 
