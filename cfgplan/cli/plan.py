@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_output
+from cfgplan.cli.fallbacks import fallback_lisp, fallback_table
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_json, to_text
 from cfgplan.configuration.model import Configuration
@@ -20,6 +21,8 @@ from cfgplan.planner import BestFirst, Stats
 from cfgplan.planner import plan as run_plan
 from cfgplan.planner.explain import explain
 from cfgplan.problem import GOAL_SOURCE, Problem, load
+from cfgplan.reconfigure.fallbacks import Fallback
+from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
 
 
 class Format(StrEnum):
@@ -178,6 +181,15 @@ def plan(
         Path | None, typer.Option("-o", "--output", help="Write here, not stdout.")
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite the -o file.")] = False,
+    fallbacks: Annotated[
+        bool,
+        typer.Option(
+            "--fallbacks",
+            help="For each resource of the cheapest configuration (functionality, robot, "
+            "medium), the best configuration if it fails, or none: the single points of "
+            "failure.",
+        ),
+    ] = False,
 ) -> None:
     """Plan ranked admissible configurations for a goal (thesis 4.5).
 
@@ -200,13 +212,23 @@ def plan(
     if not configs:
         say("\n".join(explain(search.report, call_text(problem.goal_call))))
         raise typer.Exit(EXIT_NONE)
+    backups = _fallbacks(problem, configs[0]) if fallbacks else None
     if format_ is Format.json:
-        text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search))
+        extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
+        text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search), extra)
     elif format_ is Format.lisp:
         text = _lisp(problem, configs)
+        if backups is not None:
+            text += fallback_lisp(configs[0], backups)
     else:
         text = _table(problem, configs, details)
+        if backups is not None:
+            text += fallback_table(configs[0], backups)
     write_output(text, output, force)
+
+
+def _fallbacks(problem: Problem, config: Configuration) -> list[Fallback]:
+    return fallbacks_of(problem.task, problem.goal_call, config)
 
 
 def _verbose(search: BestFirst) -> None:
