@@ -27,9 +27,15 @@ from cfgplan.cli.emit import RankOpt, choose, title
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Span
+from cfgplan.reconfigure.local import adapt
+from cfgplan.reconfigure.policy import Hysteresis
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.executor import DEFAULT_BUDGET
+from cfgplan.runtime.faults import parse_injection
+from cfgplan.runtime.inject import Injector, Scripted
+from cfgplan.runtime.launch import Hooks
 from cfgplan.runtime.main import open_transport
+from cfgplan.runtime.monitor import HOLD
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.zenoh_transport import (
     DEFAULT_LEASE,
@@ -61,6 +67,15 @@ def _endpoints(values: list[str] | None) -> list[str] | None:
         problem = endpoint_problem(text)
         if problem:
             raise typer.BadParameter(problem)
+    return values
+
+
+def _injections(values: list[str] | None) -> list[str] | None:
+    for text in values or ():
+        try:
+            parse_injection(text)
+        except RunError as exc:
+            raise typer.BadParameter(exc.message + (f" ({exc.hint})" if exc.hint else "")) from None
     return values
 
 
@@ -181,13 +196,52 @@ def run(
     verbose: Annotated[
         bool, typer.Option("--verbose", help="Print every call, not only what actions received.")
     ] = False,
+    inject: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--inject",
+            metavar="FAULT",
+            callback=_injections,
+            help="A scripted fault (repeatable): 'fail compass(Emil) at cycle 20', 'at 2.5s', "
+            "'recover compass(Emil) at ...', 'kill Emil at ...', 'retract (compass Emil) at ...'.",
+        ),
+    ] = None,
+    reconfigure: Annotated[
+        bool,
+        typer.Option(
+            "--reconfigure/--no-reconfigure",
+            help="Monitor the run and switch configurations when a resource fails (5.5); "
+            "--no-reconfigure runs the one configuration, as the thesis does.",
+        ),
+    ] = True,
+    hold: Annotated[
+        float,
+        typer.Option(
+            "--hold",
+            callback=_positive,
+            help="Seconds a failed resource must work again before it counts as recovered "
+            "(doubled at each further failure).",
+        ),
+    ] = HOLD,
+    margin: Annotated[
+        float,
+        typer.Option(
+            "--margin",
+            min=0,
+            callback=_finite,
+            help="A running configuration is left for a cheaper one only when the cost falls "
+            "by this share of it (and by 1 at least).",
+        ),
+    ] = 0.1,
 ) -> None:
     """Execute a configuration: every robot in this process, or one robot on the network
     (thesis 5.2, 5.3).
 
-    Runs until interrupted (Ctrl-C or SIGTERM), or --cycles or --duration. Exit
-    codes: 0 ran, 1 invalid input or a failing implementation, 2 usage, 3 no
-    configuration of that rank.
+    Runs until interrupted (Ctrl-C or SIGTERM), or --cycles or --duration, or
+    until the action's task is accomplished. Watches the run and switches to
+    another configuration when a resource fails (5.5), unless --no-reconfigure.
+    Exit codes: 0 ran, 1 invalid input or a failing implementation, 2 usage, 3 no
+    configuration of that rank, or none left at the end of the run.
     """
     kind = transport or (TransportKind.zenoh if robot is not None else TransportKind.inprocess)
     if robot is None and kind is TransportKind.zenoh:
@@ -210,8 +264,24 @@ def run(
     opened: Transport | None = None
     try:
         registry = Registry.load(impl)
+        hooks: Hooks | None = None
         if robot is None:
             running = society(parts, registry)
+            injector = Injector([parse_injection(t) for t in inject or ()], running)
+            if reconfigure:
+                hooks = adapt(
+                    running,
+                    registry,
+                    problem.task,
+                    problem.domain,
+                    problem.goal_call,
+                    config,
+                    injector.pending,
+                    hysteresis=Hysteresis(margin=margin),
+                    hold=hold,
+                )
+            elif injector.pending:
+                hooks = Scripted(injector)
         else:
             part = next((p for p in parts if p.robot == robot), None)
             if part is None:
@@ -230,7 +300,7 @@ def run(
             running = Society([build(part, registry, opened)], shared)
         names = ", ".join(r.name for r in running.robots)
         typer.echo(f"{title(problem, config, rank)}: {names}; {_how_long(options)}")
-        code = execute(running, options, source=registry.source)
+        code = execute(running, options, source=registry.source, hooks=hooks)
     except RunError as exc:
         if opened is not None:
             opened.close()

@@ -113,12 +113,16 @@ def fallback(
     config: Configuration,
     resource: Resource,
     situation: Situation | None = None,
+    *,
+    after: Situation | None = None,
+    derived: Task | None = None,
 ) -> Fallback:
-    """The best configuration when ``resource`` fails on top of ``situation``."""
+    """The best configuration when ``resource`` fails on top of ``situation``
+    (``after``: the situation it gives, if the caller knows better, e.g. with
+    a lowered reliability; ``derived``: its task, if the caller keeps one)."""
     before = situation or Situation()
-    after = resource.fail(before)
-    derived = derive(task, after)
-    found, search = plan(derived, goal, limit=1)
+    after = resource.fail(before) if after is None else after
+    found, search = plan(derive(task, after) if derived is None else derived, goal, limit=1)
     withdrawn = tuple(f for f in after.withdrawn(task) if f not in before.withdrawn(task))
     if not found:
         why = explain(search.report, call_text(goal))

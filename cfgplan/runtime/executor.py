@@ -53,6 +53,7 @@ __all__ = [
     "assemble",
     "build",
     "society",
+    "wired",
 ]
 
 Cycle = Callable[[], None]
@@ -89,15 +90,31 @@ class Robot:
         self.clock = clock
         self.channels: list[Channel] = []
         self.wrappers: list[Wrapper] = []
+        self.retired: list[Wrapper] = []
+        """Wrappers a switch stopped (kept for the summary)."""
         self.events: deque[Event] = deque(maxlen=keep)
         self.listeners: list[Listener] = []
         self.cycles = 0
         self.now = clock()  # the time of the current cycle
+        self.alive = True  # False once killed (a scripted fault): it runs no more
+        self.started_at: float | None = None  # clock time of start()
+        self.rate = 0.0
+        self.budget: float | None = DEFAULT_BUDGET
+        self.stale_periods = 3.0
+        self.faults: dict[tuple[str, ...], str] = {}
+        """Scripted faults in effect, by functionality instance (5.5)."""
+        self.before: list[Callable[[Robot], None]] = []
+        """Called before each cycle (fault injection, probes): see :meth:`step`."""
+        self._idle_next = 0.0  # with no functionality, the cycle still ticks at the rate
         self._cycle: Cycle | None = None
 
     def subscribe(self, listener: Listener) -> None:
         """Give ``listener`` every event of this robot from now on."""
         self.listeners.append(listener)
+
+    def record(self, event: Event) -> Event:
+        """Stamp ``event`` with this robot's cycle, keep it, give it to the listeners."""
+        return self._record(event)
 
     def local_channel(self, source: str, target: str, data: Sequence[str]) -> Channel:
         """``(make-local-channel 'ROBOT 'SRC 'DST '(data ...))`` on this robot."""
@@ -130,6 +147,12 @@ class Robot:
             freq=freq,
             clock=self._now,
         )
+        wrapper.injected = self.faults.get((name, self.name, *objects))
+        if self.started_at is not None:  # joining a running robot: on its beat
+            wrapper.schedule(self.rate, self.started_at, self.budget, self.stale_periods)
+            if wrapper.period is not None and self.now > self.started_at:
+                beats = math.ceil((self.now - self.started_at) / wrapper.period - 1e-9)
+                wrapper.next_due = self.started_at + beats * wrapper.period
         self.wrappers.append(wrapper)
         return wrapper
 
@@ -151,7 +174,8 @@ class Robot:
         stale_periods: float = 3.0,
     ) -> None:
         """Schedule every functionality from ``now`` and watch the partners."""
-        self.now = now
+        self.now = self.started_at = self._idle_next = now
+        self.rate, self.budget, self.stale_periods = rate, budget, stale_periods
         for w in self.wrappers:
             w.schedule(rate, now, budget, stale_periods)
         self._record(
@@ -168,23 +192,47 @@ class Robot:
         )
         self.transport.watch(self.name, self.partners, self._presence)
 
+    def watch(self) -> None:
+        """Watch the partners of the configuration now installed (after a switch)."""
+        if self.started_at is not None:
+            self.transport.watch(self.name, self.partners, self._presence)
+
     def due(self, now: float) -> bool:
+        if not self.alive:
+            return False
+        if not self.wrappers:
+            return self.rate <= 0 or now >= self._idle_next - 1e-9
         return any(w.due(now) for w in self.wrappers)
 
     def next_due(self) -> float | None:
-        """When the next functionality is due (``None``: every cycle, no pause)."""
+        """When the next functionality is due (``None``: every cycle, no pause).
+        A robot with nothing to run still ticks at its rate, so that its
+        cycles, scripted faults and probes go on (a dead robot: never)."""
+        if not self.alive:
+            return math.inf
+        if not self.wrappers:
+            return None if self.rate <= 0 else self._idle_next
         times = [w.next_due for w in self.wrappers if w.period is not None]
         if len(times) < len(self.wrappers):
             return None
-        return min(times, default=math.inf)  # no functionality: never due
+        return min(times)
 
     def step(self, now: float | None = None) -> None:
-        """Run one cycle at ``now`` (default: the clock's time): each
-        functionality that is due then, in sorted order."""
+        """Run one cycle at ``now`` (default: the clock's time): the
+        :attr:`before` hooks, then each functionality due then, in sorted order."""
         if self._cycle is None:
             raise RunError(f"robot {self.name} has no configuration to run")
         self.now = self.clock() if now is None else now
+        for hook in list(self.before):
+            hook(self)
+        if not self.alive:
+            return
         self.cycles += 1
+        if not self.wrappers and self.rate > 0:
+            period = 1.0 / self.rate
+            self._idle_next += period
+            if self._idle_next <= self.now:
+                self._idle_next += (math.floor((self.now - self._idle_next) / period) + 1) * period
         self._cycle()
 
     def _now(self) -> float:
@@ -196,7 +244,8 @@ class Robot:
         )
 
     def _record(self, event: Event) -> Event:
-        event = replace(event, cycle=self.cycles)
+        if not event.cycle:  # an event may name its cycle (a fault injected before it)
+            event = replace(event, cycle=self.cycles)
         self.events.append(event)
         for listener in self.listeners:
             listener(event)
@@ -238,31 +287,31 @@ Configure = Callable[[Robot], Cycle]
 
 def build(part: Part, registry: Registry, transport: Transport | None = None) -> Robot:
     """A robot configured from its part of a configuration (the same as its emitted module)."""
+    from cfgplan.runtime.install import install
+
     robot = Robot(part.robot, registry, transport)
+    install(robot, part)
+    return robot
 
-    def configure(robot: Robot) -> Cycle:
-        channels = [
-            robot.local_channel(ch.source, ch.target, ch.data)
-            if ch.other is None
-            else robot.global_channel(ch.other, ch.source, ch.target, ch.data)
-            for ch in part.channels
-        ]
-        calls = [
-            (
-                robot.wrapper(c.label, c.name, c.objects, freq=c.freq),
-                [_entry([channels[i] for i in x]) for x in c.inputs],
-                [[channels[i] for i in x] for x in c.outputs],
-            )
-            for c in part.calls
-        ]
 
-        def cycle() -> None:
-            for wrapper, inputs, outputs in calls:
-                wrapper(inputs, outputs)
+def wired(robot: Robot, part: Part, channels: Sequence[Channel]) -> Cycle:
+    """The cycle of ``part`` on ``robot``: its wrappers (made or found by
+    label) called in sorted order with the given ``channels`` (CH-1 first)."""
+    by_label = {w.label: w for w in robot.wrappers}
+    calls = [
+        (
+            by_label[c.label],
+            [_entry([channels[i] for i in x]) for x in c.inputs],
+            [[channels[i] for i in x] for x in c.outputs],
+        )
+        for c in part.calls
+    ]
 
-        return cycle
+    def cycle() -> None:
+        for wrapper, inputs, outputs in calls:
+            wrapper(inputs, outputs)
 
-    return robot.configure(configure)
+    return cycle
 
 
 def _entry(channels: list[Channel]) -> Input:
@@ -271,22 +320,75 @@ def _entry(channels: list[Channel]) -> Input:
     return channels[0] if len(channels) == 1 else channels
 
 
+Hook = Callable[[int, float], None]
+"""Called with the number of the cycle about to run (or just run) and the
+seconds since the run began: fault injection, reconfiguration (5.5)."""
+
+
 class Society:
-    """Robots run in one process and one loop, a cycle of each in turn."""
+    """Robots run in one process and one loop, a cycle of each in turn.
+
+    Robots may join while it runs (:meth:`add`: a configuration that needs a
+    robot not yet running) and be killed (:meth:`kill`: a scripted fault; the
+    others see it lost) or come back (:meth:`revive`).
+    """
 
     def __init__(
         self, robots: Sequence[Robot], transport: InProcessTransport | None = None
     ) -> None:
         self.robots = list(robots)
         self.transport = transport  # the one joining them, when they share one
+        self.listeners: list[Listener] = []
+        self.cycles = 0  # cycles run so far
+        self._settings: tuple[float, float, float | None, float] | None = None
 
     def subscribe(self, listener: Listener) -> None:
+        """Give ``listener`` every event of every robot, those added later too."""
+        self.listeners.append(listener)
         for robot in self.robots:
             robot.subscribe(listener)
+
+    def robot(self, name: str) -> Robot | None:
+        return next((r for r in self.robots if r.name == name), None)
+
+    def add(self, robot: Robot) -> Robot:
+        """Let ``robot`` join: it gets the listeners and, if the society is
+        running, starts now with the run's rate, budget and staleness."""
+        self.robots.append(robot)
+        for listener in self.listeners:
+            robot.subscribe(listener)
+        if self._settings is not None:
+            _, rate, budget, stale_periods = self._settings
+            robot.start(robot.clock(), rate, budget, stale_periods)
+        return robot
+
+    def kill(self, name: str) -> None:
+        """Robot ``name`` is gone: it runs no more and the others see it lost."""
+        robot = self.robot(name)
+        if robot is None or not robot.alive:
+            return
+        robot.alive = False
+        robot.stop("killed")
+        if isinstance(robot.transport, InProcessTransport):
+            robot.transport.leave(name)
+
+    def revive(self, name: str) -> None:
+        """Robot ``name`` is back (with the configuration it had): seen again."""
+        robot = self.robot(name)
+        if robot is None or robot.alive:
+            return
+        robot.alive = True
+        if isinstance(robot.transport, InProcessTransport):
+            robot.transport.join(name)
 
     @property
     def wrappers(self) -> list[Wrapper]:
         return [w for r in self.robots for w in r.wrappers]
+
+    @property
+    def every_wrapper(self) -> list[Wrapper]:
+        """The running wrappers, then those switches stopped (for the summary)."""
+        return [w for r in self.robots for w in (*r.wrappers, *r.retired)]
 
     def run(
         self,
@@ -298,15 +400,20 @@ class Society:
         stale_periods: float = 3.0,
         stop: threading.Event | None = None,
         after_cycle: Callable[[], None] | None = None,
+        before: Hook | None = None,
+        between: Hook | None = None,
     ) -> str:
         """Run until ``cycles`` cycles (0: no limit) or ``duration`` seconds
         have passed, or ``stop`` is set; ``rate`` per second (0: no pause).
+        ``before`` is called before each cycle, ``between`` after each pass of
+        the loop (every robot that was due has run its cycle: the moment a
+        switch may be installed, never half-way through a cycle).
         Returns why it stopped: ``cycles``, ``duration`` or ``stopped``."""
         clock = self.robots[0].clock if self.robots else time.monotonic
         begin = clock()
+        self._settings = (begin, rate, budget, stale_periods)
         for robot in self.robots:
             robot.start(begin, rate, budget, stale_periods)
-        done = 0
         while True:
             if stop is not None and stop.is_set():
                 return "stopped"
@@ -315,17 +422,21 @@ class Society:
                 return "duration"
             for transport in self._transports():
                 transport.poll()
+            if before is not None and any(r.due(now) for r in self.robots):
+                before(self.cycles + 1, now - begin)
             ran = False
-            for robot in self.robots:
+            for robot in list(self.robots):
                 if robot.due(now):
                     robot.step(now)
                     ran = True
             if ran:
-                done += 1
+                self.cycles += 1
                 if after_cycle is not None:
                     after_cycle()
-                if cycles and done >= cycles:
-                    return "cycles"
+            if between is not None:
+                between(self.cycles, clock() - begin)
+            if ran and cycles and self.cycles >= cycles:
+                return "cycles"
             self._pause(clock, begin, duration, stop)
 
     def _pause(
