@@ -260,7 +260,7 @@ class Coordinator:
         latency = max(0.0, time.time() - detection.t)
         previous = decision.previous
         change = decision.change
-        self.stopped = decision.config is None
+        self.stopped = decision.config is None and self.finished != "achieved"
         if decision.config is None:
             if self.finished == "achieved":
                 return

@@ -110,6 +110,10 @@ class Adaptive:
         """The run ends with nothing admissible running."""
         return self.coordinator.stopped
 
+    @property
+    def reconfigures(self) -> bool:
+        return True
+
 
 def adapt(
     society: Society,

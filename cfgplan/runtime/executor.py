@@ -339,7 +339,7 @@ class Society:
         self.robots = list(robots)
         self.transport = transport  # the one joining them, when they share one
         self.listeners: list[Listener] = []
-        self.cycles = 0  # cycles run so far
+        self.cycles = 0  # cycles run so far, over every run
         self._settings: tuple[float, float, float | None, float] | None = None
 
     def subscribe(self, listener: Listener) -> None:
@@ -414,6 +414,7 @@ class Society:
         self._settings = (begin, rate, budget, stale_periods)
         for robot in self.robots:
             robot.start(begin, rate, budget, stale_periods)
+        done = 0
         while True:
             if stop is not None and stop.is_set():
                 return "stopped"
@@ -430,12 +431,13 @@ class Society:
                     robot.step(now)
                     ran = True
             if ran:
+                done += 1
                 self.cycles += 1
                 if after_cycle is not None:
                     after_cycle()
             if between is not None:
                 between(self.cycles, clock() - begin)
-            if ran and cycles and self.cycles >= cycles:
+            if ran and cycles and done >= cycles:
                 return "cycles"
             self._pause(clock, begin, duration, stop)
 

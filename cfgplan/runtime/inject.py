@@ -115,6 +115,7 @@ class Scripted:
         self.injector = injector
         self.finished: str | None = None
         self.stopped = False
+        self.reconfigures = False
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)

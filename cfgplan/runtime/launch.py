@@ -66,6 +66,10 @@ class Hooks(Protocol):
     def stopped(self) -> bool:
         """Nothing admissible is running."""
 
+    @property
+    def reconfigures(self) -> bool:
+        """Resource failures are handled (by switching), not failures of the run."""
+
 
 @dataclass(frozen=True)
 class RunOptions:
@@ -213,7 +217,8 @@ def execute(
     except BaseException:
         society.close("not started")
         raise
-    printer = Printer(options.verbose, source, out, err, handled=hooks is not None)
+    handled = hooks is not None and hooks.reconfigures
+    printer = Printer(options.verbose, source, out, err, handled=handled)
     if trace is not None:
         society.subscribe(trace)
     society.subscribe(printer)
