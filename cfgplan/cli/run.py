@@ -27,15 +27,14 @@ from cfgplan.cli.emit import RankOpt, choose, title
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Span
-from cfgplan.reconfigure.local import adapt
-from cfgplan.reconfigure.policy import Hysteresis
+from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.faults import parse_injection
-from cfgplan.runtime.inject import Injector, Scripted
-from cfgplan.runtime.launch import Hooks
 from cfgplan.runtime.main import open_transport
 from cfgplan.runtime.monitor import HOLD
+from cfgplan.runtime.part import Part
+from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.zenoh_transport import (
     DEFAULT_LEASE,
@@ -261,32 +260,22 @@ def run(
         force=force,
         verbose=verbose,
     )
+    settings = Settings(
+        tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin
+    )
     opened: Transport | None = None
+    written: TraceFile | None = None
     try:
         registry = Registry.load(impl)
-        hooks: Hooks | None = None
         if robot is None:
             running = society(parts, registry)
-            injector = Injector([parse_injection(t) for t in inject or ()], running)
-            if reconfigure:
-                hooks = adapt(
-                    running,
-                    registry,
-                    problem.task,
-                    problem.domain,
-                    problem.goal_call,
-                    config,
-                    injector.pending,
-                    hysteresis=Hysteresis(margin=margin),
-                    hold=hold,
-                )
-            elif injector.pending:
-                hooks = Scripted(injector)
         else:
             part = next((p for p in parts if p.robot == robot), None)
-            if part is None:
+            agents = {f[1] for f in problem.task.facts if f[0] in ("robot", "device")}
+            if part is None and not (reconfigure and robot in agents):
                 names = ", ".join(p.robot for p in parts)
                 raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
+            part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
             registry.require(c.name for c in part.calls)
             zenoh = ZenohOptions(
                 society=society_name,
@@ -298,12 +287,21 @@ def run(
             opened = open_transport(robot, kind.value, zenoh)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
+        if options.trace is not None:
+            written = open_trace(options.trace, options.force)
+        adapting = hooks(
+            running, registry, problem, config, parts, settings, written, whole=robot is None
+        )
         names = ", ".join(r.name for r in running.robots)
         typer.echo(f"{title(problem, config, rank)}: {names}; {_how_long(options)}")
-        code = execute(running, options, source=registry.source, hooks=hooks)
+        code = execute(
+            running, options, source=registry.source, trace=written, hooks=adapting
+        )
     except RunError as exc:
         if opened is not None:
             opened.close()
+        if written is not None:
+            written.close()
         raise diagnostic(exc) from None
     if code:
         raise typer.Exit(code)

@@ -5,7 +5,7 @@ A :class:`Coordinator` takes the monitor's :class:`~cfgplan.runtime.monitor.Dete
 asks the :class:`~cfgplan.reconfigure.policy.Reconfigurator` what to run, has
 a :class:`Deployer` install it on every robot, and records what happened as
 trace events on its robot (``failure``, ``recovery``, ``facts``, ``switch``,
-``no-configuration``, ``achieved``; schema in the README):
+``no-configuration``, ``achieved``, ``abort``; schema in the README):
 
 * ``failure`` / ``recovery`` of a functionality instance, and robots
   ``lost`` / ``seen``, go straight to the reconfigurator;
@@ -44,11 +44,17 @@ __all__ = ["Coordinator", "Deployer", "Done", "upstream"]
 Done = Callable[[], None]
 """Called by a :class:`Deployer` once every robot runs the new configuration."""
 
+Failed = Callable[[list[str], str], None]
+"""Called by a :class:`Deployer` when robots could not switch (refused, silent):
+nobody switched; the robots named are taken as lost."""
+
 
 class Deployer(Protocol):
     """Installs a decision's parts on the robots (in process, or over the network)."""
 
-    def deploy(self, decision: Decision, parts: dict[str, Part], done: Done) -> None: ...
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: Failed
+    ) -> None: ...
 
 
 def upstream(config: Configuration, label: str) -> set[str]:
@@ -254,7 +260,21 @@ class Coordinator:
             self._deploying = False
             self._report(decision, detection)
 
-        self.deployer.deploy(decision, parts, done)
+        def failed(robots: list[str], reason: str) -> None:
+            self._deploying = False
+            self.reconfigurator.rollback(decision.previous)
+            self.record(
+                Adaptation(
+                    robot=self.robot,
+                    t=time.time(),
+                    what="abort",
+                    info=(("id", decision.id), ("robots", robots), ("reason", reason)),
+                )
+            )
+            for robot in robots:
+                self._failure(Detection("lost", self.robot, detection.t, other=robot, how=reason))
+
+        self.deployer.deploy(decision, parts, done, failed)
 
     def _report(self, decision: Decision, detection: Detection) -> None:
         latency = max(0.0, time.time() - detection.t)

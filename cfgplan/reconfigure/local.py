@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Domain
 from cfgplan.planner.task import Ground, Task
-from cfgplan.reconfigure.coordinate import Coordinator, Done
+from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.executor import Robot, Society
@@ -68,7 +68,9 @@ class InProcessDeployer:
             self.monitor.watch(found)
         return found
 
-    def deploy(self, decision: Decision, parts: dict[str, Part], done: Done) -> None:
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: Failed
+    ) -> None:
         for name, part in parts.items():
             robot = self.robot(name)
             if not robot.alive:

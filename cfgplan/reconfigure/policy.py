@@ -223,6 +223,11 @@ class Reconfigurator:
         self.situation = self.situation.updated(add, remove)
         return self._to(None, "", 0.0, ("the task is accomplished",), (), "achieved")
 
+    def rollback(self, previous: Configuration | None) -> None:
+        """A switch could not be deployed: the society still runs ``previous``."""
+        self.running = previous
+        self._queue_fallbacks()
+
     # -- helpers ------------------------------------------------------------
 
     def _best(self) -> tuple[Configuration | None, tuple[str, ...]]:

@@ -456,11 +456,16 @@ class Society:
         wait = min(max(0.0, wake - now), POLL)
         if duration is not None:
             wait = min(wait, max(0.0, begin + duration - now))
-        if wait > 0:
-            if stop is not None:
-                stop.wait(wait)
-            else:
-                time.sleep(wait)
+        if wait <= 0:
+            return
+        transports = self._transports()
+        arrival = getattr(transports[0], "wait", None) if len(transports) == 1 else None
+        if arrival is not None and (stop is None or not stop.is_set()):
+            arrival(wait)  # a message wakes the loop: switches go through at once
+        elif stop is not None:
+            stop.wait(wait)
+        else:
+            time.sleep(wait)
 
     def _transports(self) -> list[Transport]:
         seen: dict[int, Transport] = {}
