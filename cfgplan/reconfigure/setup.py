@@ -15,7 +15,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -28,6 +27,7 @@ from cfgplan.runtime.executor import Society
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks
+from cfgplan.runtime.main import crash
 from cfgplan.runtime.member import Member, Membership
 from cfgplan.runtime.monitor import HOLD, Monitor
 from cfgplan.runtime.part import Part
@@ -35,10 +35,7 @@ from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.tracefile import TraceFile
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
-__all__ = ["Settings", "crash_process", "hooks"]
-
-KILLED = 137
-"""Exit status of a process killed by a scripted fault (as by SIGKILL)."""
+__all__ = ["Settings", "hooks"]
 
 
 @dataclass(frozen=True)
@@ -49,13 +46,6 @@ class Settings:
     reconfigure: bool = True
     hold: float = HOLD
     margin: float = 0.1
-
-
-def crash_process(trace: TraceFile | None) -> None:
-    """End this process now, as a crash (after writing out the trace)."""
-    if trace is not None:
-        trace.flush()
-    os._exit(KILLED)
 
 
 def hooks(
@@ -92,7 +82,7 @@ def hooks(
     (robot,) = running.robots
 
     def kill(name: str) -> None:
-        crash_process(trace)
+        crash(trace)
 
     if not settings.reconfigure:
         injector = Injector(settings.injections, running, facts=False, kill=kill)

@@ -25,7 +25,9 @@ class Deployer:
         self.later: list[Done] = []
         self.hold = False
 
-    def deploy(self, decision: Decision, parts: dict[str, Part], done: Done) -> None:
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: object
+    ) -> None:
         self.deployed.append((decision, parts))
         if self.hold:
             self.later.append(done)
