@@ -53,13 +53,15 @@ def fallback_table(config: Configuration, found: list[Fallback]) -> str:
             fb.resource.text,
             fb.resource.kind,
             _withdrawn(fb),
-            "none" if c is None else fmt(c.cost),
+            ("none" if c is None else fmt(c.cost)) + ("" if fb.proven else " *"),
             "-" if c is None else ", ".join([*c.robots, *c.devices]),
             _switch(fb),
         )
     buffer = io.StringIO()
     Console(file=buffer, width=150, force_terminal=False, color_system=None).print(table)
     buffer.write(_single_points(found))
+    if not all(fb.proven for fb in found):
+        buffer.write("* not proven: the time limit cut that search\n")
     return buffer.getvalue()
 
 

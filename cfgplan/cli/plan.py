@@ -187,7 +187,7 @@ def plan(
             "--fallbacks",
             help="For each resource of the cheapest configuration (functionality, robot, "
             "medium), the best configuration if it fails, or none: the single points of "
-            "failure.",
+            "failure (--time-limit bounds each one's search).",
         ),
     ] = False,
 ) -> None:
@@ -212,7 +212,7 @@ def plan(
     if not configs:
         say("\n".join(explain(search.report, call_text(problem.goal_call))))
         raise typer.Exit(EXIT_NONE)
-    backups = _fallbacks(problem, configs[0]) if fallbacks else None
+    backups = _fallbacks(problem, configs[0], time_limit) if fallbacks else None
     if format_ is Format.json:
         extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
         text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search), extra)
@@ -227,8 +227,11 @@ def plan(
     write_output(text, output, force)
 
 
-def _fallbacks(problem: Problem, config: Configuration) -> list[Fallback]:
-    return fallbacks_of(problem.task, problem.goal_call, config)
+def _fallbacks(
+    problem: Problem, config: Configuration, time_limit: float | None
+) -> list[Fallback]:
+    """The fallbacks of ``config``; ``--time-limit`` bounds each one's search."""
+    return fallbacks_of(problem.task, problem.goal_call, config, time_limit=time_limit)
 
 
 def _verbose(search: BestFirst) -> None:

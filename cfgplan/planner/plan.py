@@ -90,7 +90,7 @@ def plan(
     if not found and search.stats.pruned and search.stats.complete:
         # The bound cut branches without meeting their dead ends; search them
         # without it, so the report can say why nothing is admissible.
-        explaining = BestFirst(grounder, goal, _no_bound, distinct)
+        explaining = BestFirst(grounder, goal, _no_bound, distinct, time_limit)
         for _ in explaining:
             break
         search.report = explaining.report

@@ -33,6 +33,7 @@ from typing import Protocol
 
 from cfgplan.configuration.describe import call_text
 from cfgplan.configuration.model import Configuration
+from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Decision, Reconfigurator
 from cfgplan.runtime.events import Adaptation
@@ -88,6 +89,8 @@ class Coordinator:
     robot: str
     deployer: Deployer
     clock: Callable[[], float] = time.monotonic
+    ahead: Ahead | None = None
+    """Computes fallbacks on a thread; without it, :meth:`tick` computes one per call."""
     finished: str | None = None
     """Why the run should end (``achieved``), once it should."""
     stopped: bool = False
@@ -103,6 +106,11 @@ class Coordinator:
         if self._deploying:
             self._backlog.append(detection)
             return
+        self._take(detection)
+        if self.ahead is not None and detection.kind not in ("stale", "fresh"):
+            self.ahead.notify()
+
+    def _take(self, detection: Detection) -> None:
         kind = detection.kind
         if kind in ("stale", "fresh"):
             self._suspect(detection)
@@ -143,7 +151,8 @@ class Coordinator:
             return
         if self._settled():
             return
-        self.reconfigurator.prepare()
+        if self.ahead is None:
+            self.reconfigurator.prepare()
 
     # -- kinds --------------------------------------------------------------
 

@@ -17,7 +17,7 @@ configurations).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from cfgplan.configuration.describe import call_text, to_dict
@@ -45,7 +45,7 @@ class Resource:
     instance: Ground = ()  # functionality: ("compass", "Emil")
     robot: str = ""  # robot (or device)
     medium: int = -1  # medium: index into the state's media
-    text: str = ""  # how reports name it
+    text: str = field(default="", compare=False)  # how reports name it
 
     def fail(self, situation: Situation) -> Situation:
         """``situation`` with this resource failed."""
@@ -80,6 +80,7 @@ class Fallback:
     config: Configuration | None
     change: Change | None
     why: tuple[str, ...] = ()
+    proven: bool = True  # False: a time limit cut the search before it proved the answer
 
     def record(self, media: tuple[Medium, ...] = ()) -> dict[str, Any]:
         """One entry of ``"fallbacks"`` in ``cfgplan plan --format json``."""
@@ -98,6 +99,7 @@ class Fallback:
             else [call_text(f.key) for f in self.change.started],
             "configuration": None if c is None else _configuration(c),
             "why": list(self.why) if c is None else None,
+            "proven": self.proven,
         }
 
 
@@ -116,20 +118,28 @@ def fallback(
     *,
     after: Situation | None = None,
     derived: Task | None = None,
+    time_limit: float | None = None,
 ) -> Fallback:
     """The best configuration when ``resource`` fails on top of ``situation``
     (``after``: the situation it gives, if the caller knows better, e.g. with
-    a lowered reliability; ``derived``: its task, if the caller keeps one)."""
+    a lowered reliability; ``derived``: its task, if the caller keeps one;
+    ``time_limit``: seconds for the search, and again for the explanation)."""
     before = situation or Situation()
     after = resource.fail(before) if after is None else after
-    found, search = plan(derive(task, after) if derived is None else derived, goal, limit=1)
+    found, search = plan(
+        derive(task, after) if derived is None else derived,
+        goal,
+        limit=1,
+        time_limit=time_limit,
+    )
+    proven = search.stopped is None and all(c.proven for c in found)
     withdrawn = tuple(f for f in after.withdrawn(task) if f not in before.withdrawn(task))
     if not found:
         why = explain(search.report, call_text(goal))
-        return Fallback(resource, withdrawn, None, None, tuple(why))
+        return Fallback(resource, withdrawn, None, None, tuple(why), proven)
     best = _media_indexes(found[0], task, after)
     best = relabel(best, config, highest_label([config, best]) + 1)
-    return Fallback(resource, withdrawn, best, change(config, best))
+    return Fallback(resource, withdrawn, best, change(config, best), (), proven)
 
 
 def _media_indexes(config: Configuration, task: Task, situation: Situation) -> Configuration:
@@ -143,7 +153,15 @@ def _media_indexes(config: Configuration, task: Task, situation: Situation) -> C
 
 
 def fallbacks(
-    task: Task, goal: Ground, config: Configuration, situation: Situation | None = None
+    task: Task,
+    goal: Ground,
+    config: Configuration,
+    situation: Situation | None = None,
+    time_limit: float | None = None,
 ) -> list[Fallback]:
-    """A :class:`Fallback` for every resource of ``config`` (:func:`resources`)."""
-    return [fallback(task, goal, config, r, situation) for r in resources(config, task.media)]
+    """A :class:`Fallback` for every resource of ``config`` (:func:`resources`),
+    each search given ``time_limit`` seconds (``None``: no limit)."""
+    return [
+        fallback(task, goal, config, r, situation, time_limit=time_limit)
+        for r in resources(config, task.media)
+    ]

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Domain
 from cfgplan.planner.task import Ground, Task
+from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
 from cfgplan.runtime.events import Adaptation
@@ -139,5 +140,7 @@ def adapt(
     recorder = deployer.robot(owner)
     if society.transport is not None:
         society.transport.presence_listeners.append(monitor.presence(owner))
-    coordinator = Coordinator(reconfigurator, recorder.record, owner, deployer)
+    coordinator = Coordinator(
+        reconfigurator, recorder.record, owner, deployer, ahead=Ahead(reconfigurator)
+    )
     return Adaptive(coordinator, monitor, Injector(injections, society))

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Domain
 from cfgplan.planner.task import Ground, Task
+from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
 from cfgplan.runtime.executor import Society
@@ -251,7 +252,9 @@ def coordinate(
     member = Member(robot, transport, monitor, forward=False)
     deployer = NetworkDeployer(transport, member, timeout, parts=dict(parts))
     reconfigurator = Reconfigurator(task, domain, goal, config, hysteresis or Hysteresis())
-    coordinator = Coordinator(reconfigurator, robot.record, robot.name, deployer)
+    coordinator = Coordinator(
+        reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator)
+    )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
     transport.subscribe(coordinator_key(transport.society), adaptive.receive)

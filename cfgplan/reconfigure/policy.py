@@ -8,7 +8,8 @@ the configuration the society runs, and answers each change with a
 * **a resource the running configuration uses fails** (a functionality
   instance, a robot): the configuration is inadmissible, so the society
   must switch — to the fallback computed ahead of time for that resource
-  (no search: :meth:`Reconfigurator.prepare` computes them in idle time),
+  (no search: :meth:`Reconfigurator.prepare` computes them one by one, or
+  :class:`~cfgplan.reconfigure.ahead.Ahead` on a thread of its own),
   else to the cheapest configuration of a search on the derived task (no
   cold start: the domain is not read, checked or compiled again). If none
   is admissible, the configuration is *stopped* (the action halts) and the
@@ -32,6 +33,7 @@ sensor is chosen again only when it is clearly worth it.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Literal
@@ -113,6 +115,8 @@ class Reconfigurator:
     _tasks: dict[Situation, Task] = field(default_factory=dict)
     _fallbacks: dict[tuple[Situation, Resource], Configuration | None] = field(default_factory=dict)
     _pending: list[Resource] = field(default_factory=list)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    """Guards the fallbacks, which :mod:`~cfgplan.reconfigure.ahead` computes on a thread."""
 
     def __post_init__(self) -> None:
         self.next_label = highest_label([self.running]) + 1
@@ -143,29 +147,57 @@ class Reconfigurator:
     # -- fallbacks ahead of time --------------------------------------------
 
     def _queue_fallbacks(self) -> None:
-        self._pending = [] if self.running is None else resources(self.running, self.task.media)
+        with self.lock:
+            running = self.running
+            self._pending = [] if running is None else resources(running, self.task.media)
+
+    def next_fallback(self) -> tuple[Situation, Configuration, Resource] | None:
+        """The next fallback of the running configuration still to compute
+        (taken off the list), or ``None``."""
+        with self.lock:
+            while self._pending and self.running is not None:
+                resource = self._pending.pop(0)
+                if (self.situation, resource) not in self._fallbacks:
+                    return self.situation, self.running, resource
+            return None
+
+    def compute(
+        self,
+        situation: Situation,
+        running: Configuration,
+        resource: Resource,
+        time_limit: float | None = None,
+    ) -> None:
+        """Plan the fallback for ``resource`` failing in ``situation`` and keep
+        it (safe on another thread: it plans a task of its own). A search cut
+        by ``time_limit`` before it proved anything keeps nothing."""
+        after = self._failing(situation, resource)
+        found = fallback(
+            self.task,
+            self.goal,
+            running,
+            resource,
+            situation,
+            after=after,
+            derived=derive(self.task, after),
+            time_limit=time_limit,
+        )
+        if found.proven:
+            with self.lock:
+                self._fallbacks[(situation, resource)] = found.config
 
     def prepare(self) -> bool:
-        """Compute one fallback of the running configuration (call in idle
+        """Compute one fallback of the running configuration now (in idle
         time); whether more remain."""
-        while self._pending:
-            resource = self._pending.pop(0)
-            key = (self.situation, resource)
-            if key in self._fallbacks or self.running is None:
-                continue
-            after = self._failing(self.situation, resource)
-            found = fallback(
-                self.task,
-                self.goal,
-                self.running,
-                resource,
-                self.situation,
-                after=after,
-                derived=self.derived(after),
-            )
-            self._fallbacks[key] = found.config
+        job = self.next_fallback()
+        if job is not None:
+            self.compute(*job)
+        with self.lock:
             return bool(self._pending)
-        return False
+
+    def _fallback(self, key: tuple[Situation, Resource]) -> tuple[bool, Configuration | None]:
+        with self.lock:
+            return key in self._fallbacks, self._fallbacks.get(key)
 
     # -- changes ------------------------------------------------------------
 
@@ -179,15 +211,10 @@ class Reconfigurator:
         if not uses(resource, self.running):
             return self._stay(cause, withdrawn)
         started = time.perf_counter()
-        key = (before, resource)
-        self.derived()  # the same task object the fallback was planned on: warm caches
-        source: Literal["fallback", "search"] = "search"
+        known, best = self._fallback((before, resource))
+        source: Literal["fallback", "search"] = "fallback" if known else "search"
         why: tuple[str, ...] = ()
-        if key in self._fallbacks:
-            best, source = self._fallbacks[key], "fallback"
-            if best is None:
-                _, why = self._best()
-        else:
+        if not known or best is None:
             best, why = self._best()
         return self._to(best, source, time.perf_counter() - started, why, withdrawn, cause)
 
@@ -284,7 +311,8 @@ class Reconfigurator:
             best = relabel(best, previous, self.next_label)
             self.next_label = max(self.next_label, highest_label([best]) + 1)
         self.id += 1
-        self.running = best
+        with self.lock:
+            self.running = best
         self._queue_fallbacks()
         return Decision(
             "switch" if best is not None else "stop",

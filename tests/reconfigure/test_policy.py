@@ -134,3 +134,28 @@ def test_parts_give_every_robot_of_both_configurations_a_part() -> None:
     parts = r.parts(decision.previous)
     assert sorted(parts) == ["Emil", "Pippi"]
     assert all(p.calls == () and p.channels == () for p in parts.values())
+
+
+def test_fallbacks_ahead_are_computed_on_a_thread_and_used() -> None:
+    from cfgplan.reconfigure.ahead import Ahead
+
+    _, r = _start(STEP2)
+    ahead = Ahead(r)
+    try:
+        assert ahead.idle.wait(60), "the fallbacks were not computed in a minute"
+    finally:
+        ahead.close()
+    assert r.next_fallback() is None  # nothing left to compute
+    decision = r.failed(COMPASS)
+    assert decision.source == "fallback" and decision.config is not None
+    assert decision.config.cost == 47
+
+
+def test_a_search_cut_by_its_time_limit_keeps_no_fallback() -> None:
+    _, r = _start(STEP2)
+    assert r.running is not None
+    r.compute(r.situation, r.running, COMPASS, time_limit=0.0)  # cut: a dive's guess
+    assert r._fallback((r.situation, COMPASS)) == (False, None)
+    r.compute(r.situation, r.running, COMPASS)
+    known, found = r._fallback((r.situation, COMPASS))
+    assert known and found is not None and found.cost == 47
