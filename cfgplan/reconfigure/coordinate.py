@@ -58,6 +58,13 @@ class Deployer(Protocol):
     ) -> None: ...
 
 
+def cost(value: float | None) -> int | float | None:
+    """A cost as the trace writes it: 44, not 44.0."""
+    if value is None:
+        return None
+    return int(value) if float(value).is_integer() else round(value, 4)
+
+
 def upstream(config: Configuration, label: str) -> set[str]:
     """Labels whose data reaches ``label`` through the configuration's channels."""
     feeds: dict[str, set[str]] = {}
@@ -107,8 +114,12 @@ class Coordinator:
             self._backlog.append(detection)
             return
         self._take(detection)
-        if self.ahead is not None and detection.kind not in ("stale", "fresh"):
-            self.ahead.notify()
+        if (
+            self.ahead is not None
+            and not self._deploying
+            and detection.kind not in ("stale", "fresh")
+        ):
+            self.ahead.notify()  # after a switch: once it is deployed (no GIL contention)
 
     def _take(self, detection: Detection) -> None:
         kind = detection.kind
@@ -139,6 +150,15 @@ class Coordinator:
             )
             self.finished = "achieved"
             self._apply(self.reconfigurator.achieved(), detection)
+
+    def install(self, config: Configuration | None, cause: str = "install") -> None:
+        """Put ``config`` on the running society with the least disruption (or
+        stop it, ``None``), recorded as a ``switch`` like any other: the
+        operation a sequence of configurations (7.3) is made of."""
+        now = Detection("facts", self.robot, time.time(), how=cause)
+        self._apply(self.reconfigurator.install(config, cause), now)
+        if self.ahead is not None:
+            self.ahead.notify()
 
     def tick(self) -> None:
         """Act on settled stale suspicions; else compute a fallback (idle time)."""
@@ -268,6 +288,8 @@ class Coordinator:
         def done() -> None:
             self._deploying = False
             self._report(decision, detection)
+            if self.ahead is not None:
+                self.ahead.notify()
 
         def failed(robots: list[str], reason: str) -> None:
             self._deploying = False
@@ -301,7 +323,7 @@ class Coordinator:
                     info=(
                         ("id", decision.id),
                         ("cause", decision.cause),
-                        ("from_cost", None if previous is None else previous.cost),
+                        ("from_cost", cost(None if previous is None else previous.cost)),
                         (
                             "stopped",
                             [] if change is None else change.record()["stopped"]["functionalities"],
@@ -321,8 +343,8 @@ class Coordinator:
                 info=(
                     ("id", decision.id),
                     ("cause", decision.cause),
-                    ("from_cost", None if previous is None else previous.cost),
-                    ("to_cost", decision.config.cost),
+                    ("from_cost", cost(None if previous is None else previous.cost)),
+                    ("to_cost", cost(decision.config.cost)),
                     ("source", decision.source),
                     ("plan_ms", round(decision.plan_seconds * 1000, 3)),
                     ("latency", round(latency, 6)),

@@ -107,14 +107,14 @@ class NetworkDeployer:
         switch = self.switch
         assert switch is not None
         number = switch.decision.id
-        own = switch.parts.get(self.me)
-        if own is not None:
-            self.member.install(number, own)
         others = sorted(r for r in switch.parts if r != self.me)
         switch.phase, switch.waiting = "commit", set(others)
         switch.deadline = self.clock() + self.timeout
-        for robot in others:
+        for robot in others:  # first: they install while this robot does
             self._to(robot, {"op": "commit", "id": number, "from": self.me})
+        own = switch.parts.get(self.me)
+        if own is not None:
+            self.member.install(number, own)
         self.parts = {**self.parts, **switch.parts}
         self.current = number
         if not others:
@@ -258,4 +258,11 @@ def coordinate(
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
     transport.subscribe(coordinator_key(transport.society), adaptive.receive)
+    for other in sorted(_agents(task) - {robot.name}):  # ready to talk to every robot
+        transport.declare(configure_key(transport.society, other))
     return adaptive
+
+
+def _agents(task: Task) -> set[str]:
+    """The robots and devices the state declares."""
+    return {f[1] for f in task.facts if f[0] in ("robot", "device") and len(f) == 2}

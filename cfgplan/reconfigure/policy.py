@@ -250,6 +250,13 @@ class Reconfigurator:
         self.situation = self.situation.updated(add, remove)
         return self._to(None, "", 0.0, ("the task is accomplished",), (), "achieved")
 
+    def install(self, config: Configuration | None, cause: str = "") -> Decision:
+        """Run ``config`` next (``None``: nothing), whatever it costs: the
+        running labels kept for what both share, fresh ones for the rest.
+        For sequences of configurations (7.3): each step installs the next."""
+        started = time.perf_counter()
+        return self._to(config, "", time.perf_counter() - started, (), (), cause)
+
     def rollback(self, previous: Configuration | None) -> None:
         """A switch could not be deployed: the society still runs ``previous``."""
         self.running = previous

@@ -6,14 +6,15 @@ action's postconditions, 4.5) added or removed, and reliabilities lowered by
 failures. :func:`derive` turns the task compiled once from the domain and
 the state into the task of that situation *without reading, checking or
 compiling the domain again* (no cold start): the same schemas, the facts
-changed and re-indexed, and — when something failed — two guards on every
-functionality operator:
+changed and re-indexed, and — when something failed — guards on the
+functionality operators concerned:
 
-* ``(not (:out-of-service NAME ARGS...))``: a failed instance is never placed
-  again, whatever facts remain (a computation that fails withdraws no fact,
+* ``(not (:out-of-service NAME ARGS...))`` on the operators of failed
+  instances: a failed instance is never placed again, whatever facts remain
+  (a computation that fails withdraws no fact,
   :mod:`~cfgplan.reconfigure.withdraw`);
-* ``(not (:lost ROBOT))`` on the operator's first argument: nothing runs on a
-  lost robot.
+* ``(not (:lost ROBOT))`` on every operator's first argument, when a robot
+  is lost: nothing runs on it.
 
 The guard facts go into the derived state only; their predicates start with
 ``:``, which no domain or state can write, so they never meet a user's fact. When no
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 from cfgplan.ir.model import Medium
-from cfgplan.planner.task import Ground, Signature, Task, Test, TestKind
+from cfgplan.planner.task import FunctionalitySchema, Ground, Signature, Task, Test, TestKind
 from cfgplan.reconfigure.withdraw import withdrawn_by_failure, withdrawn_by_loss
 
 __all__ = ["LOST", "OUT_OF_SERVICE", "Situation", "derive", "index"]
@@ -149,6 +150,19 @@ def _links(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
     return links
 
 
+def _guarded(schema: FunctionalitySchema, failed: bool, lost: bool) -> FunctionalitySchema:
+    """``schema`` with the guards it needs: out of service when an instance of
+    it failed, lost when a robot was (the others are not slowed down)."""
+    if not schema.params or not (failed or lost):
+        return schema
+    tests = list(schema.tests)
+    if failed:
+        tests.append(Test(TestKind.NOT, (OUT_OF_SERVICE, schema.name, *schema.params)))
+    if lost:
+        tests.append(Test(TestKind.NOT, (LOST, schema.params[0])))
+    return dataclasses.replace(schema, tests=tuple(tests))
+
+
 def derive(base: Task, situation: Situation) -> Task:
     """The task of ``situation``: ``base`` with its facts, media, guards and
     reliabilities changed (module docstring); ``base`` itself when nothing changed."""
@@ -160,18 +174,10 @@ def derive(base: Task, situation: Situation) -> Task:
         guards = [(OUT_OF_SERVICE, *f) for f in situation.failed]
         guards += [(LOST, r) for r in situation.lost]
         facts = (*facts, *guards)
+        failed_names = {f[0] for f in situation.failed}
         functionalities = MappingProxyType(
             {
-                signature: dataclasses.replace(
-                    schema,
-                    tests=(
-                        *schema.tests,
-                        Test(TestKind.NOT, (OUT_OF_SERVICE, schema.name, *schema.params)),
-                        Test(TestKind.NOT, (LOST, schema.params[0])),
-                    )
-                    if schema.params
-                    else schema.tests,
-                )
+                signature: _guarded(schema, schema.name in failed_names, bool(situation.lost))
                 for signature, schema in base.functionalities.items()
             }
         )

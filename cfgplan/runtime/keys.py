@@ -29,6 +29,7 @@ __all__ = [
     "alive_key",
     "alive_pattern",
     "channel_key",
+    "channels_pattern",
     "chunk",
     "configure_key",
     "coordinator_key",
@@ -61,6 +62,11 @@ def channel_key(society: str, robot: str, key: ChannelKey) -> str:
     """Where the data of channel ``key`` into ``robot`` is published."""
     parts = [PREFIX, society, robot, "ch", key.source, key.target, *key.data]
     return "/".join(p if i == 0 or i == 3 else chunk(p) for i, p in enumerate(parts))
+
+
+def channels_pattern(society: str, robot: str) -> str:
+    """Every global channel into ``robot`` (one subscriber for all of them)."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/ch/**"
 
 
 def configure_key(society: str, robot: str) -> str:

@@ -82,6 +82,9 @@ class Member:
         self.pending: dict[int, Part] = {}
         self.finished: str | None = None
         network.subscribe(configure_key(network.society, robot.name), self.receive)
+        declare = getattr(network, "declare", None)
+        if declare is not None:  # the first answer then goes out at once
+            declare(coordinator_key(network.society))
 
     def receive(self, payload: bytes) -> None:
         """One message from the coordinator (on the robot's thread, between cycles)."""

@@ -4,9 +4,11 @@ The thesis copies a global channel's data "through a socket connection"; here
 each robot program opens one Zenoh session in *peer* mode (no router) and:
 
 * declares itself with a liveliness token, ``cfgplan/<society>/<robot>/alive``;
-* subscribes to each global channel into it, on the key of
-  :mod:`cfgplan.runtime.keys`, keeping only the newest message per channel
-  (the channel of 5.2.2 holds one item) until the robot's loop polls;
+* subscribes to every global channel into it (one subscriber for the
+  robot's ``ch/**``; a channel attached or detached is a dictionary entry, so
+  a switch declares nothing), on the keys of :mod:`cfgplan.runtime.keys`,
+  keeping only the newest message per channel (the channel of 5.2.2 holds
+  one item) until the robot's loop polls;
 * publishes each write on a global channel out of it to the key of the robot
   at the other end (``express``: sent at once, not batched);
 * watches the liveliness tokens of the robots it exchanges data with, and
@@ -38,7 +40,13 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.keys import alive_key, alive_pattern, channel_key, robot_of_alive
+from cfgplan.runtime.keys import (
+    alive_key,
+    alive_pattern,
+    channel_key,
+    channels_pattern,
+    robot_of_alive,
+)
 from cfgplan.runtime.transport import ChannelKey, Presence, Receiver
 
 if TYPE_CHECKING:
@@ -162,6 +170,7 @@ class ZenohTransport:
             raise RunError(f"cannot open the Zenoh session: {_reason(exc)}") from None
         self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
         self._subscribers: list[Any] = []
+        self._channels: Any = None  # the subscriber of cfgplan/<society>/<robot>/ch/**
         self._receivers: dict[str, Receiver] = {}
         self._newest: dict[str, bytes] = {}  # per key, what arrived since the last poll
         self._lock = threading.Lock()
@@ -184,20 +193,17 @@ class ZenohTransport:
             raise RunError(f"this Zenoh session carries {self.robot}'s channels, not {robot}'s")
         where = channel_key(self.society, robot, key)
         self._receivers[where] = receiver
-        self._subscribers.append(self._session.declare_subscriber(where, self._on_sample))
+        if self._channels is None:  # one subscriber for every channel into this robot
+            every = channels_pattern(self.society, robot)
+            self._channels = self._session.declare_subscriber(every, self._on_sample)
+            self._subscribers.append(self._channels)
 
     def detach(self, robot: str, key: ChannelKey) -> None:
+        """Nothing more is handed to channel ``key`` (what still arrives is dropped)."""
         where = channel_key(self.society, robot, key)
         self._receivers.pop(where, None)
         with self._lock:
             self._newest.pop(where, None)
-        kept = []
-        for subscriber in self._subscribers:
-            if str(subscriber.key_expr) == where:
-                subscriber.undeclare()
-            else:
-                kept.append(subscriber)
-        self._subscribers = kept
 
     def subscribe(self, key: str, handler: Callable[[bytes], None]) -> None:
         """Every message on ``key`` (in order, none dropped) to ``handler``, at
@@ -211,11 +217,16 @@ class ZenohTransport:
 
     def publish(self, key: str, payload: bytes) -> None:
         """Send ``payload`` on ``key`` now (reliable, not batched)."""
+        self.declare(key).put(payload)
+
+    def declare(self, key: str) -> Any:
+        """The publisher of ``key``, declared now if it is not yet (declaring
+        ahead saves the first message the declaration's time)."""
         publisher = self._publishers.get(key)
         if publisher is None:
             publisher = self._session.declare_publisher(key, express=True)
             self._publishers[key] = publisher
-        publisher.put(payload)
+        return publisher
 
     def _on_sample(self, sample: Any) -> None:
         """On a Zenoh thread: keep the newest message of its channel for :meth:`poll`."""

@@ -162,3 +162,19 @@ def test_an_achieved_task_ends_the_run() -> None:
     assert [e.kind for e in events] == ["achieved"]
     ((decision, parts),) = deployer.deployed
     assert decision.action == "stop" and all(p.calls == () for p in parts.values())
+
+
+def test_installing_a_configuration_keeps_what_is_shared() -> None:
+    """The operation sequences of configurations (7.3) reuse: install X now."""
+    coordinator, deployer, _, events, first = _coordinator()
+    problem = load(*STEP2)
+    configs, _ = plan(problem.task, problem.goal_call, limit=2)
+    coordinator.install(configs[1], "next step")
+    ((decision, parts),) = deployer.deployed
+    assert decision.config is not None and decision.config.cost == 47
+    assert decision.change is not None and len(decision.change.kept) == 5
+    (switch,) = events
+    assert isinstance(switch, Adaptation) and switch.field("cause") == "next step"
+    coordinator.install(None, "done")
+    assert coordinator.stopped and coordinator.reconfigurator.running is None
+    assert first.cost == 44
