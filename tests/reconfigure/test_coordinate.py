@@ -170,7 +170,7 @@ def test_installing_a_configuration_keeps_what_is_shared() -> None:
     problem = load(*STEP2)
     configs, _ = plan(problem.task, problem.goal_call, limit=2)
     coordinator.install(configs[1], "next step")
-    ((decision, parts),) = deployer.deployed
+    ((decision, _),) = deployer.deployed
     assert decision.config is not None and decision.config.cost == 47
     assert decision.change is not None and len(decision.change.kept) == 5
     (switch,) = events
