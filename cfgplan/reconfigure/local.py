@@ -27,13 +27,14 @@ from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
 from cfgplan.runtime.events import Adaptation
-from cfgplan.runtime.executor import Robot, Society
+from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.install import install
 from cfgplan.runtime.monitor import HOLD, Monitor
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.society import Society
 
 __all__ = ["Adaptive", "InProcessDeployer", "adapt", "coordinator_of"]
 

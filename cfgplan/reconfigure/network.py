@@ -36,13 +36,13 @@ from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
-from cfgplan.runtime.executor import Society
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.member import Member, send
 from cfgplan.runtime.monitor import HOLD, Detection, Monitor
 from cfgplan.runtime.part import Part, part_to_json
+from cfgplan.runtime.society import Society
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
 __all__ = ["SWITCH_TIMEOUT", "NetworkAdaptive", "NetworkDeployer", "coordinate"]

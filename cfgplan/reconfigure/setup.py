@@ -23,7 +23,6 @@ from cfgplan.problem import Problem
 from cfgplan.reconfigure.local import adapt, coordinator_of
 from cfgplan.reconfigure.network import coordinate
 from cfgplan.reconfigure.policy import Hysteresis
-from cfgplan.runtime.executor import Society
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks
@@ -32,6 +31,7 @@ from cfgplan.runtime.member import Member, Membership
 from cfgplan.runtime.monitor import HOLD, Monitor
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.society import Society
 from cfgplan.runtime.tracefile import TraceFile
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 

@@ -32,16 +32,7 @@ from cfgplan.runtime.events import (
     Staleness,
     Transfer,
 )
-from cfgplan.runtime.executor import (
-    Configure,
-    Cycle,
-    Listener,
-    Robot,
-    Society,
-    assemble,
-    build,
-    society,
-)
+from cfgplan.runtime.executor import Configure, Cycle, Listener, Robot, build
 from cfgplan.runtime.faults import ACHIEVED, ResourceFailure
 from cfgplan.runtime.install import Installed, install
 from cfgplan.runtime.launch import RunOptions, execute
@@ -53,6 +44,7 @@ from cfgplan.runtime.registry import (
     functionality,
     load_module,
 )
+from cfgplan.runtime.society import Society, assemble, society
 from cfgplan.runtime.trace import describe, show, summary
 from cfgplan.runtime.transport import ChannelKey, InProcessTransport, Transport
 from cfgplan.runtime.wrapper import Wrapper, current_robot

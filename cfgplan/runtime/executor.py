@@ -1,4 +1,4 @@
-"""Running individual configurations (chapter 5): robots, cycles and societies.
+"""Running individual configurations (chapter 5): robots and their cycles.
 
 A :class:`Robot` is one robot's executable configuration: the channels it
 creates (the ``LET`` of 5.3) and a *cycle* that calls the wrappers of its
@@ -9,10 +9,9 @@ function) or from a :class:`~cfgplan.runtime.part.Part` by :func:`build`.
 A robot runs its cycle whenever one of its functionalities is due: each runs
 at its ``:freq`` (3.2) or else at the robot's rate, so the cycle comes at the
 highest of these rates, and with rate 0 every functionality runs in every
-cycle, with no pause. A :class:`Society` runs one or more robots of this
-process in one loop (:meth:`Society.run`); robots of one process share an
-:class:`~cfgplan.runtime.transport.InProcessTransport`, a robot program of
-its own talks to the others through Zenoh.
+cycle, with no pause. A :class:`~cfgplan.runtime.society.Society` runs one
+or more robots of this process in one loop. A running robot can be given
+another part of a configuration (:func:`cfgplan.runtime.install.install`).
 
 **Extension point (monitoring, 5.5).** :meth:`Robot.subscribe` (or
 :meth:`Society.subscribe`) registers a listener that receives every
@@ -27,7 +26,6 @@ such as ``--trace``.
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -35,7 +33,7 @@ from dataclasses import replace
 
 from cfgplan.runtime.channel import Channel, make_local_channel
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.events import Call, Event, Lifecycle, Presence, Transfer
+from cfgplan.runtime.events import Event, Lifecycle, Presence, Transfer
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.transport import InProcessTransport, Transport
@@ -49,10 +47,7 @@ __all__ = [
     "Cycle",
     "Listener",
     "Robot",
-    "Society",
-    "assemble",
     "build",
-    "society",
     "wired",
 ]
 
@@ -318,190 +313,3 @@ def _entry(channels: list[Channel]) -> Input:
     if not channels:
         return None
     return channels[0] if len(channels) == 1 else channels
-
-
-Hook = Callable[[int, float], None]
-"""Called with the number of the cycle about to run (or just run) and the
-seconds since the run began: fault injection, reconfiguration (5.5)."""
-
-
-class Society:
-    """Robots run in one process and one loop, a cycle of each in turn.
-
-    Robots may join while it runs (:meth:`add`: a configuration that needs a
-    robot not yet running) and be killed (:meth:`kill`: a scripted fault; the
-    others see it lost) or come back (:meth:`revive`).
-    """
-
-    def __init__(
-        self, robots: Sequence[Robot], transport: InProcessTransport | None = None
-    ) -> None:
-        self.robots = list(robots)
-        self.transport = transport  # the one joining them, when they share one
-        self.listeners: list[Listener] = []
-        self.cycles = 0  # cycles run so far, over every run
-        self._settings: tuple[float, float, float | None, float] | None = None
-
-    def subscribe(self, listener: Listener) -> None:
-        """Give ``listener`` every event of every robot, those added later too."""
-        self.listeners.append(listener)
-        for robot in self.robots:
-            robot.subscribe(listener)
-
-    def robot(self, name: str) -> Robot | None:
-        return next((r for r in self.robots if r.name == name), None)
-
-    def add(self, robot: Robot) -> Robot:
-        """Let ``robot`` join: it gets the listeners and, if the society is
-        running, starts now with the run's rate, budget and staleness."""
-        self.robots.append(robot)
-        for listener in self.listeners:
-            robot.subscribe(listener)
-        if self._settings is not None:
-            _, rate, budget, stale_periods = self._settings
-            robot.start(robot.clock(), rate, budget, stale_periods)
-        return robot
-
-    def kill(self, name: str) -> None:
-        """Robot ``name`` is gone: it runs no more and the others see it lost."""
-        robot = self.robot(name)
-        if robot is None or not robot.alive:
-            return
-        robot.alive = False
-        robot.stop("killed")
-        if isinstance(robot.transport, InProcessTransport):
-            robot.transport.leave(name)
-
-    def revive(self, name: str) -> None:
-        """Robot ``name`` is back (with the configuration it had): seen again."""
-        robot = self.robot(name)
-        if robot is None or robot.alive:
-            return
-        robot.alive = True
-        if isinstance(robot.transport, InProcessTransport):
-            robot.transport.join(name)
-
-    @property
-    def wrappers(self) -> list[Wrapper]:
-        return [w for r in self.robots for w in r.wrappers]
-
-    @property
-    def every_wrapper(self) -> list[Wrapper]:
-        """The running wrappers, then those switches stopped (for the summary)."""
-        return [w for r in self.robots for w in (*r.wrappers, *r.retired)]
-
-    def run(
-        self,
-        cycles: int = 0,
-        rate: float = 0.0,
-        *,
-        duration: float | None = None,
-        budget: float | None = DEFAULT_BUDGET,
-        stale_periods: float = 3.0,
-        stop: threading.Event | None = None,
-        after_cycle: Callable[[], None] | None = None,
-        before: Hook | None = None,
-        between: Hook | None = None,
-    ) -> str:
-        """Run until ``cycles`` cycles (0: no limit) or ``duration`` seconds
-        have passed, or ``stop`` is set; ``rate`` per second (0: no pause).
-        ``before`` is called before each cycle, ``between`` after each pass of
-        the loop (every robot that was due has run its cycle: the moment a
-        switch may be installed, never half-way through a cycle).
-        Returns why it stopped: ``cycles``, ``duration`` or ``stopped``."""
-        clock = self.robots[0].clock if self.robots else time.monotonic
-        begin = clock()
-        self._settings = (begin, rate, budget, stale_periods)
-        for robot in self.robots:
-            robot.start(begin, rate, budget, stale_periods)
-        done = 0
-        while True:
-            if stop is not None and stop.is_set():
-                return "stopped"
-            now = clock()
-            if duration is not None and now - begin >= duration:
-                return "duration"
-            for transport in self._transports():
-                transport.poll()
-            if before is not None and any(r.due(now) for r in self.robots):
-                before(self.cycles + 1, now - begin)
-            ran = False
-            for robot in list(self.robots):
-                if robot.due(now):
-                    robot.step(now)
-                    ran = True
-            if ran:
-                done += 1
-                self.cycles += 1
-                if after_cycle is not None:
-                    after_cycle()
-            if between is not None:
-                between(self.cycles, clock() - begin)
-            if ran and cycles and done >= cycles:
-                return "cycles"
-            self._pause(clock, begin, duration, stop)
-
-    def _pause(
-        self,
-        clock: Callable[[], float],
-        begin: float,
-        duration: float | None,
-        stop: threading.Event | None,
-    ) -> None:
-        due = [r.next_due() for r in self.robots]
-        if any(d is None for d in due):
-            return  # rate 0: no pause
-        wake = min(d for d in due if d is not None)
-        now = clock()
-        wait = min(max(0.0, wake - now), POLL)
-        if duration is not None:
-            wait = min(wait, max(0.0, begin + duration - now))
-        if wait <= 0:
-            return
-        transports = self._transports()
-        arrival = getattr(transports[0], "wait", None) if len(transports) == 1 else None
-        if arrival is not None and (stop is None or not stop.is_set()):
-            arrival(wait)  # a message wakes the loop: switches go through at once
-        elif stop is not None:
-            stop.wait(wait)
-        else:
-            time.sleep(wait)
-
-    def _transports(self) -> list[Transport]:
-        seen: dict[int, Transport] = {}
-        for robot in self.robots:
-            seen.setdefault(id(robot.transport), robot.transport)
-        return list(seen.values())
-
-    def close(self, reason: str) -> None:
-        """Record the stop and close every transport."""
-        for robot in self.robots:
-            robot.stop(reason)
-        for transport in self._transports():
-            transport.close()
-
-    @property
-    def events(self) -> list[Event]:
-        """The events kept, in the order they happened (cycle by cycle, robot by robot)."""
-        merged = [e for r in self.robots for e in r.events]
-        index = {r.name: i for i, r in enumerate(self.robots)}
-        return sorted(merged, key=lambda e: (e.cycle, index[e.robot]))
-
-    @property
-    def calls(self) -> list[Call]:
-        """The wrapper calls among :attr:`events`."""
-        return [e for e in self.events if isinstance(e, Call)]
-
-
-def society(parts: Sequence[Part], registry: Registry) -> Society:
-    """Every robot of a configuration, joined in process."""
-    registry.require(c.name for p in parts for c in p.calls)
-    transport = InProcessTransport()
-    return Society([build(p, registry, transport) for p in parts], transport)
-
-
-def assemble(programs: Sequence[tuple[str, Configure]], registry: Registry) -> Society:
-    """Robots configured by emitted code (name, configure), joined in process."""
-    transport = InProcessTransport()
-    robots = [Robot(name, registry, transport).configure(c) for name, c in programs]
-    return Society(robots, transport)

@@ -30,16 +30,61 @@ first, as in a configuration; a fact either way too.
 from __future__ import annotations
 
 import re
+import traceback
 from dataclasses import dataclass
 from typing import Literal
 
 from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.values import safe_repr
 
-__all__ = ["ACHIEVED", "Injection", "ResourceFailure", "parse_injection", "term_text"]
+__all__ = [
+    "ACHIEVED",
+    "Failed",
+    "Injection",
+    "ResourceFailure",
+    "failed",
+    "fault",
+    "parse_injection",
+    "term_text",
+    "where",
+]
 
 
 class ResourceFailure(Exception):
     """An implementation's resource has failed (raise it from the implementation)."""
+
+
+def where(exc: BaseException) -> str:
+    """`` (impl.py:70 in camera)``: where an exception was raised."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    if not frames:
+        return ""
+    last = frames[-1]
+    return f" ({last.filename}:{last.lineno} in {last.name})"
+
+
+def fault(exc: BaseException) -> str:
+    """What an implementation's exception says, in one line."""
+    if isinstance(exc, SystemExit):
+        return f"the implementation called sys.exit({safe_repr(exc.code)[0]})"
+    text = safe_repr(exc)[0] if not str(exc) else str(exc)
+    return f"the implementation raised {type(exc).__name__}: {text}{where(exc)}"
+
+
+@dataclass(frozen=True)
+class Failed:
+    """Why a call failed, and whether its resource did (``failure``)."""
+
+    message: str
+    failure: Literal["", "reported", "injected"] = ""
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def failed(exc: BaseException) -> Failed:
+    """A failing call: a :class:`ResourceFailure` is the resource's failure."""
+    return Failed(fault(exc), "reported" if isinstance(exc, ResourceFailure) else "")
 
 
 class _Achieved:

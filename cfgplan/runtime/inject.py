@@ -28,9 +28,10 @@ import time
 from collections.abc import Callable, Sequence
 
 from cfgplan.runtime.events import Adaptation
-from cfgplan.runtime.executor import Robot, Society
+from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.install import crash
+from cfgplan.runtime.society import Society
 
 __all__ = ["Injector", "Scripted"]
 

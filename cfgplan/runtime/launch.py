@@ -36,7 +36,8 @@ from types import FrameType
 from typing import Protocol, TextIO
 
 from cfgplan.runtime.events import Call, Event, Lifecycle
-from cfgplan.runtime.executor import DEFAULT_BUDGET, Society
+from cfgplan.runtime.executor import DEFAULT_BUDGET
+from cfgplan.runtime.society import Society
 from cfgplan.runtime.trace import describe, notice, summary
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 

@@ -26,13 +26,14 @@ import sys
 from collections.abc import Callable, Sequence
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.executor import DEFAULT_BUDGET, Configure, Robot, Society, assemble
+from cfgplan.runtime.executor import DEFAULT_BUDGET, Configure, Robot
 from cfgplan.runtime.faults import Injection, parse_injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks, RunOptions, execute
 from cfgplan.runtime.member import Member, Membership
 from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.society import Society, assemble
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.zenoh_transport import (

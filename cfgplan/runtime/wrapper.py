@@ -40,44 +40,26 @@ from __future__ import annotations
 
 import math
 import time
-import traceback
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
-from typing import Literal
 
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Data, Event, Staleness, Status, Transfer
-from cfgplan.runtime.faults import ACHIEVED, ResourceFailure
+from cfgplan.runtime.faults import ACHIEVED, Failed, failed, fault
 from cfgplan.runtime.registry import Implementation
 from cfgplan.runtime.values import ValueRuleError, encode, safe_repr, type_name
 from cfgplan.runtime.worker import Worker
 
-__all__ = ["Failed", "Input", "Stats", "Wrapper", "current_robot", "failed", "running_on"]
+__all__ = ["Input", "Stats", "Wrapper", "current_robot", "running_on"]
 
 Input = Channel | Sequence[Channel] | None
 Record = Callable[[Event], Event]
 
 _robot: ContextVar[str] = ContextVar("cfgplan_robot")
 _REFUSED = object()  # the precondition said no
-
-
-@dataclass(frozen=True)
-class Failed:
-    """Why a call failed, and whether its resource did (``failure``)."""
-
-    message: str
-    failure: Literal["", "reported", "injected"] = ""
-
-    def __str__(self) -> str:
-        return self.message
-
-
-def failed(exc: BaseException) -> Failed:
-    """A failing call: a :class:`ResourceFailure` is the resource's failure."""
-    return Failed(fault(exc), "reported" if isinstance(exc, ResourceFailure) else "")
 
 
 def current_robot() -> str:
@@ -124,23 +106,6 @@ def _channels(entry: Input) -> list[Channel]:
 
 def _data(channels: Sequence[Channel], what: str, k: int) -> Data:
     return channels[0].data if channels else (f"{what}-{k + 1}",)
-
-
-def where(exc: BaseException) -> str:
-    """`` (impl.py:70 in camera)``: where an exception was raised."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    if not frames:
-        return ""
-    last = frames[-1]
-    return f" ({last.filename}:{last.lineno} in {last.name})"
-
-
-def fault(exc: BaseException) -> str:
-    """What an implementation's exception says, in one line."""
-    if isinstance(exc, SystemExit):
-        return f"the implementation called sys.exit({safe_repr(exc.code)[0]})"
-    text = safe_repr(exc)[0] if not str(exc) else str(exc)
-    return f"the implementation raised {type(exc).__name__}: {text}{where(exc)}"
 
 
 class Wrapper:
