@@ -185,6 +185,7 @@ class NetworkAdaptive:
     monitor: Monitor
     injector: Injector
     _told: bool = False
+    _present: set[str] = field(default_factory=set)  # robots seen (each re-synchronised once)
     reconfigures: bool = True
 
     def before(self, cycle: int, elapsed: float) -> None:
@@ -200,8 +201,11 @@ class NetworkAdaptive:
             self.deployer.finish()
 
     def take(self, detection: Detection) -> None:
-        if detection.kind == "seen":
+        if detection.kind == "seen" and detection.other not in self._present:
+            self._present.add(detection.other)
             self.deployer.resync(detection.other)
+        elif detection.kind == "lost":
+            self._present.discard(detection.other)
         self.coordinator.handle(detection)
 
     def receive(self, payload: bytes) -> None:

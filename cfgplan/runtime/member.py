@@ -142,8 +142,11 @@ class Member:
     def install(self, number: int, part: Part) -> None:
         """Run ``part`` as configuration ``number`` from the next cycle on."""
         installed = install(self.robot, part)
+        same = number == self.current and not installed.changed  # a re-synchronisation
         self.current = number
         self.pending = {k: v for k, v in self.pending.items() if k > number}
+        if same:
+            return
         self.robot.record(
             Adaptation(
                 robot=self.robot.name,

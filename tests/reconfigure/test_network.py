@@ -158,3 +158,49 @@ def test_a_robot_that_cannot_run_its_part_aborts_the_switch_for_everyone(
     assert [r["id"] for r in mine if r["event"] == "install"] == [2]
     (stop,) = _kinds(mine, "no-configuration")
     assert stop["cause"] == "Pippi failed"
+
+
+def test_an_emitted_robot_program_follows_the_coordinator(tmp_path: Path) -> None:
+    """Pippi runs the module ``cfgplan emit`` wrote (no planner); Emil, from the
+    domain, coordinates: when his compass fails Pippi's program installs its
+    part of 47 too."""
+    from typer.testing import CliRunner
+
+    import cfgplan.cli.emit  # noqa: F401  (registers the command)
+    from cfgplan.cli.app import app
+
+    out = tmp_path / "emitted"
+    emitted = CliRunner().invoke(app, ["emit", *STEP2, "--lang", "python", "-o", str(out)])
+    assert emitted.exit_code == 0, emitted.output
+    emil_net, pippi_net = _network(tmp_path, "emitted-test")
+    pippi_trace = tmp_path / "pippi.jsonl"
+    with processes() as running:
+        emil, emil_trace = _robot(
+            running,
+            tmp_path,
+            "Emil",
+            EXAMPLE_IMPL,
+            emil_net,
+            "--cycles",
+            "90",
+            "--inject",
+            "fail compass(Emil) at cycle 60",
+        )
+        pippi = [str(out / "pippi.py"), "--impl", str(EXAMPLE_IMPL), "--rate", "20"]
+        running.start([*pippi, "--trace", str(pippi_trace), *pippi_net], tmp_path / "pippi.log")
+        assert emil.wait(LIMIT) == 0  # type: ignore[attr-defined]
+        running.stop_all()
+    mine, theirs = read_trace(emil_trace), read_trace(pippi_trace)
+    switch = next(r for r in mine if r["event"] == "switch")
+    assert (switch["from_cost"], switch["to_cost"]) == (44, 47)
+    (install,) = [r for r in theirs if r["event"] == "install" and r["id"] == 1]
+    assert (
+        install["id"] == 1
+        and "F12: measure-robot-orient-compass(Pippi, Emil)" in install["stopped"]
+    )  # type: ignore[operator]
+    ran = [
+        r
+        for r in theirs
+        if r["event"] == "call" and r["functionality"] == "measure-robot-orient-camera"
+    ]
+    assert any(r["status"] == "ran" for r in ran)
