@@ -302,8 +302,11 @@ class Coordinator:
                     info=(("id", decision.id), ("robots", robots), ("reason", reason)),
                 )
             )
+            how, _, detail = reason.partition(": ")
             for robot in robots:
-                self._failure(Detection("lost", self.robot, detection.t, other=robot, how=reason))
+                self._failure(
+                    Detection("lost", self.robot, detection.t, other=robot, how=how, detail=detail)
+                )
 
         self.deployer.deploy(decision, parts, done, failed)
 
