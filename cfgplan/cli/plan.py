@@ -14,6 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_output
+from cfgplan.cli.fallbacks import fallback_lisp, fallback_table
 from cfgplan.cli.sequence import SequenceOptions, plan_sequences
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_dict, to_json, to_text
@@ -22,6 +23,8 @@ from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.planner import Run, Stats
 from cfgplan.planner.explain import explain
 from cfgplan.problem import GOAL_SOURCE, Problem, load
+from cfgplan.reconfigure.fallbacks import Fallback
+from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
 
 
 class Format(StrEnum):
@@ -242,6 +245,15 @@ def plan(
             "stopped between two steps (default 0).",
         ),
     ] = 0.0,
+    fallbacks: Annotated[
+        bool,
+        typer.Option(
+            "--fallbacks",
+            help="For each resource of the cheapest configuration (functionality, robot, "
+            "medium), the best configuration if it fails, or none: the single points of "
+            "failure (--time-limit bounds each one's search).",
+        ),
+    ] = False,
 ) -> None:
     """Plan ranked admissible configurations for a goal (thesis 4.5), or
     sequences of them for several goals in order.
@@ -277,6 +289,7 @@ def plan(
     if not configs:
         say("\n".join(explain(search.report, call_text(problem.goal_call))))
         raise typer.Exit(EXIT_NONE)
+    backups = _fallbacks(problem, configs[0], time_limit) if fallbacks else None
     if format_ is Format.jsonl:
         summary = _summary(problem, configs, search)
         if stream:
@@ -285,14 +298,28 @@ def plan(
         text = "".join(_streamed(problem, c, i, format_) for i, c in enumerate(configs, 1))
         text += summary
     elif format_ is Format.json:
-        text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search))
+        extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
+        text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search), extra)
     elif stream:
+        if backups is not None:
+            sys.stdout.write(fallback_lisp(configs[0], backups))
         return  # every description went out as it was found
     elif format_ is Format.lisp:
         text = _lisp(problem, configs)
+        if backups is not None:
+            text += fallback_lisp(configs[0], backups)
     else:
         text = _table(problem, configs, details)
+        if backups is not None:
+            text += fallback_table(configs[0], backups)
     write_output(text, output, force)
+
+
+def _fallbacks(
+    problem: Problem, config: Configuration, time_limit: float | None
+) -> list[Fallback]:
+    """The fallbacks of ``config``; ``--time-limit`` bounds each one's search."""
+    return fallbacks_of(problem.task, problem.goal_call, config, time_limit=time_limit)
 
 
 def _verbose(search: Run) -> None:

@@ -27,9 +27,14 @@ from cfgplan.cli.emit import RankOpt, choose, title
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Span
+from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.executor import DEFAULT_BUDGET
+from cfgplan.runtime.faults import parse_injection
 from cfgplan.runtime.main import open_transport
+from cfgplan.runtime.monitor import HOLD
+from cfgplan.runtime.part import Part
+from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.zenoh_transport import (
     DEFAULT_LEASE,
@@ -61,6 +66,15 @@ def _endpoints(values: list[str] | None) -> list[str] | None:
         problem = endpoint_problem(text)
         if problem:
             raise typer.BadParameter(problem)
+    return values
+
+
+def _injections(values: list[str] | None) -> list[str] | None:
+    for text in values or ():
+        try:
+            parse_injection(text)
+        except RunError as exc:
+            raise typer.BadParameter(exc.message + (f" ({exc.hint})" if exc.hint else "")) from None
     return values
 
 
@@ -181,13 +195,52 @@ def run(
     verbose: Annotated[
         bool, typer.Option("--verbose", help="Print every call, not only what actions received.")
     ] = False,
+    inject: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--inject",
+            metavar="FAULT",
+            callback=_injections,
+            help="A scripted fault (repeatable): 'fail compass(Emil) at cycle 20', 'at 2.5s', "
+            "'recover compass(Emil) at ...', 'kill Emil at ...', 'retract (compass Emil) at ...'.",
+        ),
+    ] = None,
+    reconfigure: Annotated[
+        bool,
+        typer.Option(
+            "--reconfigure/--no-reconfigure",
+            help="Monitor the run and switch configurations when a resource fails (5.5); "
+            "--no-reconfigure runs the one configuration, as the thesis does.",
+        ),
+    ] = True,
+    hold: Annotated[
+        float,
+        typer.Option(
+            "--hold",
+            callback=_positive,
+            help="Seconds a failed resource must work again before it counts as recovered "
+            "(doubled at each further failure).",
+        ),
+    ] = HOLD,
+    margin: Annotated[
+        float,
+        typer.Option(
+            "--margin",
+            min=0,
+            callback=_finite,
+            help="A running configuration is left for a cheaper one only when the cost falls "
+            "by this share of it (and by 1 at least).",
+        ),
+    ] = 0.1,
 ) -> None:
     """Execute a configuration: every robot in this process, or one robot on the network
     (thesis 5.2, 5.3).
 
-    Runs until interrupted (Ctrl-C or SIGTERM), or --cycles or --duration. Exit
-    codes: 0 ran, 1 invalid input or a failing implementation, 2 usage, 3 no
-    configuration of that rank.
+    Runs until interrupted (Ctrl-C or SIGTERM), or --cycles or --duration, or
+    until the action's task is accomplished. Watches the run and switches to
+    another configuration when a resource fails (5.5), unless --no-reconfigure.
+    Exit codes: 0 ran, 1 invalid input or a failing implementation, 2 usage, 3 no
+    configuration of that rank, or none left at the end of the run.
     """
     kind = transport or (TransportKind.zenoh if robot is not None else TransportKind.inprocess)
     if robot is None and kind is TransportKind.zenoh:
@@ -207,16 +260,22 @@ def run(
         force=force,
         verbose=verbose,
     )
+    settings = Settings(
+        tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin
+    )
     opened: Transport | None = None
+    written: TraceFile | None = None
     try:
         registry = Registry.load(impl)
         if robot is None:
             running = society(parts, registry)
         else:
             part = next((p for p in parts if p.robot == robot), None)
-            if part is None:
+            agents = {f[1] for f in problem.task.facts if f[0] in ("robot", "device")}
+            if part is None and not (reconfigure and robot in agents):
                 names = ", ".join(p.robot for p in parts)
                 raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
+            part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
             registry.require(c.name for c in part.calls)
             zenoh = ZenohOptions(
                 society=society_name,
@@ -228,12 +287,21 @@ def run(
             opened = open_transport(robot, kind.value, zenoh)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
+        if options.trace is not None:
+            written = open_trace(options.trace, options.force)
+        adapting = hooks(
+            running, registry, problem, config, parts, settings, written, whole=robot is None
+        )
         names = ", ".join(r.name for r in running.robots)
         typer.echo(f"{title(problem, config, rank)}: {names}; {_how_long(options)}")
-        code = execute(running, options, source=registry.source)
+        code = execute(
+            running, options, source=registry.source, trace=written, hooks=adapting
+        )
     except RunError as exc:
         if opened is not None:
             opened.close()
+        if written is not None:
+            written.close()
         raise diagnostic(exc) from None
     if code:
         raise typer.Exit(code)

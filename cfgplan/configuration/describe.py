@@ -112,12 +112,15 @@ def to_json(
     configs: Sequence[Configuration],
     communication_checked: bool,
     stats: dict[str, Any],
+    extra: dict[str, Any] | None = None,
 ) -> str:
-    """The whole answer of ``cfgplan plan --format json``; keys in a fixed order."""
+    """The whole answer of ``cfgplan plan --format json``; keys in a fixed
+    order, ``extra`` (e.g. ``"fallbacks"``) last."""
     doc = {
         "goal": call_text(goal),
         "configurations": [to_dict(c, i + 1) for i, c in enumerate(configs)],
         "communication_checked": communication_checked,
         "stats": stats,
+        **(extra or {}),
     }
     return json.dumps(doc, indent=2, ensure_ascii=False) + "\n"

@@ -14,7 +14,10 @@ printer, the trace file and, later, a monitor (5.5).
 * :class:`Presence` — another robot appeared (``robot-seen``) or was lost
   (``robot-lost``);
 * :class:`Lifecycle` — the robot started or stopped, or a message could not
-  be read (``start``, ``stop``, ``error``).
+  be read (``start``, ``stop``, ``error``);
+* :class:`Adaptation` — monitoring and reconfiguration (5.5): faults
+  injected, failures and recoveries detected, state changes, switches,
+  installs, and the safe stop when nothing is admissible.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from cfgplan.runtime.transport import ChannelKey
 from cfgplan.runtime.values import jsonable
 
 __all__ = [
+    "Adaptation",
     "Call",
     "Data",
     "Event",
@@ -75,6 +79,10 @@ class Call(Event):
     ``waiting`` lists the descriptors without fresh data, ``stale`` those
     whose data is too old; ``outputs`` pairs each output's descriptor with
     the value written (``None``: not written); ``error`` says what failed.
+    ``failure`` is set when the call failed because the resource did
+    (``reported``: the implementation raised
+    :class:`~cfgplan.runtime.faults.ResourceFailure`; ``injected``: a
+    scripted fault); ``achieved`` when an action said its task is done.
     """
 
     label: str
@@ -88,10 +96,17 @@ class Call(Event):
     action: bool = False
     error: str = ""
     duration: float | None = None
+    failure: Literal["", "reported", "injected"] = ""
+    achieved: bool = False
 
     @property
     def kind(self) -> str:
         return "call"
+
+    @property
+    def instance(self) -> tuple[str, ...]:
+        """The functionality instance, e.g. ``("compass", "Emil")``."""
+        return (self.name, *self.args)
 
     def record(self) -> dict[str, object]:
         out = Event.record(self)
@@ -111,6 +126,10 @@ class Call(Event):
             out["error"] = self.error
         if self.duration is not None:
             out["duration"] = self.duration
+        if self.failure:
+            out["failure"] = self.failure
+        if self.achieved:
+            out["achieved"] = True
         return out
 
 
@@ -199,6 +218,42 @@ class Lifecycle(Event):
     @property
     def kind(self) -> str:
         return self.what
+
+    def record(self) -> dict[str, object]:
+        out = Event.record(self)
+        out.update({k: jsonable(v) for k, v in self.info})
+        return out
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Adaptation(Event):
+    """A step of monitoring and reconfiguration (5.5), on the robot that saw
+    or did it: ``what`` is the trace event's name and ``info`` its fields.
+
+    * ``inject`` — a scripted fault took effect (``spec``);
+    * ``failure`` — a resource failed (``resource``, ``kind``, ``how``:
+      ``reported``, ``injected``, ``stale``, ``lost``; ``detail``; on the
+      coordinator also ``withdrawn``, the facts the failure takes away);
+    * ``recovery`` — a resource works again (``resource``, ``kind``, ``how``);
+    * ``facts`` — the state changed (``added``, ``removed``, ``how``);
+    * ``switch`` — the society switched configurations (``id``, ``from_cost``,
+      ``to_cost``, ``kept``, ``stopped``, ``started``, ``latency``, ...);
+    * ``no-configuration`` — nothing admissible is left: the action is
+      stopped safely (``why``: the planner's explanation);
+    * ``install`` — this robot installed its part of configuration ``id``;
+    * ``achieved`` — an action said its task is accomplished.
+    """
+
+    what: str
+    info: tuple[tuple[str, object], ...] = ()
+
+    @property
+    def kind(self) -> str:
+        return self.what
+
+    def field(self, name: str) -> object:
+        """The value of field ``name`` (``None`` when absent)."""
+        return dict(self.info).get(name)
 
     def record(self) -> dict[str, object]:
         out = Event.record(self)

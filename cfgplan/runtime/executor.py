@@ -1,4 +1,4 @@
-"""Running individual configurations (chapter 5): robots, cycles and societies.
+"""Running individual configurations (chapter 5): robots and their cycles.
 
 A :class:`Robot` is one robot's executable configuration: the channels it
 creates (the ``LET`` of 5.3) and a *cycle* that calls the wrappers of its
@@ -9,10 +9,9 @@ function) or from a :class:`~cfgplan.runtime.part.Part` by :func:`build`.
 A robot runs its cycle whenever one of its functionalities is due: each runs
 at its ``:freq`` (3.2) or else at the robot's rate, so the cycle comes at the
 highest of these rates, and with rate 0 every functionality runs in every
-cycle, with no pause. A :class:`Society` runs one or more robots of this
-process in one loop (:meth:`Society.run`); robots of one process share an
-:class:`~cfgplan.runtime.transport.InProcessTransport`, a robot program of
-its own talks to the others through Zenoh.
+cycle, with no pause. A :class:`~cfgplan.runtime.society.Society` runs one
+or more robots of this process in one loop. A running robot can be given
+another part of a configuration (:func:`cfgplan.runtime.install.install`).
 
 **Extension point (monitoring, 5.5).** :meth:`Robot.subscribe` (or
 :meth:`Society.subscribe`) registers a listener that receives every
@@ -27,7 +26,6 @@ such as ``--trace``.
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -35,7 +33,7 @@ from dataclasses import replace
 
 from cfgplan.runtime.channel import Channel, make_local_channel
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.events import Call, Event, Lifecycle, Presence, Transfer
+from cfgplan.runtime.events import Event, Lifecycle, Presence, Transfer
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.transport import InProcessTransport, Transport
@@ -49,10 +47,8 @@ __all__ = [
     "Cycle",
     "Listener",
     "Robot",
-    "Society",
-    "assemble",
     "build",
-    "society",
+    "wired",
 ]
 
 Cycle = Callable[[], None]
@@ -89,15 +85,31 @@ class Robot:
         self.clock = clock
         self.channels: list[Channel] = []
         self.wrappers: list[Wrapper] = []
+        self.retired: list[Wrapper] = []
+        """Wrappers a switch stopped (kept for the summary)."""
         self.events: deque[Event] = deque(maxlen=keep)
         self.listeners: list[Listener] = []
         self.cycles = 0
         self.now = clock()  # the time of the current cycle
+        self.alive = True  # False once killed (a scripted fault): it runs no more
+        self.started_at: float | None = None  # clock time of start()
+        self.rate = 0.0
+        self.budget: float | None = DEFAULT_BUDGET
+        self.stale_periods = 3.0
+        self.faults: dict[tuple[str, ...], str] = {}
+        """Scripted faults in effect, by functionality instance (5.5)."""
+        self.before: list[Callable[[Robot], None]] = []
+        """Called before each cycle (fault injection, probes): see :meth:`step`."""
+        self._idle_next = 0.0  # with no functionality, the cycle still ticks at the rate
         self._cycle: Cycle | None = None
 
     def subscribe(self, listener: Listener) -> None:
         """Give ``listener`` every event of this robot from now on."""
         self.listeners.append(listener)
+
+    def record(self, event: Event) -> Event:
+        """Stamp ``event`` with this robot's cycle, keep it, give it to the listeners."""
+        return self._record(event)
 
     def local_channel(self, source: str, target: str, data: Sequence[str]) -> Channel:
         """``(make-local-channel 'ROBOT 'SRC 'DST '(data ...))`` on this robot."""
@@ -130,6 +142,12 @@ class Robot:
             freq=freq,
             clock=self._now,
         )
+        wrapper.injected = self.faults.get((name, self.name, *objects))
+        if self.started_at is not None:  # joining a running robot: on its beat
+            wrapper.schedule(self.rate, self.started_at, self.budget, self.stale_periods)
+            if wrapper.period is not None and self.now > self.started_at:
+                beats = math.ceil((self.now - self.started_at) / wrapper.period - 1e-9)
+                wrapper.next_due = self.started_at + beats * wrapper.period
         self.wrappers.append(wrapper)
         return wrapper
 
@@ -151,7 +169,8 @@ class Robot:
         stale_periods: float = 3.0,
     ) -> None:
         """Schedule every functionality from ``now`` and watch the partners."""
-        self.now = now
+        self.now = self.started_at = self._idle_next = now
+        self.rate, self.budget, self.stale_periods = rate, budget, stale_periods
         for w in self.wrappers:
             w.schedule(rate, now, budget, stale_periods)
         self._record(
@@ -168,23 +187,47 @@ class Robot:
         )
         self.transport.watch(self.name, self.partners, self._presence)
 
+    def watch(self) -> None:
+        """Watch the partners of the configuration now installed (after a switch)."""
+        if self.started_at is not None:
+            self.transport.watch(self.name, self.partners, self._presence)
+
     def due(self, now: float) -> bool:
+        if not self.alive:
+            return False
+        if not self.wrappers:
+            return self.rate <= 0 or now >= self._idle_next - 1e-9
         return any(w.due(now) for w in self.wrappers)
 
     def next_due(self) -> float | None:
-        """When the next functionality is due (``None``: every cycle, no pause)."""
+        """When the next functionality is due (``None``: every cycle, no pause).
+        A robot with nothing to run still ticks at its rate, so that its
+        cycles, scripted faults and probes go on (a dead robot: never)."""
+        if not self.alive:
+            return math.inf
+        if not self.wrappers:
+            return None if self.rate <= 0 else self._idle_next
         times = [w.next_due for w in self.wrappers if w.period is not None]
         if len(times) < len(self.wrappers):
             return None
-        return min(times, default=math.inf)  # no functionality: never due
+        return min(times)
 
     def step(self, now: float | None = None) -> None:
-        """Run one cycle at ``now`` (default: the clock's time): each
-        functionality that is due then, in sorted order."""
+        """Run one cycle at ``now`` (default: the clock's time): the
+        :attr:`before` hooks, then each functionality due then, in sorted order."""
         if self._cycle is None:
             raise RunError(f"robot {self.name} has no configuration to run")
         self.now = self.clock() if now is None else now
+        for hook in list(self.before):
+            hook(self)
+        if not self.alive:
+            return
         self.cycles += 1
+        if not self.wrappers and self.rate > 0:
+            period = 1.0 / self.rate
+            self._idle_next += period
+            if self._idle_next <= self.now:
+                self._idle_next += (math.floor((self.now - self._idle_next) / period) + 1) * period
         self._cycle()
 
     def _now(self) -> float:
@@ -196,7 +239,8 @@ class Robot:
         )
 
     def _record(self, event: Event) -> Event:
-        event = replace(event, cycle=self.cycles)
+        if not event.cycle:  # an event may name its cycle (a fault injected before it)
+            event = replace(event, cycle=self.cycles)
         self.events.append(event)
         for listener in self.listeners:
             listener(event)
@@ -238,152 +282,34 @@ Configure = Callable[[Robot], Cycle]
 
 def build(part: Part, registry: Registry, transport: Transport | None = None) -> Robot:
     """A robot configured from its part of a configuration (the same as its emitted module)."""
+    from cfgplan.runtime.install import install
+
     robot = Robot(part.robot, registry, transport)
+    install(robot, part)
+    return robot
 
-    def configure(robot: Robot) -> Cycle:
-        channels = [
-            robot.local_channel(ch.source, ch.target, ch.data)
-            if ch.other is None
-            else robot.global_channel(ch.other, ch.source, ch.target, ch.data)
-            for ch in part.channels
-        ]
-        calls = [
-            (
-                robot.wrapper(c.label, c.name, c.objects, freq=c.freq),
-                [_entry([channels[i] for i in x]) for x in c.inputs],
-                [[channels[i] for i in x] for x in c.outputs],
-            )
-            for c in part.calls
-        ]
 
-        def cycle() -> None:
-            for wrapper, inputs, outputs in calls:
-                wrapper(inputs, outputs)
+def wired(robot: Robot, part: Part, channels: Sequence[Channel]) -> Cycle:
+    """The cycle of ``part`` on ``robot``: its wrappers (made or found by
+    label) called in sorted order with the given ``channels`` (CH-1 first)."""
+    by_label = {w.label: w for w in robot.wrappers}
+    calls = [
+        (
+            by_label[c.label],
+            [_entry([channels[i] for i in x]) for x in c.inputs],
+            [[channels[i] for i in x] for x in c.outputs],
+        )
+        for c in part.calls
+    ]
 
-        return cycle
+    def cycle() -> None:
+        for wrapper, inputs, outputs in calls:
+            wrapper(inputs, outputs)
 
-    return robot.configure(configure)
+    return cycle
 
 
 def _entry(channels: list[Channel]) -> Input:
     if not channels:
         return None
     return channels[0] if len(channels) == 1 else channels
-
-
-class Society:
-    """Robots run in one process and one loop, a cycle of each in turn."""
-
-    def __init__(
-        self, robots: Sequence[Robot], transport: InProcessTransport | None = None
-    ) -> None:
-        self.robots = list(robots)
-        self.transport = transport  # the one joining them, when they share one
-
-    def subscribe(self, listener: Listener) -> None:
-        for robot in self.robots:
-            robot.subscribe(listener)
-
-    @property
-    def wrappers(self) -> list[Wrapper]:
-        return [w for r in self.robots for w in r.wrappers]
-
-    def run(
-        self,
-        cycles: int = 0,
-        rate: float = 0.0,
-        *,
-        duration: float | None = None,
-        budget: float | None = DEFAULT_BUDGET,
-        stale_periods: float = 3.0,
-        stop: threading.Event | None = None,
-        after_cycle: Callable[[], None] | None = None,
-    ) -> str:
-        """Run until ``cycles`` cycles (0: no limit) or ``duration`` seconds
-        have passed, or ``stop`` is set; ``rate`` per second (0: no pause).
-        Returns why it stopped: ``cycles``, ``duration`` or ``stopped``."""
-        clock = self.robots[0].clock if self.robots else time.monotonic
-        begin = clock()
-        for robot in self.robots:
-            robot.start(begin, rate, budget, stale_periods)
-        done = 0
-        while True:
-            if stop is not None and stop.is_set():
-                return "stopped"
-            now = clock()
-            if duration is not None and now - begin >= duration:
-                return "duration"
-            for transport in self._transports():
-                transport.poll()
-            ran = False
-            for robot in self.robots:
-                if robot.due(now):
-                    robot.step(now)
-                    ran = True
-            if ran:
-                done += 1
-                if after_cycle is not None:
-                    after_cycle()
-                if cycles and done >= cycles:
-                    return "cycles"
-            self._pause(clock, begin, duration, stop)
-
-    def _pause(
-        self,
-        clock: Callable[[], float],
-        begin: float,
-        duration: float | None,
-        stop: threading.Event | None,
-    ) -> None:
-        due = [r.next_due() for r in self.robots]
-        if any(d is None for d in due):
-            return  # rate 0: no pause
-        wake = min(d for d in due if d is not None)
-        now = clock()
-        wait = min(max(0.0, wake - now), POLL)
-        if duration is not None:
-            wait = min(wait, max(0.0, begin + duration - now))
-        if wait > 0:
-            if stop is not None:
-                stop.wait(wait)
-            else:
-                time.sleep(wait)
-
-    def _transports(self) -> list[Transport]:
-        seen: dict[int, Transport] = {}
-        for robot in self.robots:
-            seen.setdefault(id(robot.transport), robot.transport)
-        return list(seen.values())
-
-    def close(self, reason: str) -> None:
-        """Record the stop and close every transport."""
-        for robot in self.robots:
-            robot.stop(reason)
-        for transport in self._transports():
-            transport.close()
-
-    @property
-    def events(self) -> list[Event]:
-        """The events kept, in the order they happened (cycle by cycle, robot by robot)."""
-        merged = [e for r in self.robots for e in r.events]
-        index = {r.name: i for i, r in enumerate(self.robots)}
-        return sorted(merged, key=lambda e: (e.cycle, index[e.robot]))
-
-    @property
-    def calls(self) -> list[Call]:
-        """The wrapper calls among :attr:`events`."""
-        return [e for e in self.events if isinstance(e, Call)]
-
-
-def society(parts: Sequence[Part], registry: Registry) -> Society:
-    """Every robot of a configuration, joined in process."""
-    registry.require(c.name for p in parts for c in p.calls)
-    transport = InProcessTransport()
-    return Society([build(p, registry, transport) for p in parts], transport)
-
-
-def assemble(programs: Sequence[tuple[str, Configure]], registry: Registry) -> Society:
-    """Robots configured by emitted code (name, configure), joined in process."""
-    transport = InProcessTransport()
-    robots = [Robot(name, registry, transport).configure(c) for name, c in programs]
-    return Society(robots, transport)

@@ -5,6 +5,8 @@ societies on one network stay apart::
 
     cfgplan/<society>/<robot>/alive                              the robot is running
     cfgplan/<society>/<robot>/ch/<source>/<target>/<data ...>    a global channel into <robot>
+    cfgplan/<society>/<robot>/configure                          switches, to <robot>
+    cfgplan/<society>/coordinator                                reports and acks (5.5)
 
 ``<robot>`` is the robot that *receives*; ``<source>`` and ``<target>`` are the
 channel's functionality labels and ``<data ...>`` its data descriptor, one
@@ -27,7 +29,10 @@ __all__ = [
     "alive_key",
     "alive_pattern",
     "channel_key",
+    "channels_pattern",
     "chunk",
+    "configure_key",
+    "coordinator_key",
     "robot_of_alive",
     "unchunk",
 ]
@@ -57,6 +62,21 @@ def channel_key(society: str, robot: str, key: ChannelKey) -> str:
     """Where the data of channel ``key`` into ``robot`` is published."""
     parts = [PREFIX, society, robot, "ch", key.source, key.target, *key.data]
     return "/".join(p if i == 0 or i == 3 else chunk(p) for i, p in enumerate(parts))
+
+
+def channels_pattern(society: str, robot: str) -> str:
+    """Every global channel into ``robot`` (one subscriber for all of them)."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/ch/**"
+
+
+def configure_key(society: str, robot: str) -> str:
+    """Where the coordinator sends ``robot`` the steps of a switch (5.5)."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/configure"
+
+
+def coordinator_key(society: str) -> str:
+    """Where robots send the coordinator their detections and acknowledgements."""
+    return f"{PREFIX}/{chunk(society)}/coordinator"
 
 
 def alive_key(society: str, robot: str) -> str:

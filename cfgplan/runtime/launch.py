@@ -12,9 +12,14 @@ writes, so both behave the same. :func:`execute` runs the loop of
 * stops cleanly on Ctrl-C or SIGTERM (a second Ctrl-C interrupts at once),
   records the stop, closes the transport and prints the summary.
 
+With :class:`Hooks` (monitoring and reconfiguration, 5.5) the society is
+watched and reconfigured as it runs: a resource failure that is handled by a
+switch is no longer a failing run.
+
 Exit status: 0 when the run ended as asked; 1 when a functionality failed
 (raised, exited, returned what could not be written, overran its budget) or
-the trace or the console could not be written (the run goes on without them).
+the trace or the console could not be written (the run goes on without them);
+3 when, reconfiguring, the run ended with no admissible configuration left.
 """
 
 from __future__ import annotations
@@ -28,17 +33,43 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from types import FrameType
-from typing import TextIO
+from typing import Protocol, TextIO
 
 from cfgplan.runtime.events import Call, Event, Lifecycle
-from cfgplan.runtime.executor import DEFAULT_BUDGET, Society
+from cfgplan.runtime.executor import DEFAULT_BUDGET
+from cfgplan.runtime.society import Society
 from cfgplan.runtime.trace import describe, notice, summary
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 
-__all__ = ["FAULTS_SHOWN", "Printer", "RunOptions", "execute"]
+__all__ = ["EXIT_NONE", "FAULTS_SHOWN", "Hooks", "Printer", "RunOptions", "execute"]
 
 FAULTS_SHOWN = 3
 """Failures printed per functionality; later ones are only counted."""
+
+EXIT_NONE = 3
+"""Exit status of a run that ends with no admissible configuration (as ``cfgplan plan``)."""
+
+
+class Hooks(Protocol):
+    """What a self-reconfiguring run adds to the loop (:mod:`cfgplan.reconfigure.local`)."""
+
+    def before(self, cycle: int, elapsed: float) -> None:
+        """Before each cycle (scripted faults)."""
+
+    def between(self, cycle: int, elapsed: float) -> None:
+        """After each pass of the loop (detections, switches)."""
+
+    @property
+    def finished(self) -> str | None:
+        """Why the run should end now (``achieved``), or ``None``."""
+
+    @property
+    def stopped(self) -> bool:
+        """Nothing admissible is running."""
+
+    @property
+    def reconfigures(self) -> bool:
+        """Resource failures are handled (by switching), not failures of the run."""
 
 
 @dataclass(frozen=True)
@@ -58,8 +89,11 @@ class RunOptions:
 class Printer:
     """The console side of a run: a listener of every robot."""
 
-    def __init__(self, verbose: bool, source: str, out: TextIO, err: TextIO) -> None:
+    def __init__(
+        self, verbose: bool, source: str, out: TextIO, err: TextIO, handled: bool = False
+    ) -> None:
         self.verbose = verbose
+        self.handled = handled  # resource failures are handled by reconfiguration
         self.source = source
         self.out = out
         self.err = err
@@ -97,7 +131,7 @@ class Printer:
 
     def _call(self, event: Call) -> None:
         if event.status in ("error", "timeout"):
-            self.failed = True
+            self.failed = self.failed or not (self.handled and event.failure)
             self._fault(event)
             return
         if not (self.verbose or (event.action and event.status == "ran")):
@@ -168,6 +202,7 @@ def execute(
     out: TextIO | None = None,
     err: TextIO | None = None,
     trace: TraceFile | None = None,
+    hooks: Hooks | None = None,
 ) -> int:
     """Run ``society`` as ``options`` say; print the summary; the exit status.
 
@@ -183,13 +218,22 @@ def execute(
     except BaseException:
         society.close("not started")
         raise
-    printer = Printer(options.verbose, source, out, err)
+    handled = hooks is not None and hooks.reconfigures
+    printer = Printer(options.verbose, source, out, err, handled=handled)
     if trace is not None:
         society.subscribe(trace)
     society.subscribe(printer)
     stop = threading.Event()
     why: list[str] = []
     reason = "interrupted"
+
+    def between(cycle: int, elapsed: float) -> None:
+        assert hooks is not None
+        hooks.between(cycle, elapsed)
+        if hooks.finished and not stop.is_set():
+            why.append(hooks.finished)
+            stop.set()
+
     try:
         with _stopping(stop, why):
             reason = society.run(
@@ -200,6 +244,8 @@ def execute(
                 stale_periods=options.stale_periods,
                 stop=stop,
                 after_cycle=trace.flush if trace is not None else None,
+                before=None if hooks is None else hooks.before,
+                between=None if hooks is None else between,
             )
     except KeyboardInterrupt:
         reason = "interrupted"
@@ -207,7 +253,7 @@ def execute(
         society.close(why[0] if why else reason)
         if trace is not None:
             trace.close()
-    for line in summary(society.wrappers):
+    for line in summary(society.every_wrapper):
         printer.say(line)
     transport = society.transport
     if transport is not None and transport.undelivered:
@@ -219,4 +265,6 @@ def execute(
     problems = [p for p in (trace.failed if trace else None, printer.lost) if p]
     for problem in problems:
         printer.say(f"cfgplan: error: {problem}", err)
-    return 1 if problems or printer.failed else 0
+    if problems or printer.failed:
+        return 1
+    return EXIT_NONE if hooks is not None and hooks.stopped else 0

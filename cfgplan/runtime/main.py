@@ -6,22 +6,35 @@ in its own process, as each ran on its own body in the thesis (5.2.2);
 ``run_all.py`` runs every robot in one process (``society_main``). Both take
 the options of ``cfgplan run``: ``--impl``, ``--rate``, ``--cycles``,
 ``--duration``, ``--stale-periods``, ``--budget``, ``--trace FILE``
-(``--force``), ``--verbose``; a robot's module also ``--transport``,
-``--society``, ``--listen``, ``--connect``, ``--zenoh-config`` and
-``--lease``. Exit status: 0 ran, 1 user error or a failing functionality,
-2 usage.
+(``--force``), ``--verbose``, ``--inject FAULT``; a robot's module also
+``--transport``, ``--society``, ``--listen``, ``--connect``,
+``--zenoh-config`` and ``--lease``.
+
+On the network a robot's module follows the coordinator (the robot that owns
+the goal, run by ``cfgplan run --robot``, 5.5): it installs the parts it is
+sent, reports what its monitor detects, and applies the scripted faults aimed
+at it (``kill`` ends the process as a crash). It needs no planner.
+
+Exit status: 0 ran, 1 user error or a failing functionality, 2 usage.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable, Sequence
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.executor import DEFAULT_BUDGET, Configure, Robot, Society, assemble
-from cfgplan.runtime.launch import RunOptions, execute
+from cfgplan.runtime.executor import DEFAULT_BUDGET, Configure, Robot
+from cfgplan.runtime.faults import Injection, parse_injection
+from cfgplan.runtime.inject import Injector, Scripted
+from cfgplan.runtime.launch import Hooks, RunOptions, execute
+from cfgplan.runtime.member import Member, Membership
+from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.society import Society, assemble
+from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.zenoh_transport import (
     DEFAULT_LEASE,
@@ -30,7 +43,10 @@ from cfgplan.runtime.zenoh_transport import (
     endpoint_problem,
 )
 
-__all__ = ["robot_main", "society_main"]
+__all__ = ["KILLED", "crash", "robot_main", "society_main"]
+
+KILLED = 137
+"""Exit status of a process a scripted ``kill`` ended (as SIGKILL would)."""
 
 
 def _number(low: float, strict: bool, what: str) -> Callable[[str], float]:
@@ -54,6 +70,13 @@ def _count(text: str) -> int:
     if value < 0:
         raise argparse.ArgumentTypeError(f"{text!r}: must be 0 or more")
     return value
+
+
+def _injection(text: str) -> Injection:
+    try:
+        return parse_injection(text)
+    except RunError as exc:
+        raise argparse.ArgumentTypeError(exc.message) from None
 
 
 def _endpoint(text: str) -> str:
@@ -100,6 +123,15 @@ def _run_options(parser: argparse.ArgumentParser) -> None:
     add("--trace", metavar="FILE", help="write every event to FILE as JSON lines")
     add("--force", action="store_true", help="overwrite the --trace FILE if it exists")
     add("--verbose", action="store_true", help="print every call, not only what actions received")
+    add(
+        "--inject",
+        action="append",
+        default=[],
+        metavar="FAULT",
+        type=_injection,
+        help="a scripted fault (repeatable): 'fail compass(Emil) at cycle 20', 'at 2.5s', "
+        "'recover compass(Emil) at ...', 'kill Emil at ...'",
+    )
 
 
 def _network_options(parser: argparse.ArgumentParser) -> None:
@@ -165,16 +197,44 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
     _network_options(parser)
     args = parser.parse_args(argv)
     transport: Transport | None = None
+    trace: TraceFile | None = None
     try:
         registry = Registry.load(args.impl)
         transport = open_transport(name, args.transport, zenoh_options(args))
         robot = Robot(name, registry, transport).configure(configure)
         shared = transport if isinstance(transport, InProcessTransport) else None
-        return execute(Society([robot], shared), options_of(args), source=registry.source)
+        running = Society([robot], shared)
+        if args.trace is not None:
+            trace = open_trace(args.trace, args.force)
+        hooks = _follow(running, args.inject, trace)
+        return execute(running, options_of(args), source=registry.source, trace=trace, hooks=hooks)
     except (RunError, KeyboardInterrupt) as exc:
         if transport is not None:
             transport.close()
+        if trace is not None:
+            trace.close()
         return _failed(exc)
+
+
+def crash(trace: TraceFile | None) -> None:
+    """End this process now, as a crash (a scripted ``kill``), the trace written out."""
+    if trace is not None:
+        trace.flush()
+    os._exit(KILLED)
+
+
+def _follow(
+    running: Society, injections: Sequence[Injection], trace: TraceFile | None
+) -> Hooks | None:
+    """A robot of its own process on the network follows the coordinator."""
+    (robot,) = running.robots
+    injector = Injector(injections, running, facts=False, kill=lambda name: crash(trace))
+    if not hasattr(robot.transport, "subscribe"):
+        return Scripted(injector) if injector.pending else None
+    monitor = Monitor()
+    monitor.watch(robot)
+    member = Member(robot, robot.transport, monitor)  # type: ignore[arg-type]
+    return Membership(member, injector)
 
 
 def zenoh_options(args: argparse.Namespace) -> ZenohOptions:
@@ -208,7 +268,10 @@ def society_main(
     args = parser.parse_args(argv)
     try:
         registry = Registry.load(args.impl)
-        return execute(assemble(programs, registry), options_of(args), source=registry.source)
+        running = assemble(programs, registry)
+        injector = Injector(args.inject, running)
+        hooks = Scripted(injector) if injector.pending else None
+        return execute(running, options_of(args), source=registry.source, hooks=hooks)
     except (RunError, KeyboardInterrupt) as exc:
         return _failed(exc)
 

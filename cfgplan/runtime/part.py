@@ -11,9 +11,9 @@ build it (:func:`cfgplan.backends.part.runtime_part`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
-__all__ = ["CallSpec", "ChannelSpec", "Part"]
+__all__ = ["CallSpec", "ChannelSpec", "Part", "part_from_json", "part_to_json"]
 
 
 @dataclass(frozen=True)
@@ -47,3 +47,52 @@ class Part:
     robot: str
     channels: tuple[ChannelSpec, ...]
     calls: tuple[CallSpec, ...]
+
+
+def part_to_json(part: Part) -> dict[str, Any]:
+    """``part`` as JSON-ready data: how a coordinator sends a robot its part (5.5)."""
+    return {
+        "robot": part.robot,
+        "channels": [[c.kind, c.source, c.target, list(c.data), c.other] for c in part.channels],
+        "calls": [
+            [
+                c.label,
+                c.name,
+                list(c.objects),
+                [list(i) for i in c.inputs],
+                [list(o) for o in c.outputs],
+                c.freq,
+            ]
+            for c in part.calls
+        ],
+    }
+
+
+def part_from_json(data: Any) -> Part:
+    """The inverse of :func:`part_to_json`; ``ValueError`` when ``data`` is not a part."""
+    try:
+        channels = tuple(
+            ChannelSpec(kind, str(source), str(target), tuple(map(str, d)), other)
+            for kind, source, target, d, other in data["channels"]
+        )
+        calls = tuple(
+            CallSpec(
+                str(label),
+                str(name),
+                tuple(map(str, objects)),
+                tuple(tuple(int(i) for i in x) for x in inputs),
+                tuple(tuple(int(i) for i in x) for x in outputs),
+                None if freq is None else float(freq),
+            )
+            for label, name, objects, inputs, outputs, freq in data["calls"]
+        )
+        robot = str(data["robot"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"not a part of a configuration: {exc}") from None
+    for c in channels:
+        if c.kind not in ("local", "global") or (c.kind == "global") != (c.other is not None):
+            raise ValueError(f"not a channel: {c}")
+    width = len(channels)
+    if any(i >= width or i < 0 for c in calls for x in (*c.inputs, *c.outputs) for i in x):
+        raise ValueError("a call names a channel the part does not have")
+    return Part(robot, channels, calls)

@@ -19,7 +19,10 @@ of an output means "no data this time": that output's channels are not
 written. The robot it runs on is :func:`cfgplan.runtime.current_robot`.
 
 An optional ``precondition`` receives the object arguments and says whether
-the function may run now (5.2.1); by default it always may.
+the function may run now (5.2.1); by default it always may. An optional
+``stop`` receives the object arguments when the functionality stops running
+— switched out by a reconfiguration, or stopped safely when no configuration
+is admissible (5.5): an action's chance to halt its motors.
 
 :meth:`Registry.load` collects the implementations of a module given by name
 (``examples.cross_door.impl``) or by path (``examples/cross-door/impl.py``).
@@ -54,6 +57,7 @@ class Implementation:
     name: str
     function: Callable[..., object]
     precondition: Precondition | None = None
+    stop: Callable[..., object] | None = None
 
     def __call__(self, *args: object) -> object:
         return self.function(*args)
@@ -64,12 +68,15 @@ class Implementation:
 
 
 def functionality(
-    name: str, *, precondition: Precondition | None = None
+    name: str,
+    *,
+    precondition: Precondition | None = None,
+    stop: Callable[..., object] | None = None,
 ) -> Callable[[Callable[..., object]], Implementation]:
     """Declare the implementation of the functionality ``name`` (a decorator)."""
 
     def declare(function: Callable[..., object]) -> Implementation:
-        return Implementation(name, function, precondition)
+        return Implementation(name, function, precondition, stop)
 
     return declare
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-from cfgplan.runtime.events import Call, Data, Event, Lifecycle, Presence, Staleness
+from cfgplan.runtime.events import Adaptation, Call, Data, Event, Lifecycle, Presence, Staleness
 from cfgplan.runtime.values import safe_repr
 from cfgplan.runtime.wrapper import Stats, Wrapper
 
@@ -137,7 +137,67 @@ def notice(event: Event) -> str | None:
         return f"{head} {event.label}: input {call_text(event.channel.data)} is fresh again"
     if isinstance(event, Lifecycle) and event.what == "error":
         return f"{head}: {dict(event.info).get('message', '')}"
+    if isinstance(event, Adaptation):
+        return adaptation(event)
     return None  # calls have describe(); sends, receives, start and stop go to the trace
+
+
+def _names(value: object) -> str:
+    return ", ".join(str(v) for v in value) if isinstance(value, list) and value else "none"
+
+
+def _number(value: object) -> str:
+    return f"{value:g}" if isinstance(value, int | float) else "-"
+
+
+def _switch(event: Adaptation) -> str:
+    f = event.field
+    stopped, started = f("stopped"), f("started")
+    assert isinstance(stopped, dict) and isinstance(started, dict)
+    latency = f("latency")
+    ms = latency * 1000 if isinstance(latency, int | float) else 0.0
+    return (
+        f"switch {f('id')}: cost {_number(f('from_cost'))} -> {_number(f('to_cost'))} "
+        f"({f('source')}, planned in {_number(f('plan_ms'))} ms, running after {ms:.1f} ms); "
+        f"stopped {_names(stopped['functionalities'])}; "
+        f"started {_names(started['functionalities'])}"
+    )
+
+
+def adaptation(event: Adaptation) -> str | None:
+    """A line for a step of monitoring and reconfiguration (5.5)."""
+    head = f"cycle {event.cycle}: {event.robot}"
+    f = event.field
+    if event.what == "inject":
+        return f"{head}: injected: {f('spec')}"
+    if event.what == "failure":
+        withdrawn = f("withdrawn")
+        gone = (
+            f"; withdraws {' '.join(map(str, withdrawn))}"
+            if isinstance(withdrawn, list) and withdrawn
+            else ""
+        )
+        return f"{head}: failure of {f('resource')} ({f('how')}, seen by {f('detected_by')}){gone}"
+    if event.what == "recovery":
+        return f"{head}: {f('resource')} works again ({f('how')})"
+    if event.what == "facts":
+        added, removed = _names(f("added")), _names(f("removed"))
+        return f"{head}: state update ({f('how')}): added {added}; removed {removed}"
+    if event.what == "switch":
+        return f"{head}: {_switch(event)}"
+    if event.what == "no-configuration":
+        why = f("why")
+        lines = [
+            f"{head}: no admissible configuration ({f('cause')}): stopped {_names(f('stopped'))}"
+        ]
+        if isinstance(why, list):
+            lines += [f"  {line}" for line in why]
+        return "\n".join(lines)
+    if event.what == "achieved":
+        return (
+            f"{head}: {f('functionality')} accomplished its task: the configuration is played out"
+        )
+    return None
 
 
 def summary(wrappers: Iterable[Wrapper]) -> list[str]:
@@ -161,4 +221,6 @@ def _line(w: Wrapper, stats: Stats) -> str:
     failed = stats.by_status.get("error", 0)
     if failed:
         line += f"; failed {failed} time{'s' if failed > 1 else ''}, last: {stats.last_error}"
+    if w.stopped:
+        line += "; stopped"
     return line

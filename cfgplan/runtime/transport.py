@@ -56,6 +56,9 @@ class Transport(Protocol):
     def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
         """Deliver messages sent to channel ``key`` on ``robot`` to ``receiver``."""
 
+    def detach(self, robot: str, key: ChannelKey) -> None:
+        """Stop delivering channel ``key`` on ``robot`` (the channel was stopped)."""
+
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         """Send ``payload`` to the end of channel ``key`` that lives on ``robot``."""
 
@@ -71,10 +74,20 @@ class Transport(Protocol):
 
 
 class InProcessTransport:
-    """All robots in one process: :meth:`send` delivers synchronously."""
+    """All robots in one process: :meth:`send` delivers synchronously.
+
+    Robots of one process live and stop together, except when one is killed
+    on purpose (fault injection, :meth:`leave`): then the robots watching it
+    are told it is lost, and what is sent to it is dropped (not counted as
+    undelivered); :meth:`join` brings it back.
+    """
 
     def __init__(self) -> None:
         self._receivers: dict[tuple[str, ChannelKey], Receiver] = {}
+        self._watchers: dict[str, tuple[frozenset[str], Presence]] = {}
+        self.gone: set[str] = set()
+        self.presence_listeners: list[Presence] = []
+        """Told of every robot killed or back, partner or not (the coordinator)."""
         self.sent = 0
         self.undelivered = 0
 
@@ -83,12 +96,17 @@ class InProcessTransport:
             raise RunError(f"channel {key} is created twice on {robot}")
         self._receivers[(robot, key)] = receiver
 
+    def detach(self, robot: str, key: ChannelKey) -> None:
+        self._receivers.pop((robot, key), None)
+
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         self.sent += 1
         self.deliver(key, robot, payload)
 
     def deliver(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         """Hand ``payload`` to the end attached on ``robot``; drop it if there is none."""
+        if robot in self.gone:
+            return
         receiver = self._receivers.get((robot, key))
         if receiver is None:
             self.undelivered += 1
@@ -96,7 +114,28 @@ class InProcessTransport:
         receiver(payload)
 
     def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
-        """Nothing to report: robots of one process come and go together."""
+        """Tell ``report`` when one of ``partners`` is killed or comes back
+        (robots of one process otherwise come and go together)."""
+        self._watchers[robot] = (frozenset(partners), report)
+        for other in sorted(set(partners) & self.gone):
+            report(other, False)
+
+    def leave(self, robot: str) -> None:
+        """``robot`` is gone: its watchers see it lost."""
+        self.gone.add(robot)
+        self._tell(robot, False)
+
+    def join(self, robot: str) -> None:
+        """``robot`` is back: its watchers see it again."""
+        self.gone.discard(robot)
+        self._tell(robot, True)
+
+    def _tell(self, robot: str, alive: bool) -> None:
+        for watcher, (partners, report) in list(self._watchers.items()):
+            if robot in partners and watcher not in self.gone:
+                report(robot, alive)
+        for listener in self.presence_listeners:
+            listener(robot, alive)
 
     def poll(self) -> None:
         """Nothing waits: every send was delivered at once."""

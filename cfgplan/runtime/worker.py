@@ -21,6 +21,13 @@ from typing import Literal
 __all__ = ["Outcome", "Worker"]
 
 Outcome = tuple[Literal["done", "raised", "overran"], object]
+
+
+def _stop() -> object:
+    return None
+
+
+_STOP = _stop  # the job that ends a worker's thread
 """``("done", result)``, ``("raised", exception)`` or ``("overran", None)``."""
 
 
@@ -56,10 +63,18 @@ class Worker:
         self._busy = False
         return self._outcome
 
+    def close(self) -> None:
+        """End the thread once it is idle (a call still running finishes first)."""
+        if self._thread is not None:
+            self._jobs.put(_STOP)
+            self._thread = None
+
     def _serve(self) -> None:
         self._prepare()
         while True:
             job = self._jobs.get()
+            if job is _STOP:
+                return
             try:
                 self._outcome = ("done", job())
             except BaseException as exc:  # SystemExit too: reported, never raised here

@@ -22,6 +22,11 @@ Beyond the thesis, for running on real robots:
   wrong number of outputs or a value that cannot travel on a global channel
   is reported as the call's ``error``; nothing is written, so the
   functionality's outputs go stale, and the robot goes on.
+* **Resource failures (5.5).** An implementation that raises
+  :class:`~cfgplan.runtime.faults.ResourceFailure`, or a scripted fault
+  (:attr:`Wrapper.injected`), fails the call with ``failure`` set: the
+  monitor takes it as the resource failing. An action that returns
+  :data:`~cfgplan.runtime.faults.ACHIEVED` says its task is accomplished.
 * **Time budget.** With a budget the function runs on its own
   :class:`~cfgplan.runtime.worker.Worker` thread; a call over budget is
   reported (``timeout``) and the functionality is skipped (``busy``) until it
@@ -35,7 +40,6 @@ from __future__ import annotations
 
 import math
 import time
-import traceback
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -44,6 +48,7 @@ from dataclasses import dataclass, field
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Data, Event, Staleness, Status, Transfer
+from cfgplan.runtime.faults import ACHIEVED, Failed, failed, fault
 from cfgplan.runtime.registry import Implementation
 from cfgplan.runtime.values import ValueRuleError, encode, safe_repr, type_name
 from cfgplan.runtime.worker import Worker
@@ -103,23 +108,6 @@ def _data(channels: Sequence[Channel], what: str, k: int) -> Data:
     return channels[0].data if channels else (f"{what}-{k + 1}",)
 
 
-def where(exc: BaseException) -> str:
-    """`` (impl.py:70 in camera)``: where an exception was raised."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    if not frames:
-        return ""
-    last = frames[-1]
-    return f" ({last.filename}:{last.lineno} in {last.name})"
-
-
-def fault(exc: BaseException) -> str:
-    """What an implementation's exception says, in one line."""
-    if isinstance(exc, SystemExit):
-        return f"the implementation called sys.exit({safe_repr(exc.code)[0]})"
-    text = safe_repr(exc)[0] if not str(exc) else str(exc)
-    return f"the implementation raised {type(exc).__name__}: {text}{where(exc)}"
-
-
 class Wrapper:
     """The wrapper of functionality ``label`` (``name``) on ``robot``."""
 
@@ -148,6 +136,8 @@ class Wrapper:
         self.budget: float | None = None  # None: runs on the robot's thread
         self.stale_periods = 3.0
         self.stats = Stats()
+        self.injected: str | None = None  # a scripted fault: every call fails (5.5)
+        self.stopped = False  # switched out by a reconfiguration, or stopped safely
         self._worker: Worker | None = None
 
     def __str__(self) -> str:
@@ -225,7 +215,16 @@ class Wrapper:
         read = tuple(zip(data, values, strict=True))
         if status != "ran":
             return self._event(
-                status, inputs=read, action=action, error=str(result), duration=duration
+                status,
+                inputs=read,
+                action=action,
+                error=str(result),
+                duration=duration,
+                failure=result.failure if isinstance(result, Failed) else "",
+            )
+        if action and result is ACHIEVED:
+            return self._event(
+                "ran", inputs=read, action=action, duration=duration, achieved=True
             )
         out_data = [_data(chs, "output", k) for k, chs in enumerate(outputs)]
         try:
@@ -298,7 +297,9 @@ class Wrapper:
         )
 
     def _invoke(self, values: list[object]) -> tuple[Status, object, float]:
-        """Precondition and function; (status, result or message, seconds)."""
+        """Precondition and function; (status, result or :class:`Failed`, seconds)."""
+        if self.injected is not None:
+            return "error", Failed(f"injected fault ({self.injected})", "injected"), 0.0
         impl, objects = self.implementation, self.objects
 
         def job() -> object:
@@ -312,7 +313,7 @@ class Wrapper:
                 try:
                     result = job()
                 except (Exception, SystemExit) as exc:
-                    return "error", fault(exc), time.perf_counter() - started
+                    return "error", failed(exc), time.perf_counter() - started
         else:
             if self._worker is None:
                 self._worker = Worker(f"cfgplan {self.robot} {self}", self._on_worker)
@@ -326,10 +327,38 @@ class Wrapper:
                 )
             if kind == "raised":
                 assert isinstance(result, BaseException)
-                return "error", fault(result), time.perf_counter() - started
+                return "error", failed(result), time.perf_counter() - started
         if result is _REFUSED:
             return "precondition", None, 0.0
         return "ran", result, time.perf_counter() - started
+
+    def probe(self) -> bool:
+        """Whether a failed sensing resource works again (5.5): its function
+        called with no inputs and its precondition, the outputs discarded; it
+        works when it ran and gave data. Never while a scripted fault holds or
+        an earlier call is still running."""
+        if self.injected is not None or (self._worker is not None and self._worker.busy):
+            return False
+        status, result, _ = self._invoke([])
+        return status == "ran" and result is not None
+
+    def stop(self) -> str | None:
+        """The functionality stops running (switched out, or a safe stop): the
+        implementation's ``stop`` hook, then its thread ends. What went wrong
+        in the hook, if anything."""
+        problem = None
+        self.stopped = True
+        hook = self.implementation.stop
+        if hook is not None:
+            with running_on(self.robot):
+                try:
+                    hook(*self.objects)
+                except (Exception, SystemExit) as exc:
+                    problem = f"its stop hook failed: {fault(exc)}"
+        if self._worker is not None:
+            self._worker.close()
+            self._worker = None
+        return problem
 
     def _on_worker(self) -> None:
         """On the worker thread, before its first call: whose robot it is."""

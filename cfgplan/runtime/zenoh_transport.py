@@ -4,9 +4,11 @@ The thesis copies a global channel's data "through a socket connection"; here
 each robot program opens one Zenoh session in *peer* mode (no router) and:
 
 * declares itself with a liveliness token, ``cfgplan/<society>/<robot>/alive``;
-* subscribes to each global channel into it, on the key of
-  :mod:`cfgplan.runtime.keys`, keeping only the newest message per channel
-  (the channel of 5.2.2 holds one item) until the robot's loop polls;
+* subscribes to every global channel into it (one subscriber for the
+  robot's ``ch/**``; a channel attached or detached is a dictionary entry, so
+  a switch declares nothing), on the keys of :mod:`cfgplan.runtime.keys`,
+  keeping only the newest message per channel (the channel of 5.2.2 holds
+  one item) until the robot's loop polls;
 * publishes each write on a global channel out of it to the key of the robot
   at the other end (``express``: sent at once, not batched);
 * watches the liveliness tokens of the robots it exchanges data with, and
@@ -32,13 +34,19 @@ import json
 import queue
 import re
 import threading
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.keys import alive_key, alive_pattern, channel_key, robot_of_alive
+from cfgplan.runtime.keys import (
+    alive_key,
+    alive_pattern,
+    channel_key,
+    channels_pattern,
+    robot_of_alive,
+)
 from cfgplan.runtime.transport import ChannelKey, Presence, Receiver
 
 if TYPE_CHECKING:
@@ -162,6 +170,7 @@ class ZenohTransport:
             raise RunError(f"cannot open the Zenoh session: {_reason(exc)}") from None
         self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
         self._subscribers: list[Any] = []
+        self._channels: Any = None  # the subscriber of cfgplan/<society>/<robot>/ch/**
         self._receivers: dict[str, Receiver] = {}
         self._newest: dict[str, bytes] = {}  # per key, what arrived since the last poll
         self._lock = threading.Lock()
@@ -170,6 +179,13 @@ class ZenohTransport:
         self._arrivals: queue.SimpleQueue[tuple[str, bool]] = queue.SimpleQueue()
         self._watch: tuple[frozenset[str], Presence] | None = None
         self._watcher: Any = None
+        self.alive: set[str] = set()
+        """Robots of the society whose liveliness token is seen (after :meth:`watch`)."""
+        self.presence_listeners: list[Presence] = []
+        """Told of every robot of the society appearing or lost (the coordinator)."""
+        self._messages: queue.SimpleQueue[tuple[Callable[[bytes], None], bytes]] = (
+            queue.SimpleQueue()
+        )
         self.sent = 0
 
     def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
@@ -177,7 +193,40 @@ class ZenohTransport:
             raise RunError(f"this Zenoh session carries {self.robot}'s channels, not {robot}'s")
         where = channel_key(self.society, robot, key)
         self._receivers[where] = receiver
-        self._subscribers.append(self._session.declare_subscriber(where, self._on_sample))
+        if self._channels is None:  # one subscriber for every channel into this robot
+            every = channels_pattern(self.society, robot)
+            self._channels = self._session.declare_subscriber(every, self._on_sample)
+            self._subscribers.append(self._channels)
+
+    def detach(self, robot: str, key: ChannelKey) -> None:
+        """Nothing more is handed to channel ``key`` (what still arrives is dropped)."""
+        where = channel_key(self.society, robot, key)
+        self._receivers.pop(where, None)
+        with self._lock:
+            self._newest.pop(where, None)
+
+    def subscribe(self, key: str, handler: Callable[[bytes], None]) -> None:
+        """Every message on ``key`` (in order, none dropped) to ``handler``, at
+        :meth:`poll`: the reconfiguration protocol's messages."""
+
+        def queue_it(sample: Any) -> None:
+            self._messages.put((handler, sample.payload.to_bytes()))
+            self._arrived.set()
+
+        self._subscribers.append(self._session.declare_subscriber(key, queue_it))
+
+    def publish(self, key: str, payload: bytes) -> None:
+        """Send ``payload`` on ``key`` now (reliable, not batched)."""
+        self.declare(key).put(payload)
+
+    def declare(self, key: str) -> Any:
+        """The publisher of ``key``, declared now if it is not yet (declaring
+        ahead saves the first message the declaration's time)."""
+        publisher = self._publishers.get(key)
+        if publisher is None:
+            publisher = self._session.declare_publisher(key, express=True)
+            self._publishers[key] = publisher
+        return publisher
 
     def _on_sample(self, sample: Any) -> None:
         """On a Zenoh thread: keep the newest message of its channel for :meth:`poll`."""
@@ -196,18 +245,31 @@ class ZenohTransport:
         self.sent += 1
 
     def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
-        if not partners:
-            return
+        """Report ``partners`` appearing and lost; called again (after a
+        switch) it changes the partners, and a new partner already seen is
+        reported seen at once."""
+        before = self._watch[0] if self._watch is not None else frozenset()
         self._watch = (frozenset(partners), report)
-        self._watcher = self._session.liveliness().declare_subscriber(
-            alive_pattern(self.society), self._on_token, history=True
-        )
+        if self._watcher is None:
+            self._watcher = self._session.liveliness().declare_subscriber(
+                alive_pattern(self.society), self._on_token, history=True
+            )
+            return
+        with self._lock:
+            alive = set(self.alive)
+        for name in sorted((set(partners) - before) & alive):
+            self._arrivals.put((name, True))
 
     def _on_token(self, sample: Any) -> None:
-        """On a Zenoh thread: queue the change for :meth:`poll`."""
+        """On a Zenoh thread: note who is alive, queue the change for :meth:`poll`."""
         name = robot_of_alive(str(sample.key_expr), self.society)
-        if self._watch is not None and name in self._watch[0]:
-            self._arrivals.put((name, sample.kind == self._z.SampleKind.PUT))
+        if name is None or name == self.robot:
+            return
+        alive = sample.kind == self._z.SampleKind.PUT
+        with self._lock:
+            (self.alive.add if alive else self.alive.discard)(name)
+        self._arrivals.put((name, alive))
+        self._arrived.set()
 
     def wait(self, timeout: float) -> bool:
         """Block until a message has arrived (then :meth:`poll` hands it over),
@@ -219,13 +281,24 @@ class ZenohTransport:
             newest, self._newest = self._newest, {}
             self._arrived.clear()
         for where, payload in newest.items():
-            self._receivers[where](payload)
-        while self._watch is not None:
+            receiver = self._receivers.get(where)
+            if receiver is not None:
+                receiver(payload)
+        while True:
+            try:
+                handler, message = self._messages.get_nowait()
+            except queue.Empty:
+                break
+            handler(message)
+        while True:
             try:
                 name, alive = self._arrivals.get_nowait()
             except queue.Empty:
                 break
-            self._watch[1](name, alive)
+            if self._watch is not None and name in self._watch[0]:
+                self._watch[1](name, alive)
+            for listener in self.presence_listeners:
+                listener(name, alive)
 
     def close(self) -> None:
         """Leave: the token goes, so the others see this robot lost at once."""

@@ -1,0 +1,357 @@
+"""From detections to a running configuration again: the coordinator's loop (5.5).
+
+A :class:`Coordinator` takes the monitor's :class:`~cfgplan.runtime.monitor.Detection` s
+(from the robots of its process, or sent by the others over the network),
+asks the :class:`~cfgplan.reconfigure.policy.Reconfigurator` what to run, has
+a :class:`Deployer` install it on every robot, and records what happened as
+trace events on its robot (``failure``, ``recovery``, ``facts``, ``switch``,
+``no-configuration``, ``achieved``, ``abort``; schema in the README):
+
+* ``failure`` / ``recovery`` of a functionality instance, and robots
+  ``lost`` / ``seen``, go straight to the reconfigurator;
+* a **stale** input suspects its sender. The suspicion must *settle*: it is
+  acted on only if no ``fresh`` withdraws it within the staleness limit of
+  that channel (so a new configuration's first cycles, when data is not yet
+  flowing, are not mistaken for a failure), and only against the most
+  upstream suspects: a functionality whose own inputs come, directly or
+  not, from another suspect is starved, not failed (staleness flows
+  downstream);
+* the **latency** of a switch runs from the detection's time to the moment
+  the new configuration is installed on every robot.
+
+While a switch is being deployed (over the network that takes a round of
+messages), further detections wait; in idle time the coordinator computes
+the running configuration's fallbacks, one per pass.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol
+
+from cfgplan.configuration.describe import call_text
+from cfgplan.configuration.model import Configuration
+from cfgplan.reconfigure.ahead import Ahead
+from cfgplan.reconfigure.fallbacks import Resource
+from cfgplan.reconfigure.policy import Decision, Reconfigurator
+from cfgplan.runtime.events import Adaptation
+from cfgplan.runtime.monitor import Detection
+from cfgplan.runtime.part import Part
+
+__all__ = ["Coordinator", "Deployer", "Done", "upstream"]
+
+Done = Callable[[], None]
+"""Called by a :class:`Deployer` once every robot runs the new configuration."""
+
+Failed = Callable[[list[str], str], None]
+"""Called by a :class:`Deployer` when robots could not switch (refused, silent):
+nobody switched; the robots named are taken as lost."""
+
+
+class Deployer(Protocol):
+    """Installs a decision's parts on the robots (in process, or over the network)."""
+
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: Failed
+    ) -> None: ...
+
+
+def cost(value: float | None) -> int | float | None:
+    """A cost as the trace writes it: 44, not 44.0."""
+    if value is None:
+        return None
+    return int(value) if float(value).is_integer() else round(value, 4)
+
+
+def upstream(config: Configuration, label: str) -> set[str]:
+    """Labels whose data reaches ``label`` through the configuration's channels."""
+    feeds: dict[str, set[str]] = {}
+    for c in config.channels:
+        feeds.setdefault(c.target, set()).add(c.source)
+    seen: set[str] = set()
+    todo = list(feeds.get(label, ()))
+    while todo:
+        current = todo.pop()
+        if current not in seen:
+            seen.add(current)
+            todo.extend(feeds.get(current, ()))
+    return seen
+
+
+@dataclass
+class _Suspicion:
+    since: float  # monotonic
+    limit: float
+    detection: Detection
+
+
+@dataclass
+class Coordinator:
+    """Turns detections into switches (module docstring)."""
+
+    reconfigurator: Reconfigurator
+    record: Callable[[Adaptation], object]
+    robot: str
+    deployer: Deployer
+    clock: Callable[[], float] = time.monotonic
+    ahead: Ahead | None = None
+    """Computes fallbacks on a thread; without it, :meth:`tick` computes one per call."""
+    finished: str | None = None
+    """Why the run should end (``achieved``), once it should."""
+    stopped: bool = False
+    """No admissible configuration: the society runs nothing."""
+    _suspects: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
+    _backlog: list[Detection] = field(default_factory=list)
+    _deploying: bool = False
+
+    # -- input --------------------------------------------------------------
+
+    def handle(self, detection: Detection) -> None:
+        """Take one detection (queued while a switch is being deployed)."""
+        if self._deploying:
+            self._backlog.append(detection)
+            return
+        self._take(detection)
+        if (
+            self.ahead is not None
+            and not self._deploying
+            and detection.kind not in ("stale", "fresh")
+        ):
+            self.ahead.notify()  # after a switch: once it is deployed (no GIL contention)
+
+    def _take(self, detection: Detection) -> None:
+        kind = detection.kind
+        if kind in ("stale", "fresh"):
+            self._suspect(detection)
+        elif kind in ("failure", "lost"):
+            self._failure(detection)
+        elif kind in ("recovery", "seen"):
+            self._recovery(detection)
+        elif kind == "facts":
+            self._note(
+                "facts",
+                detection,
+                added=[f"({' '.join(f)})" for f in detection.added],
+                removed=[f"({' '.join(f)})" for f in detection.removed],
+                how=detection.how,
+            )
+            self._apply(
+                self.reconfigurator.updated(detection.added, detection.removed, "state update"),
+                detection,
+            )
+        elif kind == "achieved":
+            self._note(
+                "achieved",
+                detection,
+                label=detection.label,
+                functionality=call_text(detection.instance),
+            )
+            self.finished = "achieved"
+            self._apply(self.reconfigurator.achieved(), detection)
+
+    def install(self, config: Configuration | None, cause: str = "install") -> None:
+        """Put ``config`` on the running society with the least disruption (or
+        stop it, ``None``), recorded as a ``switch`` like any other: the
+        operation a sequence of configurations (7.3) is made of."""
+        now = Detection("facts", self.robot, time.time(), how=cause)
+        self._apply(self.reconfigurator.install(config, cause), now)
+        if self.ahead is not None:
+            self.ahead.notify()
+
+    def tick(self) -> None:
+        """Act on settled stale suspicions; else compute a fallback (idle time)."""
+        if self._deploying:
+            return
+        if self._backlog:
+            backlog, self._backlog = self._backlog, []
+            for detection in backlog:
+                self.handle(detection)
+            return
+        if self._settled():
+            return
+        if self.ahead is None:
+            self.reconfigurator.prepare()
+
+    # -- kinds --------------------------------------------------------------
+
+    def _resource(self, detection: Detection) -> Resource | None:
+        if detection.kind in ("lost", "seen"):
+            return Resource("robot", robot=detection.other, text=detection.other)
+        if detection.instance:
+            return Resource(
+                "functionality", instance=detection.instance, text=call_text(detection.instance)
+            )
+        return None
+
+    def _failure(self, detection: Detection) -> None:
+        resource = self._resource(detection)
+        if resource is None:
+            return
+        situation = self.reconfigurator.situation
+        if (resource.kind == "robot" and resource.robot in situation.lost) or (
+            resource.kind == "functionality" and resource.instance in situation.failed
+        ):
+            return  # known already
+        decision = self.reconfigurator.failed(resource, f"{resource.text} failed")
+        self._note(
+            "failure",
+            detection,
+            resource=resource.text,
+            kind=resource.kind,
+            how=detection.how or detection.kind,
+            detail=detection.detail,
+            withdrawn=[f"({' '.join(f)})" for f in decision.withdrawn],
+        )
+        self._apply(decision, detection)
+
+    def _recovery(self, detection: Detection) -> None:
+        resource = self._resource(detection)
+        if resource is None:
+            return
+        situation = self.reconfigurator.situation
+        if (resource.kind == "robot" and resource.robot not in situation.lost) or (
+            resource.kind == "functionality" and resource.instance not in situation.failed
+        ):
+            return  # it was never out
+        self._note(
+            "recovery",
+            detection,
+            resource=resource.text,
+            kind=resource.kind,
+            how=detection.how or detection.kind,
+        )
+        self._apply(
+            self.reconfigurator.recovered(resource, f"{resource.text} recovered"), detection
+        )
+
+    def _suspect(self, detection: Detection) -> None:
+        key = (detection.robot, detection.label, detection.detail)
+        if detection.kind == "fresh":
+            self._suspects.pop(key, None)
+        else:
+            self._suspects[key] = _Suspicion(self.clock(), detection.limit, detection)
+
+    def _settled(self) -> bool:
+        """Blame the most upstream suspects that stayed stale past their limit."""
+        running = self.reconfigurator.running
+        if running is None or not self._suspects:
+            self._suspects.clear()
+            return False
+        labels = {f.label: f for f in running.functionalities}
+        now = self.clock()
+        for key in [k for k, s in self._suspects.items() if s.detection.label not in labels]:
+            del self._suspects[key]  # a channel of an earlier configuration
+        ripe = {s.detection.label: s for s in self._suspects.values() if now - s.since >= s.limit}
+        suspected = {s.detection.label for s in self._suspects.values()}
+        roots = [label for label in ripe if not (upstream(running, label) & suspected)]
+        if not roots:
+            return False
+        label = sorted(roots)[0]
+        suspicion = ripe[label]
+        for key in [k for k in self._suspects if k[1] == label]:
+            del self._suspects[key]
+        blamed = labels[label]
+        self._failure(
+            Detection(
+                "failure",
+                suspicion.detection.robot,
+                suspicion.detection.t,
+                instance=blamed.key,
+                label=label,
+                how="stale",
+                detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
+            )
+        )
+        return True
+
+    # -- output -------------------------------------------------------------
+
+    def _note(self, what: str, detection: Detection, **info: object) -> None:
+        self.record(
+            Adaptation(
+                robot=self.robot,
+                t=time.time(),
+                what=what,
+                info=(("detected_by", detection.robot), *info.items()),
+            )
+        )
+
+    def _apply(self, decision: Decision, detection: Detection) -> None:
+        if decision.action == "stay":
+            return
+        parts = self.reconfigurator.parts(decision.previous)
+        self._deploying = True
+        self._suspects.clear()
+
+        def done() -> None:
+            self._deploying = False
+            self._report(decision, detection)
+            if self.ahead is not None:
+                self.ahead.notify()
+
+        def failed(robots: list[str], reason: str) -> None:
+            self._deploying = False
+            self.reconfigurator.rollback(decision.previous)
+            self.record(
+                Adaptation(
+                    robot=self.robot,
+                    t=time.time(),
+                    what="abort",
+                    info=(("id", decision.id), ("robots", robots), ("reason", reason)),
+                )
+            )
+            how, _, detail = reason.partition(": ")
+            for robot in robots:
+                self._failure(
+                    Detection("lost", self.robot, detection.t, other=robot, how=how, detail=detail)
+                )
+
+        self.deployer.deploy(decision, parts, done, failed)
+
+    def _report(self, decision: Decision, detection: Detection) -> None:
+        latency = max(0.0, time.time() - detection.t)
+        previous = decision.previous
+        change = decision.change
+        self.stopped = decision.config is None and self.finished != "achieved"
+        if decision.config is None:
+            if self.finished == "achieved":
+                return
+            self.record(
+                Adaptation(
+                    robot=self.robot,
+                    t=time.time(),
+                    what="no-configuration",
+                    info=(
+                        ("id", decision.id),
+                        ("cause", decision.cause),
+                        ("from_cost", cost(None if previous is None else previous.cost)),
+                        (
+                            "stopped",
+                            [] if change is None else change.record()["stopped"]["functionalities"],
+                        ),
+                        ("why", list(decision.why)),
+                        ("latency", round(latency, 6)),
+                    ),
+                )
+            )
+            return
+        assert change is not None
+        self.record(
+            Adaptation(
+                robot=self.robot,
+                t=time.time(),
+                what="switch",
+                info=(
+                    ("id", decision.id),
+                    ("cause", decision.cause),
+                    ("from_cost", cost(None if previous is None else previous.cost)),
+                    ("to_cost", cost(decision.config.cost)),
+                    ("source", decision.source),
+                    ("plan_ms", round(decision.plan_seconds * 1000, 3)),
+                    ("latency", round(latency, 6)),
+                    *change.record().items(),
+                ),
+            )
+        )

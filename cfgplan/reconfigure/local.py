@@ -1,0 +1,147 @@
+"""Monitoring and reconfiguration of a society run in one process (``cfgplan run``, 5.5).
+
+:func:`adapt` sets it up around a :class:`~cfgplan.runtime.Society`: a
+:class:`~cfgplan.runtime.monitor.Monitor` on every robot, the scripted
+faults (:class:`~cfgplan.runtime.inject.Injector`), and a
+:class:`~cfgplan.reconfigure.coordinate.Coordinator` whose deployer installs
+each robot's part directly (:func:`cfgplan.runtime.install.install`),
+between two cycles: every robot switches before the next cycle, so no cycle
+runs half of two configurations. A robot a new configuration needs that is
+not running yet joins the society. The hooks go to
+:func:`cfgplan.runtime.execute`.
+
+Sequences of configurations (7.3) can reuse :meth:`Adaptive.install`:
+put configuration X on the running society with the least disruption.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.ir.model import Domain
+from cfgplan.planner.task import Ground, Task
+from cfgplan.reconfigure.ahead import Ahead
+from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
+from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
+from cfgplan.runtime.events import Adaptation
+from cfgplan.runtime.executor import Robot
+from cfgplan.runtime.faults import Injection
+from cfgplan.runtime.inject import Injector
+from cfgplan.runtime.install import install
+from cfgplan.runtime.monitor import HOLD, Monitor
+from cfgplan.runtime.part import Part
+from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.society import Society
+
+__all__ = ["Adaptive", "InProcessDeployer", "adapt", "coordinator_of"]
+
+
+def coordinator_of(goal: Ground, config: Configuration | None) -> str:
+    """The robot that owns the goal: its first argument that is an agent of
+    the configuration (``do-cross-door(Emil, Door1)``: Emil), else the
+    configuration's first agent, else the goal's first argument."""
+    agents = [] if config is None else config.agents
+    for arg in goal[1:]:
+        if arg in agents:
+            return arg
+    if agents:
+        return agents[0]
+    return goal[1] if len(goal) > 1 else goal[0]
+
+
+class InProcessDeployer:
+    """Installs every robot's part at once (the robots share this process)."""
+
+    def __init__(self, society: Society, registry: Registry, monitor: Monitor) -> None:
+        self.society = society
+        self.registry = registry
+        self.monitor = monitor
+
+    def robot(self, name: str) -> Robot:
+        """Robot ``name``, joining the society (and the monitor) if it is new."""
+        found = self.society.robot(name)
+        if found is None:
+            found = Robot(name, self.registry, self.society.transport)
+            found.configure(lambda r: lambda: None)
+            self.society.add(found)
+            self.monitor.watch(found)
+        return found
+
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: Failed
+    ) -> None:
+        for name, part in parts.items():
+            robot = self.robot(name)
+            if not robot.alive:
+                continue
+            installed = install(robot, part)
+            robot.record(
+                Adaptation(
+                    robot=name,
+                    t=time.time(),
+                    what="install",
+                    info=(("id", decision.id), *installed.record()),
+                )
+            )
+        done()
+
+
+@dataclass
+class Adaptive:
+    """The hooks :func:`cfgplan.runtime.execute` runs a self-reconfiguring society with."""
+
+    coordinator: Coordinator
+    monitor: Monitor
+    injector: Injector
+
+    def before(self, cycle: int, elapsed: float) -> None:
+        self.injector(cycle, elapsed)
+
+    def between(self, cycle: int, elapsed: float) -> None:
+        for detection in self.monitor.drain():
+            self.coordinator.handle(detection)
+        self.coordinator.tick()
+
+    @property
+    def finished(self) -> str | None:
+        return self.coordinator.finished
+
+    @property
+    def stopped(self) -> bool:
+        """The run ends with nothing admissible running."""
+        return self.coordinator.stopped
+
+    @property
+    def reconfigures(self) -> bool:
+        return True
+
+
+def adapt(
+    society: Society,
+    registry: Registry,
+    task: Task,
+    domain: Domain,
+    goal: Ground,
+    config: Configuration,
+    injections: Sequence[Injection] = (),
+    *,
+    hysteresis: Hysteresis | None = None,
+    hold: float = HOLD,
+) -> Adaptive:
+    """Monitor ``society`` (running ``config``) and reconfigure it on failures."""
+    monitor = Monitor(hold=hold)
+    for robot in society.robots:
+        monitor.watch(robot)
+    reconfigurator = Reconfigurator(task, domain, goal, config, hysteresis or Hysteresis())
+    owner = coordinator_of(goal, config)
+    deployer = InProcessDeployer(society, registry, monitor)
+    recorder = deployer.robot(owner)
+    if society.transport is not None:
+        society.transport.presence_listeners.append(monitor.presence(owner))
+    coordinator = Coordinator(
+        reconfigurator, recorder.record, owner, deployer, ahead=Ahead(reconfigurator)
+    )
+    return Adaptive(coordinator, monitor, Injector(injections, society))

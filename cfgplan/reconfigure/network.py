@@ -1,0 +1,272 @@
+"""The coordinator across processes: switching a society whose robots talk over Zenoh (5.5).
+
+The robot that owns the goal (:func:`~cfgplan.reconfigure.local.coordinator_of`)
+runs ``cfgplan run DOMAIN STATE --robot NAME``: it has the planner. Every
+robot (itself included) runs a :class:`~cfgplan.runtime.member.Member`;
+the others send it their detections. :class:`NetworkDeployer` runs the
+two-phase switch of :mod:`cfgplan.runtime.member`:
+
+* **prepare** to every robot of the new (or old) configuration that is alive;
+  each answers ``ready`` or ``refused``;
+* when all are ready, the coordinator installs its own part and sends
+  **commit**; each robot installs its part between two cycles and answers
+  ``installed``; the switch is *running* when every answer is in (its
+  latency is measured to that moment);
+* a refusal, or no answer within :data:`SWITCH_TIMEOUT` seconds while
+  preparing, **aborts** the switch (nobody changed anything); the robots that
+  failed to answer are taken as lost, and the coordinator plans again
+  without them. A commit not answered in time is taken as done (the robot
+  installs it when it gets it, or liveliness reports it lost).
+
+A robot that appears (started late, or back after a crash) gets the running
+configuration's part at once (a commit carrying the part). When the task is
+accomplished every robot is told to **finish**.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.ir.model import Domain
+from cfgplan.planner.task import Ground, Task
+from cfgplan.reconfigure.ahead import Ahead
+from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
+from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
+from cfgplan.runtime.faults import Injection
+from cfgplan.runtime.inject import Injector
+from cfgplan.runtime.keys import configure_key, coordinator_key
+from cfgplan.runtime.member import Member, send
+from cfgplan.runtime.monitor import HOLD, Detection, Monitor
+from cfgplan.runtime.part import Part, part_to_json
+from cfgplan.runtime.society import Society
+from cfgplan.runtime.zenoh_transport import ZenohTransport
+
+__all__ = ["SWITCH_TIMEOUT", "NetworkAdaptive", "NetworkDeployer", "coordinate"]
+
+SWITCH_TIMEOUT = 2.0
+"""Seconds the coordinator waits for every robot to answer a step of a switch."""
+
+
+@dataclass
+class _Switch:
+    decision: Decision
+    parts: dict[str, Part]
+    done: Done
+    failed: Failed
+    phase: str  # "prepare" | "commit"
+    waiting: set[str]
+    deadline: float
+
+
+@dataclass
+class NetworkDeployer:
+    """Two-phase switches over the network (module docstring)."""
+
+    transport: ZenohTransport
+    member: Member
+    timeout: float = SWITCH_TIMEOUT
+    clock: Callable[[], float] = time.monotonic
+    switch: _Switch | None = None
+    parts: dict[str, Part] = field(default_factory=dict)  # what every robot runs now
+    current: int = 0
+
+    @property
+    def me(self) -> str:
+        return self.member.robot.name
+
+    def _to(self, robot: str, message: dict[str, object]) -> None:
+        send(self.transport, configure_key(self.transport.society, robot), message)
+
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: Failed
+    ) -> None:
+        alive = self.transport.alive
+        targets = {r: p for r, p in parts.items() if r == self.me or r in alive}
+        others = sorted(r for r in targets if r != self.me)
+        self.switch = _Switch(
+            decision, targets, done, failed, "prepare", set(others), self.clock() + self.timeout
+        )
+        for robot in others:
+            self._to(
+                robot,
+                {
+                    "op": "prepare",
+                    "id": decision.id,
+                    "from": self.me,
+                    "part": part_to_json(targets[robot]),
+                },
+            )
+        if not others:
+            self._commit()
+
+    def _commit(self) -> None:
+        switch = self.switch
+        assert switch is not None
+        number = switch.decision.id
+        others = sorted(r for r in switch.parts if r != self.me)
+        switch.phase, switch.waiting = "commit", set(others)
+        switch.deadline = self.clock() + self.timeout
+        for robot in others:  # first: they install while this robot does
+            self._to(robot, {"op": "commit", "id": number, "from": self.me})
+        own = switch.parts.get(self.me)
+        if own is not None:
+            self.member.install(number, own)
+        self.parts = {**self.parts, **switch.parts}
+        self.current = number
+        if not others:
+            self._finish()
+
+    def _finish(self) -> None:
+        switch, self.switch = self.switch, None
+        assert switch is not None
+        switch.done()
+
+    def acked(self, robot: str, number: int, phase: str, reason: str) -> None:
+        """An answer from ``robot`` to step ``phase`` of switch ``number``."""
+        switch = self.switch
+        if switch is None or number != switch.decision.id or robot not in switch.waiting:
+            return
+        if phase == "refused":
+            self._abort([robot], f"refused: {reason}")
+            return
+        expected = "ready" if switch.phase == "prepare" else "installed"
+        if phase != expected:
+            return
+        switch.waiting.discard(robot)
+        if not switch.waiting:
+            if switch.phase == "prepare":
+                self._commit()
+            else:
+                self._finish()
+
+    def _abort(self, robots: list[str], reason: str) -> None:
+        switch, self.switch = self.switch, None
+        assert switch is not None
+        for robot in sorted(r for r in switch.parts if r != self.me):
+            self._to(robot, {"op": "abort", "id": switch.decision.id, "from": self.me})
+        switch.failed(robots, reason)
+
+    def tick(self) -> None:
+        """Give up on robots that did not answer in time."""
+        switch = self.switch
+        if switch is None or self.clock() < switch.deadline:
+            return
+        if switch.phase == "prepare":
+            self._abort(sorted(switch.waiting), "silent")
+        else:
+            self._finish()
+
+    def resync(self, robot: str) -> None:
+        """Send ``robot`` the part it should be running (it just appeared)."""
+        part = self.parts.get(robot)
+        if part is not None and robot != self.me and self.switch is None:
+            self._to(
+                robot,
+                {"op": "commit", "id": self.current, "from": self.me, "part": part_to_json(part)},
+            )
+
+    def finish(self) -> None:
+        """The task is accomplished: every robot ends its run."""
+        for robot in sorted(set(self.parts) | self.transport.alive):
+            if robot != self.me:
+                self._to(robot, {"op": "finish", "id": self.current, "from": self.me})
+
+
+@dataclass
+class NetworkAdaptive:
+    """The hooks of :func:`cfgplan.runtime.execute` on the coordinating robot."""
+
+    coordinator: Coordinator
+    deployer: NetworkDeployer
+    monitor: Monitor
+    injector: Injector
+    _told: bool = False
+    _present: set[str] = field(default_factory=set)  # robots seen (each re-synchronised once)
+    reconfigures: bool = True
+
+    def before(self, cycle: int, elapsed: float) -> None:
+        self.injector(cycle, elapsed)
+
+    def between(self, cycle: int, elapsed: float) -> None:
+        for detection in self.monitor.drain():
+            self.take(detection)
+        self.deployer.tick()
+        self.coordinator.tick()
+        if self.coordinator.finished and not self._told:
+            self._told = True
+            self.deployer.finish()
+
+    def take(self, detection: Detection) -> None:
+        if detection.kind == "seen" and detection.other not in self._present:
+            self._present.add(detection.other)
+            self.deployer.resync(detection.other)
+        elif detection.kind == "lost":
+            self._present.discard(detection.other)
+        self.coordinator.handle(detection)
+
+    def receive(self, payload: bytes) -> None:
+        """A report or an acknowledgement sent to the coordinator."""
+        try:
+            message = json.loads(payload)
+            if message["type"] == "ack":
+                self.deployer.acked(
+                    str(message["robot"]),
+                    int(message["id"]),
+                    str(message["phase"]),
+                    str(message.get("reason", "")),
+                )
+            elif message["type"] == "report":
+                self.take(Detection.read(json.dumps(message["detection"]).encode()))
+        except (ValueError, KeyError, TypeError):
+            return  # not a message of this protocol: ignored
+
+    @property
+    def finished(self) -> str | None:
+        return self.coordinator.finished
+
+    @property
+    def stopped(self) -> bool:
+        return self.coordinator.stopped
+
+
+def coordinate(
+    society: Society,
+    transport: ZenohTransport,
+    task: Task,
+    domain: Domain,
+    goal: Ground,
+    config: Configuration,
+    parts: dict[str, Part],
+    injections: Sequence[Injection] = (),
+    *,
+    hysteresis: Hysteresis | None = None,
+    hold: float = HOLD,
+    timeout: float = SWITCH_TIMEOUT,
+    kill: Callable[[str], None] | None = None,
+) -> NetworkAdaptive:
+    """Make the one robot of ``society`` the coordinator of its society."""
+    (robot,) = society.robots
+    monitor = Monitor(hold=hold)
+    monitor.watch(robot)
+    transport.presence_listeners.append(monitor.presence(robot.name))
+    member = Member(robot, transport, monitor, forward=False)
+    deployer = NetworkDeployer(transport, member, timeout, parts=dict(parts))
+    reconfigurator = Reconfigurator(task, domain, goal, config, hysteresis or Hysteresis())
+    coordinator = Coordinator(
+        reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator)
+    )
+    injector = Injector(injections, society, kill=kill)
+    adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
+    transport.subscribe(coordinator_key(transport.society), adaptive.receive)
+    for other in sorted(_agents(task) - {robot.name}):  # ready to talk to every robot
+        transport.declare(configure_key(transport.society, other))
+    return adaptive
+
+
+def _agents(task: Task) -> set[str]:
+    """The robots and devices the state declares."""
+    return {f[1] for f in task.facts if f[0] in ("robot", "device") and len(f) == 2}

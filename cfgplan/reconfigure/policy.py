@@ -1,0 +1,348 @@
+"""Deciding what to run after a failure, a recovery or a state update (5.5, 7.2).
+
+The :class:`Reconfigurator` keeps the situation (what has failed, what came
+back, what the operator changed, :mod:`~cfgplan.reconfigure.situation`) and
+the configuration the society runs, and answers each change with a
+:class:`Decision`:
+
+* **a resource the running configuration uses fails** (a functionality
+  instance, a robot): the configuration is inadmissible, so the society
+  must switch — to the fallback computed ahead of time for that resource
+  (no search: :meth:`Reconfigurator.prepare` computes them one by one, or
+  :class:`~cfgplan.reconfigure.ahead.Ahead` on a thread of its own),
+  else to the cheapest configuration of a search on the derived task (no
+  cold start: the domain is not read, checked or compiled again). If none
+  is admissible, the configuration is *stopped* (the action halts) and the
+  planner's explanation says why;
+* **a resource it does not use fails**: the state changes, the
+  configuration stays;
+* **a resource comes back, or the operator adds or removes facts**: the
+  cheapest configuration is planned again; the society switches to it only
+  when the running configuration is no longer derivable (the operator
+  removed what it needs) or when the gain is worth a switch
+  (:class:`Hysteresis`); a stopped society resumes as soon as anything is
+  admissible;
+* **an action's task is accomplished**: its configuration's postconditions
+  (4.5: P) become true and the configuration is played out (6.2.2).
+
+Every failure of a functionality instance also multiplies its reliability
+(7.2) by ``decay`` for later choices: with ``--weights reliability=W`` a
+resource that failed costs ``W·(−ln decay)`` more each time, so a flaky
+sensor is chosen again only when it is clearly worth it.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Literal
+
+from cfgplan.backends.part import runtime_part
+from cfgplan.backends.wiring import deploy
+from cfgplan.configuration.describe import call_text
+from cfgplan.configuration.model import Configuration
+from cfgplan.ir.model import Domain
+from cfgplan.planner import plan
+from cfgplan.planner.explain import explain
+from cfgplan.planner.task import Ground, Task
+from cfgplan.reconfigure.fallbacks import Resource, fallback, resources
+from cfgplan.reconfigure.situation import Situation, derive
+from cfgplan.reconfigure.switch import Change, change, highest_label, relabel
+from cfgplan.runtime.part import Part
+
+__all__ = ["Decision", "Hysteresis", "Reconfigurator", "uses"]
+
+
+@dataclass(frozen=True)
+class Hysteresis:
+    """When a better configuration is worth a switch, and how failures weigh.
+
+    A running configuration that is still admissible is left for a cheaper one
+    only when the cost falls by at least ``max(minimum, margin × cost)``
+    (defaults: 1, and 10 %); with the thesis's weights carry-a-bar's return
+    from 45 to 33 (12) is worth it, a gain of one channel is not. Recoveries
+    themselves are held back on the robots (:mod:`cfgplan.runtime.monitor`).
+    """
+
+    margin: float = 0.1
+    minimum: float = 1.0
+    decay: float = 0.5
+
+    def worth(self, current: float, better: float) -> bool:
+        return current - better >= max(self.minimum, self.margin * current) - 1e-9
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What the society runs after a change: ``config`` (``None``: nothing)."""
+
+    action: Literal["switch", "stop", "stay"]
+    id: int  # the configuration's id after the decision (0: the first one)
+    config: Configuration | None
+    previous: Configuration | None
+    change: Change | None = None
+    source: Literal["fallback", "search", ""] = ""
+    plan_seconds: float = 0.0
+    why: tuple[str, ...] = ()
+    withdrawn: tuple[Ground, ...] = ()
+    cause: str = ""
+
+
+def uses(resource: Resource, config: Configuration | None) -> bool:
+    """Whether ``config`` relies on ``resource``."""
+    if config is None:
+        return False
+    if resource.kind == "functionality":
+        return any(f.key == resource.instance for f in config.functionalities)
+    if resource.kind == "robot":
+        return resource.robot in config.agents
+    return any(a.medium == resource.medium for a in config.media)
+
+
+@dataclass
+class Reconfigurator:
+    """The planning side of a running society (module docstring)."""
+
+    task: Task
+    domain: Domain
+    goal: Ground
+    running: Configuration | None
+    hysteresis: Hysteresis = field(default_factory=Hysteresis)
+    situation: Situation = field(default_factory=Situation)
+    id: int = 0
+    next_label: int = 0
+    _tasks: dict[Situation, Task] = field(default_factory=dict)
+    _fallbacks: dict[tuple[Situation, Resource], Configuration | None] = field(default_factory=dict)
+    _pending: list[Resource] = field(default_factory=list)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    """Guards the fallbacks, which :mod:`~cfgplan.reconfigure.ahead` computes on a thread."""
+
+    def __post_init__(self) -> None:
+        self.next_label = highest_label([self.running]) + 1
+        self._queue_fallbacks()
+
+    # -- the situation -----------------------------------------------------
+
+    def derived(self, situation: Situation | None = None) -> Task:
+        """The task of ``situation`` (default: the current one), derived once."""
+        s = self.situation if situation is None else situation
+        found = self._tasks.get(s)
+        if found is None:
+            found = self._tasks[s] = derive(self.task, s)
+        return found
+
+    def _failing(self, situation: Situation, resource: Resource) -> Situation:
+        after = resource.fail(situation)
+        if resource.kind == "functionality":
+            schema = self.task.functionality(resource.instance)
+            if schema is not None:
+                p = dict(situation.reliability).get(
+                    resource.instance,
+                    self.task.functionality_reliability(schema, resource.instance),
+                )
+                after = after.with_reliability(resource.instance, p * self.hysteresis.decay)
+        return after
+
+    # -- fallbacks ahead of time --------------------------------------------
+
+    def _queue_fallbacks(self) -> None:
+        with self.lock:
+            running = self.running
+            self._pending = [] if running is None else resources(running, self.task.media)
+
+    def next_fallback(self) -> tuple[Situation, Configuration, Resource] | None:
+        """The next fallback of the running configuration still to compute
+        (taken off the list), or ``None``."""
+        with self.lock:
+            while self._pending and self.running is not None:
+                resource = self._pending.pop(0)
+                if (self.situation, resource) not in self._fallbacks:
+                    return self.situation, self.running, resource
+            return None
+
+    def compute(
+        self,
+        situation: Situation,
+        running: Configuration,
+        resource: Resource,
+        time_limit: float | None = None,
+    ) -> None:
+        """Plan the fallback for ``resource`` failing in ``situation`` and keep
+        it (safe on another thread: it plans a task of its own). A search cut
+        by ``time_limit`` before it proved anything keeps nothing."""
+        after = self._failing(situation, resource)
+        found = fallback(
+            self.task,
+            self.goal,
+            running,
+            resource,
+            situation,
+            after=after,
+            derived=derive(self.task, after),
+            time_limit=time_limit,
+        )
+        if found.proven:
+            with self.lock:
+                self._fallbacks[(situation, resource)] = found.config
+
+    def prepare(self) -> bool:
+        """Compute one fallback of the running configuration now (in idle
+        time); whether more remain."""
+        job = self.next_fallback()
+        if job is not None:
+            self.compute(*job)
+        with self.lock:
+            return bool(self._pending)
+
+    def _fallback(self, key: tuple[Situation, Resource]) -> tuple[bool, Configuration | None]:
+        with self.lock:
+            return key in self._fallbacks, self._fallbacks.get(key)
+
+    # -- changes ------------------------------------------------------------
+
+    def failed(self, resource: Resource, cause: str = "") -> Decision:
+        """``resource`` failed (or a robot was lost)."""
+        before = self.situation
+        self.situation = self._failing(before, resource)
+        withdrawn = tuple(
+            f for f in self.situation.withdrawn(self.task) if f not in before.withdrawn(self.task)
+        )
+        if not uses(resource, self.running):
+            return self._stay(cause, withdrawn)
+        started = time.perf_counter()
+        known, best = self._fallback((before, resource))
+        source: Literal["fallback", "search"] = "fallback" if known else "search"
+        why: tuple[str, ...] = ()
+        if not known or best is None:
+            best, why = self._best()
+        return self._to(best, source, time.perf_counter() - started, why, withdrawn, cause)
+
+    def recovered(self, resource: Resource, cause: str = "") -> Decision:
+        """``resource`` works again (or a robot is back)."""
+        if resource.kind == "functionality":
+            self.situation = self.situation.recovered(resource.instance)
+        elif resource.kind == "robot":
+            self.situation = self.situation.returning(resource.robot)
+        else:
+            self.situation = self.situation.medium_up(resource.medium)
+        return self._better(cause, still_valid=True)
+
+    def updated(
+        self, add: tuple[Ground, ...], remove: tuple[Ground, ...], cause: str = ""
+    ) -> Decision:
+        """The operator (or a postcondition) added and removed facts."""
+        self.situation = self.situation.updated(add, remove)
+        return self._better(cause, still_valid=not remove)
+
+    def achieved(self) -> Decision:
+        """The action's task is accomplished: P becomes true, the configuration
+        is played out (6.2.2)."""
+        config = self.running
+        add: list[Ground] = []
+        remove: list[Ground] = []
+        for text in () if config is None else config.postconditions:
+            words = text.replace("(", " ").replace(")", " ").split()
+            if words and words[0] == "not":
+                remove.append(tuple(words[1:]))
+            elif words:
+                add.append(tuple(words))
+        self.situation = self.situation.updated(add, remove)
+        return self._to(None, "", 0.0, ("the task is accomplished",), (), "achieved")
+
+    def install(self, config: Configuration | None, cause: str = "") -> Decision:
+        """Run ``config`` next (``None``: nothing), whatever it costs: the
+        running labels kept for what both share, fresh ones for the rest.
+        For sequences of configurations (7.3): each step installs the next."""
+        started = time.perf_counter()
+        return self._to(config, "", time.perf_counter() - started, (), (), cause)
+
+    def rollback(self, previous: Configuration | None) -> None:
+        """A switch could not be deployed: the society still runs ``previous``."""
+        self.running = previous
+        self._queue_fallbacks()
+
+    # -- helpers ------------------------------------------------------------
+
+    def _best(self) -> tuple[Configuration | None, tuple[str, ...]]:
+        found, search = plan(self.derived(), self.goal, limit=1)
+        if found:
+            return found[0], ()
+        return None, tuple(explain(search.report, call_text(self.goal)))
+
+    def _better(self, cause: str, still_valid: bool) -> Decision:
+        started = time.perf_counter()
+        best, why = self._best()
+        seconds = time.perf_counter() - started
+        running = self.running
+        if running is None:
+            if best is None:
+                return self._stay(cause)
+            return self._to(best, "search", seconds, (), (), cause)
+        valid = still_valid or self._derivable(running)
+        if not valid:
+            return self._to(best, "search", seconds, why, (), cause)
+        if best is None or best.identity() == running.identity():
+            return self._stay(cause)
+        if self.hysteresis.worth(running.cost, best.cost):
+            return self._to(best, "search", seconds, (), (), cause)
+        return self._stay(cause)
+
+    def _derivable(self, config: Configuration, most: int = 1024) -> bool:
+        """Whether the planner still finds ``config`` in the current situation."""
+        limit = 4
+        while True:
+            found, search = plan(self.derived(), self.goal, limit=limit)
+            if any(c.identity() == config.identity() for c in found):
+                return True
+            if search.stats.complete or len(found) < limit or limit >= most:
+                return False
+            limit *= 4
+
+    def _stay(self, cause: str, withdrawn: tuple[Ground, ...] = ()) -> Decision:
+        return Decision(
+            "stay", self.id, self.running, self.running, withdrawn=withdrawn, cause=cause
+        )
+
+    def _to(
+        self,
+        best: Configuration | None,
+        source: Literal["fallback", "search", ""],
+        seconds: float,
+        why: tuple[str, ...],
+        withdrawn: tuple[Ground, ...],
+        cause: str,
+    ) -> Decision:
+        previous = self.running
+        if best is not None:
+            best = relabel(best, previous, self.next_label)
+            self.next_label = max(self.next_label, highest_label([best]) + 1)
+        self.id += 1
+        with self.lock:
+            self.running = best
+        self._queue_fallbacks()
+        return Decision(
+            "switch" if best is not None else "stop",
+            self.id,
+            best,
+            previous,
+            change(previous, best),
+            source,
+            seconds,
+            why,
+            withdrawn,
+            cause,
+        )
+
+    def parts(self, previous: Configuration | None = None) -> dict[str, Part]:
+        """The running configuration per robot (sorted, divided and wired,
+        5.1–5.3); robots of ``previous`` not in it get an empty part."""
+        out: dict[str, Part] = {}
+        if self.running is not None:
+            for robot_part in deploy(self.running, self.domain):
+                part = runtime_part(robot_part)
+                out[part.robot] = part
+        if previous is not None:
+            for agent in previous.agents:
+                out.setdefault(agent, Part(agent, (), ()))
+        return out

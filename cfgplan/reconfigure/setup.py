@@ -1,0 +1,107 @@
+"""Choosing how a run monitors and reconfigures itself (``cfgplan run``, 5.5).
+
+:func:`hooks` returns what :func:`cfgplan.runtime.execute` gets:
+
+* every robot in this process: :func:`~cfgplan.reconfigure.local.adapt`
+  (``--no-reconfigure``: only the scripted faults);
+* one robot alone (``--transport inprocess``): only the scripted faults;
+* one robot on the network: the robot that owns the goal coordinates
+  (:func:`~cfgplan.reconfigure.network.coordinate`), any other follows it
+  (:class:`~cfgplan.runtime.member.Membership`); both apply the scripted
+  faults aimed at their own robot, and only the coordinator the state
+  updates. ``kill`` of this process's robot ends the process at once, as a
+  crash: the trace is flushed first, nothing else is said to anyone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.problem import Problem
+from cfgplan.reconfigure.local import adapt, coordinator_of
+from cfgplan.reconfigure.network import coordinate
+from cfgplan.reconfigure.policy import Hysteresis
+from cfgplan.runtime.faults import Injection
+from cfgplan.runtime.inject import Injector, Scripted
+from cfgplan.runtime.launch import Hooks
+from cfgplan.runtime.main import crash
+from cfgplan.runtime.member import Member, Membership
+from cfgplan.runtime.monitor import HOLD, Monitor
+from cfgplan.runtime.part import Part
+from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.society import Society
+from cfgplan.runtime.tracefile import TraceFile
+from cfgplan.runtime.zenoh_transport import ZenohTransport
+
+__all__ = ["Settings", "hooks"]
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What the command line says about monitoring and reconfiguration."""
+
+    injections: tuple[Injection, ...] = ()
+    reconfigure: bool = True
+    hold: float = HOLD
+    margin: float = 0.1
+
+
+def hooks(
+    running: Society,
+    registry: Registry,
+    problem: Problem,
+    config: Configuration,
+    parts: Sequence[Part],
+    settings: Settings,
+    trace: TraceFile | None = None,
+    *,
+    whole: bool = True,
+) -> Hooks | None:
+    """The hooks of a run of ``running`` (module docstring); ``None``: none
+    needed. ``whole``: every robot of the configuration runs in ``running``
+    (else one robot runs, on the network or alone)."""
+    hysteresis = Hysteresis(margin=settings.margin)
+    transport = running.robots[0].transport if len(running.robots) == 1 else None
+    if not isinstance(transport, ZenohTransport):
+        if settings.reconfigure and whole:
+            return adapt(
+                running,
+                registry,
+                problem.task,
+                problem.domain,
+                problem.goal_call,
+                config,
+                settings.injections,
+                hysteresis=hysteresis,
+                hold=settings.hold,
+            )
+        injector = Injector(settings.injections, running)
+        return Scripted(injector) if injector.pending else None
+    (robot,) = running.robots
+
+    def kill(name: str) -> None:
+        crash(trace)
+
+    if not settings.reconfigure:
+        injector = Injector(settings.injections, running, facts=False, kill=kill)
+        return Scripted(injector) if injector.pending else None
+    if robot.name == coordinator_of(problem.goal_call, config):
+        return coordinate(
+            running,
+            transport,
+            problem.task,
+            problem.domain,
+            problem.goal_call,
+            config,
+            {p.robot: p for p in parts},
+            settings.injections,
+            hysteresis=hysteresis,
+            hold=settings.hold,
+            kill=kill,
+        )
+    monitor = Monitor(hold=settings.hold)
+    monitor.watch(robot)
+    member = Member(robot, transport, monitor)
+    return Membership(member, Injector(settings.injections, running, facts=False, kill=kill))

@@ -1,0 +1,180 @@
+"""The coordinator: detections in, switches out (5.5); staleness blamed upstream only.
+
+A fake deployer records the parts it is given and says "done" at once; the
+clock is stepped by hand, so the settling of stale suspicions is exact.
+"""
+
+from __future__ import annotations
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner import plan
+from cfgplan.problem import load
+from cfgplan.reconfigure.coordinate import Coordinator, Done, upstream
+from cfgplan.reconfigure.policy import Decision, Reconfigurator
+from cfgplan.runtime.events import Adaptation, Event
+from cfgplan.runtime.monitor import Detection
+from cfgplan.runtime.part import Part
+from tests.backends.support import DOMAINS
+
+STEP2 = (DOMAINS / "cross-door/domain.lisp", DOMAINS / "cross-door/state-6.2.2-step2.lisp")
+
+
+class Deployer:
+    def __init__(self) -> None:
+        self.deployed: list[tuple[Decision, dict[str, Part]]] = []
+        self.later: list[Done] = []
+        self.hold = False
+
+    def deploy(
+        self, decision: Decision, parts: dict[str, Part], done: Done, failed: object
+    ) -> None:
+        self.deployed.append((decision, parts))
+        if self.hold:
+            self.later.append(done)
+        else:
+            done()
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def _coordinator() -> tuple[Coordinator, Deployer, Clock, list[Event], Configuration]:
+    problem = load(*STEP2)
+    configs, _ = plan(problem.task, problem.goal_call)
+    r = Reconfigurator(problem.task, problem.domain, problem.goal_call, configs[0])
+    events: list[Event] = []
+    deployer, clock = Deployer(), Clock()
+    return (
+        Coordinator(r, events.append, "Emil", deployer, clock),
+        deployer,
+        clock,
+        events,
+        configs[0],
+    )
+
+
+def _label(config: Configuration, name: str, robot: str) -> str:
+    return next(f.label for f in config.functionalities if f.name == name and f.robot == robot)
+
+
+def _stale(label: str, robot: str, channel: str, kind: str = "stale") -> Detection:
+    return Detection(kind, "Pippi", 1.0, label=label, other=robot, detail=channel, limit=0.3)  # type: ignore[arg-type]
+
+
+def test_a_failure_is_recorded_switched_and_timed() -> None:
+    coordinator, deployer, _, events, _ = _coordinator()
+    coordinator.handle(
+        Detection("failure", "Emil", 0.0, instance=("compass", "Emil"), label="F10", how="injected")
+    )
+    ((decision, parts),) = deployer.deployed
+    assert decision.config is not None and decision.config.cost == 47
+    assert sorted(parts) == ["Emil", "Pippi"]
+    kinds = [e.kind for e in events]
+    assert kinds == ["failure", "switch"]
+    failure, switch = events
+    assert isinstance(failure, Adaptation) and isinstance(switch, Adaptation)
+    assert failure.field("resource") == "compass(Emil)" and failure.field("how") == "injected"
+    assert failure.field("withdrawn") == ["(compass Emil)"]
+    assert (switch.field("from_cost"), switch.field("to_cost")) == (44, 47)
+    assert switch.field("latency") > 1.0e6  # type: ignore[operator]  # from t=0: the epoch
+    coordinator.handle(Detection("failure", "Emil", 1.0, instance=("compass", "Emil")))
+    assert len(deployer.deployed) == 1  # known already
+
+
+def test_the_sender_of_a_stale_input_is_blamed_after_the_limit() -> None:
+    coordinator, deployer, clock, events, config = _coordinator()
+    compass = _label(config, "compass", "Emil")
+    coordinator.handle(_stale(compass, "Emil", "compass->orient"))
+    clock.now += 0.2
+    coordinator.tick()
+    assert deployer.deployed == []  # not yet settled
+    clock.now += 0.2
+    coordinator.tick()
+    ((decision, _),) = deployer.deployed
+    assert decision.cause == "compass(Emil) failed"
+    failure = next(e for e in events if e.kind == "failure")
+    assert isinstance(failure, Adaptation) and failure.field("how") == "stale"
+
+
+def test_fresh_data_withdraws_the_suspicion() -> None:
+    coordinator, deployer, clock, _, config = _coordinator()
+    compass = _label(config, "compass", "Emil")
+    coordinator.handle(_stale(compass, "Emil", "c"))
+    clock.now += 0.2
+    coordinator.handle(_stale(compass, "Emil", "c", "fresh"))
+    clock.now += 1.0
+    coordinator.tick()
+    assert deployer.deployed == []
+
+
+def test_staleness_downstream_of_a_suspect_is_not_blamed() -> None:
+    """Emil's compass falls silent: Pippi's measure-robot-orient-compass goes
+    stale on it, and then transform-info and cross-door starve. Only the
+    compass is blamed."""
+    coordinator, deployer, clock, events, config = _coordinator()
+    transform = _label(config, "transform-info", "Pippi")
+    orient = _label(config, "measure-robot-orient-compass", "Pippi")
+    compass = _label(config, "compass", "Emil")
+    assert {compass, orient} <= upstream(config, transform)
+    coordinator.handle(_stale(transform, "Pippi", "t->x"))  # cross-door's input, first
+    coordinator.handle(_stale(orient, "Pippi", "o->t"))
+    clock.now += 0.25
+    coordinator.handle(_stale(compass, "Emil", "c->o"))
+    clock.now += 0.1
+    coordinator.tick()
+    assert deployer.deployed == []  # the compass's suspicion is not ripe; nothing else is a root
+    clock.now += 0.3
+    coordinator.tick()
+    ((decision, _),) = deployer.deployed
+    assert decision.cause == "compass(Emil) failed"
+    assert [
+        e.field("resource") for e in events if isinstance(e, Adaptation) and e.kind == "failure"
+    ] == ["compass(Emil)"]
+
+
+def test_detections_wait_while_a_switch_is_deployed() -> None:
+    coordinator, deployer, _, events, _ = _coordinator()
+    deployer.hold = True
+    coordinator.handle(Detection("failure", "Emil", 0.0, instance=("compass", "Emil")))
+    coordinator.handle(Detection("lost", "Emil", 0.0, other="Pippi"))
+    assert len(deployer.deployed) == 1 and [e.kind for e in events] == ["failure"]
+    coordinator.tick()
+    assert len(deployer.deployed) == 1  # still deploying
+    deployer.later.pop()()
+    assert [e.kind for e in events] == ["failure", "switch"]
+    deployer.hold = False
+    coordinator.tick()
+    assert [e.kind for e in events] == ["failure", "switch", "failure", "no-configuration"]
+    assert coordinator.stopped
+
+
+def test_an_achieved_task_ends_the_run() -> None:
+    coordinator, deployer, _, events, _ = _coordinator()
+    coordinator.handle(
+        Detection("achieved", "Emil", 0.0, instance=("cross-door", "Emil", "Door1"), label="F3")
+    )
+    assert coordinator.finished == "achieved"
+    assert [e.kind for e in events] == ["achieved"]
+    ((decision, parts),) = deployer.deployed
+    assert decision.action == "stop" and all(p.calls == () for p in parts.values())
+
+
+def test_installing_a_configuration_keeps_what_is_shared() -> None:
+    """The operation sequences of configurations (7.3) reuse: install X now."""
+    coordinator, deployer, _, events, first = _coordinator()
+    problem = load(*STEP2)
+    configs, _ = plan(problem.task, problem.goal_call, limit=2)
+    coordinator.install(configs[1], "next step")
+    ((decision, _),) = deployer.deployed
+    assert decision.config is not None and decision.config.cost == 47
+    assert decision.change is not None and len(decision.change.kept) == 5
+    (switch,) = events
+    assert isinstance(switch, Adaptation) and switch.field("cause") == "next step"
+    coordinator.install(None, "done")
+    assert coordinator.stopped and coordinator.reconfigurator.running is None
+    assert first.cost == 44

@@ -1,0 +1,161 @@
+"""The reconfigurator's decisions (5.5, 7.2): fallbacks first, a safe stop, hysteresis."""
+
+from __future__ import annotations
+
+from cfgplan.configuration.cost import Weights
+from cfgplan.planner import plan
+from cfgplan.problem import Problem, load
+from cfgplan.reconfigure.fallbacks import Resource
+from cfgplan.reconfigure.policy import Hysteresis, Reconfigurator, uses
+from tests.backends.support import DOMAINS
+
+STEP2 = (DOMAINS / "cross-door/domain.lisp", DOMAINS / "cross-door/state-6.2.2-step2.lisp")
+CARRY = (DOMAINS / "carry-bar/domain.lisp", DOMAINS / "carry-bar/state-6.3.2.lisp")
+COMPASS = Resource("functionality", instance=("compass", "Emil"), text="compass(Emil)")
+LASER = Resource("functionality", instance=("laser", "Emil"), text="laser(Emil)")
+PIPPI = Resource("robot", robot="Pippi", text="Pippi")
+
+
+def _start(
+    files: tuple[object, object], weights: Weights | None = None
+) -> tuple[Problem, Reconfigurator]:
+    problem = load(*files, None, weights)  # type: ignore[arg-type]
+    configs, _ = plan(problem.task, problem.goal_call)
+    return problem, Reconfigurator(problem.task, problem.domain, problem.goal_call, configs[0])
+
+
+def test_a_failure_uses_the_fallback_computed_ahead_of_time() -> None:
+    _, r = _start(STEP2)
+    while r.prepare():
+        pass
+    decision = r.failed(COMPASS)
+    assert (decision.action, decision.source, decision.id) == ("switch", "fallback", 1)
+    assert decision.config is not None and decision.config.cost == 47
+    assert decision.withdrawn == (("compass", "Emil"),)
+    kept = {f.key: f.label for f in decision.change.kept}  # type: ignore[union-attr]
+    before = {f.key: f.label for f in decision.previous.functionalities}  # type: ignore[union-attr]
+    assert all(before[k] == label for k, label in kept.items())  # running labels kept
+    fresh = [f.label for f in decision.change.started]  # type: ignore[union-attr]
+    assert fresh == ["F15", "F16", "F17", "F18"]  # never used before in the run
+
+
+def test_without_fallbacks_it_searches_the_derived_task() -> None:
+    _, r = _start(STEP2)
+    decision = r.failed(COMPASS)
+    assert decision.source == "search" and decision.config is not None
+    assert decision.config.cost == 47
+
+
+def test_a_failure_of_something_unused_changes_the_state_only() -> None:
+    _, r = _start(STEP2)
+    r.failed(COMPASS)
+    again = r.failed(Resource("functionality", instance=("compass", "Pippi"), text="x"))
+    assert again.action == "stay" and again.withdrawn == (("compass", "Pippi"),)
+    assert ("compass", "Pippi") in r.situation.failed
+
+
+def test_nothing_admissible_stops_with_the_planners_explanation() -> None:
+    _, r = _start(STEP2)
+    r.failed(COMPASS)
+    decision = r.failed(PIPPI)
+    assert (decision.action, decision.config, r.running) == ("stop", None, None)
+    assert decision.why[0] == "no admissible configuration for do-cross-door(Emil, Door1):"
+    assert "(not (eql (quote ?r) (quote ?rh1))) with ?r = Emil, ?rh1 = Emil" in decision.why[1]
+    assert {f.name for f in decision.change.stopped} >= {"cross-door"}  # type: ignore[union-attr]
+    back = r.recovered(PIPPI)
+    assert back.action == "switch" and back.config is not None and back.config.cost == 47
+
+
+def test_a_small_gain_does_not_switch_back() -> None:
+    """The compass returns: 44 is 3 cheaper than 47, under the 10 % margin."""
+    _, r = _start(STEP2)
+    r.failed(COMPASS)
+    assert r.recovered(COMPASS).action == "stay"
+    assert r.running is not None and r.running.cost == 47
+    _problem, eager = _start(STEP2)
+    eager.hysteresis = Hysteresis(margin=0.0)  # any gain of at least 1 is worth it
+    eager.failed(COMPASS)
+    back = eager.recovered(COMPASS)
+    assert back.action == "switch" and back.config is not None and back.config.cost == 44
+
+
+def test_the_laser_returning_is_worth_the_switch_back_to_33() -> None:
+    _, r = _start(CARRY)
+    assert r.failed(LASER).config.cost == 45  # type: ignore[union-attr]
+    back = r.recovered(LASER)
+    assert back.action == "switch" and back.config is not None and back.config.cost == 33
+
+
+def test_failures_lower_reliability_so_a_flaky_laser_is_not_chosen_back() -> None:
+    """7.2: with reliability=10 each failure of the laser adds 10·ln 2 to the
+    configurations that use it; after two failures 33 + 13.9 > 45."""
+    _, r = _start(CARRY, Weights(reliability=10))
+    r.failed(LASER)
+    first = r.recovered(LASER)
+    assert first.action == "switch" and first.config is not None
+    assert round(first.config.cost, 2) == 39.93  # 33 + 10·ln 2
+    r.failed(LASER)
+    assert r.recovered(LASER).action == "stay"
+    assert r.running is not None and r.running.cost == 45
+
+
+def test_an_operator_update_that_removes_what_runs_forces_a_switch() -> None:
+    _, r = _start(STEP2)
+    decision = r.updated((), (("compass", "Pippi"),))
+    assert decision.action == "switch" and decision.config is not None
+    assert decision.config.cost == 47
+    same = r.updated((("door", "Door2"),), ())
+    assert same.action == "stay"
+
+
+def test_achieved_plays_the_configuration_out_and_applies_postconditions() -> None:
+    _problem, r = _start(STEP2)
+    assert r.running is not None
+    r.running = r.running.model_copy(
+        update={"postconditions": ("(in Emil Room2)", "(not (in Emil Room1))")}
+    )
+    decision = r.achieved()
+    assert decision.action == "stop" and r.running is None
+    assert ("in", "Emil", "Room2") in r.situation.asserted
+    assert ("in", "Emil", "Room1") in r.situation.retracted
+
+
+def test_uses_knows_functionalities_robots_and_media() -> None:
+    _, r = _start(STEP2)
+    assert uses(COMPASS, r.running) and uses(PIPPI, r.running)
+    assert not uses(Resource("medium", medium=0, text="m"), r.running)
+    assert not uses(COMPASS, None)
+
+
+def test_parts_give_every_robot_of_both_configurations_a_part() -> None:
+    _, r = _start(STEP2)
+    r.failed(COMPASS)
+    decision = r.failed(PIPPI)
+    parts = r.parts(decision.previous)
+    assert sorted(parts) == ["Emil", "Pippi"]
+    assert all(p.calls == () and p.channels == () for p in parts.values())
+
+
+def test_fallbacks_ahead_are_computed_on_a_thread_and_used() -> None:
+    from cfgplan.reconfigure.ahead import Ahead
+
+    _, r = _start(STEP2)
+    ahead = Ahead(r)
+    try:
+        assert ahead.idle.wait(60), "the fallbacks were not computed in a minute"
+    finally:
+        ahead.close()
+    assert r.next_fallback() is None  # nothing left to compute
+    decision = r.failed(COMPASS)
+    assert decision.source == "fallback" and decision.config is not None
+    assert decision.config.cost == 47
+
+
+def test_a_search_cut_by_its_time_limit_keeps_no_fallback() -> None:
+    _, r = _start(STEP2)
+    assert r.running is not None
+    r.compute(r.situation, r.running, COMPASS, time_limit=0.0)  # cut: a dive's guess
+    assert r._fallback((r.situation, COMPASS)) == (False, None)
+    r.compute(r.situation, r.running, COMPASS)
+    known, found = r._fallback((r.situation, COMPASS))
+    assert known and found is not None and found.cost == 47
