@@ -45,7 +45,7 @@ def _planner(mode: str, problem: Any, instance: Instance) -> Any:
         most = {"top1": 1, "top10": 10}[mode]
 
         def sequences(task: Any, goal: Any) -> tuple[list[Any], bool]:
-            search = SequenceSearch(problem.domain, problem.state, problem.goal_calls, task)
+            search = SequenceSearch(problem.goal_calls, task)
             search.time_limit = CAP
             found = [s.steps[-1].configuration.model_copy(update={"cost": s.total})
                      for s in islice(search, most)]

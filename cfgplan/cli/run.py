@@ -24,7 +24,8 @@ from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
 from cfgplan.cli.app import app
 from cfgplan.cli.emit import RankOpt, choose, title
-from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
+from cfgplan.cli.plan import DomainArg, GoalsOpt, StateArg, WeightsOpt, load_problem
+from cfgplan.cli.sequence import first_step
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Span
 from cfgplan.reconfigure.setup import Settings, hooks
@@ -101,7 +102,7 @@ def run(
             "with @functionality (cfgplan.runtime).",
         ),
     ],
-    goal: GoalOpt = None,
+    goal: GoalsOpt = None,
     rank: RankOpt = 1,
     weights: WeightsOpt = None,
     robot: Annotated[
@@ -247,8 +248,8 @@ def run(
         raise typer.BadParameter(
             "runs one robot per process: give --robot NAME", param_hint="'--transport zenoh'"
         )
-    problem = load_problem(domain, state, goal, weights)
-    config = choose(problem, rank)
+    problem = load_problem(domain, state, goal, weights, sequence=True)
+    config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p) for p in deploy(config, problem.domain)]
     options = RunOptions(
         rate=rate,

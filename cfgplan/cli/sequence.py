@@ -23,6 +23,7 @@ from rich.table import Table
 from cfgplan.cli.app import EXIT_NONE, say
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text, to_dict, to_text
+from cfgplan.configuration.model import Configuration
 from cfgplan.planner.explain import explain
 from cfgplan.planner.sequence import PlannedSequence, SequenceSearch
 from cfgplan.problem import Problem
@@ -39,14 +40,7 @@ class SequenceOptions:
 
 def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> str:
     """Plan, report on stderr, and return the text to print (exit 3 when none)."""
-    search = SequenceSearch(
-        problem.domain,
-        problem.state,
-        problem.goal_calls,
-        problem.task,
-        options.switch,
-        options.time_limit,
-    )
+    search = SequenceSearch(problem.goal_calls, problem.task, options.switch, options.time_limit)
     found = list(islice(search, options.limit) if options.limit is not None else search)
     if search.stopped is not None:
         say(f"cfgplan: search stopped ({search.stopped.value}); reporting {len(found)} found")
@@ -63,6 +57,20 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     if format_ == "lisp":
         return _lisp(problem, found)
     return _table(problem, found, options.details)
+
+
+def first_step(problem: Problem, rank: int) -> Configuration:
+    """The first step's configuration of the sequence of ``rank`` (1: the
+    cheapest): what ``cfgplan run`` starts with; exit 3 when there are fewer."""
+    search = SequenceSearch(problem.goal_calls, problem.task)
+    found = list(islice(search, rank))
+    if len(found) < rank:
+        if not found:
+            _impossible(problem, search)
+        else:
+            say(f"cfgplan: only {len(found)} sequence(s), no rank {rank}")
+        raise typer.Exit(EXIT_NONE)
+    return found[rank - 1].steps[0].configuration
 
 
 def _impossible(problem: Problem, search: SequenceSearch) -> None:

@@ -37,13 +37,12 @@ from dataclasses import dataclass, field
 from typing import cast
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.ir.model import Atom, Domain, State
 from cfgplan.planner import clock
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.plan import Run, partitioned, parts
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
-from cfgplan.planner.task import Ground, Task, compile_task, show
+from cfgplan.planner.task import Ground, Task, show, with_facts
 
 Facts = tuple[Ground, ...]
 
@@ -131,10 +130,9 @@ class _Entry:
 class SequenceSearch:
     """An iterator over sequences, cheapest first; see the module docstring."""
 
-    domain: Domain
-    state: State
     goals: tuple[Ground, ...]
     task: Task
+    """The task of the first step's state; later steps' are made from it."""
     switch: float = 0.0
     time_limit: float | None = None
     stopped: StopReason | None = None
@@ -148,14 +146,9 @@ class SequenceSearch:
         key = (step, facts)
         found = self._ranked.get(key)
         if found is None:
-            task = self.task if step == 0 else self._task(facts)
+            task = self.task if facts == self.task.facts else with_facts(self.task, facts)
             found = self._ranked[key] = Ranked(task, self.goals[step])
         return found
-
-    def _task(self, facts: Facts) -> Task:
-        atoms = tuple(Atom.model_construct(predicate=f[0], args=f[1:]) for f in facts)
-        state = self.state.model_copy(update={"facts": atoms})
-        return compile_task(self.domain, state, self.task.weights, self.task.reliability)
 
     def state_after(self, prefix: tuple[int, ...]) -> tuple[Facts, tuple[str, ...]]:
         """The facts after the steps of ``prefix``, and the last step's changes."""

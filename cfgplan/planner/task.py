@@ -12,6 +12,7 @@ kept: it orders the bindings, hence the derivations at equal cost (6.3.2).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -337,22 +338,57 @@ def compile_task(
         versions = methods.setdefault(m.name.signature, [])
         versions.append(_method(m, len(versions) + 1))
     facts = tuple(dict.fromkeys(pattern(a) for a in state.facts))  # a set, in state order
+    by_pred, by_arg = index_facts(facts)
+    return Task(
+        functionalities=MappingProxyType(functionalities),
+        methods=MappingProxyType({k: tuple(v) for k, v in methods.items()}),
+        facts=facts,
+        facts_by_predicate=by_pred,
+        facts_by_argument=by_arg,
+        media=state.media,
+        weights=weights or Weights(),
+        devices=_devices(facts),
+        reliability=MappingProxyType(dict(reliability or {})),
+        links=MappingProxyType(_links(state.media)),
+        state_names=frozenset(t for fact in facts for t in fact),
+    )
+
+
+def index_facts(
+    facts: Sequence[Ground],
+) -> tuple[
+    Mapping[Signature, tuple[Ground, ...]], Mapping[tuple[str, int, int, str], tuple[Ground, ...]]
+]:
+    """The two fact indexes a :class:`Task` keeps: by predicate, and by
+    predicate and argument value, each in state order."""
     by_pred: dict[Signature, list[Ground]] = {}
     by_arg: dict[tuple[str, int, int, str], list[Ground]] = {}
     for fact in facts:
         by_pred.setdefault((fact[0], len(fact) - 1), []).append(fact)
         for position, value in enumerate(fact[1:], 1):
             by_arg.setdefault((fact[0], len(fact) - 1, position, value), []).append(fact)
-    return Task(
-        functionalities=MappingProxyType(functionalities),
-        methods=MappingProxyType({k: tuple(v) for k, v in methods.items()}),
-        facts=facts,
-        facts_by_predicate=MappingProxyType({k: tuple(v) for k, v in by_pred.items()}),
-        facts_by_argument=MappingProxyType({k: tuple(v) for k, v in by_arg.items()}),
-        media=state.media,
-        weights=weights or Weights(),
-        devices=frozenset(fact[1] for fact in facts if fact[0] == "device" and len(fact) == 2),
-        reliability=MappingProxyType(dict(reliability or {})),
-        links=MappingProxyType(_links(state.media)),
-        state_names=frozenset(t for fact in facts for t in fact),
+    return (
+        MappingProxyType({k: tuple(v) for k, v in by_pred.items()}),
+        MappingProxyType({k: tuple(v) for k, v in by_arg.items()}),
+    )
+
+
+def _devices(facts: Sequence[Ground]) -> frozenset[str]:
+    return frozenset(f[1] for f in facts if f[0] == "device" and len(f) == 2)
+
+
+def with_facts(task: Task, facts: Sequence[Ground]) -> Task:
+    """``task`` in another world state: the same compiled schemas, weights,
+    media and reliabilities, ``facts`` (each once, in order) re-indexed. No
+    domain is read, checked or compiled: a sequence's later steps, or a
+    running society's changed state, are planned from it."""
+    unique = tuple(dict.fromkeys(facts))
+    by_pred, by_arg = index_facts(unique)
+    return dataclasses.replace(
+        task,
+        facts=unique,
+        facts_by_predicate=by_pred,
+        facts_by_argument=by_arg,
+        devices=_devices(unique),
+        state_names=frozenset(t for fact in unique for t in fact),
     )

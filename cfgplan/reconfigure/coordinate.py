@@ -148,7 +148,8 @@ class Coordinator:
                 label=detection.label,
                 functionality=call_text(detection.instance),
             )
-            self.finished = "achieved"
+            if not self.reconfigurator.goals:
+                self.finished = "achieved"  # the last step of a sequence, or the only one
             self._apply(self.reconfigurator.achieved(), detection)
 
     def install(self, config: Configuration | None, cause: str = "install") -> None:

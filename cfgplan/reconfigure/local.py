@@ -130,12 +130,15 @@ def adapt(
     *,
     hysteresis: Hysteresis | None = None,
     hold: float = HOLD,
+    goals: tuple[Ground, ...] = (),
 ) -> Adaptive:
     """Monitor ``society`` (running ``config``) and reconfigure it on failures."""
     monitor = Monitor(hold=hold)
     for robot in society.robots:
         monitor.watch(robot)
-    reconfigurator = Reconfigurator(task, domain, goal, config, hysteresis or Hysteresis())
+    reconfigurator = Reconfigurator(
+        task, domain, goal, config, hysteresis or Hysteresis(), goals=goals
+    )
     owner = coordinator_of(goal, config)
     deployer = InProcessDeployer(society, registry, monitor)
     recorder = deployer.robot(owner)

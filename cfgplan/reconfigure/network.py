@@ -245,6 +245,7 @@ def coordinate(
     *,
     hysteresis: Hysteresis | None = None,
     hold: float = HOLD,
+    goals: tuple[Ground, ...] = (),
     timeout: float = SWITCH_TIMEOUT,
     kill: Callable[[str], None] | None = None,
 ) -> NetworkAdaptive:
@@ -255,7 +256,9 @@ def coordinate(
     transport.presence_listeners.append(monitor.presence(robot.name))
     member = Member(robot, transport, monitor, forward=False)
     deployer = NetworkDeployer(transport, member, timeout, parts=dict(parts))
-    reconfigurator = Reconfigurator(task, domain, goal, config, hysteresis or Hysteresis())
+    reconfigurator = Reconfigurator(
+        task, domain, goal, config, hysteresis or Hysteresis(), goals=goals
+    )
     coordinator = Coordinator(
         reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator)
     )

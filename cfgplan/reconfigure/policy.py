@@ -23,7 +23,15 @@ the configuration the society runs, and answers each change with a
   (:class:`Hysteresis`); a stopped society resumes as soon as anything is
   admissible;
 * **an action's task is accomplished**: its configuration's postconditions
-  (4.5: P) become true and the configuration is played out (6.2.2).
+  (4.5: P) become true and the configuration is played out (6.2.2); in a
+  sequence of configurations (``goals`` after the current one), the next
+  step's configuration takes over.
+
+In a sequence, every choice — the next step's configuration, a switch after a
+failure — is the first step of the cheapest sequence of the remaining goals
+from the current state (:mod:`cfgplan.planner.sequence`), so a failure in a
+step re-plans the steps after it too; fallbacks ahead of time, which know one
+goal only, are not used then.
 
 Every failure of a functionality instance also multiplies its reliability
 (7.2) by ``decay`` for later choices: with ``--weights reliability=W`` a
@@ -45,6 +53,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Domain
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
+from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.fallbacks import Resource, fallback, resources
 from cfgplan.reconfigure.situation import Situation, derive
@@ -109,6 +118,8 @@ class Reconfigurator:
     goal: Ground
     running: Configuration | None
     hysteresis: Hysteresis = field(default_factory=Hysteresis)
+    goals: tuple[Ground, ...] = ()
+    """The goals of the steps after the current one (a sequence, 7.3)."""
     situation: Situation = field(default_factory=Situation)
     id: int = 0
     next_label: int = 0
@@ -149,7 +160,8 @@ class Reconfigurator:
     def _queue_fallbacks(self) -> None:
         with self.lock:
             running = self.running
-            self._pending = [] if running is None else resources(running, self.task.media)
+            plain = running is not None and not self.goals  # see the module docstring
+            self._pending = resources(running, self.task.media) if plain and running else []
 
     def next_fallback(self) -> tuple[Situation, Configuration, Resource] | None:
         """The next fallback of the running configuration still to compute
@@ -211,7 +223,7 @@ class Reconfigurator:
         if not uses(resource, self.running):
             return self._stay(cause, withdrawn)
         started = time.perf_counter()
-        known, best = self._fallback((before, resource))
+        known, best = (False, None) if self.goals else self._fallback((before, resource))
         source: Literal["fallback", "search"] = "fallback" if known else "search"
         why: tuple[str, ...] = ()
         if not known or best is None:
@@ -248,7 +260,15 @@ class Reconfigurator:
             elif words:
                 add.append(tuple(words))
         self.situation = self.situation.updated(add, remove)
-        return self._to(None, "", 0.0, ("the task is accomplished",), (), "achieved")
+        if not self.goals:
+            return self._to(None, "", 0.0, ("the task is accomplished",), (), "achieved")
+        self.goal, self.goals = self.goals[0], self.goals[1:]
+        with self.lock:
+            self._fallbacks.clear()  # they were for the goal of the step before
+        started = time.perf_counter()
+        best, why = self._best()
+        cause = f"next step: {call_text(self.goal)}"
+        return self._to(best, "search", time.perf_counter() - started, why, (), cause)
 
     def install(self, config: Configuration | None, cause: str = "") -> Decision:
         """Run ``config`` next (``None``: nothing), whatever it costs: the
@@ -265,10 +285,27 @@ class Reconfigurator:
     # -- helpers ------------------------------------------------------------
 
     def _best(self) -> tuple[Configuration | None, tuple[str, ...]]:
+        if self.goals:
+            return self._first_step()
         found, search = plan(self.derived(), self.goal, limit=1)
         if found:
             return found[0], ()
         return None, tuple(explain(search.report, call_text(self.goal)))
+
+    def _first_step(self) -> tuple[Configuration | None, tuple[str, ...]]:
+        """The current step's configuration in the cheapest sequence of the
+        remaining goals from the current state; else why there is none."""
+        goals = (self.goal, *self.goals)
+        search = SequenceSearch(goals, self.derived())
+        best = next(iter(search), None)
+        if best is not None:
+            return best.steps[0].configuration, ()
+        blocked = search.blocked()
+        if blocked is None:
+            return None, ("no admissible sequence of the remaining steps",)
+        step, _, report = blocked
+        head = f"step {step + 1} of the remaining ones, {call_text(goals[step])}, is impossible"
+        return None, (head, *explain(report, call_text(goals[step])))
 
     def _better(self, cause: str, still_valid: bool) -> Decision:
         started = time.perf_counter()

@@ -76,6 +76,7 @@ def hooks(
                 settings.injections,
                 hysteresis=hysteresis,
                 hold=settings.hold,
+                goals=problem.goal_calls[1:],
             )
         injector = Injector(settings.injections, running)
         return Scripted(injector) if injector.pending else None
@@ -100,6 +101,7 @@ def hooks(
             hysteresis=hysteresis,
             hold=settings.hold,
             kill=kill,
+            goals=problem.goal_calls[1:],
         )
     monitor = Monitor(hold=settings.hold)
     monitor.watch(robot)

@@ -29,15 +29,15 @@ caches, which are kept per task) are reused when a situation comes back.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 
 from cfgplan.ir.model import Medium
-from cfgplan.planner.task import FunctionalitySchema, Ground, Signature, Task, Test, TestKind
+from cfgplan.planner.task import FunctionalitySchema, Ground, Task, Test, TestKind, index_facts
 from cfgplan.reconfigure.withdraw import withdrawn_by_failure, withdrawn_by_loss
 
-__all__ = ["LOST", "OUT_OF_SERVICE", "Situation", "derive", "index"]
+__all__ = ["LOST", "OUT_OF_SERVICE", "Situation", "derive"]
 
 OUT_OF_SERVICE = ":out-of-service"
 """Predicate of the guard fact of a failed instance (a name starting with
@@ -124,24 +124,6 @@ class Situation:
         return tuple(dict.fromkeys([*kept, *self.asserted]))
 
 
-def index(
-    facts: Sequence[Ground],
-) -> tuple[
-    Mapping[Signature, tuple[Ground, ...]], Mapping[tuple[str, int, int, str], tuple[Ground, ...]]
-]:
-    """The two fact indexes a :class:`~cfgplan.planner.task.Task` keeps, for ``facts``."""
-    by_pred: dict[Signature, list[Ground]] = {}
-    by_arg: dict[tuple[str, int, int, str], list[Ground]] = {}
-    for fact in facts:
-        by_pred.setdefault((fact[0], len(fact) - 1), []).append(fact)
-        for position, value in enumerate(fact[1:], 1):
-            by_arg.setdefault((fact[0], len(fact) - 1, position, value), []).append(fact)
-    return (
-        MappingProxyType({k: tuple(v) for k, v in by_pred.items()}),
-        MappingProxyType({k: tuple(v) for k, v in by_arg.items()}),
-    )
-
-
 def _links(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
     links: dict[tuple[str, str], float] = {}
     for m in media:
@@ -184,7 +166,7 @@ def derive(base: Task, situation: Situation) -> Task:
     media = tuple(m for i, m in enumerate(base.media) if i not in situation.media_down)
     reliability = dict(base.reliability)
     reliability.update(situation.reliability)
-    by_pred, by_arg = index(facts)
+    by_pred, by_arg = index_facts(facts)
     return dataclasses.replace(
         base,
         functionalities=functionalities,

@@ -24,7 +24,7 @@ GOLDEN = ROOT / "tests/golden/sequence-6.2.2.txt"
 
 
 def search(problem: Problem, switch: float = 0.0) -> SequenceSearch:
-    return SequenceSearch(problem.domain, problem.state, problem.goal_calls, problem.task, switch)
+    return SequenceSearch(problem.goal_calls, problem.task, switch)
 
 
 def test_section_6_2_2_as_one_sequence() -> None:
