@@ -22,13 +22,12 @@ GOAL_SOURCE = "--goal"
 
 @dataclass
 class Problem:
-    """Everything needed to plan, plus the texts to quote in messages."""
+    """Everything needed to plan: the domain, the state, the goals, the compiled task."""
 
     domain: Domain
     state: State
     goal: Goal
     task: Task
-    sources: dict[str, str]
     warnings: list[Diagnostic] = field(default_factory=list)
     goals: tuple[Goal, ...] = ()
     """Every goal, in order: more than one for a sequence of configurations."""
@@ -67,15 +66,11 @@ def load(
     """Read and check a domain and a state. The goals come from ``goal_text``
     (one, or several for a sequence), else from the state file's ``(goal ...)``
     or ``(sequence ...)``. Raises CfgplanError (with every error found) on bad input."""
-    sources: dict[str, str] = {}
-    domain, text = read_domain(domain_path)
-    sources[str(domain_path)] = text
-    state, text = read_state(state_path)
-    sources[str(state_path)] = text
+    domain, _ = read_domain(domain_path)
+    state, _ = read_state(state_path)
     texts = [goal_text] if isinstance(goal_text, str) else list(goal_text or [])
     goals: tuple[Goal, ...]
     if texts:
-        sources[GOAL_SOURCE] = "\n".join(f"(goal {t})" for t in texts)
         goals = tuple(parse_goal(t, line) for line, t in enumerate(texts, 1))
     else:
         goals = (state.goal,) if state.goal is not None else state.sequence
@@ -92,4 +87,4 @@ def load(
         raise CfgplanError(diagnostics)
     task = compile_task(domain, state, weights)
     warnings = [d for d in diagnostics if not d.is_error]
-    return Problem(domain, state, goals[0], task, sources, warnings, goals)
+    return Problem(domain, state, goals[0], task, warnings, goals)

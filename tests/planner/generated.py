@@ -453,8 +453,7 @@ def solve(example: Generated) -> Problem:
     if any(d.is_error for d in diagnostics):
         raise CfgplanError(diagnostics)
     task = compile_task(domain, state, example.weights)
-    sources = {"domain.lisp": example.domain, "state.lisp": example.state}
-    return Problem(domain, state, state.goal, task, sources)
+    return Problem(domain, state, state.goal, task)
 
 
 def run(problem: Problem, *, limit: int | None = None, distinct: bool) -> list[Configuration]:

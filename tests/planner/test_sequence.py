@@ -103,8 +103,7 @@ def sequence_of(example: Generated) -> Problem:
     problem = solve(example)
     goal = problem.goal.model_copy(update={"call": Atom(predicate="do-task", args=("R2",))})
     return Problem(
-        problem.domain, problem.state, problem.goal, problem.task, problem.sources,
-        goals=(problem.goal, goal),
+        problem.domain, problem.state, problem.goal, problem.task, goals=(problem.goal, goal),
     )
 
 
