@@ -57,6 +57,17 @@ def parse_goal(text: str, line: int = 1) -> Goal:
     return source.goals[0]
 
 
+def example_goal(domain: Domain) -> str:
+    """A goal of ``domain`` to show in a hint: its first method no other method
+    calls (the top of a hierarchy), its parameters as placeholders in capitals."""
+    called = {item.call.signature for m in domain.methods for item in m.body}
+    tops = [m for m in domain.methods if m.name.signature not in called] or list(domain.methods)
+    if not tops:
+        return "(METHOD ARGUMENT ...)"
+    name = tops[0].name
+    return "(" + " ".join([name.predicate, *(a.lstrip("?").upper() for a in name.args)]) + ")"
+
+
 def load(
     domain_path: str | Path,
     state_path: str | Path,
@@ -77,7 +88,7 @@ def load(
     if not goals:
         raise error(
             f"no goal: {state_path} has no (goal ...) form and --goal was not given",
-            hint="add (goal (do-cross-door Pippi Door1)) to the state file, or pass --goal",
+            hint=f"add (goal {example_goal(domain)}) to the state file, or pass --goal",
         )
     diagnostics: list[Diagnostic] = []
     for goal in goals:

@@ -10,7 +10,8 @@ and ``(eval ...)`` tests inside the safe subset (Appendix A).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import difflib
+from collections.abc import Iterable, Sequence
 from typing import Literal
 
 from cfgplan.check import evaluate
@@ -299,7 +300,9 @@ class _Checker:
         )
 
     def _method_variables(self, m: Method) -> None:
-        """Variables of channels, ports and calls are bound by the name or a precondition."""
+        """Variables of channels, ports and calls are bound by the name or a
+        precondition: one bound by nothing leaves the call, channel or port
+        unground, and every expansion of the method fails (4.5, step 3a)."""
         bound = set(m.name.variables())
         for cond in m.precond:
             if isinstance(cond, Atom):
@@ -316,8 +319,9 @@ class _Checker:
                     first[t] = span
         for v, span in first.items():
             self.report(
-                "warning",
-                f"{v} is bound by neither the name nor a precondition of {m.name}",
+                "error",
+                f"{v} is bound by neither the name nor a precondition of {m.name}, "
+                "so no expansion of it can be made",
                 span,
                 f"add {v} to the name or bind it with a precondition such as (robot {v})",
             )
@@ -365,19 +369,23 @@ class _Checker:
         return tested
 
     def state(self, state: State) -> None:
-        """Predicates of the state and of the preconditions that differ only in case (4.4)."""
+        """Facts no precondition tests whose predicate is close to one that is
+        (a typo: ``(lazer Robby)``), and preconditions whose predicate the state
+        writes only in another case (4.4)."""
         tested = self._tested()
         stated: dict[str, Atom] = {}
         for fact in state.facts:
             stated.setdefault(fact.predicate, fact)
         for pred, fact in stated.items():
-            close = sorted(t for t in tested if t != pred and t.lower() == pred.lower())
-            if pred not in tested and close:
+            if pred in tested or pred in PLANNER_FACTS:
+                continue
+            hint = _did_you_mean(pred, tested)
+            if hint is not None:
                 self.report(
                     "warning",
                     f"no precondition tests ({pred} ...), so the fact {fact} is never used",
                     fact.span,
-                    f"symbols are case-sensitive: did you mean {' or '.join(close)}?",
+                    hint,
                 )
         for pred, atom in tested.items():
             close = sorted(s for s in stated if s != pred and s.lower() == pred.lower())
@@ -404,7 +412,7 @@ class _Checker:
             )
             return
         arities = [s[1] for s in self.versions if s[0] == call.predicate]
-        hint = self._case_hint(call.predicate, methods_only=True)
+        hint = _did_you_mean(call.predicate, {s[0] for s in self.versions})
         if arities:
             hint = f"({call.predicate} ...) takes {alternatives(arities)}, found {call.arity}"
         self.report(
@@ -413,3 +421,21 @@ class _Checker:
             span,
             hint,
         )
+
+
+PLANNER_FACTS = frozenset({"device"})
+"""Fact predicates the planner itself reads (:mod:`cfgplan.configuration.cost`):
+used even when no precondition tests them."""
+
+
+def _did_you_mean(name: str, known: Iterable[str]) -> str | None:
+    """A hint naming the known names ``name`` may be a slip for: differing
+    only in case, or close in spelling; None when none is."""
+    names = sorted(set(known) - {name})
+    same = [n for n in names if n.lower() == name.lower()]
+    if same:
+        return f"symbols are case-sensitive: did you mean {' or '.join(same)}?"
+    close = difflib.get_close_matches(name, names, n=2, cutoff=0.75)
+    if close:
+        return f"did you mean {' or '.join(close)}?"
+    return None

@@ -341,12 +341,16 @@ def test_two_out_ports_with_same_descriptor() -> None:
 # -- variables -------------------------------------------------------------------
 
 
-def test_channel_variable_bound_by_nothing_is_a_warning() -> None:
+def test_channel_variable_bound_by_nothing_is_an_error() -> None:
+    """Issue 10: the planner cannot instantiate the channel, so every expansion
+    of the method fails and configurations are lost without a word."""
     text = BASE + GOOD.replace("((local ?r) ?f1", "((local ?x) ?f1")
-    d = only(run(text), "warning")
-    assert d.message.startswith("?x is bound by neither the name nor a precondition")
+    d = only(run(text))
+    assert d.message == (
+        "?x is bound by neither the name nor a precondition of (get-door-info ?r ?d), "
+        "so no expansion of it can be made"
+    )
     assert loc(d) == "7:15"
-    assert [x for x in run(text) if x.is_error] == []
 
 
 def test_variable_bound_by_precondition_is_fine() -> None:
@@ -356,13 +360,13 @@ def test_variable_bound_by_precondition_is_fine() -> None:
     assert run(text) == []
 
 
-def test_body_call_variable_bound_by_nothing_is_a_warning_once() -> None:
+def test_body_call_variable_bound_by_nothing_is_an_error_once() -> None:
     text = BASE + GOOD.replace("(measure-door ?r ?d)", "(measure-door ?r ?z)")
     text = text.replace(
         ":out '((?f2 (pos ?r ?d)) (?f2 (orient ?r ?d)))", ":out '((?f2 (pos ?r ?z)))"
     )
     found = run(text)
-    d = only(found, "warning")
+    d = only(found)
     assert d.message.startswith("?z is bound by neither the name nor a precondition")
     assert loc(d) == at(text, "(?f2 (pos ?r ?z))") == "6:10"  # the first use, by position
 
@@ -507,7 +511,27 @@ def test_state_predicate_differing_in_case_warns_twice() -> None:
 
 
 def test_unused_state_predicate_without_case_twin_is_silent() -> None:
+    """A state may describe more of the world than a domain tests."""
     assert run(BASE + GOOD, "(state (heavy B1) (camera Pippi) (door Door1))\n") == []
+
+
+def test_a_misspelt_fact_is_a_warning_with_a_suggestion() -> None:
+    """Issue 10: (camrea Pippi) is tested by nothing; camera is close."""
+    d = only(run(BASE + GOOD, "(state (camrea Pippi) (door Door1))\n"), "warning")
+    assert d.message == (
+        "no precondition tests (camrea ...), so the fact (camrea Pippi) is never used"
+    )
+    assert d.hint == "did you mean camera?"
+    assert loc(d) == "1:8"
+
+
+def test_devices_are_read_by_the_planner_even_when_untested() -> None:
+    assert run(BASE + GOOD, "(state (device Cam) (camera Pippi) (door Door1))\n") == []
+
+
+def test_goal_spelling_hint() -> None:
+    d = only(run(BASE + GOOD, STATE + "(goal (get-dor-info Pippi Door1))\n"))
+    assert d.hint == "did you mean get-door-info?"
 
 
 def test_diagnostics_are_sorted_by_position() -> None:
@@ -520,3 +544,16 @@ def test_diagnostics_are_sorted_by_position() -> None:
     assert len(keys) == len(found) == 4
     assert keys == sorted(keys, key=lambda k: (k[0] != "t.lisp", k[1], k[2]))
     assert found[-1].span is not None and found[-1].span.file == "s.lisp"
+
+
+def test_no_goal_hint_names_a_method_of_this_domain(tmp_path: Path) -> None:
+    """Issue 10: the hint names the top method of the domain at hand."""
+    from cfgplan.diagnostics import CfgplanError
+    from cfgplan.problem import load
+
+    root = Path(__file__).resolve().parents[2] / "domains"
+    (tmp_path / "s.lisp").write_text("(state (robot Vacu))\n")
+    with pytest.raises(CfgplanError) as caught:
+        load(root / "docking/domain.lisp", tmp_path / "s.lisp")
+    (d,) = caught.value.diagnostics
+    assert d.hint == "add (goal (do-dock R S)) to the state file, or pass --goal"
