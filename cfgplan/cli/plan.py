@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import io
 import json
+import shutil
 import sys
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import typer
 from rich.console import Console
@@ -21,7 +22,7 @@ from cfgplan.configuration.describe import call_text, channel_text, to_dict, to_
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.planner import Run, Stats
-from cfgplan.planner.explain import explain
+from cfgplan.planner.explain import explain, explanation
 from cfgplan.problem import GOAL_SOURCE, Problem, load
 from cfgplan.reconfigure.fallbacks import Fallback
 from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
@@ -112,9 +113,10 @@ def _progress(stats: Stats, elapsed: float) -> None:
     say(f"planning... {elapsed:.1f} s, {stats.nodes:,} nodes, {stats.derivations:,} derivations")
 
 
-def _stats(search: Run) -> dict[str, object]:
+def _stats(search: Run, more: bool = False) -> dict[str, object]:
     s = search.stats
     return {
+        "more": more,
         "nodes": s.nodes,
         "expansions": s.expansions,
         "derivations": s.derivations,
@@ -125,7 +127,7 @@ def _stats(search: Run) -> dict[str, object]:
     }
 
 
-def _table(problem: Problem, configs: list[Configuration], details: bool) -> str:
+def _table(problem: Problem, configs: list[Configuration], details: bool, more: bool) -> str:
     table = Table(title=f"Configurations for {call_text(problem.goal_call)}")
     table.add_column("rank", justify="right")
     table.add_column("cost", justify="right")
@@ -154,9 +156,12 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
             row.append("\n".join(channel_text(ch) for ch in c.channels))
         table.add_row(*row)
     buffer = io.StringIO()
-    Console(
-        file=buffer, width=200 if details else 100, force_terminal=False, color_system=None
-    ).print(table)
+    # With --details the table is as wide as the terminal (200 when not one).
+    width = shutil.get_terminal_size((200, 24)).columns if details else 100
+    Console(file=buffer, width=width, force_terminal=False, color_system=None).print(table)
+    if more:
+        wider = len(configs) + 10
+        buffer.write(f"note: more configurations exist: --all lists them all, -k {wider} more\n")
     if not problem.state.media:
         buffer.write("note: the state declares no media: communication admissibility not checked\n")
     if any(not c.proven for c in configs):
@@ -167,7 +172,8 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
 def _streamed(problem: Problem, config: Configuration, rank: int, format_: Format) -> str:
     """One configuration as ``--format jsonl`` or ``lisp`` prints it, alone."""
     if format_ is Format.jsonl:
-        return json.dumps(to_dict(config, rank), ensure_ascii=False) + "\n"
+        line = to_dict(config, rank, problem.state.media)
+        return json.dumps(line, ensure_ascii=False) + "\n"
     head = ""
     if rank == 1:
         head = f";; cfgplan: configurations for {call_text(problem.goal_call)}\n"
@@ -177,15 +183,68 @@ def _streamed(problem: Problem, config: Configuration, rank: int, format_: Forma
     return head + shown + "\n" + to_text(config, problem.state.media) + "\n"
 
 
-def _summary(problem: Problem, configs: list[Configuration], search: Run) -> str:
+def _summary(
+    problem: Problem,
+    configs: list[Configuration],
+    search: Run,
+    more: bool = False,
+    explained: dict[str, object] | None = None,
+) -> str:
     """The last line of ``--format jsonl``: what was planned for, and how."""
-    doc = {
+    doc: dict[str, object] = {
         "goal": call_text(problem.goal_call),
         "count": len(configs),
         "communication_checked": bool(problem.state.media),
-        "stats": _stats(search),
+        "stats": _stats(search, more),
     }
+    if explained is not None:
+        doc["explanation"] = explained
     return json.dumps(doc, ensure_ascii=False) + "\n"
+
+
+def _plan(
+    problem: Problem,
+    limit: int | None,
+    distinct: bool,
+    time_limit: float | None,
+    stream: bool,
+    format_: Format,
+) -> tuple[Run, list[Configuration], bool]:
+    """Plan (streaming what is proven when asked to); with ``-k N`` one more is
+    planned, to say whether more exist: the run, the configurations, and that."""
+    search = Run(  # the time limit counts from here: planning, not reading
+        problem.task,
+        problem.goal_call,
+        None if limit is None else limit + 1,
+        distinct,
+        time_limit,
+        _progress,
+    )
+    configs: list[Configuration] = []
+    for config in search:
+        if limit is not None and len(configs) == limit:
+            return search, configs, True
+        configs.append(config)
+        if stream:  # printed as soon as it is proven
+            sys.stdout.write(_streamed(problem, config, len(configs), format_))
+            sys.stdout.flush()
+    return search, configs, False
+
+
+def _nothing(
+    problem: Problem, search: Run, format_: Format, output: Path | None, force: bool
+) -> NoReturn:
+    """No admissible configuration: why, on stderr; with JSON, also as data on
+    stdout (scripts never get an empty answer); exit 3."""
+    say("\n".join(explain(search.report, call_text(problem.goal_call))))
+    explained = explanation(search.report)
+    if format_ is Format.json:
+        extra = {"explanation": explained}
+        text = to_json(problem.goal_call, [], problem.state.media, _stats(search), extra)
+        write_output(text, output, force)
+    elif format_ is Format.jsonl:
+        write_output(_summary(problem, [], search, explained=explained), output, force)
+    raise typer.Exit(EXIT_NONE)
 
 
 def _lisp(problem: Problem, configs: list[Configuration]) -> str:
@@ -266,32 +325,19 @@ def plan(
         text = plan_sequences(problem, options, format_.value)
         write_output(text, output, force)
         return
-    search = Run(  # the time limit counts from here: planning, not reading
-        problem.task,
-        problem.goal_call,
-        None if all_ else k,
-        not derivations,
-        time_limit,
-        _progress,
-    )
+    limit = None if all_ else k
     stream = output is None and format_ in (Format.jsonl, Format.lisp)
-    configs = []
-    for config in search:
-        configs.append(config)
-        if stream:  # printed as soon as it is proven
-            sys.stdout.write(_streamed(problem, config, len(configs), format_))
-            sys.stdout.flush()
+    search, configs, more = _plan(problem, limit, not derivations, time_limit, stream, format_)
     if verbose:
         _verbose(search)
     if search.stopped:
         found = f"{len(configs)} configuration(s)" if configs else "nothing"
         say(f"cfgplan: search stopped ({search.stopped.value}); reporting {found} found so far")
     if not configs:
-        say("\n".join(explain(search.report, call_text(problem.goal_call))))
-        raise typer.Exit(EXIT_NONE)
+        _nothing(problem, search, format_, output, force)
     backups = _fallbacks(problem, configs[0], time_limit) if fallbacks else None
     if format_ is Format.jsonl:
-        summary = _summary(problem, configs, search)
+        summary = _summary(problem, configs, search, more)
         if stream:
             sys.stdout.write(summary)
             return
@@ -299,7 +345,8 @@ def plan(
         text += summary
     elif format_ is Format.json:
         extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
-        text = to_json(problem.goal_call, configs, bool(problem.state.media), _stats(search), extra)
+        stats = _stats(search, more)
+        text = to_json(problem.goal_call, configs, problem.state.media, stats, extra)
     elif stream:
         if backups is not None:
             sys.stdout.write(fallback_lisp(configs[0], backups))
@@ -309,7 +356,7 @@ def plan(
         if backups is not None:
             text += fallback_lisp(configs[0], backups)
     else:
-        text = _table(problem, configs, details)
+        text = _table(problem, configs, details, more)
         if backups is not None:
             text += fallback_table(configs[0], backups)
     write_output(text, output, force)

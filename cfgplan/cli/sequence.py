@@ -51,7 +51,7 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
         return json.dumps(_document(problem, found, search), indent=2, ensure_ascii=False) + "\n"
     if format_ == "jsonl":
         return "".join(
-            json.dumps(_sequence(s, rank), ensure_ascii=False) + "\n"
+            json.dumps(_sequence(s, rank, problem), ensure_ascii=False) + "\n"
             for rank, s in enumerate(found, 1)
         )
     if format_ == "lisp":
@@ -88,7 +88,7 @@ def _impossible(problem: Problem, search: SequenceSearch) -> None:
     say("\n".join(explain(report, goal)))
 
 
-def _sequence(planned: PlannedSequence, rank: int) -> dict[str, Any]:
+def _sequence(planned: PlannedSequence, rank: int, problem: Problem) -> dict[str, Any]:
     return {
         "rank": rank,
         "total_cost": _number(planned.total),
@@ -96,7 +96,7 @@ def _sequence(planned: PlannedSequence, rank: int) -> dict[str, Any]:
             {
                 "goal": call_text(step.goal),
                 "state_changes": list(step.changes),
-                "configuration": to_dict(step.configuration, 1),
+                "configuration": to_dict(step.configuration, 1, problem.state.media),
             }
             for step in planned.steps
         ],
@@ -108,7 +108,7 @@ def _document(
 ) -> dict[str, Any]:
     return {
         "goals": [call_text(g) for g in problem.goal_calls],
-        "sequences": [_sequence(s, rank) for rank, s in enumerate(found, 1)],
+        "sequences": [_sequence(s, rank, problem) for rank, s in enumerate(found, 1)],
         "communication_checked": bool(problem.state.media),
         "stats": {
             "exhausted": search.complete,

@@ -70,10 +70,16 @@ def to_text(config: Configuration, media: Sequence[Medium] = (), title: str = ""
     return "\n".join(lines)
 
 
-def to_dict(config: Configuration, rank: int) -> dict[str, Any]:
-    """One configuration in the public JSON schema (README, "JSON output")."""
+def to_dict(config: Configuration, rank: int, media: Sequence[Medium] = ()) -> dict[str, Any]:
+    """One configuration in the public JSON schema (README, "JSON output");
+    with the state's ``media``, the load the configuration puts on each."""
     robot = {f.label: f.robot for f in config.functionalities}
     assigned = {a.channel: a.medium for a in config.media}
+    loads = (
+        {"media_loads": [_number(load) for _, load in media_loads(config, media)]}
+        if media
+        else {}
+    )
     return {
         "rank": rank,
         "cost": _number(config.cost),
@@ -100,6 +106,7 @@ def to_dict(config: Configuration, rank: int) -> dict[str, Any]:
             for i, c in enumerate(config.channels)
         ],
         "postconditions": list(config.postconditions),
+        **loads,
     }
 
 
@@ -107,19 +114,30 @@ def _number(x: float) -> int | float:
     return int(x) if float(x).is_integer() else x
 
 
+def medium_dict(medium: Medium) -> dict[str, Any]:
+    return {
+        "type": medium.type,
+        "from": medium.sender,
+        "to": medium.receiver,
+        "capacity": _number(medium.capacity),
+        "reliability": None if medium.reliability is None else _number(medium.reliability),
+    }
+
+
 def to_json(
     goal: Sequence[str],
     configs: Sequence[Configuration],
-    communication_checked: bool,
+    media: Sequence[Medium],
     stats: dict[str, Any],
     extra: dict[str, Any] | None = None,
 ) -> str:
     """The whole answer of ``cfgplan plan --format json``; keys in a fixed
-    order, ``extra`` (e.g. ``"fallbacks"``) last."""
+    order, ``extra`` (e.g. ``"fallbacks"``, ``"explanation"``) last."""
     doc = {
         "goal": call_text(goal),
-        "configurations": [to_dict(c, i + 1) for i, c in enumerate(configs)],
-        "communication_checked": communication_checked,
+        "configurations": [to_dict(c, i + 1, media) for i, c in enumerate(configs)],
+        "communication_checked": bool(media),
+        **({"media": [medium_dict(m) for m in media]} if media else {}),
         "stats": stats,
         **(extra or {}),
     }

@@ -8,6 +8,8 @@ and configurations rejected after expansion (information, cycles, media).
 
 from __future__ import annotations
 
+from typing import Any
+
 from cfgplan.planner.report import Condition, Report
 
 
@@ -36,3 +38,31 @@ def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
     if report.unfinished:
         lines.append("  (the search for dead ends ran out of time: there may be more)")
     return lines
+
+
+def explanation(report: Report) -> dict[str, Any]:
+    """The same as data (``--format json`` when nothing is admissible): every
+    dead end with its place, condition, reason, the precondition that failed
+    and the bindings it failed under; the rejected configurations by reason."""
+    rejected: dict[tuple[Condition, str], int] = {}
+    for dead in report.rejected:
+        seen = (dead.condition, dead.describe())
+        rejected[seen] = rejected.get(seen, 0) + 1
+    return {
+        "dead_ends": [
+            {
+                "where": dead.where,
+                "condition": dead.condition.value,
+                "reason": dead.reason,
+                "source": None if dead.span is None else str(dead.span),
+                "failed": dead.failed or None,
+                "bindings": dict(dead.bindings),
+            }
+            for dead in report.dead.values()
+        ],
+        "rejected": [
+            {"condition": condition.value, "reason": reason, "configurations": count}
+            for (condition, reason), count in rejected.items()
+        ],
+        "complete": not report.unfinished,
+    }

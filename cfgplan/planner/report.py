@@ -43,6 +43,8 @@ class DeadEnd:
     reason: str
     span: Span | None = None
     condition: Condition = Condition.PRECONDITION
+    failed: str = ""  # the precondition no binding got past, as written
+    bindings: tuple[tuple[str, str], ...] = ()  # the bindings it failed under
 
     def describe(self) -> str:
         return f"{self.where}: {self.reason}" if self.where else self.reason

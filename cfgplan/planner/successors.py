@@ -112,4 +112,11 @@ def _no_binding(
     failure = grounder.failure(
         schema, call, lambda: why_not(grounder.task, schema.tests, env, schema.params)
     )
-    return DeadEnd(where, failure.describe(), failure.span or schema.span)
+    return DeadEnd(
+        where,
+        failure.describe(),
+        failure.span or schema.span,
+        Condition.PRECONDITION,
+        failure.condition,
+        failure.bindings,
+    )

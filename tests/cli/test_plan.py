@@ -25,9 +25,14 @@ def test_json_schema_and_values(cfgplan: Run) -> None:
     out = cfgplan("plan", *MEDIA, "--format", "json", "-k", "1")
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
-    assert list(doc) == ["goal", "configurations", "communication_checked", "stats"]
+    assert list(doc) == ["goal", "configurations", "communication_checked", "media", "stats"]
     assert doc["goal"] == "do-cross-door(Pippi, Door1)"
     assert doc["communication_checked"] is True
+    assert doc["media"] == [  # the state's media, in order: channels name them by index
+        {"type": "socket", "from": "Pippi", "to": "Emil", "capacity": 200, "reliability": None},
+        {"type": "socket", "from": "Emil", "to": "Pippi", "capacity": 200, "reliability": None},
+    ]
+    assert doc["stats"]["more"] is True  # -k 1 cut the list: 47 exists too
     (config,) = doc["configurations"]
     assert (config["rank"], config["cost"]) == (1, 44)
     assert set(config["robots"]) == {"Pippi", "Emil"}
@@ -43,6 +48,7 @@ def test_json_schema_and_values(cfgplan: Run) -> None:
         "bandwidth": 10,
         "medium": 1,
     }
+    assert config["media_loads"] == [10, 30]  # 4.6: global-orient 10; pos 20 + orient 10
 
 
 def test_json_is_byte_identical_across_runs(cfgplan: Run) -> None:
@@ -174,3 +180,30 @@ def test_self_loop_is_a_cycle_not_a_traceback(cfgplan: Run, tmp_path: Path) -> N
     assert out.returncode == 3, out.stderr
     assert "Traceback" not in out.stderr
     assert "cycle: configuration: its channels form a cycle through F5 flt(r1)" in out.stderr
+
+
+def test_json_when_nothing_is_admissible_is_still_a_document(cfgplan: Run) -> None:
+    """Issue 10: one JSON document on stdout, the explanation as data, exit 3."""
+    out = cfgplan(
+        "plan",
+        "domains/cross-door/domain.lisp",
+        "domains/cross-door/state-6.2.2-step3-as-printed.lisp",
+        "--format",
+        "json",
+    )
+    assert out.returncode == 3
+    doc = json.loads(out.stdout)
+    assert doc["configurations"] == []
+    dead = doc["explanation"]["dead_ends"]
+    first = next(d for d in dead if d["where"] == "get-door-info(Pippi, Door1), version 1")
+    assert first["condition"] == "precondition"
+    assert first["failed"] == "(in Door1 ?room)"
+    assert first["bindings"] == {"?room": "Room2"}
+    assert first["source"].startswith("domains/cross-door/domain.lisp:41:")
+
+
+def test_table_says_when_more_configurations_exist(cfgplan: Run) -> None:
+    cut = cfgplan("plan", *CROSS, "-k", "1")
+    assert "note: more configurations exist: --all lists them all, -k 11 more" in cut.stdout
+    whole = cfgplan("plan", *CROSS, "-k", "2")
+    assert "more configurations exist" not in whole.stdout
