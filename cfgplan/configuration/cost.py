@@ -3,9 +3,12 @@ functionalities``, with settable weights and per-functionality ``:cost``."""
 
 from __future__ import annotations
 
+import math
+
 from pydantic import BaseModel, ConfigDict
 
 from cfgplan.diagnostics import error
+from cfgplan.ir.model import Quantity
 
 
 class Weights(BaseModel):
@@ -13,10 +16,10 @@ class Weights(BaseModel):
 
     model_config = ConfigDict(frozen=True)
 
-    robot: float = 10
-    global_: float = 3
-    local: float = 1
-    functionality: float = 1
+    robot: Quantity = 10
+    global_: Quantity = 3
+    local: Quantity = 1
+    functionality: Quantity = 1
 
     def __str__(self) -> str:
         return (
@@ -24,6 +27,10 @@ class Weights(BaseModel):
             f"local={fmt(self.local)},functionality={fmt(self.functionality)}"
         )
 
+
+MAX_WEIGHT = 1e15
+"""Larger weights are refused: costs stay finite (no ``inf`` or ``nan`` in the
+output, which strict JSON parsers reject) and exact integers for integer weights."""
 
 _NAMES = {"robot": "robot", "global": "global_", "local": "local", "functionality": "functionality"}
 
@@ -42,6 +49,10 @@ def parse_weights(text: str) -> Weights:
             number = float(value)
         except ValueError:
             raise error(f"bad weight {part!r}: {value.strip()!r} is not a number") from None
+        if not math.isfinite(number) or number > MAX_WEIGHT:
+            raise error(
+                f"bad weight {part!r}: a weight is a finite number of at most {MAX_WEIGHT:g}"
+            )
         if number < 0:
             raise error(f"bad weight {part!r}: weights are not negative")
         values[_NAMES[key]] = number
