@@ -4,12 +4,13 @@ and no medium carries more than its capacity.
 
 A channel without a declared bandwidth still needs a medium and loads it by 0.
 When several media connect the same pair, any assignment that fits will do:
-:func:`assign` searches them exhaustively (channels largest first), so it
-finds one whenever one exists.
+:func:`assign` searches them exhaustively (channels largest first, each pair
+of robots on its own, without recursion), so it finds one whenever one exists.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -47,38 +48,61 @@ def describe(medium: Medium) -> str:
 
 def assign(demands: Sequence[Demand | None], media: Sequence[Medium]) -> MediaResult:
     """Assign each demand (None: no medium needed) to a medium that fits."""
-    todo = [i for i, d in enumerate(demands) if d is not None]
-    for i in todo:
-        d = demands[i]
-        assert d is not None
+    present = [(i, d) for i, d in enumerate(demands) if d is not None]
+    for _, d in present:
         if not any(m.sender == d.sender and m.receiver == d.receiver for m in media):
             return MediaResult(
                 None, {}, f"no medium from {d.sender} to {d.receiver} for a global channel"
             )
-    todo.sort(key=lambda i: (-(demands[i].bandwidth), i))  # type: ignore[union-attr]
+    present.sort(key=lambda item: (-item[1].bandwidth, item[0]))
     loads = [0.0] * len(media)
     chosen: dict[int, int] = {}
+    pairs: dict[tuple[str, str], list[tuple[int, Demand]]] = {}
+    for i, d in present:
+        pairs.setdefault((d.sender, d.receiver), []).append((i, d))
+    # The pairs are independent: searching each alone finds the same assignment
+    # as searching them all together, without multiplying their alternatives;
+    # a pair that needs more than all its media carry fails without a search.
+    for (sender, receiver), group in pairs.items():
+        links = [j for j, m in enumerate(media) if (m.sender, m.receiver) == (sender, receiver)]
+        need = math.fsum(d.bandwidth for _, d in group)
+        room = math.fsum(media[j].capacity for j in links)
+        if need > room or not _fits(group, links, media, loads, chosen):
+            return MediaResult(None, {}, _overflow(demands, media))
+    return MediaResult(dict(sorted(chosen.items())), dict(enumerate(loads)))
 
-    def fits(k: int) -> bool:
-        if k == len(todo):
-            return True
-        i = todo[k]
-        d = demands[i]
-        assert d is not None
-        for j, m in enumerate(media):
-            same_pair = m.sender == d.sender and m.receiver == d.receiver
-            if same_pair and loads[j] + d.bandwidth <= m.capacity:
+
+def _fits(
+    group: Sequence[tuple[int, Demand]],
+    links: Sequence[int],
+    media: Sequence[Medium],
+    loads: list[float],
+    chosen: dict[int, int],
+) -> bool:
+    """Depth first: each demand of ``group`` on the first of ``links`` with room,
+    backtracking to the next medium when the demands after it do not fit.
+    An explicit stack (the medium chosen for each placed demand), no recursion."""
+    picks: list[int] = []  # position in links of each placed demand's medium
+    start = 0
+    while len(picks) < len(group):
+        i, d = group[len(picks)]
+        for p in range(start, len(links)):
+            j = links[p]
+            if loads[j] + d.bandwidth <= media[j].capacity:
                 loads[j] += d.bandwidth
                 chosen[i] = j
-                if fits(k + 1):
-                    return True
-                loads[j] -= d.bandwidth
-                del chosen[i]
-        return False
-
-    if fits(0):
-        return MediaResult(dict(sorted(chosen.items())), dict(enumerate(loads)))
-    return MediaResult(None, {}, _overflow(demands, media))
+                picks.append(p)
+                start = 0
+                break
+        else:
+            if not picks:
+                return False
+            p = picks.pop()
+            i, d = group[len(picks)]
+            loads[links[p]] -= d.bandwidth
+            del chosen[i]
+            start = p + 1
+    return True
 
 
 def _overflow(demands: Sequence[Demand | None], media: Sequence[Medium]) -> str:
