@@ -197,30 +197,11 @@ def write_folder(folder: Path, files: Mapping[str, bytes], force: bool) -> None:
     _into_folder(folder, files)
 
 
-def _new_folder(folder: Path, files: Mapping[str, bytes]) -> None:
-    try:
-        folder.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise error(f"cannot create {folder.parent}: {exc.strerror}") from None
-    temporary = _temporary(folder.parent, folder.name)
-    try:
-        temporary.mkdir()
-    except OSError as exc:
-        raise error(f"cannot create {folder}: {exc.strerror}") from None
-    try:
-        for name, data in files.items():
-            _write_new(temporary / name, data, folder / name)
-        try:
-            os.rename(temporary, folder)
-        except OSError as exc:
-            raise error(f"cannot create {folder}: {exc.strerror}") from None
-    except CfgplanError as exc:
-        shutil.rmtree(temporary, ignore_errors=True)
-        raise _nothing_written(exc, folder) from None
-
-
-def _into_folder(folder: Path, files: Mapping[str, bytes]) -> None:
-    temporary = _temporary(folder, "emit")
+def _stage(where: Path, stem: str, folder: Path, files: Mapping[str, bytes]) -> Path:
+    """A new temporary folder in ``where`` holding ``files`` whole, each with the
+    mode of the file it will replace in ``folder``; on failure nothing is left
+    and the error names the file of ``folder`` that could not be written."""
+    temporary = _temporary(where, stem)
     try:
         temporary.mkdir()
     except OSError as exc:
@@ -234,6 +215,24 @@ def _into_folder(folder: Path, files: Mapping[str, bytes]) -> None:
     except CfgplanError as exc:
         shutil.rmtree(temporary, ignore_errors=True)
         raise _nothing_written(exc, folder) from None
+    return temporary
+
+
+def _new_folder(folder: Path, files: Mapping[str, bytes]) -> None:
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise error(f"cannot create {folder.parent}: {exc.strerror}") from None
+    temporary = _stage(folder.parent, folder.name, folder, files)
+    try:
+        os.rename(temporary, folder)
+    except OSError as exc:
+        shutil.rmtree(temporary, ignore_errors=True)
+        raise _nothing_written(error(f"cannot create {folder}: {exc.strerror}"), folder) from None
+
+
+def _into_folder(folder: Path, files: Mapping[str, bytes]) -> None:
+    temporary = _stage(folder, "emit", folder, files)
     try:
         for name in files:
             try:
