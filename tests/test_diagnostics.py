@@ -100,3 +100,27 @@ def test_the_command_line_escapes_what_it_quotes(tmp_path: Path, command: str) -
         assert _raw_controls(err) == [], err
         assert len(err) < 2000
         assert "Traceback" not in err
+
+
+def test_names_with_escape_sequences_are_escaped_in_tables_and_summaries(tmp_path: Path) -> None:
+    """Not only errors: the plan table and the check summary are for people too."""
+    (tmp_path / "d.lisp").write_text(
+        "(make-functionality :name '(camera ?r) :out '((image ?r)))\n"
+        "(make-functionality :name '(look ?r) :in '((image ?r)))\n"
+        "(make-config-method :name '(see ?r) :precond '((robot ?r))\n"
+        "  :channels '(((local ?r) ?f1 ?f2 (image ?r)))\n"
+        "  :body '((?f1 (camera ?r)) (?f2 (look ?r))))\n"
+    )
+    evil = "\x1b[31mEvil\x07\x1b[2J"  # no ";": it would start a comment
+    (tmp_path / "s.lisp").write_text(f"(state (robot {evil}))\n(goal (see {evil}))\n")
+    for args in (["plan", "--details"], ["check"]):
+        done = subprocess.run(
+            [sys.executable, "-m", "cfgplan", args[0], "d.lisp", "s.lisp", *args[1:]],
+            capture_output=True,
+            cwd=tmp_path,
+            timeout=60,
+        )
+        assert done.returncode == 0, done.stderr
+        out = done.stdout.decode("utf-8")
+        assert _raw_controls(out) == [], out
+        assert "\\x1b[31mEvil\\x07\\x1b[2J" in out

@@ -15,7 +15,8 @@ from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_json, to_text
 from cfgplan.configuration.model import Configuration
-from cfgplan.diagnostics import CfgplanError
+from cfgplan.diagnostics import CfgplanError, printable
+from cfgplan.files import check_target
 from cfgplan.planner.explain import explain
 from cfgplan.planner.search import Search, Stats
 from cfgplan.planner.search import plan as run_plan
@@ -92,7 +93,9 @@ def _stats(search: Search) -> dict[str, object]:
 
 
 def _table(problem: Problem, configs: list[Configuration], details: bool) -> str:
-    table = Table(title=f"Configurations for {call_text(problem.goal_call)}")
+    """The table for people: names with control characters escaped (a name
+    holding ESC cannot drive the terminal)."""
+    table = Table(title=printable(f"Configurations for {call_text(problem.goal_call)}"))
     table.add_column("rank", justify="right")
     table.add_column("cost", justify="right")
     table.add_column("robots")
@@ -114,7 +117,7 @@ def _table(problem: Problem, configs: list[Configuration], details: bool) -> str
         if details:
             row.append("\n".join(str(f) for f in c.functionalities))
             row.append("\n".join(channel_text(ch) for ch in c.channels))
-        table.add_row(*row)
+        table.add_row(*(printable(cell, keep="\n") for cell in row))
     buffer = io.StringIO()
     Console(
         file=buffer, width=200 if details else 100, force_terminal=False, color_system=None
@@ -179,6 +182,8 @@ def plan(
 
     Exit codes: 0 found, 1 invalid input, 2 usage, 3 no admissible configuration.
     """
+    if output is not None:
+        check_target(output, force)  # before planning, which may take long
     problem = load_problem(domain, state, goal, weights)
     configs, search = run_plan(
         problem.task,
