@@ -159,7 +159,7 @@ def worker(time_limit: float, dump: str) -> None:
                 send({"start": name})
                 stack.seek(0)
                 stack.truncate()
-                faulthandler.dump_traceback_later(time_limit, file=stack)
+                faulthandler.dump_traceback_later(time_limit, exit=True, file=stack)
                 kind, detail = _run_cli(args)
                 faulthandler.cancel_dump_traceback_later()
                 found = _check_outputs(name, folder) if kind == "success" else None
@@ -273,12 +273,15 @@ class Worker:
             limit = self.time_limit + 2.0 if current else 60.0  # start-up and writing files
             message = self._line(time.monotonic() + limit)
             if message is None or "eof" in message:
-                kind = "timeout" if message is None else "crash"
-                if kind == "timeout":
+                # At its time limit the worker dumps its stack and exits itself;
+                # one that does not (stuck beyond faulthandler) is killed here.
+                if message is None:
                     self.process.send_signal(signal.SIGKILL)
                 self.process.wait()
                 code = self.process.returncode
                 detail = self.dump.read_text(errors="replace") if self.dump.exists() else ""
+                timed_out = message is None or detail.startswith("Timeout")
+                kind = "timeout" if current and timed_out else "crash"
                 if kind == "crash" and self.errors.exists():
                     detail += self.errors.read_text(errors="replace")[-6000:]
                 self.process = None
