@@ -43,7 +43,7 @@ def module_name(robot: str) -> str:
     return safe_stem(robot)
 
 
-def _escaped(text: str) -> str:
+def _doc(text: str) -> str:
     """``text`` for inside a double-quoted literal or docstring."""
     out = []
     for char in text:
@@ -58,11 +58,10 @@ def _escaped(text: str) -> str:
 
 def py_str(text: str) -> str:
     """A Python string literal holding exactly ``text``."""
-    return '"' + _escaped(text) + '"'
+    return '"' + _doc(text) + '"'
 
 
-_str = py_str
-_doc = _escaped
+_str = py_str  # the name the code below has always used
 
 
 def _comment(text: str) -> str:
