@@ -11,8 +11,9 @@ each, chains one in a hundred):
   a hostile name (``../../x``, ``CON``, ``a\\b``, ``#|x``), or a fact repeated;
 * **generated**: domains and states built from the grammar over a small
   vocabulary, shaped like the real ones (methods with preconditions,
-  channels and bodies calling each other), with a goal, so that many reach
-  the planner and the backends;
+  channels and bodies calling each other), or a bundled domain with a state
+  of random facts over the bundled states' predicates and a goal, so that
+  many reach the planner and the backends;
 * **chains**: method hierarchies 1 to 600 levels deep (issue 9, item 4).
 """
 
@@ -228,6 +229,16 @@ _FACT = st.builds(lambda p, a: _paren(p, *a), _PREDS, st.lists(_CONSTS, min_size
 
 @st.composite
 def generated(draw: st.DrawFn) -> Case:
+    """Half the time a domain built from the grammar (mostly refused by the
+    checker: its error paths), half a bundled domain with a state built from
+    the predicates of the bundled states (reaching the planner and backends)."""
+    if draw(st.booleans()):
+        domain, _ = draw(st.sampled_from(PAIRS))
+        goals = [goal for method, goal in _GOALS.items() if method in domain]
+        facts = draw(st.lists(_BUNDLED_FACT, max_size=25))
+        goal = draw(st.one_of(*goals))
+        state = f"(state {' '.join(facts)})\n(goal {goal})\n"
+        return Case("generated", domain, state.encode())
     forms = draw(st.lists(st.one_of(_FUNCTIONALITY, _METHOD), min_size=1, max_size=8))
     facts = draw(st.lists(_FACT, max_size=10))
     goal = draw(
@@ -235,6 +246,32 @@ def generated(draw: st.DrawFn) -> Case:
     )
     state = f"(state {' '.join(facts)})\n(goal {goal})\n"
     return Case("generated", "\n".join(forms).encode(), state.encode())
+
+
+_ROBOTS = st.sampled_from(["Pippi", "Emil", "Rasmus", "../x", "EMIL", "a\\b"])
+_THINGS = st.sampled_from(["Door1", "Room1", "Room2", "Bar1", "B1", "W1", "#|x"])
+_BUNDLED_FACT = st.one_of(
+    st.builds(
+        lambda p, r: f"({p} {r})",
+        st.sampled_from(
+            ["robot", "camera", "compass", "laser", "sonar", "pusher", "left", "right"]
+        ),
+        _ROBOTS,
+    ),
+    st.builds(
+        lambda p, t: f"({p} {t})", st.sampled_from(["door", "open", "block", "wall"]), _THINGS
+    ),
+    st.builds(lambda a, b: f"(in {a} {b})", st.one_of(_ROBOTS, _THINGS), _THINGS),
+    st.builds(lambda d, a, b: f"(connects {d} {a} {b})", _THINGS, _THINGS, _THINGS),
+    st.builds(
+        lambda a, b, c: f"(medium socket {a} {b} {c})", _ROBOTS, _ROBOTS, st.integers(0, 300)
+    ),
+)
+_GOALS = {
+    b"do-cross-door": st.builds(lambda r, d: f"(do-cross-door {r} {d})", _ROBOTS, _THINGS),
+    b"do-carry-bar": st.builds(lambda r: f"(do-carry-bar {r})", _ROBOTS),
+    b"do-push-block": st.builds(lambda b, w: f"(do-push-block {b} {w})", _THINGS, _THINGS),
+}
 
 
 def chain(levels: int) -> bytes:
