@@ -5,9 +5,12 @@ device (``/dev/zero``), a socket or a directory, and at most
 :data:`MAX_SOURCE_BYTES` of it; the file is opened without blocking, so a FIFO
 with no writer cannot hang cfgplan.
 
-Writing (:func:`write_file`, :func:`write_folder`): an output path that is a
-symbolic link (dangling or not) or not a regular file is refused, and cfgplan
-never writes through it; an existing file is replaced only with ``--force``.
+Writing (:func:`write_file`, :func:`write_folder`): an output file that is a
+symbolic link (dangling or not) or not a regular file is refused, and so is an
+output folder that is a dangling link (a link to an existing folder is the
+user's way to put the output elsewhere, and is followed); cfgplan never
+writes through a link to a file. An existing file is replaced only with
+``--force``.
 Everything is written to a temporary file or folder beside the target first
 and moved into place with a rename, so a failed write (a full disk) leaves the
 target as it was, and the message names the file that could not be written.
