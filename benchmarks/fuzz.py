@@ -2,7 +2,8 @@
 
 Each input (:mod:`benchmarks.fuzz_inputs`: mutated bundled files, problems
 generated from the grammar, deep chains) is written to a domain and a state
-file and put through the command line, in process, in a worker subprocess:
+file and put through the command line, in process, in a worker subprocess
+(:mod:`benchmarks.fuzz_worker`):
 ``check``; if that passes ``plan -k 3 --format json`` and ``render
 --hierarchy``; if a configuration is found ``emit`` in both languages (the
 emitted Python must compile) and ``render``. Every command gets a time limit
@@ -25,9 +26,6 @@ from __future__ import annotations
 import argparse
 import base64
 import contextlib
-import faulthandler
-import functools
-import io
 import json
 import os
 import re
@@ -38,7 +36,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import traceback
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -48,8 +45,18 @@ from typing import Any
 from benchmarks.fuzz_inputs import CASES, Case
 
 ROOT = Path(__file__).resolve().parents[1]
-KINDS = ("success", "clean", "memory", "traceback", "timeout", "crash", "escape", "invalid")
+KINDS = (
+    "success",
+    "clean",
+    "memory",
+    "traceback",
+    "timeout",
+    "crash",
+    "escape",
+    "invalid",
+)
 """Outcomes, mildest first; an input counts as the worst of its commands."""
+_FRAME = re.compile(r'File "([^"]*cfgplan[/\\]([a-z_]+)[/\\][^"]*)"')
 HEADINGS = {
     "success": "successes",
     "clean": "clean errors",
@@ -60,117 +67,6 @@ HEADINGS = {
     "escape": "escapes",
     "invalid": "invalid code",
 }
-ABSOLUTE_BAIT = "/tmp/cfgplan-fuzz-abs"
-"""A hostile robot name of the inputs; a file starting so would be an escape."""
-_FRAME = re.compile(r'File "([^"]*cfgplan[/\\]([a-z_]+)[/\\][^"]*)"')
-
-
-def commands(folder: Path) -> list[tuple[str, list[str], str]]:
-    """(name, arguments, what must have succeeded first) for one input."""
-    d, s, out = str(folder / "domain.lisp"), str(folder / "state.lisp"), folder / "a" / "b"
-    return [
-        ("check", ["check", d, s], ""),
-        ("plan", ["plan", d, s, "-k", "3", "--format", "json"], "check"),
-        ("hierarchy", ["render", d, s, "--hierarchy", "-o", str(out / "h.dot")], "check"),
-        ("emit-lisp", ["emit", d, s, "--lang", "lisp", "-o", str(out / "lisp")], "plan"),
-        ("emit-python", ["emit", d, s, "--lang", "python", "-o", str(out / "py")], "plan"),
-        ("render", ["render", d, s, "-o", str(out / "c.dot")], "plan"),
-    ]
-
-
-# -- the worker: runs inputs in process --------------------------------------------------
-
-
-def _run_cli(args: list[str]) -> tuple[str, str]:
-    """Run ``cfgplan ARGS`` through its ``main``; (kind, stderr or traceback)."""
-    from cfgplan.cli.app import main
-
-    sys.argv = ["cfgplan", *args]
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
-            main()
-        code: object = 0
-    except SystemExit as exc:
-        code = exc.code
-    except Exception:
-        return "traceback", traceback.format_exc()
-    if code in (0, 3, None):
-        return "success", ""
-    message = err.getvalue()
-    if "error: out of memory" in message:
-        return "memory", message
-    return ("clean" if message.strip() else "traceback"), message or f"exit {code}, no message"
-
-
-def _check_outputs(name: str, folder: Path) -> tuple[str, str] | None:
-    """An escape (a file outside -o) or emitted Python that does not compile."""
-    inside = folder / "a" / "b"
-    for path in folder.rglob("*"):
-        if path.is_file() and path.parent != folder and inside not in path.parents:
-            return "escape", f"{name} wrote {path}"
-    bait = list(Path(ABSOLUTE_BAIT).parent.glob(Path(ABSOLUTE_BAIT).name + "*"))
-    if bait:
-        return "escape", f"{name} wrote {bait[0]}"
-    if name == "emit-python":
-        for path in (inside / "py").glob("*.py"):
-            try:
-                compile(path.read_bytes(), str(path), "exec")
-            except (SyntaxError, ValueError) as exc:
-                return "invalid", f"{path.name}: {exc}"
-    return None
-
-
-def worker(time_limit: float, dump: str) -> None:
-    """Read inputs (JSON lines) on stdin, report each command on stdout."""
-    protocol = os.fdopen(os.dup(1), "w", buffering=1)
-    null = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(null, 1)  # what C code prints goes nowhere
-    stack = open(dump, "w")  # noqa: SIM115 - open for the worker's lifetime
-
-    def send(message: dict[str, Any]) -> None:
-        protocol.write(json.dumps(message) + "\n")
-
-    # Reading is pure: each file of an input is parsed once, not once per command.
-    # And typer builds its click command anew on every call (10 ms): build it once.
-    import typer.main
-
-    from cfgplan.cli import app
-    from cfgplan.cli import commands as registered  # noqa: F401
-    from cfgplan.syntax import reader
-
-    command = typer.main.get_command(app.app)
-    app.app = lambda: command.main(prog_name="cfgplan")  # type: ignore[assignment]
-
-    parsed = functools.lru_cache(maxsize=4)(reader.parse)
-    reader.parse = parsed
-
-    for line in sys.stdin:
-        job = json.loads(line)
-        with tempfile.TemporaryDirectory(prefix="cfgplan-fuzz-") as tmp:
-            folder = Path(tmp)
-            (folder / "domain.lisp").write_bytes(base64.b64decode(job["domain"]))
-            (folder / "state.lisp").write_bytes(base64.b64decode(job["state"]))
-            (folder / "a" / "b").mkdir(parents=True)
-            passed = {""}
-            for name, args, needs in commands(folder):
-                if needs not in passed:
-                    continue
-                send({"start": name})
-                stack.seek(0)
-                stack.truncate()
-                faulthandler.dump_traceback_later(time_limit, exit=True, file=stack)
-                kind, detail = _run_cli(args)
-                faulthandler.cancel_dump_traceback_later()
-                found = _check_outputs(name, folder) if kind == "success" else None
-                kind, detail = found or (kind, detail)
-                if kind == "success":
-                    passed.add(name)
-                send({"done": name, "kind": kind, "detail": detail[-6000:]})
-        parsed.cache_clear()
-        send({"end": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss})
-
-
 # -- the parent: generates inputs, watches the worker -------------------------------------------
 
 
@@ -222,10 +118,10 @@ class Worker:
             resource.setrlimit(resource.RLIMIT_AS, (self.memory, self.memory))
             resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
-        args = ["--worker", "--time-limit", str(self.time_limit), "--dump", str(self.dump)]
+        args = ["--time-limit", str(self.time_limit), "--dump", str(self.dump)]
         self.buffer, self.served = b"", 0
         return subprocess.Popen(
-            [sys.executable, "-m", "benchmarks.fuzz", *args],
+            [sys.executable, "-m", "benchmarks.fuzz_worker", *args],
             cwd=ROOT,
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
@@ -264,8 +160,9 @@ class Worker:
             "domain": base64.b64encode(case.domain).decode(),
             "state": base64.b64encode(case.state).decode(),
         }
-        self.process.stdin.write((json.dumps(job) + "\n").encode())
-        self.process.stdin.flush()
+        with contextlib.suppress(BrokenPipeError):  # a worker that died at start: a crash
+            self.process.stdin.write((json.dumps(job) + "\n").encode())
+            self.process.stdin.flush()
         self.served += 1
         results: dict[str, tuple[str, str]] = {}
         current = ""
@@ -389,12 +286,7 @@ def main() -> None:
     parser.add_argument("--time-limit", type=float, default=5.0)
     parser.add_argument("--memory-mib", type=int, default=2048)
     parser.add_argument("--save", type=Path, default=None, help="keep findings here")
-    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
-    parser.add_argument("--dump", default="", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.worker:
-        worker(args.time_limit, args.dump)
-        return
     tally = campaign(args.inputs, args.seed, args.time_limit, args.memory_mib, args.save)
     print("\n".join(table(tally, args)))
 

@@ -8,11 +8,12 @@ outside ``-o`` from a clean error.
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import pytest
 
-from benchmarks import fuzz
+from benchmarks import fuzz, fuzz_worker
 from benchmarks.fuzz_inputs import Case, chain
 
 CROSS = Path(__file__).resolve().parents[2] / "domains" / "cross-door"
@@ -57,19 +58,26 @@ def test_the_harness_tells_a_traceback_from_a_clean_error(monkeypatch: pytest.Mo
     def broken() -> None:
         raise KeyError("a bug")
 
-    assert fuzz._run_cli(["check", "/nonexistent"])[0] == "clean"
+    assert fuzz_worker._run_cli(["check", "/nonexistent"])[0] == "clean"
     monkeypatch.setattr(cfgplan.cli.app, "main", broken)
-    kind, detail = fuzz._run_cli(["check", str(CROSS / "domain.lisp")])
+    kind, detail = fuzz_worker._run_cli(["check", str(CROSS / "domain.lisp")])
     assert kind == "traceback" and "KeyError: 'a bug'" in detail
 
 
 def test_a_file_outside_the_output_folder_is_an_escape(tmp_path: Path) -> None:
     (tmp_path / "a" / "b" / "out").mkdir(parents=True)
     (tmp_path / "a" / "b" / "out" / "emil.py").write_text("")
-    assert fuzz._check_outputs("emit-python", tmp_path) is None
+    assert fuzz_worker._check_outputs("emit-python", tmp_path) is None
     (tmp_path / "a" / "escaped.py").write_text("")
-    found = fuzz._check_outputs("emit-python", tmp_path)
+    found = fuzz_worker._check_outputs("emit-python", tmp_path)
     assert found is not None and found[0] == "escape"
+
+
+def test_a_temporary_folder_named_like_the_bait_is_no_escape(tmp_path: Path) -> None:
+    """The big run once counted a worker's own temporary folder,
+    /tmp/cfgplan-fuzz-abs21csp, as a file written by cfgplan."""
+    with tempfile.TemporaryDirectory(prefix=Path(fuzz_worker.ABSOLUTE_BAIT).name, dir="/tmp"):
+        assert fuzz_worker._check_outputs("check", tmp_path) is None
 
 
 def test_where_names_the_innermost_cfgplan_package() -> None:
