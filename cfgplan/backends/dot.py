@@ -9,6 +9,10 @@ and, when declared, its bandwidth. A legend names the colours and edge styles.
 Only DOT source is built here (the ``graphviz`` package needs no binary for
 that); :mod:`cfgplan.backends.render` lays it out. The source is deterministic:
 node ids are the functionality labels, everything comes in list order.
+
+Names from the input enter DOT strings only through :func:`dot_text` and
+HTML-like labels only through :func:`html_text`: a backslash, a NUL or an
+ESC in a robot's name cannot break the DOT source.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import graphviz  # type: ignore[import-untyped]
 
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
+from cfgplan.diagnostics import printable
 
 FONT = "Helvetica"
 ROBOT_COLOURS = (
@@ -40,6 +45,18 @@ GLOBAL_EDGE = {"style": "bold", "color": "black", "fontcolor": "black", "penwidt
 LOCAL_EDGE = {"style": "solid", "color": "gray55", "fontcolor": "gray35", "penwidth": "1"}
 
 
+def dot_text(text: str) -> str:
+    """``text`` for a DOT string shown as it is: unsafe characters escaped as
+    ``\\x00`` text, every backslash doubled so that none starts a DOT escape
+    (``\\n``) or escapes the closing quote."""
+    return printable(text).replace("\\", "\\\\")
+
+
+def html_text(text: str) -> str:
+    """``text`` for an HTML-like label: unsafe characters escaped, then ``<&>"``."""
+    return html.escape(printable(text))
+
+
 def term(t: str) -> str:
     """A term as the figures print a schema's variables: ``?rh1`` -> ``rh1``."""
     return t[1:] if t.startswith("?") else t
@@ -54,7 +71,7 @@ def new_graph(name: str, title: str = "") -> Any:
     """A ``graphviz.Digraph`` with the common look: Helvetica, boxes, title on top."""
     graph_attr = {"fontname": FONT, "nodesep": "0.35", "ranksep": "0.55"}
     if title:
-        graph_attr.update({"label": title, "labelloc": "t", "fontsize": "14"})
+        graph_attr.update({"label": dot_text(title), "labelloc": "t", "fontsize": "14"})
     return graphviz.Digraph(
         name=name,
         graph_attr=graph_attr,
@@ -78,14 +95,14 @@ def robot_colours(robots: Sequence[str]) -> dict[str, str]:
 
 def functionality_label(f: FunctionalityInstance) -> str:
     """``<<B>CAMERA</B><BR/>F8 : (EMIL)>``: the box text of Fig. 4.3 as an HTML-like label."""
-    name = html.escape(f.name.upper())
-    where = html.escape(f"{f.label} : ({' '.join(a.upper() for a in f.args)})")
+    name = html_text(f.name.upper())
+    where = html_text(f"{f.label} : ({' '.join(a.upper() for a in f.args)})")
     return f"<<B>{name}</B><BR/>{where}>"
 
 
 def channel_label(ch: Channel) -> str:
     """``IMAGE(EMIL)``, with ``bandwidth 20`` on a second line when declared."""
-    data = f"{ch.data[0]}({', '.join(ch.data[1:])})".upper()
+    data = dot_text(f"{ch.data[0]}({', '.join(ch.data[1:])})".upper())
     if ch.bandwidth is not None:
         data += f"\\nbandwidth {fmt(ch.bandwidth)}"
     return data
@@ -104,8 +121,10 @@ def configuration_graph(
     wired = {(ch.source, ch.target) for ch in config.channels}
     graph = new_graph("configuration", title)
     for index, robot in enumerate(robots):
-        with graph.subgraph(name=f"cluster_{index}_{robot}") as cluster:
-            cluster.attr(label=robot, style="rounded,dashed", color="gray40", fontsize="12")
+        with graph.subgraph(name=f"cluster_{index}_{dot_text(robot)}") as cluster:
+            cluster.attr(
+                label=dot_text(robot), style="rounded,dashed", color="gray40", fontsize="12"
+            )
             mine = [f for f in config.functionalities if f.robot == robot]
             for f in mine:
                 cluster.node(f.label, functionality_label(f), fillcolor=colours[robot])
@@ -173,7 +192,7 @@ def _legend(graph: Any, robots: Sequence[str], colours: dict[str, str]) -> None:
         legend.attr(label="Legend", style="rounded", color="gray60", fontsize="11")
         legend.node_attr.update(fontsize="9", margin="0.08,0.04", height="0.3")
         for index, robot in enumerate(robots):
-            legend.node(f"legend_robot_{index}", robot, fillcolor=colours[robot])
+            legend.node(f"legend_robot_{index}", dot_text(robot), fillcolor=colours[robot])
         samples = (
             ("global", "global channel", GLOBAL_EDGE),
             ("local", "local channel", LOCAL_EDGE),

@@ -17,12 +17,11 @@ DOT source is the same on every run.
 
 from __future__ import annotations
 
-import html
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from cfgplan.backends.dot import call, new_graph, term
+from cfgplan.backends.dot import call, dot_text, html_text, new_graph, term
 from cfgplan.diagnostics import error
 from cfgplan.ir.model import SExpr, is_variable
 from cfgplan.planner.task import MethodSchema, Task, Test, TestKind
@@ -32,6 +31,8 @@ FUNCTIONALITY = {"fillcolor": "white"}
 VERSION = {"shape": "box", "style": "rounded", "fontsize": "8", "margin": "0.06,0.03"}
 UNKNOWN = {"fillcolor": "white", "style": "dashed", "color": "red"}
 MAX_NODES = 2000
+
+Call = tuple[str, ...]
 
 
 @dataclass
@@ -54,7 +55,22 @@ class _Builder:
         self.graph.node(node_id, label, **attrs)
 
     def expand(self, node_id: str, goal: tuple[str, ...]) -> None:
-        """Draw the bodies of every version of the method ``goal``, depth first."""
+        """Draw the method ``goal`` and everything below it, depth first.
+
+        Each method's expansion is a generator that yields the methods of its
+        body to expand next; this loop runs them on an explicit stack, so a
+        hierarchy thousands of levels deep needs no Python recursion."""
+        stack = [self._versions(node_id, goal)]
+        while stack:
+            below = next(stack[-1], None)
+            if below is None:
+                stack.pop()
+            else:
+                stack.append(self._versions(*below))
+
+    def _versions(self, node_id: str, goal: tuple[str, ...]) -> Iterator[tuple[str, Call]]:
+        """Draw the bodies of every version of the method ``goal``, yielding each
+        body method (node id and call) to be expanded before the next item."""
         signature = (goal[0], len(goal) - 1)
         versions = self.task.methods[signature]
         self.path[signature] = node_id
@@ -68,13 +84,16 @@ class _Builder:
                 self.graph.edge(node_id, parent, style="dashed", arrowhead="none")
             for label, pattern in method.body:
                 child = (pattern[0], *(env.get(a, a) for a in pattern[1:]))
-                self.item(f"{parent}.{label.lstrip('?')}", parent, child)
+                child_id = f"{parent}.{label.lstrip('?')}"
+                if self.item(child_id, parent, child):
+                    yield child_id, child
         del self.path[signature]
 
-    def item(self, node_id: str, parent: str, item: tuple[str, ...]) -> None:
-        """One body item: a functionality, a method (expanded), or a recursion."""
+    def item(self, node_id: str, parent: str, item: Call) -> bool:
+        """Draw one body item: a functionality, a method, or a recursion; True
+        for a method, whose body is to be drawn below it."""
         signature = (item[0], len(item) - 1)
-        text = call(item[0], item[1:])
+        text = dot_text(call(item[0], item[1:]))
         if signature in self.path:
             self.add(node_id, f"{text}\\n(recursive)", style="filled,dashed", **METHOD)
             self.graph.edge(parent, node_id)
@@ -84,13 +103,14 @@ class _Builder:
         elif signature in self.task.methods:
             self.add(node_id, text, **METHOD)
             self.graph.edge(parent, node_id)
-            self.expand(node_id, item)
+            return True
         elif signature in self.task.functionalities:
             self.add(node_id, text, **FUNCTIONALITY)
             self.graph.edge(parent, node_id)
         else:
             self.add(node_id, f"{text}\\n(undefined)", **UNKNOWN)
             self.graph.edge(parent, node_id)
+        return False
 
 
 def substitution(method: MethodSchema, args: Sequence[str]) -> dict[str, str]:
@@ -142,7 +162,7 @@ def version_label(method: MethodSchema, env: dict[str, str]) -> str:
         else:
             atom = call(test.pattern[0], [env.get(a, a) for a in test.pattern[1:]])
             lines.append(f"not {atom}" if test.kind is TestKind.NOT else atom)
-    return "<" + "<BR/>".join(html.escape(line) for line in lines) + ">"
+    return "<" + "<BR/>".join(html_text(line) for line in lines) + ">"
 
 
 def _sexpr(expr: SExpr, env: dict[str, str]) -> str:
@@ -163,7 +183,7 @@ def hierarchy_graph(task: Task, goal: Sequence[str], *, max_nodes: int = MAX_NOD
     text = call(root[0], root[1:])
     graph = new_graph("hierarchy", f"Methods (grey) and functionalities (white) for {text}")
     builder = _Builder(task, graph, max_nodes)
-    builder.add("goal", text, **METHOD)
+    builder.add("goal", dot_text(text), **METHOD)
     builder.expand("goal", root)
     _legend(graph, builder.has_versions)
     return graph

@@ -16,16 +16,37 @@ passes ``(LIST CH-a CH-b)`` in that position, an input without a channel is
 ``NIL`` and an output without one ``(LIST)``. Symbols keep the domain's case;
 ``LET``, ``LAMBDA``, ``PROGN``, ``LIST`` and ``NIL`` are upper case as the
 thesis prints them. The layout is that of 5.4, one channel a line.
+
+A name is written bare, as the thesis writes it (``'Door1``), when a Common
+Lisp reader reads it as one symbol (folding its case, as for the thesis's
+code): it starts with a letter and holds only letters, digits and
+``-_+*/<>=!?$%&.``; a number stays a number. Any other
+name is written between bars with ``\\`` and ``|`` escaped (``'|#\\|Door1|``),
+so that no name can open a comment (``#|``), a string, a package prefix
+(``:``) or end the form. Comments show unsafe characters escaped.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 
 from cfgplan.backends.wiring import Call, RobotPart
 from cfgplan.configuration.model import Channel
+from cfgplan.diagnostics import printable
 
-__all__ = ["call_form", "channel_name", "make_channel", "to_lisp"]
+__all__ = ["call_form", "channel_name", "lisp_symbol", "make_channel", "to_lisp"]
+
+_PLAIN = re.compile(r"[A-Za-z][A-Za-z0-9\-_+*/<>=!?$%&.]*|[-+]?[0-9]+(\.[0-9]+)?")
+
+
+def lisp_symbol(name: str) -> str:
+    """``name`` as a Common Lisp reader reads it back: as it is when it is plain
+    (``Door1``, ``measure-door``, ``20``), else ``|...|`` with ``\\`` and ``|``
+    escaped."""
+    if _PLAIN.fullmatch(name):
+        return name
+    return "|" + name.replace("\\", "\\\\").replace("|", "\\|") + "|"
 
 
 def channel_name(index: int) -> str:
@@ -35,11 +56,12 @@ def channel_name(index: int) -> str:
 
 def make_channel(robot: str, ch: Channel) -> str:
     """The form that creates ``ch`` on ``robot`` (5.2.2)."""
-    data = "'(" + " ".join(ch.data) + ")"
+    data = "'(" + " ".join(lisp_symbol(x) for x in ch.data) + ")"
+    ends = f"'{lisp_symbol(ch.source)} '{lisp_symbol(ch.target)} {data}"
     if ch.kind == "local":
-        return f"(make-local-channel '{ch.source_robot} '{ch.source} '{ch.target} {data})"
+        return f"(make-local-channel '{lisp_symbol(ch.source_robot)} {ends})"
     other = ch.target_robot if ch.source_robot == robot else ch.source_robot
-    return f"(make-global-channel '{other} '{ch.source} '{ch.target} {data})"
+    return f"(make-global-channel '{lisp_symbol(other)} {ends})"
 
 
 def _input(channels: Sequence[int]) -> str:
@@ -56,8 +78,8 @@ def _output(channels: Sequence[int]) -> str:
 
 def call_form(call: Call) -> str:
     """``(measure-door 'Door1 CH-4 (LIST CH-5) (LIST CH-6))`` (5.2.1)."""
-    parts = [call.functionality.name]
-    parts += [f"'{x}" for x in call.objects]
+    parts = [lisp_symbol(call.functionality.name)]
+    parts += [f"'{lisp_symbol(x)}" for x in call.objects]
     parts += [_input(x) for x in call.inputs]
     parts += [_output(x) for x in call.outputs]
     return "(" + " ".join(parts) + ")"
@@ -66,7 +88,7 @@ def call_form(call: Call) -> str:
 def to_lisp(part: RobotPart, comments: Sequence[str] = ()) -> str:
     """The executable individual configuration of ``part`` (5.3, 5.4), with
     ``comments`` as leading ``;;`` lines; ends with a newline."""
-    lines = [f";; {c}".rstrip() for c in comments]
+    lines = [f";; {printable(c)}".rstrip() for c in comments]
     channels = [
         f"({channel_name(i)} {make_channel(part.robot, ch)})"
         for i, ch in enumerate(part.individual.channels)

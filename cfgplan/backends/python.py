@@ -16,6 +16,12 @@ the options are those of :func:`cfgplan.runtime.robot_main`).
 A ``run_all.py`` is emitted too: it loads every robot's module and runs them
 together in one process, joined by the in-process transport. The text is
 deterministic: no dates, no paths.
+
+Names from the input reach the code only escaped: in string literals
+(:func:`py_str`) and docstrings every backslash, quote and unsafe character
+(control, format, line separator) is escaped, in comments unsafe characters
+are; identifiers are made of labels and ASCII letters only. So the module
+compiles for any name the reader accepts (``D\\x1``, a NUL, a BEL).
 """
 
 from __future__ import annotations
@@ -25,19 +31,45 @@ from collections.abc import Sequence
 
 from cfgplan.backends.wiring import Call, RobotPart
 from cfgplan.configuration.describe import call_text
+from cfgplan.diagnostics import escape_char, is_unsafe, printable
+from cfgplan.safe_names import safe_stem
 
-__all__ = ["module_name", "run_all", "to_python"]
+__all__ = ["module_name", "py_str", "run_all", "to_python"]
 
 WIDTH = 100
 
 
 def module_name(robot: str) -> str:
-    """The file a robot's module is written to: ``emil.py`` for Emil (without ``.py``)."""
-    return robot.lower()
+    """The file a robot's module is written to on its own: ``emil.py`` for Emil
+    (without ``.py``); :attr:`RobotPart.stem` also keeps robots apart whose
+    names differ only in case."""
+    return safe_stem(robot)
 
 
-def _str(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+def _doc(text: str) -> str:
+    """``text`` for inside a double-quoted literal or docstring."""
+    out = []
+    for char in text:
+        if char in '\\"':
+            out.append("\\" + char)
+        elif is_unsafe(char):
+            out.append(escape_char(char))
+        else:
+            out.append(char)
+    return "".join(out)
+
+
+def py_str(text: str) -> str:
+    """A Python string literal holding exactly ``text``."""
+    return '"' + _doc(text) + '"'
+
+
+_str = py_str  # the name the code below has always used
+
+
+def _comment(text: str) -> str:
+    """``text`` for a ``#`` comment: nothing in it can end the line."""
+    return printable(text)
 
 
 def _tuple(items: Sequence[str]) -> str:
@@ -75,10 +107,12 @@ def _signature(call: Call) -> list[str]:
     """Comment lines: the functionality, its inputs and outputs."""
     ins = ", ".join(call_text(d) for d in call.input_data) or "no input"
     outs = ", ".join(call_text(d) for d in call.output_data) or "no output"
-    line = f"    # {call.functionality}: {ins} -> {outs}"
+    name = _comment(str(call.functionality))
+    ins, outs = _comment(ins), _comment(outs)
+    line = f"    # {name}: {ins} -> {outs}"
     if len(line) <= WIDTH:
         return [line]
-    return [f"    # {call.functionality}", f"    #   in: {ins}", f"    #   out: {outs}"]
+    return [f"    # {name}", f"    #   in: {ins}", f"    #   out: {outs}"]
 
 
 def _statement(indent: str, head: str, args: str) -> list[str]:
@@ -92,20 +126,21 @@ def _statement(indent: str, head: str, args: str) -> list[str]:
 def to_python(part: RobotPart, title: str) -> str:
     """The module of one robot; ``title`` says which configuration it is part of."""
     robot = part.robot
+    shown = _doc(robot)
     ind = part.individual
     lines = [
-        f'"""{robot}\'s part of a configuration, as Python (thesis 5.3; cfgplan emit).',
+        f'"""{shown}\'s part of a configuration, as Python (thesis 5.3; cfgplan emit).',
         "",
-        f"{title}.",
+        f"{_doc(title)}.",
         "The individual configuration (5.4):",
         "",
-        *("    " + x for x in ind.text().splitlines()),
+        *("    " + _doc(x) for x in ind.text().splitlines()),
         "",
-        f"configure() creates {robot}'s channels (the LET of 5.3) and returns the cycle",
+        f"configure() creates {shown}'s channels (the LET of 5.3) and returns the cycle",
         "(the LAMBDA): one call to each functionality, in sorted order (5.1). Run this",
         "robot in a process of its own, its global channels over Zenoh (5.2.2):",
         "",
-        f"    python {module_name(robot)}.py --impl IMPL [--listen ENDPOINT] [--connect ENDPOINT]",
+        f"    python {part.stem}.py --impl IMPL [--listen ENDPOINT] [--connect ENDPOINT]",
         "        [--society NAME] [--rate HZ] [--cycles N] [--duration S] [--trace FILE]",
         "",
         "IMPL is a module name or a .py file declaring the implementations with",
@@ -121,7 +156,7 @@ def to_python(part: RobotPart, title: str) -> str:
         "",
         "",
         "def configure(robot: Robot) -> Cycle:",
-        f'    """{robot}\'s channels and functionalities; returns one cycle."""',
+        f'    """{shown}\'s channels and functionalities; returns one cycle."""',
     ]
     if ind.channels:
         lines.append(f"    # LET: the channels CH-1 .. CH-{len(ind.channels)} (5.2.2, 5.3)")
@@ -170,12 +205,12 @@ def to_python(part: RobotPart, title: str) -> str:
 def run_all(parts: Sequence[RobotPart], title: str) -> str:
     """``run_all.py``: every robot of the configuration in one process."""
     robots = [p.robot for p in parts]
-    files = ", ".join(f"{module_name(r)}.py" for r in robots)
-    entries = [f"    ({_str(r)}, {_str(module_name(r) + '.py')})," for r in robots]
+    files = ", ".join(f"{p.stem}.py" for p in parts)
+    entries = [f"    ({_str(p.robot)}, {_str(p.stem + '.py')})," for p in parts]
     lines = [
         '"""All robots of a configuration in one process (thesis 5.3; cfgplan emit).',
         "",
-        f"{title}: {', '.join(robots)}.",
+        f"{_doc(title)}: {_doc(', '.join(robots))}.",
         f"Each robot's module ({files}) creates its channels and its cycle;",
         "here their global channels are joined by an in-process transport and the",
         "robots run one cycle each in turn. Run:",

@@ -27,8 +27,9 @@ from cfgplan.configuration.describe import call_text, channel_text
 from cfgplan.configuration.model import Configuration, FunctionalityInstance
 from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.ir.model import Atom, Domain
+from cfgplan.safe_names import file_stems, safe_stem
 
-__all__ = ["Call", "Data", "RobotPart", "deploy", "wire"]
+__all__ = ["RESERVED_STEMS", "Call", "Data", "RobotPart", "deploy", "wire"]
 
 Data = tuple[str, ...]
 """An instantiated data descriptor, e.g. ``("pos", "Emil", "Door1")``."""
@@ -135,19 +136,36 @@ def _mismatch(
     )
 
 
+RESERVED_STEMS = ("configuration", "run_all")
+"""Stems of the files an emission writes besides the robots' ones."""
+
+
 @dataclass(frozen=True)
 class RobotPart:
-    """An individual configuration with its calls wired: what a backend emits."""
+    """An individual configuration with its calls wired: what a backend emits.
+
+    ``file_stem`` is the safe name of the robot's file (:mod:`cfgplan.safe_names`),
+    set by :func:`deploy` so that the robots of one configuration never share one.
+    """
 
     individual: Individual
     calls: tuple[Call, ...]
+    file_stem: str | None = None
 
     @property
     def robot(self) -> str:
         return self.individual.robot
 
+    @property
+    def stem(self) -> str:
+        """The robot's file name without suffix: ``emil`` for Emil."""
+        return self.file_stem or safe_stem(self.robot)
+
 
 def deploy(config: Configuration, domain: Domain) -> tuple[RobotPart, ...]:
-    """Sort, divide and wire ``config`` (5.1, 5.3): one part per robot."""
+    """Sort, divide and wire ``config`` (5.1, 5.3): one part per robot, each
+    with a file stem of its own."""
     order = sort_functionalities(config)
-    return tuple(RobotPart(ind, wire(ind, domain)) for ind in divide(config, order))
+    individuals = divide(config, order)
+    stems = file_stems((ind.robot for ind in individuals), RESERVED_STEMS)
+    return tuple(RobotPart(ind, wire(ind, domain), stems[ind.robot]) for ind in individuals)

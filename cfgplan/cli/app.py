@@ -1,18 +1,24 @@
 """The ``cfgplan`` command: a thin typer layer over the pipeline.
 
 Exit codes: 0 success; 1 invalid input (a ``file:line:col`` message, never a
-traceback); 2 usage; 3 no admissible configuration.
+traceback), an output that cannot be written (a full disk) or memory running
+out; 2 usage; 3 no admissible configuration.
 """
 
 from __future__ import annotations
 
 import contextlib
+import gc
+import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import typer
 
-from cfgplan.diagnostics import CfgplanError, Diagnostic, render_all
+from cfgplan.diagnostics import CfgplanError, Diagnostic, printable, render_all
+from cfgplan.files import read_source, write_file
+from cfgplan.syntax.reader import decode
 
 app = typer.Typer(
     name="cfgplan",
@@ -38,8 +44,8 @@ def _sources(diagnostics: list[Diagnostic]) -> dict[str, str]:
     sources = dict(_extra_sources)
     for d in diagnostics:
         if d.span is not None and d.span.file not in sources:
-            with contextlib.suppress(OSError):
-                sources[d.span.file] = Path(d.span.file).read_bytes().decode("utf-8", "replace")
+            with contextlib.suppress(CfgplanError):
+                sources[d.span.file] = decode(read_source(d.span.file), d.span.file)
     return sources
 
 
@@ -50,34 +56,115 @@ def report(diagnostics: list[Diagnostic]) -> None:
 
 
 def say(text: str) -> None:
-    """A plain line (or lines) on stderr: notes, progress, explanations."""
-    print(text, file=sys.stderr, flush=True)
+    """A plain line (or lines) on stderr: notes, progress, explanations; what
+    came from the input is shown with control characters escaped."""
+    print(printable(text, keep="\n"), file=sys.stderr, flush=True)
 
 
 def write_output(text: str, output: Path | None, force: bool) -> None:
-    """Write to ``output`` (refusing to overwrite without --force) or stdout."""
+    """Write to ``output`` (refusing to overwrite without --force, never through
+    a link, see :mod:`cfgplan.files`) or to stdout."""
     if output is None:
         sys.stdout.write(text)
         return
-    if output.exists() and not force:
-        raise CfgplanError([Diagnostic("error", f"{output} exists; pass --force to overwrite it")])
+    write_file(output, text.encode("utf-8"), force)
+
+
+def _caused_by_memory(exc: BaseException) -> bool:
+    """True when ``exc`` is, or was raised while handling, a MemoryError (C code
+    running out of memory sometimes surfaces as a SystemError)."""
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        if isinstance(current, MemoryError):
+            return True
+        seen.add(id(current))
+        current = current.__cause__ or current.__context__
+    return False
+
+
+def _unraisable(unraisable: Any) -> None:
+    """Generators closed while a MemoryError unwinds the stack may fail again
+    for want of memory, and Python prints each as "Exception ignored": the one
+    "out of memory" message says it all. Anything else is printed as usual."""
+    if isinstance(unraisable.exc_value, MemoryError):
+        return
+    sys.__unraisablehook__(unraisable)
+
+
+def _silence_stdout() -> None:
+    """After stdout failed, point it at the null device so that the
+    interpreter's last flush does not fail again."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+
+
+_OUT_OF_MEMORY = "out of memory"
+
+
+def _fail(message: str, hint: str | None = None) -> None:
+    with contextlib.suppress(OSError, ValueError):
+        report([Diagnostic("error", message, None, hint)])
+    sys.exit(EXIT_INPUT)
+
+
+def _run() -> int | str | None:
+    """Run the command; stdout is flushed here, so that a write error (a full
+    disk, ``> /dev/full``) is reported rather than raised at exit."""
     try:
-        output.write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise CfgplanError(
-            [Diagnostic("error", f"cannot write {output}: {exc.strerror}")]
-        ) from None
+        app()
+        status: int | str | None = 0
+    except SystemExit as exc:
+        status = exc.code
+    sys.stdout.flush()
+    return status
 
 
 def main() -> None:
     """Entry point of the console script."""
-    from cfgplan.cli import commands  # noqa: F401  (registers the commands)
-
+    sys.unraisablehook = _unraisable
     try:
-        app()
+        from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+
+        status = _run()
     except CfgplanError as exc:
         report(exc.diagnostics)
         sys.exit(EXIT_INPUT)
     except KeyboardInterrupt:
         print("cfgplan: interrupted", file=sys.stderr)
         sys.exit(130)
+    except BrokenPipeError:  # cfgplan plan ... | head: the reader has all it wants
+        _silence_stdout()
+        sys.exit(EXIT_INPUT)
+    except UnicodeEncodeError as exc:
+        _silence_stdout()
+        _fail(
+            f"cannot write the output in this terminal's encoding ({exc.encoding}): "
+            f"it cannot show {exc.object[exc.start : exc.end]!r}",
+            "set PYTHONIOENCODING=utf-8, or write to a file with -o",
+        )
+    except OSError as exc:
+        _silence_stdout()
+        if exc.filename:
+            _fail(f"{exc.filename}: {exc.strerror or exc}")
+        _fail(f"cannot write the output: {exc.strerror or exc}")
+    except (MemoryError, SystemError) as exc:
+        if not _caused_by_memory(exc):
+            raise
+        status = _OUT_OF_MEMORY
+    if status is _OUT_OF_MEMORY:
+        # Reported only here, outside the except clause: the traceback, and with
+        # it the frames holding what filled the memory, is gone by now.
+        gc.collect()
+        try:
+            _fail(
+                "out of memory",
+                "the problem is too large for the memory available; "
+                "plan fewer configurations (-k N, not --all) or set --time-limit",
+            )
+        except MemoryError:
+            os.write(2, b"cfgplan: error: out of memory\n")
+            sys.exit(EXIT_INPUT)
+    sys.exit(status)

@@ -10,6 +10,7 @@ import typer
 from cfgplan.check import check as run_checks
 from cfgplan.cli.app import EXIT_INPUT, app, report
 from cfgplan.cli.plan import DomainArg
+from cfgplan.diagnostics import printable
 from cfgplan.syntax.reader import read_domain, read_state
 
 
@@ -49,4 +50,4 @@ def check(
             summary += f", goal {world.goal.call}"
     if warnings:
         summary += f"; {warnings} warning(s)"
-    typer.echo(summary)
+    typer.echo(printable(summary))

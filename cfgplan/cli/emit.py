@@ -3,8 +3,11 @@
 The configuration of the given rank is sorted, divided per robot and
 translated: one file per robot (``emil.lisp`` with the LET/LAMBDA form of 5.3,
 or ``emil.py`` for :mod:`cfgplan.runtime`; plus ``run_all.py`` for Python)
-and the whole configuration description in ``configuration.txt``. Existing
-files are never overwritten without ``--force``.
+and the whole configuration description in ``configuration.txt``, which ends
+with the robot -> file table. A robot's file name is made safe by
+:mod:`cfgplan.safe_names` (``../../x`` cannot leave the folder). The files are
+written all at once by :func:`cfgplan.files.write_folder`; existing files are
+never overwritten without ``--force``.
 """
 
 from __future__ import annotations
@@ -16,14 +19,15 @@ from typing import Annotated
 import typer
 
 from cfgplan.backends.lisp import to_lisp
-from cfgplan.backends.python import module_name, run_all, to_python
+from cfgplan.backends.python import run_all, to_python
 from cfgplan.backends.wiring import RobotPart, deploy
 from cfgplan.cli.app import EXIT_NONE, app, say
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text, to_text
 from cfgplan.configuration.model import Configuration
-from cfgplan.diagnostics import error
+from cfgplan.diagnostics import printable
+from cfgplan.files import write_folder
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem
@@ -61,16 +65,23 @@ def files(problem: Problem, config: Configuration, rank: int, lang: Lang) -> dic
     """File name -> text, in the order they are written."""
     parts = deploy(config, problem.domain)
     head = title(problem, config, rank)
+    suffix = ".lisp" if lang is Lang.lisp else ".py"
     out: dict[str, str] = {}
     for part in parts:
-        name = module_name(part.robot) + (".lisp" if lang is Lang.lisp else ".py")
-        if name in out or name in (DESCRIPTION, RUN_ALL):
-            raise error(f"robot {part.robot}'s file {name} collides with another file")
+        name = part.stem + suffix
         out[name] = _lisp(part, head) if lang is Lang.lisp else to_python(part, head)
     if lang is Lang.python:
         out[RUN_ALL] = run_all(parts, head)
-    out[DESCRIPTION] = to_text(config, problem.state.media) + "\n"
+    out[DESCRIPTION] = to_text(config, problem.state.media) + "\n" + file_table(parts, suffix)
     return out
+
+
+def file_table(parts: tuple[RobotPart, ...], suffix: str) -> str:
+    """The robot -> file table that ends ``configuration.txt``, as LISP comments;
+    names are shown with unsafe characters escaped."""
+    lines = [";; Files, one per robot (cfgplan emit):"]
+    lines += [f";;   {printable(p.robot)} -> {p.stem}{suffix}" for p in parts]
+    return "\n".join(lines) + "\n"
 
 
 def _lisp(part: RobotPart, head: str) -> str:
@@ -103,15 +114,6 @@ def emit(
     """
     problem = load_problem(domain, state, goal, weights)
     texts = files(problem, choose(problem, rank), rank, lang)
-    if output.exists() and not output.is_dir():
-        raise error(f"{output} exists and is not a directory")
-    existing = [name for name in texts if (output / name).exists()]
-    if existing and not force:
-        raise error(f"{output} already holds {', '.join(existing)}; pass --force to overwrite")
-    try:
-        output.mkdir(parents=True, exist_ok=True)
-        for name, text in texts.items():
-            (output / name).write_text(text, encoding="utf-8")
-            say(f"wrote {output / name}")
-    except OSError as exc:
-        raise error(f"cannot write to {output}: {exc.strerror}") from None
+    write_folder(output, {name: text.encode("utf-8") for name, text in texts.items()}, force)
+    for name in texts:
+        say(f"wrote {output / name}")

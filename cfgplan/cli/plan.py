@@ -20,7 +20,8 @@ from cfgplan.cli.sequence import SequenceOptions, plan_sequences
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
 from cfgplan.configuration.describe import call_text, channel_text, to_dict, to_json, to_text
 from cfgplan.configuration.model import Configuration
-from cfgplan.diagnostics import CfgplanError, Diagnostic
+from cfgplan.diagnostics import CfgplanError, Diagnostic, printable
+from cfgplan.files import check_target
 from cfgplan.planner import Run, Stats
 from cfgplan.planner.explain import explain, explanation
 from cfgplan.problem import GOAL_SOURCE, Problem, load
@@ -128,7 +129,9 @@ def _stats(search: Run, more: bool = False) -> dict[str, object]:
 
 
 def _table(problem: Problem, configs: list[Configuration], details: bool, more: bool) -> str:
-    table = Table(title=f"Configurations for {call_text(problem.goal_call)}")
+    """The table for people: names with control characters escaped (a name
+    holding ESC cannot drive the terminal)."""
+    table = Table(title=printable(f"Configurations for {call_text(problem.goal_call)}"))
     table.add_column("rank", justify="right")
     table.add_column("cost", justify="right")
     table.add_column("robots")
@@ -154,7 +157,7 @@ def _table(problem: Problem, configs: list[Configuration], details: bool, more: 
         if details:
             row.append("\n".join(str(f) for f in c.functionalities))
             row.append("\n".join(channel_text(ch) for ch in c.channels))
-        table.add_row(*row)
+        table.add_row(*(printable(cell, keep="\n") for cell in row))
     buffer = io.StringIO()
     # With --details the table is as wide as the terminal (200 when not one).
     width = shutil.get_terminal_size((200, 24)).columns if details else 100
@@ -319,6 +322,8 @@ def plan(
 
     Exit codes: 0 found, 1 invalid input, 2 usage, 3 no admissible configuration.
     """
+    if output is not None:
+        check_target(output, force)  # before planning, which may take long
     problem = load_problem(domain, state, goal, weights, sequence=True)
     if len(problem.goals) > 1:
         options = SequenceOptions(None if all_ else k, switch, time_limit, verbose, details)

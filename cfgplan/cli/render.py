@@ -19,7 +19,8 @@ from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import call_text
-from cfgplan.diagnostics import CfgplanError, error
+from cfgplan.diagnostics import CfgplanError
+from cfgplan.files import check_target, write_file
 from cfgplan.planner import plan as run_plan
 from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem
@@ -41,13 +42,9 @@ def output_format(output: Path) -> Kind:
 
 
 def write_bytes(data: bytes, output: Path, force: bool) -> None:
-    """Write ``data`` to ``output``, refusing to overwrite it without --force."""
-    if output.exists() and not force:
-        raise error(f"{output} exists; pass --force to overwrite it")
-    try:
-        output.write_bytes(data)
-    except OSError as exc:
-        raise error(f"cannot write {output}: {exc.strerror}") from None
+    """Write ``data`` to ``output`` in one step, refusing to overwrite it without
+    --force and to write through a link (:func:`cfgplan.files.write_file`)."""
+    write_file(output, data, force)
 
 
 def configuration_source(problem: Problem, rank: int) -> str:
@@ -97,8 +94,7 @@ def render(
     """
     kind = output_format(output)
     try:
-        if output.exists() and not force:
-            raise error(f"{output} exists; pass --force to overwrite it")
+        check_target(output, force)
         problem = load_problem(domain, state, goal, weights)
         if hierarchy:
             source = hierarchy_dot(problem.task, problem.goal_call)

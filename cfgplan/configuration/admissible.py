@@ -110,17 +110,24 @@ def satisfying(conditions: Sequence[Condition], facts: Sequence[Ground], env: En
                     return False
         return True
 
-    def extend(index: int, current: Env) -> Iterator[Env]:
-        if index == len(atoms):
-            if passes(current):
-                yield current
-            return
-        for fact in facts:
-            bound = _unify(atoms[index], fact, current)
-            if bound is not None:
-                yield from extend(index + 1, bound)
-
-    yield from extend(0, env)
+    if not atoms:
+        if passes(env):
+            yield env
+        return
+    # Depth first over the atoms, facts in order; an explicit stack (one entry
+    # per atom matched so far), so that a long precondition list needs no recursion.
+    stack: list[tuple[Env, Iterator[Ground]]] = [(env, iter(facts))]
+    while stack:
+        current, remaining = stack[-1]
+        atom = atoms[len(stack) - 1]
+        bound = next((b for f in remaining if (b := _unify(atom, f, current)) is not None), None)
+        if bound is None:
+            stack.pop()
+        elif len(stack) == len(atoms):
+            if passes(bound):
+                yield bound
+        else:
+            stack.append((bound, iter(facts)))
 
 
 # -- the checks ---------------------------------------------------------------

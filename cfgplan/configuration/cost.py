@@ -11,9 +11,12 @@ reliability)`` to the cost (0 by default), that is ``W·(−ln p)`` for each par
 
 from __future__ import annotations
 
+import math
+
 from pydantic import BaseModel, ConfigDict
 
 from cfgplan.diagnostics import error
+from cfgplan.ir.model import Quantity
 
 
 class Weights(BaseModel):
@@ -21,12 +24,12 @@ class Weights(BaseModel):
 
     model_config = ConfigDict(frozen=True)
 
-    robot: float = 10
-    global_: float = 3
-    local: float = 1
-    functionality: float = 1
-    device: float = 10
-    reliability: float = 0
+    robot: Quantity = 10
+    global_: Quantity = 3
+    local: Quantity = 1
+    functionality: Quantity = 1
+    device: Quantity = 10
+    reliability: Quantity = 0
 
     def __str__(self) -> str:
         return (
@@ -36,6 +39,10 @@ class Weights(BaseModel):
             + (f",reliability={fmt(self.reliability)}" if self.reliability else "")
         )
 
+
+MAX_WEIGHT = 1e15
+"""Larger weights are refused: costs stay finite (no ``inf`` or ``nan`` in the
+output, which strict JSON parsers reject) and exact integers for integer weights."""
 
 _NAMES = {
     "robot": "robot",
@@ -61,6 +68,10 @@ def parse_weights(text: str) -> Weights:
             number = float(value)
         except ValueError:
             raise error(f"bad weight {part!r}: {value.strip()!r} is not a number") from None
+        if not math.isfinite(number) or number > MAX_WEIGHT:
+            raise error(
+                f"bad weight {part!r}: a weight is a finite number of at most {MAX_WEIGHT:g}"
+            )
         if number < 0:
             raise error(f"bad weight {part!r}: weights are not negative")
         values[_NAMES[key]] = number

@@ -26,6 +26,7 @@ from lark.exceptions import (
 from lark.visitors import Transformer_NonRecursive
 
 from cfgplan.diagnostics import CfgplanError, error, lines_of
+from cfgplan.files import read_source
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
 from cfgplan.syntax.sx import Sx
@@ -49,6 +50,11 @@ _TERMINAL_NAMES = {
     "SEQUENCE": "sequence",
     "$END": "end of file",
 }
+
+
+_OTHER_LINE_BREAKS = frozenset("\x0b\x1c\x1d\x1e\x85\u2028\u2029")
+"""What Unicode (and ``str.splitlines``) also counts as line breaks; the
+grammar does not, and refuses them where they would end a comment."""
 
 
 @cache
@@ -223,6 +229,11 @@ def _syntax_error(exc: UnexpectedInput, filename: str, text: str) -> CfgplanErro
     hint = None
     if char == '"':
         hint = "cfgplan has no strings: write a symbol, or (quote symbol) inside (eval ...)"
+    elif char in _OTHER_LINE_BREAKS:
+        hint = (
+            "a line break other than \\n, \\r\\n or \\r (vertical tab, NEL, U+2028 ...): "
+            "cfgplan does not read it as one; replace it with a newline"
+        )
     return error(f"unexpected character {char!r}", span, hint)
 
 
@@ -255,8 +266,21 @@ def _form_hint(word: str) -> str:
     )
 
 
+BOM = "\ufeff"
+"""The UTF-8 byte-order mark some editors put first; it is skipped."""
+
+
+def normalize(text: str) -> str:
+    """``text`` without a leading byte-order mark, every line break (``\r\n``, or
+    a ``\r`` alone as old Mac editors write) made a ``\n``: line breaks are
+    white space to the language, and so lines are counted alike everywhere."""
+    return text.removeprefix(BOM).replace("\r\n", "\n").replace("\r", "\n")
+
+
 def decode(data: bytes, filename: str) -> str:
-    """Decode UTF-8 source; a bad byte is reported at its line and column."""
+    """Decode UTF-8 source (see :func:`normalize`); a bad byte is reported at
+    its line and column."""
+    data = data.removeprefix(BOM.encode("utf-8")).replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -274,10 +298,13 @@ def decode(data: bytes, filename: str) -> str:
 
 
 def parse(text: str, filename: str = "<text>") -> SourceFile:
-    """Parse one file's text into its forms (functionalities, methods, states, goals)."""
+    """Parse one file's text into its forms (functionalities, methods, states, goals).
+
+    The text is normalized first (:func:`normalize`); spans count lines in the result."""
+    text = normalize(text)
     source = SourceFile(filename, text)
     if not text.strip() or all(
-        not ln.strip() or ln.lstrip().startswith(";") for ln in text.splitlines()
+        not ln.strip() or ln.lstrip().startswith(";") for ln in text.split("\n")
     ):
         span = Span(file=filename, line=1, column=1, end_line=1, end_column=1)
         raise error("the file is empty: it holds no forms", span)
@@ -313,18 +340,10 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
 
 
 def read_text_file(path: str | Path) -> tuple[str, str]:
-    """Read a file as UTF-8; returns (display name, text)."""
-    p = Path(path)
+    """Read a regular file of at most 4 MiB as UTF-8 (:func:`cfgplan.files.read_source`);
+    returns (display name, normalized text)."""
     name = str(path)
-    try:
-        data = p.read_bytes()
-    except FileNotFoundError:
-        raise error(f"no such file: {name}") from None
-    except IsADirectoryError:
-        raise error(f"{name} is a directory, not a file") from None
-    except OSError as exc:
-        raise error(f"cannot read {name}: {exc.strerror}") from None
-    return name, decode(data, name)
+    return name, decode(read_source(path), name)
 
 
 def domain_from(source: SourceFile) -> Domain:

@@ -9,7 +9,7 @@ import pytest
 
 from cfgplan.check import check
 from cfgplan.check.evaluate import EvalFailure, holds
-from cfgplan.diagnostics import CfgplanError, Diagnostic, render, source_line
+from cfgplan.diagnostics import WINDOW, CfgplanError, Diagnostic, render, source_line
 from cfgplan.ir.model import Eval
 from cfgplan.syntax.reader import (
     MAX_NESTING,
@@ -52,10 +52,20 @@ def assert_rendered(d: Diagnostic, text: str, line: int, column: int, message: s
     assert rows[0] == f"t.lisp:{line}:{column}: {d.severity}: {d.message}"
     quoted = source_line(text, line).expandtabs(1)
     gutter = f"{line:>5} | "
-    assert rows[1] == gutter + quoted
     caret_row = rows[2]
     assert caret_row.startswith(" " * (len(gutter) - 2) + "| ")
-    assert caret_row.index("^") - len(gutter) == column - 1
+    caret = caret_row.index("^") - len(gutter)
+    if len(quoted) <= WINDOW:
+        assert rows[1] == gutter + quoted
+        assert caret == column - 1
+    else:  # a long line is cut to a window around the caret, "…" where cut
+        shown = rows[1][len(gutter) :]
+        assert len(shown) <= WINDOW + 2 and "…" in shown
+        assert shown.strip("…") in quoted
+        if column <= len(quoted):
+            assert shown[caret] == quoted[column - 1]
+        else:
+            assert caret == len(shown)
     if d.hint:
         assert rows[3] == f"  hint: {d.hint}"
     return out
@@ -311,4 +321,7 @@ def test_form_feed_does_not_start_a_line() -> None:
         parse(text, "s.lisp")
     out = render(caught.value.diagnostics[0], {"s.lisp": text})
     assert out.splitlines()[0].startswith("s.lisp:1:8: error")
-    assert out.split("\n")[1] == "    1 | (state\x0c(robot ?x))"
+    rows = out.split("\n")
+    # shown escaped (terminal safety), the caret still under "(robot" (column 8)
+    assert rows[1] == "    1 | (state\\x0c(robot ?x))"
+    assert rows[2].index("^") == rows[1].index("(robot")
