@@ -40,6 +40,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import plan
 from cfgplan.problem import load
 from cfgplan.reconfigure.fallbacks import Resource
@@ -74,10 +75,6 @@ def best(repeats: int, run: Callable[[], object]) -> float:
     return min(times) * 1000
 
 
-def _fact(f: tuple[str, ...]) -> str:
-    return "(" + " ".join(f) + ")"
-
-
 FAMILY = ("wall K=6 N=20 L=8", (6, 20, 8))
 """A generated build-a-wall (benchmarks/families/wall.py); its first laser fails."""
 
@@ -110,7 +107,7 @@ def scenario(
     situation = Situation().failing(failed)
     withdrawn = set(situation.withdrawn(problem.task))
     goal = " ".join(problem.goal_call)
-    facts = " ".join(_fact(f) for f in problem.task.facts if f not in withdrawn)
+    facts = " ".join(atom_text(f) for f in problem.task.facts if f not in withdrawn)
     with tempfile.TemporaryDirectory() as folder:
         edited = Path(folder) / "state.lisp"
         edited.write_text(f"(state {facts})\n(goal ({goal}))\n")
@@ -135,7 +132,7 @@ def scenario(
         assert decision.source == "fallback"
     return [
         name,
-        f"{failed[0]}({', '.join(failed[1:])})",
+        call_text(failed),
         f"{configs[0].cost:g} -> {found[0].cost:g}",
         f"{cold_ms:.2f}",
         f"{warm_ms:.2f}",

@@ -14,6 +14,7 @@ from cfgplan.check import check
 from cfgplan.configuration.cost import Weights
 from cfgplan.diagnostics import CfgplanError, Diagnostic, error
 from cfgplan.ir.model import Domain, Goal, Span, State
+from cfgplan.notation import atom_text
 from cfgplan.planner.task import Ground, Task, compile_task, pattern
 from cfgplan.syntax.reader import parse, read_domain, read_state
 
@@ -65,7 +66,7 @@ def example_goal(domain: Domain) -> str:
     if not tops:
         return "(METHOD ARGUMENT ...)"
     name = tops[0].name
-    return "(" + " ".join([name.predicate, *(a.lstrip("?").upper() for a in name.args)]) + ")"
+    return atom_text([name.predicate, *(a.lstrip("?").upper() for a in name.args)])
 
 
 def load(

@@ -27,6 +27,7 @@ import graphviz  # type: ignore[import-untyped]
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
 from cfgplan.diagnostics import printable
+from cfgplan.notation import call_text
 
 FONT = "Helvetica"
 ROBOT_COLOURS = (
@@ -64,7 +65,7 @@ def term(t: str) -> str:
 
 def call(name: str, args: Sequence[str]) -> str:
     """``get-door-info(rh1, r, d)``: the thesis's notation for a call."""
-    return f"{name}({', '.join(term(a) for a in args)})"
+    return call_text((name, *(term(a) for a in args)))
 
 
 def new_graph(name: str, title: str = "") -> Any:

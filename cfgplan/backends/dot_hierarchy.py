@@ -24,6 +24,7 @@ from typing import Any
 from cfgplan.backends.dot import call, dot_text, html_text, new_graph, term
 from cfgplan.diagnostics import error
 from cfgplan.ir.model import SExpr, is_variable
+from cfgplan.notation import sexpr_text
 from cfgplan.planner.task import MethodSchema, Task, Test, TestKind
 
 METHOD = {"fillcolor": "gray80"}
@@ -166,10 +167,8 @@ def version_label(method: MethodSchema, env: dict[str, str]) -> str:
 
 
 def _sexpr(expr: SExpr, env: dict[str, str]) -> str:
-    if isinstance(expr, list):
-        return "(" + " ".join(_sexpr(e, env) for e in expr) + ")"
-    text = str(expr)
-    return term(env.get(text, text))
+    """``expr`` with the variables of ``env`` replaced, as the figures print terms."""
+    return sexpr_text(expr, lambda leaf: term(env.get(str(leaf), str(leaf))))
 
 
 def hierarchy_graph(task: Task, goal: Sequence[str], *, max_nodes: int = MAX_NODES) -> Any:

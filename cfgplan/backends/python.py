@@ -30,8 +30,8 @@ import re
 from collections.abc import Sequence
 
 from cfgplan.backends.wiring import Call, RobotPart
-from cfgplan.configuration.describe import call_text
 from cfgplan.diagnostics import escape_char, is_unsafe, printable
+from cfgplan.notation import call_text
 from cfgplan.safe_names import safe_stem
 
 __all__ = ["module_name", "py_str", "run_all", "to_python"]

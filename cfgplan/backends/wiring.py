@@ -23,10 +23,11 @@ from dataclasses import dataclass
 
 from cfgplan.backends.divide import Individual, divide
 from cfgplan.backends.sort import sort_functionalities
-from cfgplan.configuration.describe import call_text, channel_text
+from cfgplan.configuration.describe import channel_text
 from cfgplan.configuration.model import Configuration, FunctionalityInstance
 from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.ir.model import Atom, Domain
+from cfgplan.notation import call_text
 from cfgplan.safe_names import file_stems, safe_stem
 
 __all__ = ["RESERVED_STEMS", "Call", "Data", "RobotPart", "deploy", "wire"]

@@ -19,7 +19,6 @@ from cfgplan.check.messages import (
     alternatives,
     by_position,
     case_hint,
-    cond_text,
     position,
     sig_text,
     where,
@@ -350,7 +349,7 @@ class _Checker:
                 if v not in bound:
                     self.report(
                         "error",
-                        f"{v} in {cond_text(cond)} is bound by neither the name nor an atom "
+                        f"{v} in {cond} is bound by neither the name nor an atom "
                         "precondition, so it can never be bound",
                         cond.span,
                         f"bind {v} with an atom precondition of {name}",

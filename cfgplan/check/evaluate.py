@@ -13,6 +13,7 @@ from collections.abc import Callable, Mapping
 from itertools import pairwise
 
 from cfgplan.ir.model import SExpr, is_variable
+from cfgplan.notation import sexpr_text
 
 Value = str | int | float | bool | list["Value"]
 
@@ -74,14 +75,16 @@ def _number(value: Value) -> float:
     return value
 
 
-def _show(value: Value) -> str:
-    if isinstance(value, list):
-        return "(" + " ".join(_show(v) for v in value) + ")"
+def _leaf(value: str | int | float) -> str:
     if value is True:
         return "t"
     if value is False:
         return "nil"
     return str(value)
+
+
+def _show(value: Value) -> str:
+    return sexpr_text(value, _leaf)
 
 
 def _truthy(value: Value) -> bool:

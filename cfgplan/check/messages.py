@@ -6,14 +6,7 @@ from collections.abc import Iterable, Sequence
 
 from cfgplan.check.unify import Signature
 from cfgplan.diagnostics import Diagnostic
-from cfgplan.ir.model import Condition, Eval, SExpr, Span
-
-
-def sexpr_text(expr: SExpr) -> str:
-    """An s-expression as written, e.g. ``(not (eql (quote ?r) (quote ?rh1)))``."""
-    if isinstance(expr, list):
-        return "(" + " ".join(sexpr_text(e) for e in expr) + ")"
-    return str(expr)
+from cfgplan.ir.model import Span
 
 
 def args_text(n: int) -> str:
@@ -31,11 +24,6 @@ def alternatives(numbers: Iterable[int]) -> str:
     items = [str(n) for n in sorted(set(numbers))]
     text = items[0] if len(items) == 1 else ", ".join(items[:-1]) + " or " + items[-1]
     return text + (" argument" if items == ["1"] else " arguments")
-
-
-def cond_text(cond: Condition) -> str:
-    """A precondition as written."""
-    return f"(eval {sexpr_text(cond.expr)})" if isinstance(cond, Eval) else str(cond)
 
 
 def position(span: Span | None) -> tuple[int, int]:

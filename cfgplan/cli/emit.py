@@ -24,10 +24,11 @@ from cfgplan.backends.wiring import RobotPart, deploy
 from cfgplan.cli.app import EXIT_NONE, app, say
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
-from cfgplan.configuration.describe import call_text, to_text
+from cfgplan.configuration.describe import to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import printable
 from cfgplan.files import write_folder
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem

@@ -16,13 +16,14 @@ from rich.table import Table
 
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import atom_text
 from cfgplan.reconfigure.fallbacks import Fallback
 
 __all__ = ["fallback_lisp", "fallback_table"]
 
 
 def _withdrawn(fb: Fallback) -> str:
-    return " ".join(f"({' '.join(f)})" for f in fb.withdrawn) or "-"
+    return " ".join(atom_text(f) for f in fb.withdrawn) or "-"
 
 
 def _switch(fb: Fallback) -> str:

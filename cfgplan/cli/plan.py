@@ -18,10 +18,11 @@ from cfgplan.cli.app import EXIT_NONE, app, remember_source, report, say, write_
 from cfgplan.cli.fallbacks import fallback_lisp, fallback_table
 from cfgplan.cli.sequence import SequenceOptions, plan_sequences
 from cfgplan.configuration.cost import Weights, fmt, parse_weights
-from cfgplan.configuration.describe import call_text, channel_text, to_dict, to_json, to_text
+from cfgplan.configuration.describe import channel_text, to_dict, to_json, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic, printable
 from cfgplan.files import check_target
+from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
 from cfgplan.planner.explain import explain, explanation
 from cfgplan.problem import GOAL_SOURCE, Problem, load

@@ -18,9 +18,9 @@ from cfgplan.backends.render import render as render_dot
 from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
 from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
 from cfgplan.configuration.cost import fmt
-from cfgplan.configuration.describe import call_text
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.files import check_target, write_file
+from cfgplan.notation import call_text
 from cfgplan.planner import plan as run_plan
 from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem

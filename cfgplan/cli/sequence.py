@@ -22,8 +22,9 @@ from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, say
 from cfgplan.configuration.cost import fmt
-from cfgplan.configuration.describe import call_text, to_dict, to_text
+from cfgplan.configuration.describe import to_dict, to_text
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import call_text
 from cfgplan.planner.explain import explain
 from cfgplan.planner.sequence import PlannedSequence, SequenceSearch
 from cfgplan.problem import Problem

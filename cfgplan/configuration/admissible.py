@@ -35,9 +35,9 @@ from cfgplan.ir.model import (
     Functionality,
     Medium,
     Negation,
-    SExpr,
     State,
 )
+from cfgplan.notation import atom_text
 
 Ground = tuple[str, ...]
 Env = dict[str, str]
@@ -47,16 +47,8 @@ def _is_var(term: str) -> bool:
     return term.startswith("?")
 
 
-def _text(atom: Sequence[str]) -> str:
-    return "(" + " ".join(atom) + ")"
-
-
-def _call(f: FunctionalityInstance) -> str:
-    return f"{f.label}: {f.name}({', '.join(f.args)})"
-
-
 def _channel_text(index: int, ch: Channel) -> str:
-    return f"channel {index} ({ch.kind} {ch.source} -> {ch.target} {_text(ch.data)})"
+    return f"channel {index} ({ch.kind} {ch.source} -> {ch.target} {atom_text(ch.data)})"
 
 
 # -- matching preconditions ---------------------------------------------------
@@ -175,7 +167,7 @@ class _Checker:
             if f.label in self.by_label:
                 self.report(
                     "labels",
-                    f"label {f.label} names both {_call(self.by_label[f.label])} and {_call(f)}",
+                    f"label {f.label} names both {self.by_label[f.label]} and {f}",
                 )
             else:
                 self.by_label[f.label] = f
@@ -186,25 +178,25 @@ class _Checker:
             if schema is None:
                 self.report(
                     "domain",
-                    f"{_call(f)} names no functionality ({f.name} ...) with "
+                    f"{f} names no functionality ({f.name} ...) with "
                     f"{len(f.args)} argument(s) of the domain",
                 )
                 continue
             if not f.args:
-                self.report("location", f"{_call(f)} has no first argument to run on")
+                self.report("location", f"{f} has no first argument to run on")
             variables = [a for a in f.args if _is_var(a)]
             if variables:
-                self.report("causal", f"{_call(f)} is not ground: {', '.join(variables)}")
+                self.report("causal", f"{f} is not ground: {', '.join(variables)}")
             env = _unify(_atom(schema.name), (f.name, *f.args), {})
             if env is None:
-                self.report("domain", f"{_call(f)} does not match the schema {schema.name}")
+                self.report("domain", f"{f} does not match the schema {schema.name}")
                 continue
             options = list(satisfying(schema.precond, self.facts, env))
             if not options:
-                conditions = " ".join(_condition_text(c) for c in schema.precond)
+                conditions = " ".join(str(c) for c in schema.precond)
                 self.report(
                     "causal",
-                    f"the preconditions of {_call(f)} do not hold in the state: {conditions}",
+                    f"the preconditions of {f} do not hold in the state: {conditions}",
                 )
             self.schemas[label] = (schema, self._fitting(label, schema, options) or env)
 
@@ -247,7 +239,7 @@ class _Checker:
                 if inst is not None and inst.args and inst.args[0] != recorded:
                     self.report(
                         "location",
-                        f"{shown}: {role}_robot is {recorded} but {_call(inst)} runs on "
+                        f"{shown}: {role}_robot is {recorded} but {inst} runs on "
                         f"{inst.args[0]}",
                     )
             if ch.kind == "local":
@@ -261,11 +253,11 @@ class _Checker:
             produced = self._ports(ch.source, "out")
             if produced is not None and ch.data not in produced:
                 assert src is not None
-                self.report("information", f"{shown}: {_call(src)} does not produce it")
+                self.report("information", f"{shown}: {src} does not produce it")
             consumed = self._ports(ch.target, "in")
             if consumed is not None and ch.data not in consumed:
                 assert dst is not None
-                self.report("information", f"{shown}: {_call(dst)} does not consume it")
+                self.report("information", f"{shown}: {dst} does not consume it")
 
     def _robot(self, label: str, recorded: str) -> str:
         """Where the functionality ``label`` runs (the recorded robot if unknown)."""
@@ -278,7 +270,7 @@ class _Checker:
             for need in self._ports(label, "in") or []:
                 if (label, need) not in fed:
                     self.report(
-                        "information", f"input {_text(need)} of {_call(inst)} is fed by no channel"
+                        "information", f"input {atom_text(need)} of {inst} is fed by no channel"
                     )
 
     def duplicates(self) -> None:
@@ -439,18 +431,6 @@ class _Checker:
                 f"and {self.config.local_channels} local channels, "
                 f"{len(self.config.functionalities)} functionalities; weights {w})",
             )
-
-
-def _condition_text(cond: Condition) -> str:
-    if isinstance(cond, Eval):
-        return f"(eval {_sexpr(cond.expr)})"
-    return str(cond)
-
-
-def _sexpr(expr: SExpr) -> str:
-    if isinstance(expr, list):
-        return "(" + " ".join(_sexpr(e) for e in expr) + ")"
-    return str(expr)
 
 
 def _medium(m: Medium) -> str:

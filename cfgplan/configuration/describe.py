@@ -26,11 +26,7 @@ from typing import Any
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Channel, Configuration
 from cfgplan.ir.model import Medium
-
-
-def call_text(atom: Sequence[str]) -> str:
-    """``pos(Pippi, Door1)``: the thesis's printed notation of an atom."""
-    return f"{atom[0]}({', '.join(atom[1:])})"
+from cfgplan.notation import call_text
 
 
 def channel_text(ch: Channel) -> str:

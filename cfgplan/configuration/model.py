@@ -13,6 +13,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from cfgplan.configuration.cost import Weights
+from cfgplan.notation import instance_text
 
 
 class FunctionalityInstance(BaseModel):
@@ -33,7 +34,7 @@ class FunctionalityInstance(BaseModel):
         return (self.name, *self.args)
 
     def __str__(self) -> str:
-        return f"{self.label}: {self.name}({', '.join(self.args)})"
+        return instance_text(self.label, self.name, self.args)
 
 
 class Channel(BaseModel):

@@ -15,6 +15,8 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 from typing_extensions import TypeAliasType
 
+from cfgplan.notation import atom_text, sexpr_text
+
 Quantity = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 """A bandwidth, cost, frequency or capacity: finite and not negative."""
 
@@ -75,7 +77,7 @@ class Atom(Node):
         return [a for a in self.args if is_variable(a)]
 
     def __str__(self) -> str:
-        return "(" + " ".join((self.predicate, *self.args)) + ")"
+        return atom_text((self.predicate, *self.args))
 
 
 class Negation(Node):
@@ -110,6 +112,9 @@ class Eval(Node):
             elif isinstance(item, str) and is_variable(item) and item not in found:
                 found.append(item)
         return found
+
+    def __str__(self) -> str:
+        return f"(eval {sexpr_text(self.expr)})"
 
 
 Condition = Atom | Negation | Eval

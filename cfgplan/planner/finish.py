@@ -13,10 +13,11 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
-from cfgplan.planner.partial import Partial, describe_call
+from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import Condition, DeadEnd
-from cfgplan.planner.task import Ground, Task, show
+from cfgplan.planner.task import Ground, Task
 
 
 @dataclass
@@ -42,20 +43,20 @@ def _information(node: Partial) -> DeadEnd | None:
         src = located[ch.source]
         if ch.data not in src.outputs:
             return DeadEnd(
-                describe_call(src.call), f"does not produce {show(ch.data)}", None,
+                call_text(src.call), f"does not produce {atom_text(ch.data)}", None,
                 Condition.INFORMATION,
             )
         dst = located[ch.target]
         if ch.data not in dst.inputs:
             return DeadEnd(
-                describe_call(dst.call), f"does not consume {show(ch.data)}", None,
+                call_text(dst.call), f"does not consume {atom_text(ch.data)}", None,
                 Condition.INFORMATION,
             )
         slow = src.schema.freq, dst.schema.freq
         if slow[0] is not None and slow[1] is not None and slow[0] < slow[1]:
             return DeadEnd(
-                describe_call(src.call),
-                f"runs at {slow[0]:g} Hz but feeds {describe_call(dst.call)} at {slow[1]:g} Hz",
+                call_text(src.call),
+                f"runs at {slow[0]:g} Hz but feeds {call_text(dst.call)} at {slow[1]:g} Hz",
                 None,
                 Condition.INFORMATION,
             )
@@ -64,7 +65,7 @@ def _information(node: Partial) -> DeadEnd | None:
         for need in p.inputs:
             if (p.label, need) not in fed:
                 return DeadEnd(
-                    describe_call(p.call), f"input {show(need)} is fed by no channel", None,
+                    call_text(p.call), f"input {atom_text(need)} is fed by no channel", None,
                     Condition.INFORMATION,
                 )
     return None
@@ -92,7 +93,7 @@ def _cycle(node: Partial) -> DeadEnd | None:
         return None
     stuck = {n for n, d in indegree.items() if d > 0}
     on_cycle = _on_cycle(succ, stuck)
-    names = ", ".join(f"{_label(n)} {describe_call(node.located[n].call)}" for n in on_cycle)
+    names = ", ".join(f"{_label(n)} {call_text(node.located[n].call)}" for n in on_cycle)
     return DeadEnd("configuration", f"its channels form a cycle through {names}", None,
                    Condition.CYCLE)
 
@@ -119,7 +120,7 @@ def _on_cycle(succ: dict[int, set[int]], stuck: set[int]) -> list[int]:
 
 def postconditions(node: Partial) -> tuple[str, ...]:
     """P as the thesis prints it: atoms and ``(not ATOM)``, each once, in order."""
-    post = (show(a) if positive else f"(not {show(a)})" for positive, a in node.effects)
+    post = (atom_text(a) if positive else f"(not {atom_text(a)})" for positive, a in node.effects)
     return tuple(dict.fromkeys(post))
 
 

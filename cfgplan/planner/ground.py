@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from cfgplan.notation import atom_text
 from cfgplan.planner.match import Failure, bindings
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import (
@@ -28,7 +29,6 @@ from cfgplan.planner.task import (
     Signature,
     Task,
     Test,
-    show,
 )
 from cfgplan.planner.unify import Bindings, bind_name, is_ground, key, substitute
 
@@ -70,7 +70,9 @@ def _ground(p: Pattern, env: Bindings, where: str) -> Ground | DeadEnd:
     ground = substitute(p, env)
     if not is_ground(ground):
         free = next(t for t in ground[1:] if t[:1] == "?")
-        return DeadEnd(where, f"{free} in {show(p)} is bound by nothing", None, Condition.BINDING)
+        return DeadEnd(
+            where, f"{free} in {atom_text(p)} is bound by nothing", None, Condition.BINDING
+        )
     return ground
 
 

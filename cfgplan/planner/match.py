@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.ir.model import Span, is_variable
+from cfgplan.notation import atom_text
 from cfgplan.planner import clock
-from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind, show
+from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
 from cfgplan.planner.unify import Bindings, substitute, unify
 
 
@@ -122,7 +123,7 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
         shown = tuple((k, v) for k, v in current.items() if _mentions(test, k))
     else:
         # An atom is shown with the name's variables filled in, the others listed.
-        condition = show(substitute(test.pattern, named))
+        condition = atom_text(substitute(test.pattern, named))
         shown = tuple((k, v) for k, v in current.items() if k not in params and _mentions(test, k))
     detail = _DETAIL[test.kind]
     if test.kind is TestKind.ATOM:

@@ -19,10 +19,11 @@ from dataclasses import dataclass
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Span
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
 from cfgplan.planner.ground import Expansion
 from cfgplan.planner.report import Condition, DeadEnd
-from cfgplan.planner.task import FunctionalitySchema, Ground, Task, show
+from cfgplan.planner.task import FunctionalitySchema, Ground, Task
 
 Key = Ground
 """A functionality instance's identity: ``("camera", "Emil")``."""
@@ -103,11 +104,6 @@ def root(goal: Ground) -> Partial:
     )
 
 
-def describe_call(call: Ground) -> str:
-    """``get-door-info(Pippi, Door1)``, as the thesis writes instances."""
-    return f"{call[0]}({', '.join(call[1:])})"
-
-
 # -- step 3: expand a method ---------------------------------------------------------
 
 
@@ -135,9 +131,8 @@ def expand_method(
         if at_source:
             port = expansion.outputs.get(ch.data)
             if port is None:
-                return DeadEnd(
-                    where, f"no :out entry produces {show(ch.data)}", span, Condition.INFORMATION
-                )
+                missing = f"no :out entry produces {atom_text(ch.data)}"
+                return DeadEnd(where, missing, span, Condition.INFORMATION)
             source = first + port[0]
             if bandwidth is None and ch.kind == "global":
                 bandwidth = port[1]  # a global channel allocates the :out's bandwidth
@@ -145,9 +140,8 @@ def expand_method(
         if at_target:
             offsets = expansion.inputs.get(ch.data)
             if not offsets:
-                return DeadEnd(
-                    where, f"no :in entry consumes {show(ch.data)}", span, Condition.INFORMATION
-                )
+                missing = f"no :in entry consumes {atom_text(ch.data)}"
+                return DeadEnd(where, missing, span, Condition.INFORMATION)
             targets = tuple(first + k for k in offsets)  # an :in may feed several
         rewired.extend(Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth) for t in targets)
     ancestors = item.ancestors | {item.call}
@@ -327,10 +321,10 @@ def _media(channels: list[Channel], located: dict[int, Placed], task: Task) -> D
 
 def _misplaced(ch: Channel, src: Placed, dst: Placed) -> DeadEnd:
     return DeadEnd(
-        f"{ch.kind} channel {show(ch.data)}",
+        f"{ch.kind} channel {atom_text(ch.data)}",
         f"declared ({ch.kind} {' '.join(ch.robots)}) but it runs from "
-        f"{describe_call(src.call)} on {src.robot} to "
-        f"{describe_call(dst.call)} on {dst.robot}",
+        f"{call_text(src.call)} on {src.robot} to "
+        f"{call_text(dst.call)} on {dst.robot}",
         condition=Condition.LOCATION,
     )
 

@@ -37,12 +37,13 @@ from dataclasses import dataclass, field
 from typing import cast
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.plan import Run, partitioned, parts
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
-from cfgplan.planner.task import Ground, Task, show, with_facts
+from cfgplan.planner.task import Ground, Task, with_facts
 
 Facts = tuple[Ground, ...]
 
@@ -71,13 +72,13 @@ def apply(facts: Facts, effects: Sequence[tuple[bool, Ground]]) -> tuple[Facts, 
     deleted = {atom for positive, atom in effects if not positive}
     kept = [f for f in facts if f not in deleted]
     present = set(kept)
-    changes = [f"(not {show(f)})" for f in facts if f in deleted]
+    changes = [f"(not {atom_text(f)})" for f in facts if f in deleted]
     for positive, atom in effects:
         if positive and atom not in present:
             kept.append(atom)
             present.add(atom)
             if atom not in deleted:
-                changes.append(show(atom))
+                changes.append(atom_text(atom))
     return tuple(kept), tuple(changes)
 
 

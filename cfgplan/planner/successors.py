@@ -18,12 +18,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
+from cfgplan.notation import call_text
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.match import why_not
 from cfgplan.planner.partial import (
     Item,
     Partial,
-    describe_call,
     expand_method,
     place_functionality,
     reuse_functionality,
@@ -50,14 +50,14 @@ def _expand(
 ) -> Iterator[Child]:
     if item.call in item.ancestors:
         yield DeadEnd(
-            describe_call(item.call),
+            call_text(item.call),
             "it recurs on its own expansion path",
             condition=Condition.RECURSION,
         )
         return
     choice = 0
     for method in versions:
-        where = f"{describe_call(item.call)}, version {method.version}"
+        where = f"{call_text(item.call)}, version {method.version}"
         options = grounder.method_bindings(method, item.call)
         if not options:
             yield _no_binding(grounder, method, item.call, where)
@@ -76,7 +76,7 @@ def _place(grounder: Grounder, node: Partial, item: Item) -> Iterator[Child]:
     schema = task.functionality(item.call)
     if schema is None:
         yield DeadEnd(
-            describe_call(item.call),
+            call_text(item.call),
             "is neither a method nor a functionality",
             condition=Condition.DOMAIN,
         )
@@ -87,7 +87,7 @@ def _place(grounder: Grounder, node: Partial, item: Item) -> Iterator[Child]:
         return
     options = grounder.functionality_bindings(schema, item.call)
     if not options:
-        yield _no_binding(grounder, schema, item.call, describe_call(item.call))
+        yield _no_binding(grounder, schema, item.call, call_text(item.call))
         return
     for index, env in enumerate(options):
         instance = grounder.instance(schema, env)

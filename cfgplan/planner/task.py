@@ -36,6 +36,7 @@ from cfgplan.ir.model import (
     State,
     is_variable,
 )
+from cfgplan.notation import sexpr_text
 
 Ground = tuple[str, ...]
 """A ground atom or call as a tuple: ``("in", "Pippi", "Room1")``."""
@@ -235,11 +236,6 @@ def pattern(atom: Atom) -> Pattern:
     return (atom.predicate, *atom.args)
 
 
-def show(p: Sequence[str]) -> str:
-    """Print an atom tuple as the thesis's s-expression ``(in Pippi Room1)``."""
-    return "(" + " ".join(p) + ")"
-
-
 def _tests(conditions: Sequence[Condition], bound: set[str]) -> tuple[Test, ...]:
     """Order preconditions so every ``not`` and ``eval`` runs once its variables
     are bound by the name or an earlier atom (atoms keep their order): an
@@ -264,17 +260,11 @@ def _tests(conditions: Sequence[Condition], bound: set[str]) -> tuple[Test, ...]
             waiting.append((set(cond.atom.variables()), test))
             release()
         elif isinstance(cond, Eval):
-            test = Test(TestKind.EVAL, expr=cond.expr, span=cond.span, text=_eval_text(cond.expr))
+            test = Test(TestKind.EVAL, expr=cond.expr, span=cond.span, text=sexpr_text(cond.expr))
             waiting.append((set(cond.variables()), test))
             release()
     ordered.extend(test for _, test in waiting)
     return tuple(ordered)
-
-
-def _eval_text(expr: SExpr) -> str:
-    if isinstance(expr, list):
-        return "(" + " ".join(_eval_text(e) for e in expr) + ")"
-    return str(expr)
 
 
 def _effects(effects: Sequence[Effect]) -> tuple[EffectSpec, ...]:

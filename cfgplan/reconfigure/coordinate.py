@@ -31,8 +31,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from cfgplan.configuration.describe import call_text
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import atom_text, call_text
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Decision, Reconfigurator
@@ -133,8 +133,8 @@ class Coordinator:
             self._note(
                 "facts",
                 detection,
-                added=[f"({' '.join(f)})" for f in detection.added],
-                removed=[f"({' '.join(f)})" for f in detection.removed],
+                added=[atom_text(f) for f in detection.added],
+                removed=[atom_text(f) for f in detection.removed],
                 how=detection.how,
             )
             self._apply(
@@ -203,7 +203,7 @@ class Coordinator:
             kind=resource.kind,
             how=detection.how or detection.kind,
             detail=detection.detail,
-            withdrawn=[f"({' '.join(f)})" for f in decision.withdrawn],
+            withdrawn=[atom_text(f) for f in decision.withdrawn],
         )
         self._apply(decision, detection)
 

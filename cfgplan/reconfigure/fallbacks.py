@@ -20,9 +20,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from cfgplan.configuration.describe import call_text, to_dict
+from cfgplan.configuration.describe import to_dict
 from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Medium
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.task import Ground, Task
@@ -88,7 +89,7 @@ class Fallback:
         return {
             "resource": self.resource.text,
             "kind": self.resource.kind,
-            "withdrawn": [f"({' '.join(f)})" for f in self.withdrawn],
+            "withdrawn": [atom_text(f) for f in self.withdrawn],
             "cost": None if c is None else to_dict(c, 1)["cost"],
             "robots": None if c is None else c.robots,
             "stopped": []

@@ -48,9 +48,9 @@ from typing import Literal
 
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
-from cfgplan.configuration.describe import call_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Domain
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.sequence import SequenceSearch

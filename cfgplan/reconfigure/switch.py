@@ -23,8 +23,8 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from cfgplan.configuration.describe import call_text
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
+from cfgplan.notation import call_text
 
 __all__ = ["Change", "change", "channel_name", "label_number", "relabel"]
 

@@ -34,6 +34,7 @@ import traceback
 from dataclasses import dataclass
 from typing import Literal
 
+from cfgplan.notation import call_text
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.values import safe_repr
 
@@ -153,7 +154,7 @@ def term_text(term: tuple[str, ...]) -> str:
     """``compass(Emil)`` for an instance or fact, ``Emil`` for a robot."""
     if len(term) == 1:
         return term[0]
-    return f"{term[0]}({', '.join(term[1:])})"
+    return call_text(term)
 
 
 def _term(text: str) -> tuple[str, ...] | None:

@@ -42,6 +42,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Literal
 
+from cfgplan.notation import atom_text
 from cfgplan.runtime.events import Adaptation, Call, Event, Presence, Staleness
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.faults import term_text
@@ -104,8 +105,8 @@ class Detection:
         if self.kind in ("lost", "seen"):
             return f"robot {self.other} {self.kind}"
         if self.kind == "facts":
-            shown = [f"+({' '.join(f)})" for f in self.added]
-            shown += [f"-({' '.join(f)})" for f in self.removed]
+            shown = [f"+{atom_text(f)}" for f in self.added]
+            shown += [f"-{atom_text(f)}" for f in self.removed]
             return f"state update ({self.how}): {' '.join(shown)}"
         return f"{self.kind} {self.label} on {self.other or self.robot}"
 

@@ -10,8 +10,9 @@ printer can blame the implementation.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 
+from cfgplan.notation import call_text
 from cfgplan.runtime.events import Adaptation, Call, Data, Event, Lifecycle, Presence, Staleness
 from cfgplan.runtime.values import safe_repr
 from cfgplan.runtime.wrapper import Stats, Wrapper
@@ -20,11 +21,6 @@ __all__ = ["call_text", "describe", "notice", "show", "show_checked", "summary"]
 
 DEPTH = 12  # containers shown this deep, then "..."
 WIDTH = 400  # characters of one value, then "…"
-
-
-def call_text(atom: Sequence[str]) -> str:
-    """``pos(Pippi, Door1)``: the thesis's printed notation of an atom."""
-    return f"{atom[0]}({', '.join(atom[1:])})"
 
 
 def show(value: object) -> str:

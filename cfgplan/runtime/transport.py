@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable, Collection
 from typing import NamedTuple, Protocol
 
+from cfgplan.notation import atom_text
 from cfgplan.runtime.errors import RunError
 
 __all__ = ["ChannelKey", "InProcessTransport", "Presence", "Receiver", "Transport"]
@@ -40,7 +41,7 @@ class ChannelKey(NamedTuple):
     data: tuple[str, ...]
 
     def __str__(self) -> str:
-        return f"{self.source}->{self.target} ({' '.join(self.data)})"
+        return f"{self.source}->{self.target} {atom_text(self.data)}"
 
 
 Receiver = Callable[[bytes], None]

@@ -45,6 +45,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 
+from cfgplan.notation import call_text, instance_text
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Data, Event, Staleness, Status, Transfer
@@ -141,7 +142,7 @@ class Wrapper:
         self._worker: Worker | None = None
 
     def __str__(self) -> str:
-        return f"{self.label}: {self.name}({', '.join((self.robot, *self.objects))})"
+        return instance_text(self.label, self.name, (self.robot, *self.objects))
 
     def schedule(
         self, rate: float, now: float, budget: float | None = None, stale_periods: float = 3.0
@@ -387,7 +388,7 @@ class Wrapper:
             return encode(value)
         except ValueRuleError as exc:
             raise RunError(
-                f"output {data[0]}({', '.join(data[1:])}) goes to "
+                f"output {call_text(data)} goes to "
                 f"another robot, but {exc.message} (type {type_name(value)})",
                 hint=exc.hint,
             ) from None

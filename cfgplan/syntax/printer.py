@@ -37,6 +37,7 @@ from cfgplan.ir.model import (
     SExpr,
     State,
 )
+from cfgplan.notation import atom_text, sexpr_text
 
 __all__ = [
     "WIDTH",
@@ -99,6 +100,14 @@ def format_quantity(x: float) -> str:
 # --- s-expressions and atoms ----------------------------------------------
 
 
+def _leaf(item: str | int | float) -> str:
+    if isinstance(item, bool):  # not produced by the reader; be explicit
+        return "t" if item else "nil"
+    if isinstance(item, float):
+        return _float_text(item)
+    return str(item)
+
+
 def format_sexpr(expr: SExpr) -> str:
     """An ``(eval EXPR)`` expression: symbols, numbers and nested lists.
 
@@ -106,34 +115,12 @@ def format_sexpr(expr: SExpr) -> str:
     reader gives back the same Python types. ``['quote', x]`` prints as
     ``(quote x)``. Iterative, so deep nesting cannot overflow the stack.
     """
-    out: list[str] = []
-    # Work items: an expression to print, or a literal string to emit.
-    stack: list[SExpr | tuple[str]] = [expr]
-    while stack:
-        item = stack.pop()
-        if isinstance(item, tuple):
-            out.append(item[0])
-        elif isinstance(item, list):
-            out.append("(")
-            stack.append((")",))
-            for i in range(len(item) - 1, -1, -1):
-                stack.append(item[i])
-                if i > 0:
-                    stack.append((" ",))
-        elif isinstance(item, bool):  # not produced by the reader; be explicit
-            out.append("t" if item else "nil")
-        elif isinstance(item, int):
-            out.append(str(item))
-        elif isinstance(item, float):
-            out.append(_float_text(item))
-        else:
-            out.append(item)
-    return "".join(out)
+    return sexpr_text(expr, _leaf)
 
 
 def format_atom(atom: Atom) -> str:
     """``(predicate arg ...)``, e.g. ``(camera ?r)``."""
-    return "(" + " ".join((atom.predicate, *atom.args)) + ")"
+    return atom_text((atom.predicate, *atom.args))
 
 
 def format_condition(cond: Condition | Effect) -> str:
@@ -148,7 +135,7 @@ def format_condition(cond: Condition | Effect) -> str:
 def _with_bandwidth(parts: list[str], bandwidth: float | None) -> str:
     if bandwidth is not None:
         parts.append(format_quantity(bandwidth))
-    return "(" + " ".join(parts) + ")"
+    return atom_text(parts)
 
 
 def format_port(port: Port) -> str:
@@ -158,7 +145,7 @@ def format_port(port: Port) -> str:
 
 def format_channel(channel: ChannelSpec) -> str:
     """``((local ?r) ?f1 ?f2 (image ?r) 50)`` or ``((global ?a ?b) ...)``."""
-    kind = "(" + " ".join((channel.kind, *channel.robots)) + ")"
+    kind = atom_text((channel.kind, *channel.robots))
     parts = [kind, channel.source, channel.target, format_atom(channel.data)]
     return _with_bandwidth(parts, channel.bandwidth)
 
@@ -269,7 +256,7 @@ def format_medium(medium: Medium) -> str:
     parts = ["medium", medium.type, medium.sender, medium.receiver, capacity]
     if medium.reliability is not None:
         parts.append(format_quantity(medium.reliability))
-    return "(" + " ".join(parts) + ")"
+    return atom_text(parts)
 
 
 def print_domain(domain: Domain) -> str:

@@ -82,7 +82,6 @@ class SourceFile:
     states: list[State] = field(default_factory=list)
     goals: list[Goal] = field(default_factory=list)
     sequences: list[tuple[Goal, ...]] = field(default_factory=list)
-    order: list[str] = field(default_factory=list)
 
 
 class _ToIR(Transformer_NonRecursive[Token, Any]):
@@ -323,19 +322,14 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
     for item in items:
         if isinstance(item, Functionality):
             source.functionalities.append(item)
-            source.order.append("functionality")
         elif isinstance(item, Method):
             source.methods.append(item)
-            source.order.append("method")
         elif isinstance(item, State):
             source.states.append(item)
-            source.order.append("state")
         elif isinstance(item, Goal):
             source.goals.append(item)
-            source.order.append("goal")
         elif isinstance(item, GoalSequence):
             source.sequences.append(item.goals)
-            source.order.append("sequence")
     return source
 
 

@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 
@@ -74,7 +75,7 @@ THESIS_SORTED = ["F117", "F116", "F114", "F129", "F118", "F115", "F113", "F109"]
 
 def thesis_labels(config: Configuration) -> dict[str, str]:
     """Thesis label -> our label, matched by functionality name and arguments."""
-    ours = {f"{f.name}({', '.join(f.args)})": f.label for f in config.functionalities}
+    ours = {call_text((f.name, *f.args)): f.label for f in config.functionalities}
     return {thesis: ours[text] for thesis, text in THESIS_FUNCTIONALITIES}
 
 

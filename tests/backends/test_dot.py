@@ -30,6 +30,7 @@ from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.cli.app import app
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 
@@ -199,7 +200,7 @@ def test_sensors_on_top_cross_door_at_the_bottom() -> None:
     assert by_name["transform-info"] == 2
     assert by_name["cross-door"] == 3
     dot = configuration_dot(config)
-    label = {f"{f.name}({', '.join(f.args)})": f.label for f in config.functionalities}
+    label = {call_text((f.name, *f.args)): f.label for f in config.functionalities}
     keep = re.findall(r"^\t\t(F\d+) -> (F\d+) \[minlen=(\d+) style=invis weight=0\]", dot, re.M)
     # Pippi's compass three layers above her cross-door, not beside it
     assert (label["compass(Pippi)"], label["cross-door(Pippi, Door1)"], "3") in keep

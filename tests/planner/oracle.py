@@ -16,6 +16,7 @@ from cfgplan.configuration.admissible import satisfying
 from cfgplan.configuration.cost import Weights
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Atom, Functionality, Method, Negation
+from cfgplan.notation import atom_text
 from cfgplan.problem import Problem
 
 Ground = tuple[str, ...]
@@ -48,13 +49,11 @@ def _subst(atom: Atom, env: dict[str, str]) -> Ground:
     return (atom.predicate, *(env.get(t, t) for t in atom.args))
 
 
-def _show(ground: Ground) -> str:
-    return "(" + " ".join(ground) + ")"
-
-
 def _effects(effects: Sequence[Atom | Negation], env: dict[str, str]) -> tuple[str, ...]:
     return tuple(
-        f"(not {_show(_subst(e.atom, env))})" if isinstance(e, Negation) else _show(_subst(e, env))
+        f"(not {atom_text(_subst(e.atom, env))})"
+        if isinstance(e, Negation)
+        else atom_text(_subst(e, env))
         for e in effects
     )
 

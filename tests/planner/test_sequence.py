@@ -12,6 +12,7 @@ from hypothesis import given
 
 from cfgplan.configuration.admissible import problems
 from cfgplan.ir.model import Atom
+from cfgplan.notation import atom_text
 from cfgplan.planner import plan
 from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.problem import Problem, load
@@ -130,16 +131,12 @@ def test_sequences_come_cheapest_first_and_every_step_is_admissible(example: Gen
         for step in planned.steps:
             assert problems(step.configuration, problem.domain, state) == []
             facts = [(a.predicate, *a.args) for a in state.facts]
-            kept = [f for f in facts if f"(not {_show(f)})" not in step.changes]
+            kept = [f for f in facts if f"(not {atom_text(f)})" not in step.changes]
             added = [c for c in step.changes if not c.startswith("(not ")]
             atoms = [*kept, *(tuple(c[1:-1].split()) for c in added)]
             state = state.model_copy(
                 update={"facts": tuple(Atom(predicate=a[0], args=a[1:]) for a in atoms)}
             )
-
-
-def _show(fact: tuple[str, ...]) -> str:
-    return "(" + " ".join(fact) + ")"
 
 
 def test_json_schema_of_sequences() -> None:

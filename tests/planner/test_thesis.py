@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.planner.report import Condition
 from cfgplan.planner.task import compile_task
@@ -30,7 +31,7 @@ def costs(configs: list[Configuration]) -> list[int]:
 
 
 def keys(config: Configuration) -> set[str]:
-    return {f"{f.name}({', '.join(f.args)})" for f in config.functionalities}
+    return {call_text((f.name, *f.args)) for f in config.functionalities}
 
 
 def run(p: Problem, distinct: bool = True) -> list[Configuration]:
@@ -91,7 +92,7 @@ SECTION_4_6_CHANNELS = [
 
 
 def channel_rows(config: Configuration) -> list[tuple[str, str, str, str]]:
-    name = {f.label: f"{f.name}({', '.join(f.args)})" for f in config.functionalities}
+    name = {f.label: call_text((f.name, *f.args)) for f in config.functionalities}
     return [(c.kind, name[c.source], name[c.target], " ".join(c.data)) for c in config.channels]
 
 

@@ -16,7 +16,6 @@ duplicated or swapped. Runs are derandomized, so they are reproducible.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 
@@ -24,17 +23,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from cfgplan.check import check
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Domain, State
 from cfgplan.syntax.printer import print_domain, print_state
 from cfgplan.syntax.reader import SourceFile, domain_from, parse, state_from
-
-CheckFn = Callable[..., list[Diagnostic]]
-check: CheckFn | None
-try:  # the static checker is written in parallel; fuzz it once it exists
-    from cfgplan.check import check
-except ImportError:  # pragma: no cover - depends on the checker being present
-    check = None
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted((ROOT / "domains").glob("*/*.lisp"))
@@ -84,8 +77,9 @@ def _round_trip(before: Domain | State) -> None:
     assert repr(after.model_dump()) == repr(before.model_dump())
 
 
-def _read_and_check(text: str, folder: str = "cross-door") -> None:
-    """Run the front end on ``text``; only CfgplanError may escape, and it must be located."""
+def _read_and_check(text: str, folder: str = "cross-door") -> list[Diagnostic]:
+    """Run the front end on ``text``: read, print back, check. Only
+    CfgplanError may escape, and it must be located; the diagnostics found."""
     try:
         source: SourceFile = parse(text, "fuzz.lisp")
         is_state = bool(source.states or source.goals)
@@ -93,10 +87,8 @@ def _read_and_check(text: str, folder: str = "cross-door") -> None:
     except CfgplanError as exc:
         assert exc.diagnostics, "a CfgplanError without diagnostics"
         _assert_diagnostics_located(exc.diagnostics, span_required=True)
-        return
+        return exc.diagnostics
     _round_trip(result)
-    if check is None:
-        return
     try:
         if isinstance(result, Domain):
             found = check(result)
@@ -104,9 +96,10 @@ def _read_and_check(text: str, folder: str = "cross-door") -> None:
             found = check(_bundled_domain(folder), result, result.goal)
     except CfgplanError as exc:
         _assert_diagnostics_located(exc.diagnostics, span_required=True)
-        return
+        return exc.diagnostics
     assert isinstance(found, list)
     _assert_diagnostics_located(found, span_required=True)
+    return found
 
 
 # --- (a) text from the language's alphabet -------------------------------------
@@ -332,7 +325,15 @@ def test_eval_numeral_past_int_digit_limit() -> None:
     _read_and_check(text)  # and the fuzz property holds for it
 
 
-def test_checker_is_available() -> None:
-    """Record (as a skip) when the checker part of the property did not run."""
-    if check is None:  # pragma: no cover
-        pytest.skip("cfgplan.check.check is not available: only the reader was fuzzed")
+def test_the_property_checks_what_reads() -> None:
+    """What reads well is checked too: a body calling an undefined method is
+    the checker's error, located on the call (not only the reader is fuzzed)."""
+    text = (
+        "(make-functionality :name '(camera ?r) :out '((image ?r)))\n"
+        "(make-config-method :name '(see ?r)\n"
+        "  :body '((?f1 (camera ?r)) (?f2 (measure-window ?r))))\n"
+    )
+    found = _read_and_check(text)
+    (d,) = [d for d in found if d.is_error]
+    assert "no functionality or method (measure-window ...)" in d.message
+    assert d.span is not None and (d.span.line, d.span.column) == (3, 34)
