@@ -1,5 +1,6 @@
 """Bad input gives a positioned, readable error: ``file:line:col``, the source line
-and a caret under the offending column (reader and checker, thesis 4.4)."""
+and a caret under the offending column (the reader, thesis 4.4; the checker's
+errors rendered: ``tests/check/test_errors.py``)."""
 
 from __future__ import annotations
 
@@ -7,13 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from cfgplan.check import check
-from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.diagnostics import WINDOW, CfgplanError, Diagnostic, render, source_line
-from cfgplan.ir.model import Eval
 from cfgplan.syntax.reader import (
     MAX_NESTING,
-    domain_from,
     parse,
     read_domain,
     read_state,
@@ -36,10 +33,6 @@ def reader_error(text: str, filename: str = "t.lisp") -> Diagnostic:
         parse(text, filename)
     assert len(info.value.diagnostics) == 1
     return info.value.diagnostics[0]
-
-
-def checker_errors(text: str) -> list[Diagnostic]:
-    return [d for d in check(domain_from(parse(text, "t.lisp"))) if d.is_error]
 
 
 def assert_rendered(d: Diagnostic, text: str, line: int, column: int, message: str) -> str:
@@ -198,80 +191,6 @@ def test_non_utf8_byte_column_counts_characters(tmp_path: Path) -> None:
     out = render(d, {str(path): text}).splitlines()
     assert out[1] == "    2 |   (in ’P\ufffd))"
     assert out[2].index("^") - len("    2 | ") == 8
-
-
-# -- checker errors, rendered ----------------------------------------------------
-
-
-def _method(body: str, channels: str = "") -> str:
-    return (
-        FUNCTIONALITIES
-        + "(make-config-method :name '(get-door-info ?r ?d)\n"
-        + "  :precond '((camera ?r) (door ?d))\n"
-        + (f"  :channels '({channels})\n" if channels else "")
-        + f"  :body '({body}))\n"
-    )
-
-
-def test_body_naming_an_undefined_method() -> None:
-    text = _method("(?f1 (camera ?r)) (?f2 (measure-window ?r ?d))")
-    (d,) = checker_errors(text)
-    assert_rendered(d, text, 5, 34, "no functionality or method (measure-window ...)")
-
-
-def test_channel_label_not_in_body() -> None:
-    text = _method(
-        "(?f1 (camera ?r)) (?f2 (measure-door ?r ?d))", "((local ?r) ?f1 ?f3 (image ?r))"
-    )
-    (d,) = checker_errors(text)
-    assert_rendered(d, text, 5, 15, "channel target ?f3 is not a label of the body")
-
-
-def test_channel_descriptor_not_produced() -> None:
-    text = _method(
-        "(?f1 (camera ?r)) (?f2 (measure-door ?r ?d))", "((local ?r) ?f1 ?f2 (sound ?r))"
-    )
-    found = checker_errors(text)
-    assert [d.message for d in found] == [
-        "channel data (sound ?r) is not produced by ?f1 (camera ?r)",
-        "channel data (sound ?r) is not consumed by ?f2 (measure-door ?r ?d)",
-    ]
-    out = assert_rendered(found[0], text, 5, 15, "is not produced by ?f1 (camera ?r)")
-    assert "hint: it produces (image ?r)" in out
-
-
-def test_arity_mismatch() -> None:
-    text = _method("(?f1 (camera ?r ?d)) (?f2 (measure-door ?r ?d))")
-    (d,) = checker_errors(text)
-    assert_rendered(d, text, 5, 16, "arity mismatch: (camera ...) takes 1 argument, found 2")
-
-
-@pytest.mark.parametrize(
-    ("expr", "message"),
-    [
-        ("(shell-command (quote rm))", "eval may not call shell-command"),
-        ("(exit)", "eval may not call exit"),
-        ("(print (quote pwned))", "eval may not call print"),
-        ("(progn (quit) t)", "eval may not call progn"),
-    ],
-)
-def test_eval_outside_the_safe_subset_is_reported_not_run(
-    expr: str, message: str, capsys: pytest.CaptureFixture[str]
-) -> None:
-    text = FUNCTIONALITIES + (
-        "(make-config-method :name '(get-door-info ?r ?d)\n"
-        f"  :precond '((camera ?r) (eval {expr}))\n"
-        "  :body '((?f1 (camera ?r)) (?f2 (measure-door ?r ?d))))\n"
-    )
-    (d,) = checker_errors(text)
-    assert_rendered(d, text, 4, 26, message)
-    # Interpreting it (as the planner would) refuses it too: nothing is executed.
-    test = domain_from(parse(text, "t.lisp")).methods[0].precond[1]
-    assert isinstance(test, Eval)
-    with pytest.raises(EvalFailure, match="eval may not call"):
-        holds(test.expr, {})
-    captured = capsys.readouterr()
-    assert captured.out == "" and captured.err == ""  # print never ran; exit/quit never ran
 
 
 # -- quotes and notations that must read the same --------------------------------
