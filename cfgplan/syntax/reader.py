@@ -2,8 +2,8 @@
 each grammar rule straight to an :class:`Sx` node or an IR object.
 
 Entry points: :func:`read_domain` and :func:`read_state` (files or text).
-Errors are :class:`~cfgplan.diagnostics.CfgplanError` with a span, built from
-Lark's ``UnexpectedInput`` for syntax errors.
+Errors are :class:`~cfgplan.diagnostics.CfgplanError` with a span; syntax
+errors are built from Lark's ``UnexpectedInput`` by :mod:`cfgplan.syntax.unexpected`.
 """
 
 from __future__ import annotations
@@ -16,46 +16,18 @@ from pathlib import Path
 from typing import Any
 
 from lark import Lark, Token, v_args
-from lark.exceptions import (
-    UnexpectedCharacters,
-    UnexpectedEOF,
-    UnexpectedInput,
-    UnexpectedToken,
-    VisitError,
-)
+from lark.exceptions import UnexpectedInput, VisitError
 from lark.visitors import Transformer_NonRecursive
 
-from cfgplan.diagnostics import CfgplanError, error, lines_of
+from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.files import read_source
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
 from cfgplan.syntax.sx import Sx
+from cfgplan.syntax.unexpected import syntax_error
 
 MAX_NESTING = 64
 """Lists may nest this deep; deeper input is refused (no recursion anywhere)."""
-
-_TERMINAL_NAMES = {
-    "LPAR": '"("',
-    "RPAR": '")"',
-    "COMMA": '","',
-    "QUOTE": "a quote '",
-    "KEYWORD": "a keyword such as :name",
-    "SYMBOL": "a symbol",
-    "NUMBER": "a number",
-    "CALL_NAME": "a name followed by (",
-    "MAKE_FUNCTIONALITY": "make-functionality",
-    "MAKE_CONFIG_METHOD": "make-config-method",
-    "STATE": "state",
-    "GOAL": "goal",
-    "SEQUENCE": "sequence",
-    "$END": "end of file",
-}
-
-
-_OTHER_LINE_BREAKS = frozenset("\x0b\x1c\x1d\x1e\x85\u2028\u2029")
-"""What Unicode (and ``str.splitlines``) also counts as line breaks; the
-grammar does not, and refuses them where they would end a comment."""
-
 
 @cache
 def grammar_text() -> str:
@@ -180,91 +152,6 @@ def _parser() -> Lark:
     return Lark(grammar_text(), parser="lalr", propagate_positions=True, maybe_placeholders=True)
 
 
-def _describe_expected(expected: set[str]) -> str:
-    names = sorted({_TERMINAL_NAMES.get(e, e) for e in expected})
-    if not names:
-        return ""
-    if len(names) == 1:
-        return names[0]
-    return ", ".join(names[:-1]) + " or " + names[-1]
-
-
-def _syntax_error(exc: UnexpectedInput, filename: str, text: str) -> CfgplanError:
-    line = getattr(exc, "line", 1) or 1
-    column = getattr(exc, "column", 1) or 1
-    if isinstance(exc, UnexpectedEOF) or (
-        isinstance(exc, UnexpectedToken) and exc.token.type == "$END"
-    ):
-        lines = lines_of(text)
-        while len(lines) > 1 and not lines[-1].strip():
-            lines.pop()  # point at the end of the last line with text
-        line, column = len(lines), len(lines[-1]) + 1
-        message = "unexpected end of file: a list is not closed (missing ')')"
-        span = Span(file=filename, line=line, column=column, end_line=line, end_column=column)
-        advice = "every '(' needs a matching ')'"
-        opened = _unclosed(text)
-        if opened is not None:
-            advice += f"; the '(' at line {opened[0]}, column {opened[1]} is never closed"
-        return error(message, span, advice)
-    if isinstance(exc, UnexpectedToken):
-        tok = exc.token
-        found = f"'{tok}'" if tok.type != "$END" else "end of file"
-        expected = _describe_expected(set(exc.expected))
-        message = f"unexpected {found}; expected {expected}"
-        hint: str | None = None
-        if tok.type == "RPAR" and "RPAR" not in exc.expected:
-            hint = "there is one ')' too many, or an opening '(' is missing"
-        elif tok.type == "LPAR" and "KEYWORD" in exc.expected:
-            hint = "a form holds :keyword value pairs; if the form before ends here, it lacks a ')'"
-        elif tok.type == "SYMBOL" and {"MAKE_FUNCTIONALITY", "STATE"} & set(exc.expected):
-            hint = _form_hint(str(tok))
-        end_col = (tok.end_column or column + 1) if tok.end_line == tok.line else column + 1
-        span = Span(file=filename, line=line, column=column, end_line=line, end_column=end_col)
-        return error(message, span, hint)
-    assert isinstance(exc, UnexpectedCharacters)
-    pos = exc.pos_in_stream
-    char = text[pos] if pos is not None and pos < len(text) else "?"
-    span = Span(file=filename, line=line, column=column, end_line=line, end_column=column + 1)
-    hint = None
-    if char == '"':
-        hint = "cfgplan has no strings: write a symbol, or (quote symbol) inside (eval ...)"
-    elif char in _OTHER_LINE_BREAKS:
-        hint = (
-            "a line break other than \\n, \\r\\n or \\r (vertical tab, NEL, U+2028 ...): "
-            "cfgplan does not read it as one; replace it with a newline"
-        )
-    return error(f"unexpected character {char!r}", span, hint)
-
-
-def _unclosed(text: str) -> tuple[int, int] | None:
-    """Line and column of the outermost '(' that is never closed (comments skipped)."""
-    stack: list[tuple[int, int]] = []
-    line, column, in_comment = 1, 0, False
-    for char in text:
-        column += 1
-        if char == "\n":
-            line, column, in_comment = line + 1, 0, False
-        elif in_comment:
-            continue
-        elif char == ";":
-            in_comment = True
-        elif char == "(":
-            stack.append((line, column))
-        elif char == ")" and stack:
-            stack.pop()
-    return stack[0] if stack else None
-
-
-def _form_hint(word: str) -> str:
-    known = ("make-functionality", "make-config-method", "state", "goal", "sequence")
-    for k in known:
-        if word.lower() == k:
-            return f"symbols are case-sensitive: write {k}"
-    return (
-        "a file holds (make-functionality ...), (make-config-method ...), (state ...) or (goal ...)"
-    )
-
-
 BOM = "\ufeff"
 """The UTF-8 byte-order mark some editors put first; it is skipped."""
 
@@ -310,7 +197,7 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
     try:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
-        raise _syntax_error(exc, filename, text) from None
+        raise syntax_error(exc, filename, text) from None
     except RecursionError:  # pragma: no cover - the grammar and transformer are iterative
         raise error("input too deeply nested") from None
     try:

@@ -84,8 +84,49 @@ def test_unbalanced_parenthesis_one_too_many() -> None:
 def test_missing_close_before_next_form() -> None:
     text = "(make-functionality :name '(camera ?r) :out '((image ?r))\n" + FUNCTIONALITIES
     d = reader_error(text)
-    assert_rendered(d, text, 2, 1, "unexpected '('")
-    assert d.hint is not None and "lacks a ')'" in d.hint
+    assert_rendered(d, text, 2, 1, "the form before it is not closed (missing ')')")
+    assert d.hint == (
+        "every '(' needs a matching ')'; the '(' at line 1, column 1 is not closed before this form"
+    )
+
+
+def test_missing_close_in_the_middle_of_a_file_is_found_where_it_is() -> None:
+    """A ')' missing in the middle of the cross-door domain (Appendix A.1) is
+    reported at the next form, naming the '(' left open: as good a hint as
+    for a ')' missing at the end of the file, not an error at the end."""
+    lines = CROSS_DOOR.read_text("utf-8").split("\n")
+    row = lines.index("  :out '((pos ?rh1 ?r)))")  # the end of measure-robot-pos (line 21)
+    lines[row] = "  :out '((pos ?rh1 ?r))"
+    text = "\n".join(lines)
+    d = reader_error(text, "domain.lisp")
+    assert d.span is not None and (d.span.line, d.span.column) == (row + 2, 1)
+    assert "the form before it is not closed (missing ')')" in d.message
+    opened = next(i for i in range(row, -1, -1) if lines[i].startswith("(make-functionality"))
+    assert d.hint is not None and f"the '(' at line {opened + 1}, column 1" in d.hint
+
+
+def test_missing_close_of_a_fact_is_found_at_the_goal() -> None:
+    text = "(state (robot Pippi) (robot Emil (in Pippi Room1))\n(goal (do-it Pippi))\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 2, 1, "the form before it is not closed (missing ')')")
+    assert d.hint is not None and "the '(' at line 1, column 1" in d.hint
+
+
+def test_missing_close_before_a_keyword_names_the_open_list() -> None:
+    text = "(make-functionality :name '(camera ?r)\n  :out '((image ?r)\n  :cost 2)\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 3, 3, "a list is not closed before ':cost' (missing ')')")
+    assert d.hint == (
+        "every '(' needs a matching ')'; the '(' at line 2, column 9 is not closed before :cost"
+    )
+
+
+def test_a_form_at_column_1_inside_a_closed_one_is_not_blamed() -> None:
+    """A list written at column 1 inside a form that is closed later is no
+    missing ')': a later error is reported as itself."""
+    text = "(state (robot Pippi)\n(robot Emil))\n(goal \"do\")\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 3, 7, "unexpected character '\"'")
 
 
 def test_unknown_keyword() -> None:
