@@ -125,7 +125,7 @@ def worker(time_limit: float, dump: str) -> None:
     from cfgplan.syntax import reader
 
     command = typer.main.get_command(app.app)
-    app.app = lambda: command.main(prog_name="cfgplan")  # type: ignore[assignment]
+    app.app = lambda **kwargs: command.main(**kwargs)  # type: ignore[assignment]
 
     parsed = functools.lru_cache(maxsize=4)(reader.parse)
     reader.parse = parsed

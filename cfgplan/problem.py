@@ -50,6 +50,19 @@ def parse_goal(text: str, line: int = 1) -> Goal:
     """A goal given on the command line: ``(do-cross-door Pippi Door1)`` or
     ``do-cross-door(Pippi, Door1)``; ``line`` is its place among several
     ``--goal`` options (messages quote that line of them)."""
+    if "(" not in text:  # words without parentheses, or nothing
+        start = 7  # the goal is quoted as "(goal TEXT)"
+        span = Span(
+            file=GOAL_SOURCE, line=line, column=start, end_line=line, end_column=start + len(text)
+        )
+        words = " ".join(text.split())
+        if not words:
+            raise error("the goal is empty", span, "write --goal '(METHOD ARGUMENT ...)'")
+        raise error(
+            "a goal is a method instance in parentheses",
+            span,
+            f"add the parentheses: --goal '({words})'",
+        )
     wrapped = "\n" * (line - 1) + f"(goal {text})"
     source = parse(wrapped, GOAL_SOURCE)
     if len(source.goals) != 1:

@@ -11,23 +11,67 @@ import contextlib
 import gc
 import os
 import sys
+from collections.abc import Callable
+from importlib.metadata import version
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, NoReturn, TypeVar
 
 import typer
+from typer.core import TyperCommand
 
 from cfgplan.diagnostics import CfgplanError, Diagnostic, printable, render_all
 from cfgplan.files import read_source, write_file
 from cfgplan.syntax.reader import decode
 
-app = typer.Typer(
+
+class Command(TyperCommand):
+    """A cfgplan command: its usage line names the arguments as ``DOMAIN
+    STATE`` (typer would write ``{DOMAIN} {STATE}``)."""
+
+    def collect_usage_pieces(self, ctx: Any) -> list[str]:
+        pieces: list[str] = super().collect_usage_pieces(ctx)
+        return [p[1:-1] if p.startswith("{") and p.endswith("}") else p for p in pieces]
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+class _Typer(typer.Typer):
+    """Every command is a :class:`Command`."""
+
+    def command(self, *args: Any, **kwargs: Any) -> Callable[[_F], _F]:
+        kwargs.setdefault("cls", Command)
+        return super().command(*args, **kwargs)
+
+
+app = _Typer(
     name="cfgplan",
     help="Plan-based configuration of robot societies (R. Lundh, 2006).",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"cfgplan {version('cfgplan')}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _options(
+    show_version: Annotated[
+        bool,
+        typer.Option(
+            "--version", is_eager=True, callback=_version, help="Print cfgplan's version and exit."
+        ),
+    ] = False,
+) -> None:
+    """Plan-based configuration of robot societies (R. Lundh, 2006): plan, draw,
+    emit and run configurations of robots lending each other functionalities."""
 
 EXIT_INPUT = 1
 EXIT_NONE = 3
@@ -59,6 +103,11 @@ def say(text: str) -> None:
     """A plain line (or lines) on stderr: notes, progress, explanations; what
     came from the input is shown with control characters escaped."""
     print(printable(text, keep="\n"), file=sys.stderr, flush=True)
+
+
+def usage_error(message: str, option: str) -> NoReturn:
+    """Refuse the command line (exit 2), naming the option at fault."""
+    raise typer.BadParameter(message, param_hint=f"'{option}'")
 
 
 def write_output(text: str, output: Path | None, force: bool) -> None:
@@ -114,7 +163,7 @@ def _run() -> int | str | None:
     """Run the command; stdout is flushed here, so that a write error (a full
     disk, ``> /dev/full``) is reported rather than raised at exit."""
     try:
-        app()
+        app(prog_name="cfgplan")  # also as python -m cfgplan
         status: int | str | None = 0
     except SystemExit as exc:
         status = exc.code

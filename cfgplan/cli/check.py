@@ -9,12 +9,12 @@ import typer
 
 from cfgplan.check import check as run_checks
 from cfgplan.cli.app import EXIT_INPUT, app, report
-from cfgplan.cli.plan import DomainArg
+from cfgplan.cli.options import DomainArg
 from cfgplan.diagnostics import printable
 from cfgplan.syntax.reader import read_domain, read_state
 
 
-@app.command()
+@app.command(short_help="Check a domain (and a state with its goal) without planning.")
 def check(
     domain: DomainArg,
     state: Annotated[

@@ -12,7 +12,6 @@ never overwritten without ``--force``.
 
 from __future__ import annotations
 
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -21,57 +20,45 @@ import typer
 from cfgplan.backends.lisp import to_lisp
 from cfgplan.backends.python import run_all, to_python
 from cfgplan.backends.wiring import RobotPart, deploy
-from cfgplan.cli.app import EXIT_NONE, app, say
-from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
+from cfgplan.cli.app import app, say
+from cfgplan.cli.options import (
+    DomainArg,
+    GoalOpt,
+    RankOpt,
+    StateArg,
+    WeightsOpt,
+    choice_of,
+    choose,
+    completing,
+    load_problem,
+)
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import printable
 from cfgplan.files import write_folder
 from cfgplan.notation import call_text
-from cfgplan.planner import plan
-from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem
 
-
-class Lang(StrEnum):
-    lisp = "lisp"
-    python = "python"
-
-
-RankOpt = Annotated[
-    int, typer.Option("--rank", min=1, help="Which configuration, cheapest first (default 1).")
-]
+LANGS = ("lisp", "python")
 DESCRIPTION = "configuration.txt"
 RUN_ALL = "run_all.py"
-
-
-def choose(problem: Problem, rank: int) -> Configuration:
-    """The configuration of ``rank`` (1: the cheapest); exit 3 when there are fewer."""
-    configs, search = plan(problem.task, problem.goal_call, limit=rank)
-    if len(configs) < rank:
-        if not configs:
-            say("\n".join(explain(search.report, call_text(problem.goal_call))))
-        else:
-            say(f"cfgplan: only {len(configs)} configuration(s), no rank {rank}")
-        raise typer.Exit(EXIT_NONE)
-    return configs[rank - 1]
 
 
 def title(problem: Problem, config: Configuration, rank: int) -> str:
     return f"Configuration rank {rank}, cost {fmt(config.cost)}, for {call_text(problem.goal_call)}"
 
 
-def files(problem: Problem, config: Configuration, rank: int, lang: Lang) -> dict[str, str]:
-    """File name -> text, in the order they are written."""
+def files(problem: Problem, config: Configuration, rank: int, lang: str) -> dict[str, str]:
+    """File name -> text, in the order they are written; ``lang`` is ``lisp`` or ``python``."""
     parts = deploy(config, problem.domain)
     head = title(problem, config, rank)
-    suffix = ".lisp" if lang is Lang.lisp else ".py"
+    suffix = ".lisp" if lang == "lisp" else ".py"
     out: dict[str, str] = {}
     for part in parts:
         name = part.stem + suffix
-        out[name] = _lisp(part, head) if lang is Lang.lisp else to_python(part, head)
-    if lang is Lang.python:
+        out[name] = _lisp(part, head) if lang == "lisp" else to_python(part, head)
+    if lang == "python":
         out[RUN_ALL] = run_all(parts, head)
     out[DESCRIPTION] = to_text(config, problem.state.media) + "\n" + file_table(parts, suffix)
     return out
@@ -95,18 +82,31 @@ def _lisp(part: RobotPart, head: str) -> str:
     return to_lisp(part, comments)
 
 
-@app.command()
+@app.command(short_help="Write one executable file per robot for a configuration (5.1-5.3).")
 def emit(
     domain: DomainArg,
     state: StateArg,
     output: Annotated[
-        Path, typer.Option("-o", "--output", help="Directory to write the files to.")
+        Path,
+        typer.Option("-o", "--output", metavar="DIR", help="Directory to write the files to."),
     ],
     goal: GoalOpt = None,
     rank: RankOpt = 1,
     weights: WeightsOpt = None,
-    lang: Annotated[Lang, typer.Option("--lang", help="Target language.")] = Lang.lisp,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite existing files.")] = False,
+    lang: Annotated[
+        str,
+        typer.Option(
+            "--lang",
+            metavar="lisp|python",
+            parser=choice_of(LANGS, "a language"),
+            autocompletion=completing(LANGS),
+            help="Target language: the thesis's LET/LAMBDA form, or Python (default lisp).",
+            show_default=False,
+        ),
+    ] = "lisp",
+    force: Annotated[
+        bool, typer.Option("--force", help="Replace an earlier emission in DIR.")
+    ] = False,
 ) -> None:
     """Write one executable file per robot for a configuration (thesis 5.1-5.3).
 

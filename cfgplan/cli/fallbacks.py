@@ -39,9 +39,10 @@ def _single_points(found: list[Fallback]) -> str:
     return f"single points of failure ({len(names)}): {', '.join(names)}\n"
 
 
-def fallback_table(config: Configuration, found: list[Fallback]) -> str:
-    """The report as a table, then the single points of failure."""
-    table = Table(title=f"Fallbacks of rank 1 (cost {fmt(config.cost)}): if one resource fails")
+def fallback_table(config: Configuration, found: list[Fallback], rank: int = 1) -> str:
+    """The report on ``config`` (of ``rank``) as a table, then the single points of failure."""
+    title = f"Fallbacks of rank {rank} (cost {fmt(config.cost)}): if one resource fails"
+    table = Table(title=title)
     table.add_column("resource", overflow="fold")
     table.add_column("kind")
     table.add_column("withdraws", overflow="fold")
@@ -66,9 +67,9 @@ def fallback_table(config: Configuration, found: list[Fallback]) -> str:
     return buffer.getvalue()
 
 
-def fallback_lisp(config: Configuration, found: list[Fallback]) -> str:
+def fallback_lisp(config: Configuration, found: list[Fallback], rank: int = 1) -> str:
     """The report as ``;;`` comment lines (the ``lisp`` format stays readable by Lisp)."""
-    lines = [f";; fallbacks of rank 1 (cost {fmt(config.cost)}): if one resource fails"]
+    lines = [f";; fallbacks of rank {rank} (cost {fmt(config.cost)}): if one resource fails"]
     for fb in found:
         target = "none" if fb.config is None else f"cost {fmt(fb.config.cost)}"
         lines.append(

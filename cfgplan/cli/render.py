@@ -15,14 +15,21 @@ import typer
 from cfgplan.backends.dot import configuration_dot
 from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.backends.render import render as render_dot
-from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
-from cfgplan.cli.plan import DomainArg, GoalOpt, StateArg, WeightsOpt, load_problem
+from cfgplan.cli.app import EXIT_INPUT, app, report
+from cfgplan.cli.options import (
+    DomainArg,
+    ForceOpt,
+    GoalOpt,
+    RankOpt,
+    StateArg,
+    WeightsOpt,
+    choose,
+    load_problem,
+)
 from cfgplan.configuration.cost import fmt
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.files import check_target, write_file
 from cfgplan.notation import call_text
-from cfgplan.planner import plan as run_plan
-from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem
 
 Kind = Literal["dot", "svg", "png"]
@@ -49,33 +56,26 @@ def write_bytes(data: bytes, output: Path, force: bool) -> None:
 
 def configuration_source(problem: Problem, rank: int) -> str:
     """DOT of the configuration of the given rank; exit 3 when there is none."""
-    configs, search = run_plan(problem.task, problem.goal_call, limit=rank)
-    goal = call_text(problem.goal_call)
-    if not configs:
-        say("\n".join(explain(search.report, goal)))
-        raise typer.Exit(EXIT_NONE)
-    if len(configs) < rank:
-        say(f"cfgplan: {goal} has {len(configs)} configuration(s), none of rank {rank}")
-        raise typer.Exit(EXIT_NONE)
-    config = configs[rank - 1]
-    title = f"{goal}: rank {rank}, cost {fmt(config.cost)}"
+    config = choose(problem, rank)
+    title = f"{call_text(problem.goal_call)}: rank {rank}, cost {fmt(config.cost)}"
     return configuration_dot(config, title=title, first=problem.goal_call[1:])
 
 
-@app.command()
+@app.command(short_help="Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).")
 def render(
     domain: DomainArg,
     state: StateArg,
     output: Annotated[
         Path,
         typer.Option(
-            "-o", "--output", help="File to write; its suffix gives the format: .dot, .svg, .png."
+            "-o",
+            "--output",
+            metavar="FILE",
+            help="File to write; its suffix gives the format: .dot, .svg, .png.",
         ),
     ],
     goal: GoalOpt = None,
-    rank: Annotated[
-        int, typer.Option("--rank", min=1, help="Which configuration, 1 being the cheapest.")
-    ] = 1,
+    rank: RankOpt = 1,
     weights: WeightsOpt = None,
     hierarchy: Annotated[
         bool,
@@ -85,7 +85,7 @@ def render(
             "instead of a configuration.",
         ),
     ] = False,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite the -o file.")] = False,
+    force: ForceOpt = False,
 ) -> None:
     """Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).
 

@@ -13,70 +13,70 @@ how often it ran.
 
 from __future__ import annotations
 
-import math
-from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
-from cfgplan.cli.app import app
-from cfgplan.cli.emit import RankOpt, choose, title
-from cfgplan.cli.plan import DomainArg, GoalsOpt, StateArg, WeightsOpt, load_problem
+from cfgplan.cli.app import app, usage_error
+from cfgplan.cli.emit import title
+from cfgplan.cli.options import (
+    DomainArg,
+    GoalsOpt,
+    RankOpt,
+    StateArg,
+    WeightsOpt,
+    choice_of,
+    choose,
+    completing,
+    load_problem,
+    number_of,
+    parsed,
+)
 from cfgplan.cli.sequence import first_step
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.ir.model import Span
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
-from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.faults import parse_injection
 from cfgplan.runtime.main import open_transport
 from cfgplan.runtime.monitor import HOLD
+from cfgplan.runtime.options import (
+    BUDGET,
+    CONNECT,
+    CYCLES,
+    DURATION,
+    FORCE,
+    IMPL,
+    INJECT,
+    LEASE,
+    LISTEN,
+    RATE,
+    SOCIETY,
+    STALE_PERIODS,
+    TRACE,
+    VERBOSE,
+    ZENOH_CONFIG,
+    Option,
+    how_long,
+)
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
-from cfgplan.runtime.zenoh_transport import (
-    DEFAULT_LEASE,
-    DEFAULT_SOCIETY,
-    ZenohOptions,
-    endpoint_problem,
-)
+from cfgplan.runtime.zenoh_transport import ZenohOptions
+
+TRANSPORTS = ("zenoh", "inprocess")
 
 
-class TransportKind(StrEnum):
-    zenoh = "zenoh"
-    inprocess = "inprocess"
-
-
-def _positive(value: float | None) -> float | None:
-    if value is not None and not (math.isfinite(value) and value > 0):
-        raise typer.BadParameter(f"{value}: must be a number more than 0")
-    return value
-
-
-def _finite(value: float) -> float:
-    if not math.isfinite(value):
-        raise typer.BadParameter(f"{value}: must be a finite number")
-    return value
-
-
-def _endpoints(values: list[str] | None) -> list[str] | None:
-    for text in values or ():
-        problem = endpoint_problem(text)
-        if problem:
-            raise typer.BadParameter(problem)
-    return values
-
-
-def _injections(values: list[str] | None) -> list[str] | None:
-    for text in values or ():
-        try:
-            parse_injection(text)
-        except RunError as exc:
-            raise typer.BadParameter(exc.message + (f" ({exc.hint})" if exc.hint else "")) from None
-    return values
+def option(spec: Option[Any]) -> Any:
+    """The typer option of one of the run options of :mod:`cfgplan.runtime.options`
+    (the emitted programs build theirs from the same)."""
+    parse = None if spec.parse is None else parsed(spec.parse)
+    return typer.Option(
+        spec.flag, metavar=spec.metavar, help=spec.help, parser=parse, show_default=False
+    )
 
 
 def diagnostic(exc: RunError) -> CfgplanError:
@@ -90,122 +90,45 @@ def diagnostic(exc: RunError) -> CfgplanError:
     return CfgplanError([Diagnostic("error", exc.message, span, exc.hint)])
 
 
-@app.command()
+@app.command(short_help="Run a configuration: every robot here, or one on the network (5.2).")
 def run(
     domain: DomainArg,
     state: StateArg,
-    impl: Annotated[
-        str,
-        typer.Option(
-            "--impl",
-            help="Implementations: a module name (pkg.impl) or a .py file declaring them "
-            "with @functionality (cfgplan.runtime).",
-        ),
-    ],
+    impl: Annotated[str, option(IMPL)],
     goal: GoalsOpt = None,
     rank: RankOpt = 1,
     weights: WeightsOpt = None,
     robot: Annotated[
         str | None,
-        typer.Option("--robot", help="Run only this robot's part (default: every robot)."),
+        typer.Option(
+            "--robot", metavar="NAME", help="Run only this robot's part (default: every robot)."
+        ),
     ] = None,
     transport: Annotated[
-        TransportKind | None,
+        str | None,
         typer.Option(
             "--transport",
+            metavar="|".join(TRANSPORTS),
+            parser=choice_of(TRANSPORTS, "a transport"),
+            autocompletion=completing(TRANSPORTS),
             help="zenoh: reach the other robots' programs (the default with --robot); "
             "inprocess: robots of this process only (the default without --robot).",
         ),
     ] = None,
-    society_name: Annotated[
-        str, typer.Option("--society", help="Keeps societies on one network apart.")
-    ] = DEFAULT_SOCIETY,
-    listen: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--listen",
-            metavar="ENDPOINT",
-            callback=_endpoints,
-            help="Listen on ENDPOINT (repeatable).",
-        ),
-    ] = None,
-    connect: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--connect",
-            metavar="ENDPOINT",
-            callback=_endpoints,
-            help="Connect to ENDPOINT (repeatable); with --listen or --connect, multicast "
-            "scouting is off.",
-        ),
-    ] = None,
-    zenoh_config: Annotated[
-        Path | None,
-        typer.Option("--zenoh-config", metavar="FILE", help="A Zenoh configuration file (JSON5)."),
-    ] = None,
-    lease: Annotated[
-        float | None,
-        typer.Option(
-            "--lease",
-            callback=_positive,
-            help="Seconds after which a frozen robot is reported lost "
-            f"(default {DEFAULT_LEASE:g}).",
-        ),
-    ] = None,
-    rate: Annotated[
-        float,
-        typer.Option(
-            "--rate",
-            min=0,
-            callback=_finite,
-            help="Cycles per second for functionalities without :freq (0: every "
-            "functionality in every cycle, no pause).",
-        ),
-    ] = 10.0,
-    cycles: Annotated[
-        int, typer.Option("--cycles", min=0, help="Stop after N cycles (0: no limit).")
-    ] = 0,
-    duration: Annotated[
-        float | None,
-        typer.Option("--duration", callback=_positive, help="Stop after S seconds."),
-    ] = None,
-    stale_periods: Annotated[
-        float,
-        typer.Option(
-            "--stale-periods",
-            callback=_positive,
-            help="An input not refreshed for K periods of its sender is stale.",
-        ),
-    ] = 3.0,
-    budget: Annotated[
-        float,
-        typer.Option(
-            "--budget",
-            min=0,
-            callback=_finite,
-            help="Seconds one call may take before it is reported as blocked (0: no budget).",
-        ),
-    ] = DEFAULT_BUDGET,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write every event to FILE as JSON lines."),
-    ] = None,
-    force: Annotated[
-        bool, typer.Option("--force", help="Overwrite the --trace FILE if it exists.")
-    ] = False,
-    verbose: Annotated[
-        bool, typer.Option("--verbose", help="Print every call, not only what actions received.")
-    ] = False,
-    inject: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--inject",
-            metavar="FAULT",
-            callback=_injections,
-            help="A scripted fault (repeatable): 'fail compass(Emil) at cycle 20', 'at 2.5s', "
-            "'recover compass(Emil) at ...', 'kill Emil at ...', 'retract (compass Emil) at ...'.",
-        ),
-    ] = None,
+    society_name: Annotated[str, option(SOCIETY)] = SOCIETY.default,
+    listen: Annotated[list[str] | None, option(LISTEN)] = None,
+    connect: Annotated[list[str] | None, option(CONNECT)] = None,
+    zenoh_config: Annotated[Path | None, option(ZENOH_CONFIG)] = None,
+    lease: Annotated[float | None, option(LEASE)] = LEASE.default,
+    rate: Annotated[float, option(RATE)] = RATE.default,
+    cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
+    duration: Annotated[float | None, option(DURATION)] = DURATION.default,
+    stale_periods: Annotated[float, option(STALE_PERIODS)] = STALE_PERIODS.default,
+    budget: Annotated[float, option(BUDGET)] = BUDGET.default,
+    trace: Annotated[Path | None, option(TRACE)] = None,
+    force: Annotated[bool, option(FORCE)] = FORCE.default,
+    verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
+    inject: Annotated[list[str] | None, option(INJECT)] = None,
     reconfigure: Annotated[
         bool,
         typer.Option(
@@ -218,36 +141,37 @@ def run(
         float,
         typer.Option(
             "--hold",
-            callback=_positive,
+            metavar="S",
+            parser=number_of(0, above=True),
             help="Seconds a failed resource must work again before it counts as recovered "
-            "(doubled at each further failure).",
+            f"(doubled at each further failure; default {HOLD:g}).",
+            show_default=False,
         ),
     ] = HOLD,
     margin: Annotated[
         float,
         typer.Option(
             "--margin",
-            min=0,
-            callback=_finite,
+            metavar="F",
+            parser=number_of(0),
             help="A running configuration is left for a cheaper one only when the cost falls "
-            "by this share of it (and by 1 at least).",
+            "by this share of it (and by 1 at least; default 0.1).",
+            show_default=False,
         ),
     ] = 0.1,
 ) -> None:
     """Execute a configuration: every robot in this process, or one robot on the network
     (thesis 5.2, 5.3).
 
-    Runs until interrupted (Ctrl-C or SIGTERM), or --cycles or --duration, or
-    until the action's task is accomplished. Watches the run and switches to
+    Runs until interrupted (Ctrl-C or SIGTERM), or for --cycles or --duration,
+    or until the action's task is accomplished. Watches the run and switches to
     another configuration when a resource fails (5.5), unless --no-reconfigure.
     Exit codes: 0 ran, 1 invalid input or a failing implementation, 2 usage, 3 no
     configuration of that rank, or none left at the end of the run.
     """
-    kind = transport or (TransportKind.zenoh if robot is not None else TransportKind.inprocess)
-    if robot is None and kind is TransportKind.zenoh:
-        raise typer.BadParameter(
-            "runs one robot per process: give --robot NAME", param_hint="'--transport zenoh'"
-        )
+    kind = transport or ("zenoh" if robot is not None else "inprocess")
+    if robot is None and kind == "zenoh":
+        usage_error("runs one robot per process: give --robot NAME", "--transport zenoh")
     problem = load_problem(domain, state, goal, weights, sequence=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p) for p in deploy(config, problem.domain)]
@@ -285,7 +209,7 @@ def run(
                 config_file=None if zenoh_config is None else str(zenoh_config),
                 lease=lease,
             )
-            opened = open_transport(robot, kind.value, zenoh)
+            opened = open_transport(robot, kind, zenoh)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
         if options.trace is not None:
@@ -294,7 +218,8 @@ def run(
             running, registry, problem, config, parts, settings, written, whole=robot is None
         )
         names = ", ".join(r.name for r in running.robots)
-        typer.echo(f"{title(problem, config, rank)}: {names}; {_how_long(options)}")
+        lasting = how_long(options.cycles, options.duration)
+        typer.echo(f"{title(problem, config, rank)}: {names}; {lasting}")
         code = execute(
             running, options, source=registry.source, trace=written, hooks=adapting
         )
@@ -306,12 +231,3 @@ def run(
         raise diagnostic(exc) from None
     if code:
         raise typer.Exit(code)
-
-
-def _how_long(options: RunOptions) -> str:
-    limits = []
-    if options.cycles:
-        limits.append(f"{options.cycles} cycle(s)")
-    if options.duration is not None:
-        limits.append(f"{options.duration:g} s")
-    return " or ".join(limits) if limits else "until interrupted"

@@ -21,6 +21,7 @@ from rich.console import Console
 from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, say
+from cfgplan.cli.options import no_rank
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_dict, to_text
 from cfgplan.configuration.model import Configuration
@@ -37,6 +38,7 @@ class SequenceOptions:
     time_limit: float | None
     verbose: bool
     details: bool
+    rank: int | None = None  # only the sequence of this rank
 
 
 def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> str:
@@ -48,16 +50,27 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     if not found:
         _impossible(problem, search)
         raise typer.Exit(EXIT_NONE)
+    first = options.rank or 1
+    if options.rank is not None:
+        if len(found) < options.rank:
+            no_rank(_goals(problem), len(found), options.rank, "sequence")
+        found = found[options.rank - 1 :]
     if format_ == "json":
-        return json.dumps(_document(problem, found, search), indent=2, ensure_ascii=False) + "\n"
+        document = _document(problem, found, search, first)
+        return json.dumps(document, indent=2, ensure_ascii=False) + "\n"
     if format_ == "jsonl":
         return "".join(
             json.dumps(_sequence(s, rank, problem), ensure_ascii=False) + "\n"
-            for rank, s in enumerate(found, 1)
+            for rank, s in enumerate(found, first)
         )
     if format_ == "lisp":
-        return _lisp(problem, found)
-    return _table(problem, found, options.details)
+        return _lisp(problem, found, first)
+    return _table(problem, found, options.details, first)
+
+
+def _goals(problem: Problem) -> str:
+    """``do-cross-door(Pippi, Door1) then do-cross-door(Emil, Door1)``."""
+    return " then ".join(call_text(g) for g in problem.goal_calls)
 
 
 def first_step(problem: Problem, rank: int) -> Configuration:
@@ -65,12 +78,11 @@ def first_step(problem: Problem, rank: int) -> Configuration:
     cheapest): what ``cfgplan run`` starts with; exit 3 when there are fewer."""
     search = SequenceSearch(problem.goal_calls, problem.task)
     found = list(islice(search, rank))
-    if len(found) < rank:
-        if not found:
-            _impossible(problem, search)
-        else:
-            say(f"cfgplan: only {len(found)} sequence(s), no rank {rank}")
+    if not found:
+        _impossible(problem, search)
         raise typer.Exit(EXIT_NONE)
+    if len(found) < rank:
+        no_rank(_goals(problem), len(found), rank, "sequence")
     return found[rank - 1].steps[0].configuration
 
 
@@ -105,11 +117,11 @@ def _sequence(planned: PlannedSequence, rank: int, problem: Problem) -> dict[str
 
 
 def _document(
-    problem: Problem, found: list[PlannedSequence], search: SequenceSearch
+    problem: Problem, found: list[PlannedSequence], search: SequenceSearch, first: int
 ) -> dict[str, Any]:
     return {
         "goals": [call_text(g) for g in problem.goal_calls],
-        "sequences": [_sequence(s, rank, problem) for rank, s in enumerate(found, 1)],
+        "sequences": [_sequence(s, rank, problem) for rank, s in enumerate(found, first)],
         "communication_checked": bool(problem.state.media),
         "stats": {
             "exhausted": search.complete,
@@ -122,10 +134,10 @@ def _number(x: float) -> int | float:
     return int(x) if float(x).is_integer() else x
 
 
-def _lisp(problem: Problem, found: list[PlannedSequence]) -> str:
+def _lisp(problem: Problem, found: list[PlannedSequence], first: int) -> str:
     goals = ", ".join(call_text(g) for g in problem.goal_calls)
     parts = [f";; cfgplan: {len(found)} sequence(s) for {goals}"]
-    for rank, planned in enumerate(found, 1):
+    for rank, planned in enumerate(found, first):
         parts.append(f";; sequence {rank}, total cost {fmt(planned.total)}")
         for i, step in enumerate(planned.steps, 1):
             parts.append(f";; step {i}: {call_text(step.goal)}")
@@ -134,9 +146,8 @@ def _lisp(problem: Problem, found: list[PlannedSequence]) -> str:
     return "\n".join(parts) + "\n"
 
 
-def _table(problem: Problem, found: list[PlannedSequence], details: bool) -> str:
-    goals = " then ".join(call_text(g) for g in problem.goal_calls)
-    table = Table(title=f"Sequences for {goals}")
+def _table(problem: Problem, found: list[PlannedSequence], details: bool, first: int) -> str:
+    table = Table(title=f"Sequences for {_goals(problem)}")
     table.add_column("rank", justify="right")
     table.add_column("total", justify="right")
     table.add_column("step", justify="right")
@@ -146,7 +157,7 @@ def _table(problem: Problem, found: list[PlannedSequence], details: bool) -> str
     table.add_column("then the state changes")
     if details:
         table.add_column("functionality instances")
-    for rank, planned in enumerate(found, 1):
+    for rank, planned in enumerate(found, first):
         for i, step in enumerate(planned.steps, 1):
             config = step.configuration
             row = [

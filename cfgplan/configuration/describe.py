@@ -126,12 +126,14 @@ def to_json(
     media: Sequence[Medium],
     stats: dict[str, Any],
     extra: dict[str, Any] | None = None,
+    first: int = 1,
 ) -> str:
     """The whole answer of ``cfgplan plan --format json``; keys in a fixed
-    order, ``extra`` (e.g. ``"fallbacks"``, ``"explanation"``) last."""
+    order, ``extra`` (e.g. ``"fallbacks"``, ``"explanation"``) last; the
+    configurations ranked from ``first``."""
     doc = {
         "goal": call_text(goal),
-        "configurations": [to_dict(c, i + 1, media) for i, c in enumerate(configs)],
+        "configurations": [to_dict(c, i, media) for i, c in enumerate(configs, first)],
         "communication_checked": bool(media),
         **({"media": [medium_dict(m) for m in media]} if media else {}),
         "stats": stats,

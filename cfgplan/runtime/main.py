@@ -4,11 +4,10 @@ A robot's module runs that robot alone (``robot_main``), by default on the
 network through Zenoh, so that each robot runs its individual configuration
 in its own process, as each ran on its own body in the thesis (5.2.2);
 ``run_all.py`` runs every robot in one process (``society_main``). Both take
-the options of ``cfgplan run``: ``--impl``, ``--rate``, ``--cycles``,
-``--duration``, ``--stale-periods``, ``--budget``, ``--trace FILE``
-(``--force``), ``--verbose``, ``--inject FAULT``; a robot's module also
-``--transport``, ``--society``, ``--listen``, ``--connect``,
-``--zenoh-config`` and ``--lease``.
+the options of ``cfgplan run``, defined once in :mod:`cfgplan.runtime.options`
+(``RUN_OPTIONS``; a robot's module also ``--transport`` and
+``NETWORK_OPTIONS``), and like it run until interrupted, ``--cycles`` or
+``--duration``.
 
 On the network a robot's module follows the coordinator (the robot that owns
 the goal, run by ``cfgplan run --robot``, 5.5): it installs the parts it is
@@ -24,24 +23,28 @@ import argparse
 import os
 import sys
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.executor import DEFAULT_BUDGET, Configure, Robot
+from cfgplan.runtime.executor import Configure, Robot
 from cfgplan.runtime.faults import Injection, parse_injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks, RunOptions, execute
 from cfgplan.runtime.member import Member, Membership
 from cfgplan.runtime.monitor import Monitor
+from cfgplan.runtime.options import (
+    IMPL,
+    NETWORK_OPTIONS,
+    RUN_OPTIONS,
+    UNTIL,
+    Option,
+    choice,
+)
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import Society, assemble
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
-from cfgplan.runtime.zenoh_transport import (
-    DEFAULT_LEASE,
-    DEFAULT_SOCIETY,
-    ZenohOptions,
-    endpoint_problem,
-)
+from cfgplan.runtime.zenoh_transport import ZenohOptions
 
 __all__ = ["KILLED", "crash", "robot_main", "society_main"]
 
@@ -49,130 +52,55 @@ KILLED = 137
 """Exit status of a process a scripted ``kill`` ended (as SIGKILL would)."""
 
 
-def _number(low: float, strict: bool, what: str) -> Callable[[str], float]:
-    def parse(text: str) -> float:
+def _argparse_type(parse: Callable[[str], object]) -> Callable[[str], object]:
+    """An option's parser as argparse calls it: its message, not argparse's."""
+
+    def convert(text: str) -> object:
         try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        if value != value or value == float("inf") or value < low or (strict and value == low):
-            raise argparse.ArgumentTypeError(f"{text!r}: {what}")
-        return value
+            return parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
 
-    return parse
+    return convert
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be 0 or more")
-    return value
+def _add(parser: argparse.ArgumentParser, option: Option[Any], **extra: Any) -> None:
+    """Add one of :mod:`cfgplan.runtime.options` to ``parser``."""
+    kwargs: dict[str, Any] = {"help": option.help.replace("%", "%%"), **extra}
+    if option.metavar is None:
+        kwargs["action"] = "store_true"
+    else:
+        kwargs["metavar"] = option.metavar
+        kwargs["default"] = list(option.default) if option.repeat else option.default
+        if option.repeat:
+            kwargs["action"] = "append"
+        if option.parse is not None:
+            kwargs["type"] = _argparse_type(option.parse)
+    parser.add_argument(option.flag, **kwargs)
 
 
-def _injection(text: str) -> Injection:
-    try:
-        return parse_injection(text)
-    except RunError as exc:
-        raise argparse.ArgumentTypeError(exc.message) from None
+TRANSPORT_HELP = (
+    "zenoh (default): reach the other robots' programs; inprocess: this robot alone."
+)
 
 
-def _endpoint(text: str) -> str:
-    problem = endpoint_problem(text)
-    if problem:
-        raise argparse.ArgumentTypeError(problem)
-    return text
-
-
-def _run_options(parser: argparse.ArgumentParser) -> None:
-    add = parser.add_argument
-    add("--impl", required=True, help="implementations: a module name (pkg.impl) or a .py file")
-    add(
-        "--rate",
-        metavar="HZ",
-        type=_number(0, False, "must be 0 or more"),
-        default=10.0,
-        help="cycles per second for functionalities without :freq (default 10; "
-        "0: every functionality in every cycle, no pause)",
-    )
-    add("--cycles", metavar="N", type=_count, default=0, help="stop after N cycles (0: no limit)")
-    add(
-        "--duration",
-        metavar="S",
-        type=_number(0, True, "must be more than 0"),
-        default=None,
-        help="stop after S seconds (default: until interrupted)",
-    )
-    add(
-        "--stale-periods",
-        metavar="K",
-        type=_number(0, True, "must be more than 0"),
-        default=3.0,
-        help="an input not refreshed for K periods of its sender is stale (default 3)",
-    )
-    add(
-        "--budget",
-        metavar="S",
-        type=_number(0, False, "must be 0 or more"),
-        default=DEFAULT_BUDGET,
-        help=f"seconds one call may take before it is reported as blocked "
-        f"(default {DEFAULT_BUDGET:g}; 0: no budget, calls run on the robot's thread)",
-    )
-    add("--trace", metavar="FILE", help="write every event to FILE as JSON lines")
-    add("--force", action="store_true", help="overwrite the --trace FILE if it exists")
-    add("--verbose", action="store_true", help="print every call, not only what actions received")
-    add(
-        "--inject",
-        action="append",
-        default=[],
-        metavar="FAULT",
-        type=_injection,
-        help="a scripted fault (repeatable): 'fail compass(Emil) at cycle 20', 'at 2.5s', "
-        "'recover compass(Emil) at ...', 'kill Emil at ...'",
-    )
-
-
-def _network_options(parser: argparse.ArgumentParser) -> None:
-    add = parser.add_argument
-    add(
-        "--transport",
-        choices=("zenoh", "inprocess"),
-        default="zenoh",
-        help="zenoh (default): reach the other robots' programs; inprocess: this robot alone",
-    )
-    add(
-        "--society",
-        metavar="NAME",
-        default=DEFAULT_SOCIETY,
-        help=f"keeps societies on one network apart (default {DEFAULT_SOCIETY})",
-    )
-    add(
-        "--listen",
-        action="append",
-        default=[],
-        metavar="ENDPOINT",
-        type=_endpoint,
-        help="listen on ENDPOINT, e.g. tcp/0.0.0.0:7447 (repeatable)",
-    )
-    add(
-        "--connect",
-        action="append",
-        default=[],
-        metavar="ENDPOINT",
-        type=_endpoint,
-        help="connect to ENDPOINT, e.g. tcp/192.168.1.7:7447 (repeatable); with --listen or "
-        "--connect, multicast scouting is off",
-    )
-    add("--zenoh-config", metavar="FILE", help="a Zenoh configuration file (JSON5) for the rest")
-    add(
-        "--lease",
-        metavar="S",
-        type=_number(0, True, "must be more than 0"),
-        default=None,
-        help=f"seconds after which a frozen robot is reported lost (default {DEFAULT_LEASE:g})",
-    )
+def parser_of(description: str, network: bool) -> argparse.ArgumentParser:
+    """The command line of an emitted program: every run's options and, for a
+    robot's module (``network``), ``--transport`` and the network's."""
+    parser = argparse.ArgumentParser(description=f"{description} {UNTIL}")
+    for option in RUN_OPTIONS:
+        _add(parser, option, **({"required": True} if option is IMPL else {}))
+    if network:
+        parser.add_argument(
+            "--transport",
+            metavar="zenoh|inprocess",
+            default="zenoh",
+            type=_argparse_type(choice(("zenoh", "inprocess"), "a transport")),
+            help=TRANSPORT_HELP,
+        )
+        for option in NETWORK_OPTIONS:
+            _add(parser, option)
+    return parser
 
 
 def options_of(args: argparse.Namespace) -> RunOptions:
@@ -190,12 +118,8 @@ def options_of(args: argparse.Namespace) -> RunOptions:
 
 def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = None) -> int:
     """``python emil.py``: run one robot, its global channels over Zenoh."""
-    parser = argparse.ArgumentParser(
-        description=f"Run {name}'s part of a configuration (cfgplan, thesis 5.2, 5.3)."
-    )
-    _run_options(parser)
-    _network_options(parser)
-    args = parser.parse_args(argv)
+    description = f"Run {name}'s part of a configuration (cfgplan, thesis 5.2, 5.3)."
+    args = parser_of(description, network=True).parse_args(argv)
     transport: Transport | None = None
     trace: TraceFile | None = None
     try:
@@ -206,7 +130,8 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
         running = Society([robot], shared)
         if args.trace is not None:
             trace = open_trace(args.trace, args.force)
-        hooks = _follow(running, args.inject, trace)
+        injections = [parse_injection(text) for text in args.inject]
+        hooks = _follow(running, injections, trace)
         return execute(running, options_of(args), source=registry.source, trace=trace, hooks=hooks)
     except (RunError, KeyboardInterrupt) as exc:
         if transport is not None:
@@ -261,15 +186,12 @@ def society_main(
 ) -> int:
     """``python run_all.py``: run every robot in this process."""
     names = ", ".join(name for name, _ in programs)
-    parser = argparse.ArgumentParser(
-        description=f"Run {names} in one process (cfgplan, thesis 5.3)."
-    )
-    _run_options(parser)
-    args = parser.parse_args(argv)
+    description = f"Run {names} in one process (cfgplan, thesis 5.3)."
+    args = parser_of(description, network=False).parse_args(argv)
     try:
         registry = Registry.load(args.impl)
         running = assemble(programs, registry)
-        injector = Injector(args.inject, running)
+        injector = Injector([parse_injection(text) for text in args.inject], running)
         hooks = Scripted(injector) if injector.pending else None
         return execute(running, options_of(args), source=registry.source, hooks=hooks)
     except (RunError, KeyboardInterrupt) as exc:

@@ -1,0 +1,192 @@
+"""The arguments and options the commands share, and what they read.
+
+``DOMAIN`` and ``STATE`` are read, checked and compiled by :func:`load_problem`
+(thesis 4.4); ``--goal`` (one, or several for a sequence), ``--weights``
+(the cost of 4.5) and ``--rank`` (which configuration, :func:`choose`) mean
+the same in every command. Values are parsed here, with cfgplan's own
+wording for a bad one (``-k: 'abc' is not a whole number``), never the
+wording of the libraries underneath.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated, Any, NoReturn
+
+import typer
+
+from cfgplan.cli.app import EXIT_NONE, remember_source, report, say
+from cfgplan.configuration.cost import Weights, parse_weights
+from cfgplan.configuration.model import Configuration
+from cfgplan.diagnostics import CfgplanError, Diagnostic
+from cfgplan.notation import call_text
+from cfgplan.planner import plan
+from cfgplan.planner.explain import explain
+from cfgplan.planner.report import Report
+from cfgplan.problem import GOAL_SOURCE, Problem, load
+from cfgplan.runtime.options import choice, number, whole
+
+__all__ = [
+    "DomainArg",
+    "ForceOpt",
+    "GoalOpt",
+    "GoalsOpt",
+    "RankOpt",
+    "StateArg",
+    "WeightsOpt",
+    "choice_of",
+    "choose",
+    "completing",
+    "count_of",
+    "load_problem",
+    "no_rank",
+    "number_of",
+    "parsed",
+]
+
+
+def parsed(parse: Callable[[str], Any]) -> Callable[[str], Any]:
+    """``parse`` as a typer parser: its ``ValueError`` (or a
+    :class:`CfgplanError`) becomes a usage error with its own message."""
+
+    def convert(text: str) -> Any:
+        try:
+            return parse(text)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        except CfgplanError as exc:
+            raise typer.BadParameter(str(exc)) from None
+
+    return convert
+
+
+def count_of(low: int) -> Callable[[str], int]:
+    """Whole numbers of at least ``low``, for typer."""
+    return parsed(whole(low))
+
+
+def number_of(low: float, *, above: bool = False) -> Callable[[str], float]:
+    """Finite numbers of at least (``above``: more than) ``low``, for typer."""
+    return parsed(number(low, above=above))
+
+
+def choice_of(values: tuple[str, ...], what: str) -> Callable[[str], str]:
+    """One of ``values``, for typer: ``'yaml' is not a format: choose table, ...``."""
+    return parsed(choice(values, what))
+
+
+def completing(values: tuple[str, ...]) -> Callable[[str], list[str]]:
+    """Shell completion of an option that takes one of ``values``."""
+    return lambda incomplete: [v for v in values if v.startswith(incomplete)]
+
+
+DomainArg = Annotated[
+    Path,
+    typer.Argument(
+        metavar="DOMAIN", help="Domain file: make-functionality and make-config-method forms."
+    ),
+]
+StateArg = Annotated[
+    Path,
+    typer.Argument(metavar="STATE", help="State file: facts, media and an optional (goal ...)."),
+]
+GoalOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--goal",
+        metavar="GOAL",
+        help="Goal method instance, e.g. '(do-cross-door Pippi Door1)'; "
+        "default: the state file's (goal ...).",
+    ),
+]
+GoalsOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--goal",
+        metavar="GOAL",
+        help="Goal method instance, e.g. '(do-cross-door Pippi Door1)'; give it several "
+        "times for a sequence of configurations, one goal after the other. "
+        "Default: the state file's (goal ...) or (sequence ...).",
+    ),
+]
+WeightsOpt = Annotated[
+    Weights | None,
+    typer.Option(
+        "--weights",
+        metavar="NAME=W,...",
+        parser=parsed(parse_weights),
+        help="Cost weights, e.g. robot=10,global=3,local=1,functionality=1,device=10 "
+        "(the thesis's, and the default). A functionality's :cost replaces its weight.",
+    ),
+]
+RankOpt = Annotated[
+    int,
+    typer.Option(
+        "--rank",
+        metavar="N",
+        parser=count_of(1),
+        help="Which configuration, 1 being the cheapest (default 1).",
+        show_default=False,
+    ),
+]
+ForceOpt = Annotated[bool, typer.Option("--force", help="Overwrite the -o file.")]
+
+
+def load_problem(
+    domain: Path,
+    state: Path,
+    goal: str | list[str] | None,
+    weights: Weights | None,
+    sequence: bool = False,
+) -> Problem:
+    """Read, check and compile; warnings go to stderr. Unless ``sequence``,
+    the command plans one configuration and refuses a sequence of goals."""
+    goals = [goal] if isinstance(goal, str) else list(goal or [])
+    if goals:
+        remember_source(GOAL_SOURCE, "\n".join(f"(goal {g})" for g in goals))
+    problem = load(domain, state, goals, weights)
+    report(problem.warnings)
+    if len(problem.goals) > 1 and not sequence:
+        raise CfgplanError(
+            [
+                Diagnostic(
+                    "error",
+                    f"{state} holds a sequence of {len(problem.goals)} goals; "
+                    "this command plans one configuration",
+                    hint="choose one with --goal; cfgplan plan plans the whole sequence",
+                )
+            ]
+        )
+    return problem
+
+
+def no_rank(what: str, found: int, rank: int, kind: str = "configuration") -> NoReturn:
+    """``--rank`` past the last one: the same words in every command; exit 3."""
+    report(
+        [
+            Diagnostic(
+                "error",
+                f"{what} has {found} {kind}{'' if found == 1 else 's'}, none of rank {rank}",
+                hint=f"--rank 1 to {found}",
+            )
+        ]
+    )
+    raise typer.Exit(EXIT_NONE)
+
+
+def nothing(report_: Report, goal: str) -> NoReturn:
+    """No admissible configuration: why, on stderr; exit 3."""
+    say("\n".join(explain(report_, goal)))
+    raise typer.Exit(EXIT_NONE)
+
+
+def choose(problem: Problem, rank: int) -> Configuration:
+    """The configuration of ``rank`` (1: the cheapest); exit 3 when there are fewer."""
+    configs, search = plan(problem.task, problem.goal_call, limit=rank)
+    goal = call_text(problem.goal_call)
+    if not configs:
+        nothing(search.report, goal)
+    if len(configs) < rank:
+        no_rank(goal, len(configs), rank)
+    return configs[rank - 1]

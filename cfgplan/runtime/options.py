@@ -1,0 +1,254 @@
+"""The options of a run, defined once for ``cfgplan run`` and the emitted programs.
+
+A robot's emitted module (``python emil.py``), ``run_all.py`` and ``cfgplan
+run`` take the same options with the same meaning, defaults and wording
+(5.2, 5.3): each :class:`Option` here gives an option's flag, metavariable,
+default, help and parser. The emitted programs build their ``argparse``
+parser from them (:mod:`cfgplan.runtime.main`), ``cfgplan run`` its typer
+options (:mod:`cfgplan.cli.run`). A parser raises ``ValueError`` with the
+message a user reads (``'two' is not a whole number``).
+
+Light, like the rest of :mod:`cfgplan.runtime`: no typer, no pydantic.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
+
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.executor import DEFAULT_BUDGET
+from cfgplan.runtime.faults import SYNTAX, parse_injection
+from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, DEFAULT_SOCIETY, endpoint_problem
+
+__all__ = [
+    "BUDGET",
+    "CONNECT",
+    "CYCLES",
+    "DURATION",
+    "FORCE",
+    "IMPL",
+    "INJECT",
+    "LEASE",
+    "LISTEN",
+    "NETWORK_OPTIONS",
+    "RATE",
+    "RUN_OPTIONS",
+    "SOCIETY",
+    "STALE_PERIODS",
+    "TRACE",
+    "UNTIL",
+    "VERBOSE",
+    "ZENOH_CONFIG",
+    "Option",
+    "choice",
+    "endpoint",
+    "how_long",
+    "injection",
+    "number",
+    "whole",
+]
+
+T = TypeVar("T")
+
+UNTIL = (
+    "Runs until interrupted (Ctrl-C or SIGTERM), or for --cycles or --duration, "
+    "or until the action's task is accomplished."
+)
+"""How long a run lasts: the same for ``cfgplan run`` and the emitted programs."""
+
+
+def whole(low: int) -> Callable[[str], int]:
+    """A parser of whole numbers of at least ``low``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise ValueError(f"{text!r} is not a whole number") from None
+        if value < low:
+            raise ValueError(f"{text}: must be {low} or more")
+        return value
+
+    return parse
+
+
+def number(low: float, *, above: bool = False) -> Callable[[str], float]:
+    """A parser of finite numbers of at least ``low`` (``above``: more than ``low``)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise ValueError(f"{text!r} is not a number") from None
+        if not math.isfinite(value):
+            raise ValueError(f"{text}: must be a finite number")
+        if value < low or (above and value == low):
+            raise ValueError(f"{text}: must be {'more than' if above else 'at least'} {low:g}")
+        return value
+
+    return parse
+
+
+def choice(values: Sequence[str], what: str) -> Callable[[str], str]:
+    """A parser of one of ``values``: ``'yaml' is not a format: choose table, lisp or json``."""
+
+    def parse(text: str) -> str:
+        if text in values:
+            return text
+        shown = ", ".join(values[:-1]) + " or " + values[-1] if len(values) > 1 else values[0]
+        raise ValueError(f"{text!r} is not {what}: choose {shown}")
+
+    return parse
+
+
+def endpoint(text: str) -> str:
+    """A Zenoh endpoint such as ``tcp/127.0.0.1:7447`` (its form only)."""
+    problem = endpoint_problem(text)
+    if problem:
+        raise ValueError(problem)
+    return text
+
+
+def injection(text: str) -> str:
+    """A scripted fault (:func:`cfgplan.runtime.faults.parse_injection`), kept as written."""
+    try:
+        parse_injection(text)
+    except RunError as exc:
+        raise ValueError(exc.message + (f" ({exc.hint})" if exc.hint else "")) from None
+    return text
+
+
+@dataclass(frozen=True)
+class Option(Generic[T]):
+    """One option: ``metavar`` ``None`` for a flag; ``repeat`` for one given
+    several times (its default is then empty)."""
+
+    flag: str
+    metavar: str | None
+    default: T
+    help: str
+    parse: Callable[[str], object] | None = None
+    repeat: bool = False
+
+    @property
+    def dest(self) -> str:
+        """The Python name of its value: ``--stale-periods`` -> ``stale_periods``."""
+        return self.flag.lstrip("-").replace("-", "_")
+
+
+IMPL: Option[str | None] = Option(
+    "--impl",
+    "IMPL",
+    None,
+    "The implementations: a module name (pkg.impl) or a .py file declaring them "
+    "with @functionality (cfgplan.runtime).",
+)
+RATE = Option(
+    "--rate",
+    "HZ",
+    10.0,
+    "Cycles per second of functionalities without :freq (default 10; 0: every "
+    "functionality in every cycle, no pause).",
+    number(0),
+)
+CYCLES = Option("--cycles", "N", 0, "Stop after N cycles (default 0: no limit).", whole(0))
+DURATION: Option[float | None] = Option(
+    "--duration", "S", None, "Stop after S seconds (default: no limit).", number(0, above=True)
+)
+STALE_PERIODS = Option(
+    "--stale-periods",
+    "K",
+    3.0,
+    "An input not refreshed for K periods of its sender is stale (default 3).",
+    number(0, above=True),
+)
+BUDGET = Option(
+    "--budget",
+    "S",
+    DEFAULT_BUDGET,
+    f"Seconds one call may take before it is reported as blocked (default "
+    f"{DEFAULT_BUDGET:g}; 0: no budget, calls run on the robot's thread).",
+    number(0),
+)
+TRACE: Option[str | None] = Option(
+    "--trace", "FILE", None, "Write every event to FILE as JSON lines."
+)
+FORCE = Option("--force", None, False, "Overwrite the --trace FILE if it exists.")
+VERBOSE = Option("--verbose", None, False, "Print every call, not only what actions received.")
+INJECT: Option[list[str]] = Option(
+    "--inject",
+    "FAULT",
+    [],
+    f"A scripted fault (repeatable): {SYNTAX}; e.g. 'fail compass(Emil) at cycle 20'. "
+    "A robot's own program applies those aimed at it.",
+    injection,
+    repeat=True,
+)
+
+SOCIETY = Option(
+    "--society",
+    "NAME",
+    DEFAULT_SOCIETY,
+    f"Keeps societies on one network apart (default {DEFAULT_SOCIETY}).",
+)
+LISTEN: Option[list[str]] = Option(
+    "--listen",
+    "ENDPOINT",
+    [],
+    "Listen on ENDPOINT, e.g. tcp/0.0.0.0:7447 (repeatable).",
+    endpoint,
+    repeat=True,
+)
+CONNECT: Option[list[str]] = Option(
+    "--connect",
+    "ENDPOINT",
+    [],
+    "Connect to ENDPOINT, e.g. tcp/192.168.1.7:7447 (repeatable); with --listen or "
+    "--connect, multicast scouting is off.",
+    endpoint,
+    repeat=True,
+)
+ZENOH_CONFIG: Option[str | None] = Option(
+    "--zenoh-config",
+    "FILE",
+    None,
+    "A Zenoh configuration file (JSON5) for anything else; the options above go on top.",
+)
+LEASE: Option[float | None] = Option(
+    "--lease",
+    "S",
+    None,
+    f"Seconds after which a frozen robot is reported lost (default {DEFAULT_LEASE:g}).",
+    number(0, above=True),
+)
+
+RUN_OPTIONS: tuple[Option[Any], ...] = (
+    IMPL,
+    RATE,
+    CYCLES,
+    DURATION,
+    STALE_PERIODS,
+    BUDGET,
+    TRACE,
+    FORCE,
+    VERBOSE,
+    INJECT,
+)
+"""Every run's options: ``cfgplan run``, a robot's module, ``run_all.py``."""
+
+NETWORK_OPTIONS: tuple[Option[Any], ...] = (SOCIETY, LISTEN, CONNECT, ZENOH_CONFIG, LEASE)
+"""A robot on the network: ``cfgplan run --robot`` and a robot's module."""
+
+
+def how_long(cycles: int, duration: float | None) -> str:
+    """``3 cycle(s)``, ``2.5 s``, or ``until interrupted (Ctrl-C)``: what a run
+    says when it starts."""
+    limits = []
+    if cycles:
+        limits.append(f"{cycles} cycle(s)")
+    if duration is not None:
+        limits.append(f"{duration:g} s")
+    return " or ".join(limits) if limits else "until interrupted (Ctrl-C)"

@@ -1,0 +1,161 @@
+"""The ``cfgplan`` command line as a whole (issue 10): --version, -h, shell
+completion, whole one-line summaries, usage lines, cfgplan's own wording for
+bad values (never typer's, click's or pydantic's), one wording for a --rank
+past the last configuration, a hint for a --goal without parentheses."""
+
+from __future__ import annotations
+
+import json
+import re
+from importlib.metadata import version
+
+import pytest
+import typer
+
+from cfgplan.cli import commands
+from cfgplan.cli.app import app
+from tests.cli.conftest import Run
+
+DOCKING = ("domains/docking/domain.lisp", "domains/docking/state-kitchen.lisp")
+CROSS = ("domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp")
+COMMANDS = sorted(commands.__all__)
+
+# What typer, click and pydantic say, and cfgplan must not.
+LIBRARY_WORDS = (
+    "Value error",
+    "Input should be",
+    "x>=",
+    "<int",
+    "<float",
+    "<str>",
+    "list[str]",
+    "{DOMAIN}",
+    "{STATE}",
+)
+
+
+def _group() -> typer.core.TyperGroup:
+    group = typer.main.get_command(app)
+    assert isinstance(group, typer.core.TyperGroup)
+    return group
+
+
+def test_version(cfgplan: Run) -> None:
+    out = cfgplan("--version")
+    assert out.returncode == 0
+    assert out.stdout == f"cfgplan {version('cfgplan')}\n"
+
+
+@pytest.mark.parametrize("command", ["", *COMMANDS])
+def test_h_is_help_everywhere(cfgplan: Run, command: str) -> None:
+    words = [command] if command else []
+    short, long = cfgplan(*words, "-h"), cfgplan(*words, "--help")
+    assert short.returncode == long.returncode == 0
+    assert short.stdout == long.stdout and "Usage: cfgplan" in short.stdout
+
+
+def test_shell_completion_as_typer_offers_it(cfgplan: Run) -> None:
+    def complete(words: str) -> list[str]:
+        env = {
+            "_CFGPLAN_COMPLETE": "complete_bash",
+            "COMP_WORDS": words,
+            "COMP_CWORD": str(len(words.split()) - 1),
+        }
+        out = cfgplan(env=env)
+        assert out.returncode == 0, out.stderr
+        return out.stdout.split()
+
+    assert complete("cfgplan pl") == ["plan"]
+    assert complete("cfgplan plan d s --format j") == ["json", "jsonl"]
+    assert complete("cfgplan emit d s --lang p") == ["python"]
+    assert "--rank" in complete("cfgplan render d s --ra")
+    script = cfgplan("--show-completion", "bash")
+    assert script.returncode == 0 and "_CFGPLAN_COMPLETE" in script.stdout
+
+
+def test_help_shows_whole_one_line_summaries(cfgplan: Run) -> None:
+    """On an 80-column terminal each command's summary is whole, on its line."""
+    out = cfgplan("--help", env={"COLUMNS": "80"})
+    listing = out.stdout.split("Commands:\n", 1)[1].splitlines()
+    shown = {line.split()[0]: line.split(None, 1)[1] for line in listing if line.strip()}
+    group = _group()
+    for name in COMMANDS:
+        summary = group.commands[name].short_help
+        assert summary and summary.endswith(".")
+        assert shown[name] == summary, name
+    assert len(shown) == len(group.commands)  # no summary ran onto a second line
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_usage_and_help_speak_cfgplan(cfgplan: Run, command: str) -> None:
+    out = cfgplan(command, "-h", env={"COLUMNS": "200"})
+    usage = out.stdout.splitlines()[0]
+    assert re.fullmatch(rf"Usage: cfgplan {command} \[OPTIONS\] DOMAIN (STATE|\[STATE\])", usage)
+    assert not [w for w in LIBRARY_WORDS if w in out.stdout]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["plan", *DOCKING, "--format", "yaml"], "'yaml' is not a format: choose table, lisp"),
+        (["plan", *DOCKING, "-k", "abc"], "'abc' is not a whole number"),
+        (["plan", *DOCKING, "-k", "0"], "0: must be 1 or more"),
+        (["plan", *DOCKING, "--time-limit", "-1"], "-1: must be at least 0"),
+        (["plan", *DOCKING, "--time-limit", "soon"], "'soon' is not a number"),
+        (["plan", *DOCKING, "--weights", "robot=x"], "bad weight 'robot=x'"),
+        (["plan", *DOCKING, "--rank", "2", "-k", "3"], "-k and --all list several"),
+        (["render", *DOCKING, "-o", "x.dot", "--rank", "first"], "'first' is not a whole"),
+        (["emit", *DOCKING, "-o", "out", "--lang", "c"], "'c' is not a language: choose lisp"),
+        (["run", *DOCKING, "--impl", "x", "--rate", "nan"], "nan: must be a finite number"),
+        (["run", *DOCKING, "--impl", "x", "--transport", "q"], "'q' is not a transport"),
+        (["run", *DOCKING, "--impl", "x", "--cycles", "-1"], "-1: must be 0 or more"),
+        (["run", *DOCKING, "--impl", "x", "--hold", "0"], "0: must be more than 0"),
+    ],
+)
+def test_bad_values_get_cfgplan_wording(cfgplan: Run, args: list[str], message: str) -> None:
+    out = cfgplan(*args)
+    assert out.returncode == 2, out.stderr
+    assert message in out.stderr
+    assert not [w for w in LIBRARY_WORDS if w in out.stderr], out.stderr
+    assert "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["plan", *DOCKING],
+        ["render", *DOCKING, "-o", "never.dot"],
+        ["emit", *DOCKING, "-o", "never"],
+        ["run", *DOCKING, "--impl", "examples/cross-door/impl.py"],
+    ],
+    ids=["plan", "render", "emit", "run"],
+)
+def test_rank_past_the_last_has_one_wording(cfgplan: Run, args: list[str]) -> None:
+    out = cfgplan(*args, "--rank", "99")
+    assert out.returncode == 3
+    assert out.stderr == (
+        "cfgplan: error: do-dock(Vacu, Charger1) has 3 configurations, none of rank 99\n"
+        "  hint: --rank 1 to 3\n"
+    )
+    assert out.stdout == ""
+
+
+def test_plan_rank_shows_that_configuration_alone(cfgplan: Run) -> None:
+    """6.2.2: the configuration of rank 2 costs 47."""
+    out = cfgplan("plan", *CROSS, "--rank", "2", "--format", "json")
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert [(c["rank"], c["cost"]) for c in doc["configurations"]] == [(2, 47)]
+    table = cfgplan("plan", *CROSS, "--rank", "2").stdout
+    assert re.search(r"│\s+2 │\s+47 │", table) and "│    1 │" not in table
+
+
+def test_a_goal_without_parentheses_gets_a_hint(cfgplan: Run) -> None:
+    out = cfgplan("plan", *DOCKING, "--goal", "do-dock Vacu Charger1")
+    assert out.returncode == 1
+    assert out.stderr.splitlines() == [
+        "--goal:1:7: error: a goal is a method instance in parentheses",
+        "    1 | (goal do-dock Vacu Charger1)",
+        "      |       ^^^^^^^^^^^^^^^^^^^^^",
+        "  hint: add the parentheses: --goal '(do-dock Vacu Charger1)'",
+    ]
