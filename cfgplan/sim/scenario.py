@@ -1,0 +1,431 @@
+"""Scenario files: a domain, a state, goals, and the world the robots act in.
+
+A scenario is a TOML file (README, "Simulation"): which domain and state to
+plan with (paths relative to the scenario file), the goals (else the state's
+``(goal ...)`` or ``(sequence ...)``), the implementations (a module name or a
+``.py`` file), the world (rooms and doors as in 6.2.1, magnetic
+disturbances, a bar, blocks and walls), each robot's start pose, sensors and
+task parameters, scripted faults (the runtime's ``--inject`` syntax) and
+world changes, how long to run and the seed. Angles are written in degrees.
+
+Everything is checked before anything runs: a misspelt key, a value of the
+wrong kind, a robot of the state with no body, a door the world lacks, a
+robot standing in a wall, a fault that does not parse — each is an error at
+the place in the file (``file:line:col`` and a caret), never a traceback.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from cfgplan.diagnostics import CfgplanError, Diagnostic, error
+from cfgplan.sim.locate import locate, span_at
+
+__all__ = [
+    "SENSORS",
+    "Bar",
+    "Block",
+    "Door",
+    "Event",
+    "Loaded",
+    "Magnetic",
+    "RobotSpec",
+    "Scenario",
+    "WallObject",
+    "World",
+    "read_scenario",
+]
+
+SensorName = Literal["camera", "compass", "odometry", "laser", "sonar"]
+SENSORS: tuple[SensorName, ...] = ("camera", "compass", "odometry", "laser", "sonar")
+
+Point = tuple[float, float]
+Box = tuple[float, float, float, float]
+
+
+class Strict(BaseModel):
+    """Every key is known (a misspelt one is an error), values are final."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+
+
+class Door(Strict):
+    """A door in a wall between two rooms: its centre, width and direction of passage."""
+
+    at: Point
+    width: float = Field(gt=0)
+    passage: float  # degrees
+
+
+class Magnetic(Strict):
+    """A magnetic disturbance: compasses near ``at`` read ``deflection`` degrees
+    off, fading with the distance (a Gaussian of deviation ``radius``)."""
+
+    at: Point
+    radius: float = Field(gt=0)
+    deflection: float
+    start: float = Field(default=0.0, ge=0, alias="from")
+    until: float | None = None
+
+
+class Bar(Strict):
+    """A bar resting on two robots (6.3.1): dropped when their distance leaves
+    ``length`` ± ``tolerance``."""
+
+    robots: tuple[str, str]
+    length: float = Field(gt=0)
+    tolerance: float = Field(gt=0)
+
+
+class Block(Strict):
+    """A wall block (6.4): its centre, the heading of its long faces' normal,
+    its size (length, thickness), the robots pushing its back face, and the
+    wall it must be aligned with (within ``tolerance``: metres, degrees)."""
+
+    at: Point
+    heading: float
+    size: tuple[float, float]
+    pushers: dict[Literal["left", "right"], str] = Field(default_factory=dict)
+    contact: float = Field(default=0.45, gt=0)
+    target: str | None = None
+    tolerance: tuple[float, float] = (0.05, 3.0)
+
+
+class WallObject(Strict):
+    """A built wall (W1 of 6.4): a fixed block row whose free end, ``left`` or
+    ``right`` seen along ``heading``, is where the next block goes, ``gap`` away."""
+
+    at: Point
+    heading: float
+    size: tuple[float, float]
+    free_end: Literal["left", "right"] = "left"
+    gap: float = Field(default=0.02, ge=0)
+
+
+class World(Strict):
+    rooms: dict[str, Box]
+    doors: dict[str, Door] = Field(default_factory=dict)
+    obstacles: list[Box] = Field(default_factory=list)
+    magnetic: list[Magnetic] = Field(default_factory=list)
+    bar: Bar | None = None
+    blocks: dict[str, Block] = Field(default_factory=dict)
+    walls: dict[str, WallObject] = Field(default_factory=dict)
+    marks: dict[str, Point] = Field(default_factory=dict)
+
+
+class CameraSpec(Strict):
+    """A fixed camera (6.2.1): bearings within ``fov``, range and a door's
+    orientation only for objects beyond ``min_range``."""
+
+    fov: float = Field(default=90.0, gt=0, le=360)
+    min_range: float = Field(default=2.0, ge=0)
+    max_range: float = Field(default=7.0, gt=0)
+    bearing_noise: float = Field(default=0.5, ge=0)  # degrees
+    range_noise: float = Field(default=0.01, ge=0)  # share of the range
+    orient_noise: float = Field(default=1.5, ge=0)  # degrees
+
+
+class CompassSpec(Strict):
+    noise: float = Field(default=1.0, ge=0)  # degrees
+
+
+class LaserSpec(Strict):
+    fov: float = Field(default=180.0, gt=0, le=360)
+    beams: int = Field(default=361, ge=2, le=4000)
+    max_range: float = Field(default=8.0, gt=0)
+    noise: float = Field(default=0.005, ge=0)  # metres
+
+
+class SonarSpec(Strict):
+    beams: int = Field(default=16, ge=2, le=360)
+    max_range: float = Field(default=3.0, gt=0)
+    noise: float = Field(default=0.005, ge=0)  # metres, plus 1 % of the range
+
+
+class OdometrySpec(Strict):
+    scale: float = Field(default=0.01, ge=0)  # share: the wheels' calibration error
+    drift: float = Field(default=1.0, ge=0)  # degrees of heading error per metre
+    noise: float = Field(default=0.005, ge=0)  # metres per metre travelled
+
+
+class Sensors(Strict):
+    camera: CameraSpec = CameraSpec()
+    compass: CompassSpec = CompassSpec()
+    laser: LaserSpec = LaserSpec()
+    sonar: SonarSpec = SonarSpec()
+    odometry: OdometrySpec = OdometrySpec()
+
+
+class Motion(Strict):
+    """Unicycle robots (40 cm discs, 6.1): limits, actuation noise, and the
+    watchdog that stops a robot whose commands stop coming. A robot's body
+    stands below the lasers' plane; a laser sees its post (the stand that
+    holds the bar, 6.3.1) of radius ``post`` at its centre."""
+
+    radius: float = Field(default=0.2, gt=0)
+    post: float = Field(default=0.05, gt=0)  # the radius of the post a laser sees
+    max_speed: float = Field(default=0.4, gt=0)
+    max_turn: float = Field(default=90.0, gt=0)  # degrees per second
+    noise: float = Field(default=0.02, ge=0)  # share of the speed
+    watchdog: float = Field(default=0.3, gt=0)  # seconds
+
+
+class RobotSpec(Strict):
+    at: tuple[float, float, float] | None = None  # x, y, heading (degrees); pushers: none
+    has: list[SensorName] | None = None  # default: every sensor
+    camera: CameraSpec | None = None
+    compass: CompassSpec | None = None
+    laser: LaserSpec | None = None
+    sonar: SonarSpec | None = None
+    odometry: OdometrySpec | None = None
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
+class Event(Strict):
+    """A world change at ``at`` seconds: a sensor breaks or is repaired
+    (``"laser(Emil)"``), or a magnetic disturbance appears."""
+
+    at: float = Field(ge=0)
+    breaks: str | None = Field(default=None, alias="break")
+    repair: str | None = None
+    magnetic: Magnetic | None = None
+
+
+class Expect(Strict):
+    rooms: dict[str, str] = Field(default_factory=dict)
+
+
+class Scenario(Strict):
+    name: str
+    title: str = ""
+    domain: str
+    state: str
+    goals: list[str] = Field(default_factory=list)
+    impl: str
+    seed: int = 1
+    duration: float = Field(default=120.0, gt=0, le=3600)
+    step: float = Field(default=0.1, gt=0, le=1)
+    world: World
+    sensors: Sensors = Sensors()
+    motion: Motion = Motion()
+    robots: dict[str, RobotSpec]
+    faults: list[str] = Field(default_factory=list)
+    events: list[Event] = Field(default_factory=list)
+    expect: Expect = Expect()
+
+    def sensor(self, robot: str, kind: SensorName) -> Any:
+        """The spec of ``robot``'s sensor ``kind`` (its own, else the defaults)."""
+        own = getattr(self.robots[robot], kind)
+        return own if own is not None else getattr(self.sensors, kind)
+
+    def carries(self, robot: str, kind: SensorName) -> bool:
+        has = self.robots[robot].has
+        return has is None or kind in has
+
+
+@dataclass(frozen=True)
+class Loaded:
+    """A scenario as read, with where it came from (to resolve paths and quote lines)."""
+
+    scenario: Scenario
+    file: str
+    text: str
+    folder: Path
+
+    def path(self, relative: str) -> Path:
+        """A path of the scenario, relative to its file."""
+        p = Path(relative)
+        return p if p.is_absolute() else self.folder / p
+
+    def where(self, *path: str | int) -> Any:
+        """The span of a key, for messages."""
+        return locate(self.text, self.file, path)
+
+    def problem(self, message: str, *path: str | int, hint: str | None = None) -> Diagnostic:
+        return Diagnostic("error", message, self.where(*path), hint)
+
+
+_AT = re.compile(r"\(at line (\d+), column (\d+)\)")
+
+
+def read_scenario(file: str, text: str, folder: Path) -> Loaded:
+    """Parse and validate a scenario; :class:`CfgplanError` with every problem."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        message = str(exc)
+        found = _AT.search(message)
+        span = span_at(file, int(found.group(1)), int(found.group(2))) if found else None
+        raise error(f"not a scenario (TOML): {_AT.sub('', message).strip()}", span) from None
+    try:
+        scenario = Scenario.model_validate(data)
+    except ValidationError as exc:
+        raise CfgplanError(_validation(exc, file, text)) from None
+    loaded = Loaded(scenario, file, text, folder)
+    problems = _geometry(loaded)
+    if problems:
+        raise CfgplanError(problems)
+    return loaded
+
+
+def _validation(exc: ValidationError, file: str, text: str) -> list[Diagnostic]:
+    out: list[Diagnostic] = []
+    for item in exc.errors():
+        path = [p for p in item["loc"] if isinstance(p, str | int)]
+        # pydantic names the member of a union or the alias it tried: keep the keys
+        keys = [p for p in path if not (isinstance(p, str) and p in _UNION_PARTS)]
+        shown = ".".join(str(p) if isinstance(p, str) else f"[{p}]" for p in keys)
+        shown = shown.replace(".[", "[")
+        if item["type"] == "extra_forbidden":
+            message = f"{shown}: unknown key"
+            hint = "see the README, section Simulation, for the keys of a scenario"
+        elif item["type"] == "missing" and keys and isinstance(keys[-1], int):
+            base = shown.rsplit("[", 1)[0]
+            message = f"{base}: too few values (expected at least {keys[-1] + 1})"
+            hint = None
+        elif item["type"] == "missing":
+            message = f"{shown}: missing"
+            hint = None
+        else:
+            message = f"{shown}: {item['msg'].lower()}"
+            hint = None
+        out.append(Diagnostic("error", message, locate(text, file, keys), hint))
+    return out
+
+
+_UNION_PARTS = {"float", "int", "str", "list[str]", "bool"}
+
+
+def _geometry(loaded: Loaded) -> list[Diagnostic]:
+    """What the types cannot say: boxes the right way round, sizes positive,
+    robots standing in a room and clear of walls, references that exist."""
+    s = loaded.scenario
+    out: list[Diagnostic] = []
+    for name, box in s.world.rooms.items():
+        if not (box[2] > box[0] and box[3] > box[1]):
+            out.append(
+                loaded.problem(
+                    f"world.rooms.{name}: expected [x0, y0, x1, y1] with x1 > x0 and y1 > y0",
+                    "world",
+                    "rooms",
+                    name,
+                )
+            )
+    sized = [("blocks", n, b.size) for n, b in s.world.blocks.items()]
+    sized += [("walls", n, w.size) for n, w in s.world.walls.items()]
+    for kind, name, size in sized:
+        if min(size) <= 0:
+            out.append(
+                loaded.problem(
+                    f"world.{kind}.{name}.size: both sides must be more than 0",
+                    "world",
+                    kind,
+                    name,
+                    "size",
+                )
+            )
+    robots = set(s.robots)
+    if s.world.bar is not None:
+        for who in s.world.bar.robots:
+            if who not in robots:
+                out.append(_unknown_robot(loaded, who, "world", "bar", "robots"))
+    for name, block in s.world.blocks.items():
+        for side, who in block.pushers.items():
+            if who not in robots:
+                out.append(_unknown_robot(loaded, who, "world", "blocks", name, "pushers", side))
+        if block.target is not None and block.target not in s.world.walls:
+            out.append(
+                loaded.problem(
+                    f"world.blocks.{name}.target: no wall {block.target} in world.walls",
+                    "world",
+                    "blocks",
+                    name,
+                    "target",
+                )
+            )
+    for who, room in s.expect.rooms.items():
+        if who not in robots:
+            out.append(_unknown_robot(loaded, who, "expect", "rooms", who))
+        if room not in s.world.rooms:
+            out.append(
+                loaded.problem(
+                    f"expect.rooms.{who}: no room {room} in world.rooms", "expect", "rooms", who
+                )
+            )
+    pushers = {who for b in s.world.blocks.values() for who in b.pushers.values()}
+    for name, spec in s.robots.items():
+        if name in pushers:
+            continue  # placed against its block
+        if spec.at is None:
+            out.append(loaded.problem(f"robots.{name}.at: missing (x, y, heading)", "robots", name))
+            continue
+        x, y, _ = spec.at
+        if room_of(s.world.rooms, x, y) is None:
+            out.append(
+                loaded.problem(
+                    f"robots.{name}.at: ({x:g}, {y:g}) is in no room of world.rooms",
+                    "robots",
+                    name,
+                    "at",
+                )
+            )
+    for i, event in enumerate(s.events):
+        given = [e for e in (event.breaks, event.repair, event.magnetic) if e is not None]
+        if len(given) != 1:
+            out.append(
+                loaded.problem(
+                    f"events[{i}]: give exactly one of break, repair, magnetic", "events", i, "at"
+                )
+            )
+        for key, target in (("break", event.breaks), ("repair", event.repair)):
+            if target is not None:
+                problem = sensor_problem(target, robots)
+                if problem:
+                    out.append(loaded.problem(f"events[{i}].{key}: {problem}", "events", i, key))
+    return out
+
+
+def _unknown_robot(loaded: Loaded, who: str, *path: str) -> Diagnostic:
+    known = ", ".join(sorted(loaded.scenario.robots)) or "none"
+    return loaded.problem(f"{'.'.join(path)}: no robot {who} in robots (robots: {known})", *path)
+
+
+_SENSOR = re.compile(r"^\s*\(?\s*([a-z]+)\s*[\s(]\s*([^\s()]+)\s*\)?\s*$")
+
+
+def parse_sensor(text: str) -> tuple[SensorName, str] | None:
+    """``laser(Emil)`` or ``(laser Emil)``: the sensor and its robot."""
+    m = _SENSOR.match(text)
+    if m is None or m.group(1) not in SENSORS:
+        return None
+    kind: SensorName = m.group(1)  # type: ignore[assignment]
+    return kind, m.group(2)
+
+
+def sensor_problem(text: str, robots: Sequence[str] | set[str]) -> str | None:
+    parsed = parse_sensor(text)
+    if parsed is None:
+        return f"{text!r}: expected a sensor such as laser(Emil) ({', '.join(SENSORS)})"
+    if parsed[1] not in robots:
+        return f"{text!r}: no robot {parsed[1]} in robots"
+    return None
+
+
+def room_of(rooms: dict[str, Box], x: float, y: float) -> str | None:
+    """The room whose box holds (x, y), the first one listed when several do."""
+    for name, (x0, y0, x1, y1) in rooms.items():
+        if x0 <= x <= x1 and y0 <= y <= y1:
+            return name
+    return None
+
+
+def radians(degrees: float) -> float:
+    return math.radians(degrees)
