@@ -71,6 +71,15 @@ def simulate(
             help="Simulated seconds at most (default: the scenario's).",
         ),
     ] = None,
+    rank: Annotated[
+        int | None,
+        typer.Option(
+            "--rank",
+            min=1,
+            help="Start with the configuration (or sequence) of this rank, 1 being the cheapest "
+            "(default: the scenario's, else 1).",
+        ),
+    ] = None,
     animate: Annotated[
         bool, typer.Option("--animate", help="Also write animation.gif (no system package needed).")
     ] = False,
@@ -98,7 +107,7 @@ def simulate(
         except RunError as exc:  # the implementations cannot be loaded
             raise diagnostic(exc) from None
         prepare_folder(out, force)
-        code = _run(ready, out, seed, duration, animate, quiet)
+        code = _run(ready, out, seed, duration, rank, animate, quiet)
     except CfgplanError as exc:
         report(exc.diagnostics)
         raise typer.Exit(EXIT_INPUT) from None
@@ -107,7 +116,13 @@ def simulate(
 
 
 def _run(
-    ready: object, out: Path, seed: int | None, duration: float | None, animate: bool, quiet: bool
+    ready: object,
+    out: Path,
+    seed: int | None,
+    duration: float | None,
+    rank: int | None,
+    animate: bool,
+    quiet: bool,
 ) -> int:
     from cfgplan.cli.run import diagnostic
     from cfgplan.runtime.errors import RunError
@@ -124,9 +139,10 @@ def _run(
     try:
         with (out / "trace.jsonl").open("w", encoding="utf-8", newline="\n") as trace:
             run = run_simulation(
-                loaded,
+                ready,
                 seed=seed,
                 duration=duration,
+                rank=rank,
                 trace=trace,
                 echo=None if quiet else typer.echo,
             )

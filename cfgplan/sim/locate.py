@@ -74,12 +74,11 @@ def _find(lines: list[str], path: Path) -> tuple[int, int, int] | None:
 
 def _key(lines: list[str], first: int, last: int, keys: list[str]) -> tuple[int, int, int] | None:
     """The deepest of ``keys`` written in lines[first:last]: as a dotted key
-    ``a.b = ...`` or inside an inline table ``a = { b = ... }``."""
-    for depth in range(len(keys), 0, -1):
-        dotted = re.compile(r"^\s*" + r"\s*\.\s*".join(_quoted(k) for k in keys[:depth]) + r"\s*=")
-        for i in range(first, last):
-            if dotted.match(lines[i]):
-                return i + 1, lines[i].find(keys[0]) + 1, len(".".join(keys[:depth]))
+    ``a.b = ...``, or inside an inline table ``a = { b = ... }``."""
+    whole = re.compile(r"^\s*" + r"\s*\.\s*".join(_quoted(k) for k in keys) + r"\s*=")
+    for i in range(first, last):
+        if whole.match(lines[i]):
+            return i + 1, lines[i].find(keys[0]) + 1, len(".".join(keys))
     head = re.compile(r"^\s*" + _quoted(keys[0]) + r"\s*=")
     for i in range(first, last):
         if head.match(lines[i]):
@@ -88,7 +87,7 @@ def _key(lines: list[str], first: int, last: int, keys: list[str]) -> tuple[int,
                 if inner:
                     return i + 1, inner.start(1) + 1, len(key)
             return i + 1, lines[i].find(keys[0]) + 1, len(keys[0])
-    return None
+    return _key(lines, first, last, keys[:-1]) if len(keys) > 1 else None
 
 
 def locate(text: str, file: str, path: Path) -> Span | None:

@@ -24,8 +24,10 @@ what they received through the configuration's channels (5.2.1)::
   after a door, the leader's route, which side of a block it pushes);
 * ``knowledge`` — its map (walls as segments) and the sizes of the objects
   it may meet, known in advance, as a real robot's map is;
-* ``note(instance, text)`` — why an instance gave no data, kept for the
-  scenario's report if the task is not accomplished.
+* ``missing(instance, text)`` — this instance has no data this time, and why
+  (kept for the scenario's report); after :data:`MISSING` seconds without
+  any it raises :class:`~cfgplan.runtime.ResourceFailure`; ``found(instance)``
+  when it has data again.
 """
 
 from __future__ import annotations
@@ -37,11 +39,15 @@ from dataclasses import dataclass
 from typing import Any
 
 from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.faults import ResourceFailure
 from cfgplan.runtime.wrapper import current_robot
 from cfgplan.sim import sensors
 from cfgplan.sim.world import World
 
 __all__ = ["Hardware", "Knowledge", "hardware", "simulating"]
+
+MISSING = 2.0
+"""Seconds without data after which a measurement counts as failed (:meth:`Hardware.missing`)."""
 
 _active: list[World] = []
 _notes: dict[str, tuple[float, str]] = {}
@@ -154,6 +160,23 @@ class Hardware:
 
     def note(self, instance: str, text: str) -> None:
         _notes[instance] = (round(self._world.time, 3), text)
+
+    def missing(self, instance: str, text: str, limit: float = MISSING) -> None:
+        """``instance`` has no data this time, because of ``text``: noted, and
+        once it has had none for ``limit`` seconds running, its resource has
+        failed (:class:`~cfgplan.runtime.ResourceFailure`): a measurement
+        that cannot measure for that long is as good as broken, and the
+        society re-plans without it (5.5)."""
+        self.note(instance, text)
+        memory = self.memory(f"missing {instance}")
+        since = memory.setdefault("since", self._world.time)
+        if self._world.time - since >= limit - 1e-9:
+            memory.clear()
+            raise ResourceFailure(f"no data for {limit:g} s: {text}")
+
+    def found(self, instance: str) -> None:
+        """``instance`` has data again (see :meth:`missing`)."""
+        self.memory(f"missing {instance}").clear()
 
 
 def hardware(robot: str | None = None) -> Hardware:

@@ -129,8 +129,9 @@ def _line(record: dict[str, Any]) -> str:
     t = f"{record['t']:7.1f} s"
     what = record["event"]
     if what == "switch":
+        was = "nothing" if record["from_cost"] is None else record["from_cost"]
         return (
-            f"{t}  switch {record['from_cost']} -> {record['to_cost']} "
+            f"{t}  switch {was} -> {record['to_cost']} "
             f"({record['cause']}; {record['source'] or 'installed'})"
         )
     if what == "failure":

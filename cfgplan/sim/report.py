@@ -149,11 +149,11 @@ def summary(run: Run, diagrams: dict[int, str] | None = None) -> dict[str, Any]:
         {
             "time": n.t,
             "from_cost": n.record.get("from_cost"),
-            "to_cost": n.record.get("to_cost"),
+            "to_cost": n.record.get("to_cost"),  # None: nothing admissible, the society stops
             "reason": n.record.get("cause"),
             "source": n.record.get("source") or None,
         }
-        for n in rec.of("switch")
+        for n in rec.of("switch", "no-configuration")
     ]
     faults = [
         {

@@ -28,6 +28,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import resources
+from itertools import islice
 from pathlib import Path
 from typing import IO
 
@@ -185,23 +186,34 @@ def _against_world(loaded: Loaded, problem: Problem) -> list[Diagnostic]:
     return out
 
 
-def first_configuration(problem: Problem) -> tuple[Configuration | None, tuple[str, ...]]:
-    """The configuration to start with, or why there is none."""
+def first_configuration(
+    problem: Problem, rank: int = 1
+) -> tuple[Configuration | None, tuple[str, ...]]:
+    """The configuration to start with — the first step of the sequence of
+    ``rank`` (1: the cheapest), or the configuration of that rank — or why
+    there is none."""
     goals = problem.goal_calls
     if len(goals) > 1:
         sequences = SequenceSearch(goals, problem.task)
-        best = next(iter(sequences), None)
-        if best is not None:
-            return best.steps[0].configuration, ()
+        ranked = list(islice(sequences, rank))
+        if len(ranked) == rank:
+            return ranked[-1].steps[0].configuration, ()
+        if ranked:
+            return None, (
+                f"there are {len(ranked)} sequences of configurations, none of rank {rank}",
+            )
         blocked = sequences.blocked()
         if blocked is None:
             return None, ("no admissible sequence of configurations",)
         step, _, report = blocked
         head = f"step {step + 1}, {call_text(goals[step])}, has no admissible configuration"
         return None, (head, *explain(report, call_text(goals[step])))
-    found, search = plan(problem.task, goals[0], limit=1)
+    found, search = plan(problem.task, goals[0], limit=rank)
+    if len(found) == rank:
+        return found[-1], ()
     if found:
-        return found[0], ()
+        goal = call_text(goals[0])
+        return None, (f"{goal} has {len(found)} configurations, none of rank {rank}",)
     return None, (
         f"step 1, {call_text(goals[0])}, has no admissible configuration",
         *explain(search.report, call_text(goals[0])),
@@ -246,6 +258,7 @@ def simulate(
     *,
     seed: int | None = None,
     duration: float | None = None,
+    rank: int | None = None,
     trace: IO[str] | None = None,
     echo: Callable[[str], None] | None = None,
     stop: threading.Event | None = None,
@@ -260,7 +273,7 @@ def simulate(
     recorder = Recorder(world, trace, echo)
     goals = problem.goal_calls
     steps = [Step(call_text(g)) for g in goals]
-    config, why = first_configuration(problem)
+    config, why = first_configuration(problem, s.rank if rank is None else rank)
     if config is None:
         return Run(loaded, problem, world, recorder, steps, "none", True, why)
     steps[0].started = 0.0

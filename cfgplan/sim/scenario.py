@@ -146,7 +146,7 @@ class LaserSpec(Strict):
 
 class SonarSpec(Strict):
     beams: int = Field(default=16, ge=2, le=360)
-    max_range: float = Field(default=3.0, gt=0)
+    max_range: float = Field(default=5.0, gt=0)
     noise: float = Field(default=0.005, ge=0)  # metres, plus 1 % of the range
 
 
@@ -209,6 +209,7 @@ class Scenario(Strict):
     domain: str
     state: str
     goals: list[str] = Field(default_factory=list)
+    rank: int = Field(default=1, ge=1)  # start with the configuration (or sequence) of this rank
     impl: str
     seed: int = 1
     duration: float = Field(default=120.0, gt=0, le=3600)

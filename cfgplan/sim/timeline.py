@@ -91,10 +91,12 @@ def draw_timeline(run: Run, path: Path) -> None:
     # switches, failures, recoveries, world changes
     last = -end
     level = 0
-    for n in rec.of("switch"):
+    for n in rec.of("switch", "no-configuration"):
         ax.axvline(n.t, color="#333333", ls="--", lw=0.9)
         cause = str(n.record.get("cause", ""))
-        text = f"{n.record['from_cost']} → {n.record['to_cost']}: " + textwrap.shorten(cause, 40)
+        was = n.record.get("from_cost")
+        to = n.record.get("to_cost", "stop")
+        text = f"{'nothing' if was is None else was} → {to}: " + textwrap.shorten(cause, 40)
         # labels close in time go one above the other
         level = level + 1 if n.t - last < 0.25 * end else 0
         last = n.t
@@ -108,7 +110,8 @@ def draw_timeline(run: Run, path: Path) -> None:
             bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.85},
         )
     for n in rec.of("failure"):
-        who = str(n.record.get("detected_by", ""))
+        who = str(n.record.get("resource", ""))  # a robot lost, on its own row
+        who = who if who in rows else str(n.record.get("detected_by", ""))
         if who in rows:
             ax.plot(
                 [n.t], [rows[who] + 0.3], marker="X", ms=10, color="#d62728", mec="white", zorder=5
@@ -144,7 +147,7 @@ def draw_timeline(run: Run, path: Path) -> None:
     for tick, name in zip(ax.get_yticklabels()[1:], rows, strict=True):
         tick.set_color(colour[name])
         tick.set_fontweight("bold")
-    ax.set_ylim(0, top + 1.2 + 0.28 * max(0, len(rec.of("switch")) - 1))
+    ax.set_ylim(0, top + 1.2 + 0.28 * max(0, len(rec.of("switch", "no-configuration")) - 1))
     ax.set_xlim(0, end * 1.02)
     ax.set_xlabel("simulated time (s)")
     title = run.loaded.scenario.title or run.loaded.scenario.name

@@ -11,12 +11,13 @@ built wall the normal of its face seen from the robots' side.
 * ``measure-pos-laser`` — a block's centre (from a long side and the ends of
   it that are true corners, or a whole short side), or a built wall's corner
   at its free end.
-  When something nearer hides that corner from the laser for
-  :data:`HIDDEN_CALLS` calls running ("the block may occlude the wall so
-  that the laser can not register the wall", 6.4), the measurement raises
+  When something nearer hides that corner from the laser for :data:`HIDDEN`
+  seconds running ("the block may occlude the wall so that the laser can
+  not register the wall", 6.4), the measurement raises
   :class:`~cfgplan.runtime.ResourceFailure`: the monitor takes it as that
   functionality failing, and the society re-plans without it (Rasmus
-  measures instead, Fig. 6.12).
+  measures instead, Fig. 6.12). Any measurement without data for
+  :data:`~cfgplan.sim.onboard.MISSING` seconds fails likewise.
 * ``transform-block-data`` — the block's position and orientation relative
   to its slot at the wall's free end: ``[across, depth]`` (metres; across:
   to the right of the pushing direction, depth: negative while short of the
@@ -35,16 +36,17 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from cfgplan.runtime import ACHIEVED, ResourceFailure, current_robot, functionality
+from cfgplan.runtime import ACHIEVED, current_robot, functionality
 from cfgplan.sim import hardware
 from cfgplan.sim.impl.control import clip
+from cfgplan.sim.onboard import MISSING
 from cfgplan.sim.perception import block, faces, free_end, long_face, runs, square
 
 Scan = dict[str, Any]
 Pos = tuple[float, float]
 
-HIDDEN_CALLS = 3
-"""Calls in a row a wall's free end must stay hidden before its measurement fails."""
+HIDDEN = 0.25
+"""Seconds a wall's free end must stay hidden before its measurement fails."""
 
 LOOKAHEAD = (0.3, 1.0)
 """Metres ahead on the slot's axis the block is steered towards: 0.6 of the
@@ -76,7 +78,7 @@ def _orientation(scan: Scan, name: str, what: str) -> float | None:
     k = hw.knowledge
     found = [r for r in runs(scan, name) if len(r.points) >= 3]
     if not found:
-        hw.note(instance, f"{name} is not in {robot}'s scan")
+        hw.missing(instance, f"{name} is not in {robot}'s scan")
         return None
     if hw.params.get("push", {}).get("block") == name:
         # pushing it: the face in front is a long side
@@ -95,8 +97,9 @@ def _orientation(scan: Scan, name: str, what: str) -> float | None:
     else:
         normal, why = None, f"{robot} knows no object {name}"
     if normal is None:
-        hw.note(instance, why)
+        hw.missing(instance, why)
         return None
+    hw.found(instance)
     return square(normal)
 
 
@@ -124,16 +127,14 @@ def measure_pos_laser(name: str, scan: Scan) -> Pos | None:
     elif name in k.built:
         built = k.built[name]
         found = free_end(scan, name, float(built["size"][1]), str(built["free_end"]))
-        memory = hw.memory(instance)
-        hidden = isinstance(found, str) and "hidden" in found
-        memory["hidden"] = memory.get("hidden", 0) + 1 if hidden else 0
-        if memory["hidden"] >= HIDDEN_CALLS:
-            raise ResourceFailure(f"{robot}'s laser cannot register {name}: {found}")
     else:
         found = f"{robot} knows no object {name}"
     if isinstance(found, str):
-        hw.note(instance, found)
+        # hidden behind something: the laser cannot register it (6.4)
+        hidden = HIDDEN if "hidden" in found else MISSING
+        hw.missing(instance, f"{robot}'s laser cannot register {name}: {found}", hidden)
         return None
+    hw.found(instance)
     return found
 
 

@@ -58,12 +58,11 @@ def meas_robot_angle_dist_laser(other: str, scan: Scan) -> tuple[float, float] |
     """Bearing and distance of ``other``'s centre, from the echoes of its body."""
     hw = hardware()
     found = runs(scan, other)
+    instance = f"meas-robot-angle-dist-laser({current_robot()}, {other})"
     if not found:
-        hw.note(
-            f"meas-robot-angle-dist-laser({current_robot()}, {other})",
-            f"{other} is not in {current_robot()}'s laser scan",
-        )
+        hw.missing(instance, f"{other} is not in {current_robot()}'s laser scan")
         return None
+    hw.found(instance)
     run = max(found, key=lambda r: len(r.points))
     x = sum(p[0] for p in run.points) / len(run.points)
     y = sum(p[1] for p in run.points) / len(run.points)
@@ -171,6 +170,13 @@ def lead_robot(other: str, dist: float) -> object:
             y + v * h * math.sin(th + w * h / 2),
             th + w * h,
         )
+    if not route:
+        hw.note(
+            f"lead-robot({current_robot()}, {other})",
+            f"{current_robot()} has no route to lead along (params.carry.route)",
+        )
+        hw.halt()
+        return None
     leg = memory.get("leg", 0)
     while leg < len(route) and math.hypot(route[leg][0] - x, route[leg][1] - y) < 0.08:
         leg += 1

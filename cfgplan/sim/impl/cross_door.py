@@ -85,18 +85,20 @@ def compass() -> float:
 
 
 def _seen(image: Image, name: str, what: str, ranged: bool) -> list[Any] | None:
+    """What the image says of ``name`` (``None``: nothing, noted; for
+    :data:`~cfgplan.sim.onboard.MISSING` seconds running: a failure)."""
     sees = image.get("sees", {})
     found = sees.get(name) if isinstance(sees, dict) else None
     robot = current_robot()
+    hw = hardware()
+    instance = f"{what}({robot}, {name})"
     if found is None:
-        hardware().note(f"{what}({robot}, {name})", f"{name} is not in {robot}'s camera view")
+        hw.missing(instance, f"{name} is not in view of {robot}'s camera")
         return None
     if ranged and found[1] is None:
-        hardware().note(
-            f"{what}({robot}, {name})",
-            f"{name} is too near {robot}'s camera to measure its distance",
-        )
+        hw.missing(instance, f"{name} is too near {robot}'s camera to measure its distance")
         return None
+    hw.found(instance)
     return list(found)
 
 
