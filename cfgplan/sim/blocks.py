@@ -120,12 +120,13 @@ def slot(wall: WallObject, block: Block) -> Pose:
 
 
 def alignment(block: BlockState, wall: WallObject) -> tuple[float, float, float]:
-    """How far ``block`` is from its slot at ``wall``: across and along the
-    wall's face (metres) and in heading (radians; a block is symmetric, so
+    """How far ``block`` is from its slot at ``wall``: across (to the right
+    of the pushing direction) and deep (negative: short of the slot), in
+    metres, and turned (radians, counter-clockwise; a block is symmetric, so
     modulo half a turn)."""
     sx, sy, sh = slot(wall, block.spec)
     dx, dy = block.pose[0] - sx, block.pose[1] - sy
-    across = -dx * math.sin(sh) + dy * math.cos(sh)
+    across = dx * math.sin(sh) - dy * math.cos(sh)  # to the right of the pushing direction
     depth = dx * math.cos(sh) + dy * math.sin(sh)
     turn = wrap(block.pose[2] - sh)
     if turn > math.pi / 2:
