@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import importlib
 import math
+import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report, say
+from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report
 from cfgplan.diagnostics import CfgplanError, error
 
 EXIT_FAILED = 4
@@ -126,6 +127,7 @@ def _run(
 ) -> int:
     from cfgplan.cli.run import diagnostic
     from cfgplan.runtime.errors import RunError
+    from cfgplan.runtime.launch import Printer
     from cfgplan.sim.outputs import write_all
     from cfgplan.sim.report import why
     from cfgplan.sim.run import Prepared
@@ -134,8 +136,11 @@ def _run(
     assert isinstance(ready, Prepared)
     loaded = ready.loaded
     s = loaded.scenario
+    # a console that goes away (a closed pipe) is given up, never fatal
+    console = Printer(False, "", sys.stdout, sys.stderr)
+    echo = console.say
     if not quiet:
-        typer.echo(f"{s.name}: {s.title or loaded.file}")
+        echo(f"{s.name}: {s.title or loaded.file}")
     try:
         with (out / "trace.jsonl").open("w", encoding="utf-8", newline="\n") as trace:
             run = run_simulation(
@@ -144,7 +149,7 @@ def _run(
                 duration=duration,
                 rank=rank,
                 trace=trace,
-                echo=None if quiet else typer.echo,
+                echo=None if quiet else echo,
             )
     except OSError as exc:
         raise error(f"cannot write {out / 'trace.jsonl'}: {exc.strerror}") from None
@@ -156,13 +161,13 @@ def _run(
         raise error(f"cannot write in {out}: {exc.strerror}") from None
     reasons = why(run)
     if not reasons:
-        typer.echo(f"accomplished in {run.world.time:g} s (seed {run.world.seed})")
+        echo(f"accomplished in {run.world.time:g} s (seed {run.world.seed})")
     else:
-        say("not accomplished: " + reasons[0])
+        console.say("not accomplished: " + reasons[0], sys.stderr)
         for line in reasons[1:]:
-            say("  " + line)
+            console.say("  " + line, sys.stderr)
     if not quiet:
-        typer.echo(f"wrote {', '.join(files)} in {out}")
+        echo(f"wrote {', '.join(files)} in {out}")
     if run.ended == "interrupted":
         return EXIT_INTERRUPTED
     if not reasons:

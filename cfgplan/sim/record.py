@@ -8,12 +8,14 @@ fields that measure the host's wall clock — a call's ``duration``, a
 switch's ``plan_ms`` and ``latency``, a message's ``sent`` — are left out,
 so that one seed gives one trace, byte for byte. Values longer than
 :data:`ELIDE` characters of JSON (a laser scan) are written as
+``{"$elided": "dict", "$items": N}`` (N numbers and names in it) or
 ``{"$elided": "dict", "$chars": N}``.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import IO, Any
@@ -110,8 +112,24 @@ class Recorder:
         return [n for n in self.notable if n.what in what]
 
 
+def _items(value: object, budget: int) -> int:
+    """How many scalars ``value`` holds, counting no further than ``budget``."""
+    if isinstance(value, dict):
+        value = list(value.values())
+    if not isinstance(value, list | tuple):
+        return 1
+    count = 0
+    for item in value:
+        count += _items(item, budget - count)
+        if count > budget:
+            break
+    return count
+
+
 def _elide(value: object) -> object:
     """``value``, or a note of its size when its JSON is longer than :data:`ELIDE`."""
+    if _items(value, ELIDE // 4) > ELIDE // 4:  # surely long: no need to write it out
+        return {"$elided": type(value).__name__, "$items": _items(value, 100_000)}
     try:
         text = json.dumps(value, separators=(",", ":"))
     except (TypeError, ValueError):
@@ -135,9 +153,9 @@ def _line(record: dict[str, Any]) -> str:
             f"({record['cause']}; {record['source'] or 'installed'})"
         )
     if what == "failure":
-        detail = f": {record['detail']}" if record.get("detail") else ""
+        said = f": {detail(str(record['detail']))}" if record.get("detail") else ""
         seen = f"{record['how']}, seen by {record['detected_by']}"
-        return f"{t}  failure of {record['resource']} ({seen}){detail}"
+        return f"{t}  failure of {record['resource']} ({seen}){said}"
     if what == "recovery":
         return f"{t}  {record['resource']} works again ({record['how']})"
     if what == "achieved":
@@ -151,6 +169,17 @@ def _line(record: dict[str, Any]) -> str:
     return f"{t}  {what}: " + ", ".join(
         f"{k}={record[k]}" for k in ("added", "removed") if k in record
     )
+
+
+_RAISED = re.compile(
+    r"^the implementation raised ResourceFailure: (?P<what>.*?)(?: \([^()]*:\d+ in [^()]*\))?$"
+)
+
+
+def detail(text: str) -> str:
+    """What a resource failure said, without the implementation's file and line."""
+    found = _RAISED.match(text)
+    return found.group("what") if found else text
 
 
 def goal_text(goal: Ground) -> str:

@@ -24,6 +24,7 @@ from cfgplan.configuration.describe import call_text
 from cfgplan.reconfigure.coordinate import upstream
 from cfgplan.sim.blocks import alignment
 from cfgplan.sim.onboard import notes
+from cfgplan.sim.record import detail
 from cfgplan.sim.run import Run
 
 __all__ = ["summary", "why"]
@@ -161,7 +162,7 @@ def summary(run: Run, diagrams: dict[int, str] | None = None) -> dict[str, Any]:
             "resource": n.record.get("resource"),
             "how": n.record.get("how"),
             "detected_by": n.record.get("detected_by"),
-            "detail": n.record.get("detail") or "",
+            "detail": detail(str(n.record.get("detail") or "")),
             "withdrawn": n.record.get("withdrawn", []),
         }
         for n in rec.of("failure")

@@ -311,6 +311,7 @@ def simulate(
             return
         world.step(s.step)
 
+    reason = "interrupted"
     with simulating(world):
         try:
             reason = running.run(

@@ -158,12 +158,13 @@ def _moments(ax: Axes, run: Run, samples: list[Sample]) -> None:
                 label=cross_label,
             )
             cross_label = "_"
+            left = x < sum(ax.get_xlim()) / 2  # the label towards the middle of the map
             ax.annotate(
                 f"{n.record.get('resource')} fails",
                 (x, y),
-                xytext=(-10, 10),
+                xytext=(10 if left else -10, 10),
                 textcoords="offset points",
-                ha="right",
+                ha="left" if left else "right",
                 fontsize=7,
                 color="#d62728",
                 zorder=9,
