@@ -7,15 +7,16 @@ monitoring and reconfiguration (:mod:`cfgplan.reconfigure`), in simulated
 time, against a world of rooms, doors, robots, a bar and blocks; and draws
 what happened (Figs. 6.5 and 6.6). One module a part:
 
-* ``scenario`` (and ``locate``) — scenario files, checked with positions;
+* ``scenario``, ``reading``, ``locate`` — scenario files, read and checked with positions;
 * ``geometry``, ``bodies``, ``blocks``, ``sensors``, ``world`` — the world;
 * ``onboard`` — what implementations may touch: their own robot's sensors
   and motors (:func:`hardware`), never the true state;
 * ``perception`` — shared helpers of the bundled implementations (scan
   features, localization); ``impl`` — implementations of every
   functionality of the three bundled domains;
-* ``run`` — the simulation loop; ``report`` — summary and failures;
-* ``timeline``, ``trajectories``, ``animate``, ``diagrams`` — the pictures.
+* ``run`` — the simulation loop; ``record`` — the trace and what ran when;
+  ``report`` — summary and failures; ``outputs`` — what goes in ``--out``;
+* ``drawing``, ``timeline``, ``trajectories``, ``animate``, ``diagrams`` — the pictures.
 
 Needs the ``sim`` extra (numpy, shapely, matplotlib): ``pip install
 'cfgplan[sim]'``. Importing this package imports nothing heavy:

@@ -24,7 +24,6 @@ __all__ = [
     "distance_to_segment",
     "rectangle",
     "relative",
-    "segments_cross",
     "to_world",
     "wrap",
 ]
@@ -74,19 +73,6 @@ def distance_to_segment(px: float, py: float, seg: Segment) -> float:
     length2 = dx * dx + dy * dy
     t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((px - x1) * dx + (py - y1) * dy) / length2))
     return math.hypot(px - (x1 + t * dx), py - (y1 + t * dy))
-
-
-def segments_cross(a: Segment, b: Segment) -> bool:
-    """Whether two segments intersect (touching counts)."""
-
-    def side(x1: float, y1: float, x2: float, y2: float, x: float, y: float) -> float:
-        return (x2 - x1) * (y - y1) - (y2 - y1) * (x - x1)
-
-    d1 = side(*b, a[0], a[1])
-    d2 = side(*b, a[2], a[3])
-    d3 = side(*a, b[0], b[1])
-    d4 = side(*a, b[2], b[3])
-    return d1 * d2 <= 0 and d3 * d4 <= 0
 
 
 @dataclass(frozen=True)

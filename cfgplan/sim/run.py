@@ -47,8 +47,9 @@ from cfgplan.runtime.faults import parse_injection
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import society
 from cfgplan.sim.onboard import simulating
+from cfgplan.sim.reading import read_scenario
 from cfgplan.sim.record import Recorder
-from cfgplan.sim.scenario import Loaded, read_scenario, room_of
+from cfgplan.sim.scenario import Loaded, room_of
 from cfgplan.sim.world import World
 
 __all__ = ["BUNDLED", "Prepared", "Run", "Step", "open_scenario", "prepare", "simulate"]

@@ -19,6 +19,8 @@ import random
 from dataclasses import dataclass, field
 from typing import Any
 
+from shapely.geometry import MultiLineString, Point, Polygon
+
 from cfgplan.sim.blocks import BlockState, attach, push
 from cfgplan.sim.bodies import Body
 from cfgplan.sim.geometry import (
@@ -27,7 +29,6 @@ from cfgplan.sim.geometry import (
     Segment,
     distance_to_segment,
     rectangle,
-    segments_cross,
     wrap,
 )
 from cfgplan.sim.scenario import Door, Magnetic, Scenario, WallObject, parse_sensor, room_of
@@ -71,10 +72,12 @@ class World:
     """Implementations' state between calls, per robot (:meth:`Hardware.memory`)."""
     _streams: dict[tuple[str, str], random.Random] = field(default_factory=dict)
     _pending: list[int] = field(default_factory=list)
+    _walls: MultiLineString = field(default_factory=MultiLineString)
 
     def __post_init__(self) -> None:
         s = self.scenario
         self.segments = map_segments(s)
+        self._walls = MultiLineString([[w[:2], w[2:]] for w in self.segments])
         self.doors = dict(s.world.doors)
         self.walls = dict(s.world.walls)
         self.magnetic = list(s.world.magnetic)
@@ -195,22 +198,23 @@ class World:
         return False
 
     def collides_block(self, block: BlockState, moved: Pose, pushers: list[Body]) -> bool:
-        """Whether ``block`` at ``moved`` overlaps the map, a wall, another block or a robot."""
-        sides = rectangle(moved[0], moved[1], moved[2], *block.spec.size)
-        others = list(self.segments)
-        for wall in self.walls.values():
-            others += rectangle(*wall.at, math.radians(wall.heading), *wall.size)
-        for other in self.blocks.values():
-            if other is not block:
-                others += other.segments()
-        if any(segments_cross(a, b) for a in sides for b in others):
+        """Whether ``block`` at ``moved`` overlaps the map, a built wall, another
+        block or a robot that is not pushing it (shapely's intersection tests)."""
+        shape = Polygon([side[:2] for side in rectangle(*moved, *block.spec.size)])
+        solids = [
+            Polygon([s[:2] for s in rectangle(*w.at, math.radians(w.heading), *w.size)])
+            for w in self.walls.values()
+        ]
+        solids += [
+            Polygon([s[:2] for s in b.segments()]) for b in self.blocks.values() if b is not block
+        ]
+        if shape.intersects(self._walls) or any(shape.intersects(solid) for solid in solids):
             return True
-        for body in self.bodies.values():
-            if body in pushers:
-                continue
-            if any(distance_to_segment(body.pose[0], body.pose[1], s) < body.radius for s in sides):
-                return True
-        return False
+        return any(
+            shape.distance(Point(body.pose[0], body.pose[1])) < body.radius
+            for body in self.bodies.values()
+            if body not in pushers
+        )
 
     def _bar(self) -> None:
         bar = self.scenario.world.bar
