@@ -4,17 +4,19 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from cfgplan.cli import commands  # noqa: F401  (registers the commands)
 from cfgplan.cli.app import app
 from cfgplan.sim.run import open_scenario, simulate
 from tests.sim.conftest import DATA, ROOT
-
-BAD = ROOT / "tests" / "data" / "sim"
 
 
 def _run(*args: str) -> tuple[int, str, str]:
@@ -69,7 +71,17 @@ def test_outputs_and_the_same_bytes_for_the_same_seed(tmp_path: Path) -> None:
         (33, 45, summary["switches"][0]["time"])
     ]
     assert all("latency" not in e and "duration" not in e for e in trace)  # no wall clock
-    assert _run("carry-bar", "--out", str(two), "--quiet")[0] == 0
+    # another process, with another hash seed (set orders differ): the same bytes
+    env = {**os.environ, "PYTHONHASHSEED": "12345"}
+    done = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "simulate", "carry-bar", "--out", str(two), "--quiet"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
     for name in (
         "summary.json",
         "trace.jsonl",
@@ -201,3 +213,19 @@ def test_a_scenario_of_ones_own_beyond_the_thesis(tmp_path: Path) -> None:
     assert summary["robots"]["Pippi"]["room"] == "Room3"
     assert [st["achieved"] for st in summary["steps"]] == [True, True]
     assert DATA.is_dir()
+
+
+def test_without_the_sim_extra_it_says_what_to_install(monkeypatch: pytest.MonkeyPatch) -> None:
+    import cfgplan.cli.simulate as command
+
+    real = command.importlib.import_module
+
+    def missing(name: str) -> object:
+        if name == "shapely":
+            raise ImportError(name)
+        return real(name)
+
+    monkeypatch.setattr(command.importlib, "import_module", missing)
+    code, _, err = _run("carry-bar", "--out", "never")
+    assert code == 1
+    assert "cfgplan simulate needs shapely" in err and "pip install 'cfgplan[sim]'" in err
