@@ -24,7 +24,6 @@ __all__ = [
     "distance_to_segment",
     "rectangle",
     "relative",
-    "to_world",
     "wrap",
 ]
 
@@ -43,12 +42,6 @@ def relative(observer: Pose, x: float, y: float) -> tuple[float, float]:
     dx, dy = x - observer[0], y - observer[1]
     c, s = math.cos(observer[2]), math.sin(observer[2])
     return c * dx + s * dy, -s * dx + c * dy
-
-
-def to_world(observer: Pose, x: float, y: float) -> tuple[float, float]:
-    """The point (x, y) of ``observer``'s frame in the world frame."""
-    c, s = math.cos(observer[2]), math.sin(observer[2])
-    return observer[0] + c * x - s * y, observer[1] + s * x + c * y
 
 
 def rectangle(cx: float, cy: float, heading: float, length: float, width: float) -> list[Segment]:

@@ -19,7 +19,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import IO, Any
 
-from cfgplan.configuration.describe import call_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.task import Ground
 from cfgplan.runtime.events import Adaptation, Call, Data, Event, Transfer
@@ -180,6 +179,3 @@ def detail(text: str) -> str:
     found = _RAISED.match(text)
     return found.group("what") if found else text
 
-
-def goal_text(goal: Ground) -> str:
-    return call_text(goal)

@@ -337,7 +337,7 @@ def simulate(
         world,
         recorder,
         steps,
-        "interrupted" if reason == "interrupted" and not ended else end,
+        end,
         adaptive.stopped,
         _why_none(recorder) if adaptive.stopped else (),
         [seg.config for seg in recorder.segments if seg.config is not None],
