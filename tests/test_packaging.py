@@ -120,6 +120,11 @@ def venv_python(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_wheel_ships_every_module_and_the_grammar(wheel: Path) -> None:
     names = set(zipfile.ZipFile(wheel).namelist())
     assert "cfgplan/grammar/cfgplan.lark" in names, "the grammar is not shipped as package data"
+    # cfgplan simulate finds its bundled scenarios, and their domains, in the package
+    scenarios = ("cross-door/sim-6.2.2.toml", "carry-bar/sim-6.3.2.toml", "build-wall/sim-6.4.toml")
+    for bundled in scenarios:
+        assert f"cfgplan/domains/{bundled}" in names, bundled
+    assert "cfgplan/domains/cross-door/domain-steps.lisp" in names
     source_modules = {
         p.relative_to(ROOT).as_posix()
         for p in (ROOT / "cfgplan").rglob("*.py")

@@ -39,6 +39,7 @@ class Item:
     label: int
     call: Ground  # (name, *args)
     ancestors: frozenset[Ground]  # method instances above it: the recursion guard
+    text: str = ""  # its part of canonical(), made once
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -51,6 +52,7 @@ class Channel:
     target: int
     data: Ground
     bandwidth: float | None
+    text: str = ""  # its label-free part of canonical(), made once
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -64,6 +66,8 @@ class Placed:
     robot: str
     inputs: tuple[Ground, ...]
     outputs: tuple[Ground, ...]
+    text: str = ""  # its part of canonical(), made once
+    name: str = ""  # its call as canonical() names it, made once
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -338,21 +342,30 @@ def canonical(node: Partial, task: Task) -> bytes:
     forgotten. Two different forms share a digest with odds of about 2^-128
     per pair (far below anything a run can meet); it takes 16 bytes where the
     form takes kilobytes, so every expanded node can be remembered."""
-    names: dict[int, object] = {p.label: p.call for p in node.placed}
+    # Nodes share most of their items, placed instances and channels: each
+    # one's text is made once and kept on it (they are never changed).
+    names: dict[int, str] = {}
+    for p in node.placed:
+        if not p.text:
+            p.text = repr((p.call, p.inputs, p.outputs))
+            p.name = repr(p.call)
+        names[p.label] = p.name
     for index, item in enumerate(node.stack):
-        names[item.label] = index
-    channels = sorted(
-        repr((ch.kind, ch.robots, names[ch.source], names[ch.target], ch.data, ch.bandwidth))
-        for ch in node.channels
-    )
+        names[item.label] = str(index)
+    channels = []
+    for ch in node.channels:
+        if not ch.text:
+            ch.text = repr((ch.kind, ch.robots, ch.data, ch.bandwidth))
+        channels.append(f"{ch.text}{names[ch.source]}>{names[ch.target]}")
+    channels.sort()
     recursive = task.recursive
-    stack = [
-        repr((item.call, sorted(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)))
-        if recursive
-        else repr(item.call)
-        for item in node.stack
-    ]
-    placed = sorted(repr((p.call, p.inputs, p.outputs)) for p in node.placed)
+    stack = []
+    for item in node.stack:
+        if not item.text:
+            relevant = sorted(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)
+            item.text = repr((item.call, relevant)) if relevant else repr(item.call)
+        stack.append(item.text)
+    placed = sorted(p.text for p in node.placed)
     effects = sorted(map(repr, node.effects))
     text = "\n".join("\t".join(part) for part in (placed, channels, stack, effects))
     return hashlib.blake2b(text.encode(), digest_size=16).digest()

@@ -17,7 +17,7 @@ put configuration X on the running society with the least disruption.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from cfgplan.configuration.model import Configuration
@@ -64,7 +64,9 @@ class InProcessDeployer:
         """Robot ``name``, joining the society (and the monitor) if it is new."""
         found = self.society.robot(name)
         if found is None:
-            found = Robot(name, self.registry, self.society.transport)
+            found = Robot(
+                name, self.registry, self.society.transport, clock=self.society.clock
+            )
             found.configure(lambda r: lambda: None)
             self.society.add(found)
             self.monitor.watch(found)
@@ -131,8 +133,15 @@ def adapt(
     hysteresis: Hysteresis | None = None,
     hold: float = HOLD,
     goals: tuple[Ground, ...] = (),
+    clock: Callable[[], float] | None = None,
+    ahead: bool = True,
 ) -> Adaptive:
-    """Monitor ``society`` (running ``config``) and reconfigure it on failures."""
+    """Monitor ``society`` (running ``config``) and reconfigure it on failures.
+
+    For simulation (deterministic runs): ``clock`` times stale suspicions
+    (default: the society's clock); ``ahead=False`` computes the fallbacks
+    one per pass of the loop on the robots' thread instead of on a thread of
+    their own, so that every decision is the same from run to run."""
     monitor = Monitor(hold=hold)
     for robot in society.robots:
         monitor.watch(robot)
@@ -145,6 +154,11 @@ def adapt(
     if society.transport is not None:
         society.transport.presence_listeners.append(monitor.presence(owner))
     coordinator = Coordinator(
-        reconfigurator, recorder.record, owner, deployer, ahead=Ahead(reconfigurator)
+        reconfigurator,
+        recorder.record,
+        owner,
+        deployer,
+        clock=clock or society.clock,
+        ahead=Ahead(reconfigurator) if ahead else None,
     )
     return Adaptive(coordinator, monitor, Injector(injections, society))

@@ -280,11 +280,18 @@ Configure = Callable[[Robot], Cycle]
 """What emitted code provides: create a robot's channels and wrappers, return its cycle."""
 
 
-def build(part: Part, registry: Registry, transport: Transport | None = None) -> Robot:
-    """A robot configured from its part of a configuration (the same as its emitted module)."""
+def build(
+    part: Part,
+    registry: Registry,
+    transport: Transport | None = None,
+    *,
+    clock: Callable[[], float] = time.monotonic,
+) -> Robot:
+    """A robot configured from its part of a configuration (the same as its
+    emitted module), on ``clock``."""
     from cfgplan.runtime.install import install
 
-    robot = Robot(part.robot, registry, transport)
+    robot = Robot(part.robot, registry, transport, clock=clock)
     install(robot, part)
     return robot
 

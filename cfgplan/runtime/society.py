@@ -11,6 +11,12 @@ there, so no cycle runs half of two configurations; before a cycle (the
 ``before`` hook) scripted faults take effect. Robots may join a running
 society (a configuration needs a robot not yet running), be killed (a
 scripted fault) and come back.
+
+**Extension point (simulation).** A society runs on a ``clock`` (default: the
+first robot's, ``time.monotonic``); every robot it makes or takes in later
+should share it. With ``paced=False`` the loop never pauses: a simulated
+clock, advanced by the ``between`` hook (one fixed step per pass), makes each
+run deterministic and as fast as the machine allows (:mod:`cfgplan.sim`).
 """
 
 from __future__ import annotations
@@ -50,10 +56,21 @@ class Society:
     """
 
     def __init__(
-        self, robots: Sequence[Robot], transport: InProcessTransport | None = None
+        self,
+        robots: Sequence[Robot],
+        transport: InProcessTransport | None = None,
+        *,
+        clock: Callable[[], float] | None = None,
+        paced: bool = True,
     ) -> None:
         self.robots = list(robots)
         self.transport = transport  # the one joining them, when they share one
+        self.clock: Callable[[], float] = clock or (
+            self.robots[0].clock if self.robots else time.monotonic
+        )
+        """The society's time: its robots', and that of the robots that join it."""
+        self.paced = paced
+        """False: the loop never waits for the next robot to be due (a simulated clock)."""
         self.listeners: list[Listener] = []
         self.cycles = 0  # cycles run so far, over every run
         self._settings: tuple[float, float, float | None, float] | None = None
@@ -125,7 +142,7 @@ class Society:
         the loop (every robot that was due has run its cycle: the moment a
         switch may be installed, never half-way through a cycle).
         Returns why it stopped: ``cycles``, ``duration`` or ``stopped``."""
-        clock = self.robots[0].clock if self.robots else time.monotonic
+        clock = self.clock
         begin = clock()
         self._settings = (begin, rate, budget, stale_periods)
         for robot in self.robots:
@@ -165,8 +182,8 @@ class Society:
         stop: threading.Event | None,
     ) -> None:
         due = [r.next_due() for r in self.robots]
-        if any(d is None for d in due):
-            return  # rate 0: no pause
+        if not self.paced or any(d is None for d in due):
+            return  # rate 0, or a simulated clock: no pause
         wake = min(d for d in due if d is not None)
         now = clock()
         wait = min(max(0.0, wake - now), POLL)
@@ -209,11 +226,18 @@ class Society:
         return [e for e in self.events if isinstance(e, Call)]
 
 
-def society(parts: Sequence[Part], registry: Registry) -> Society:
-    """Every robot of a configuration, joined in process."""
+def society(
+    parts: Sequence[Part],
+    registry: Registry,
+    *,
+    clock: Callable[[], float] = time.monotonic,
+    paced: bool = True,
+) -> Society:
+    """Every robot of a configuration, joined in process (on ``clock``)."""
     registry.require(c.name for p in parts for c in p.calls)
     transport = InProcessTransport()
-    return Society([build(p, registry, transport) for p in parts], transport)
+    robots = [build(p, registry, transport, clock=clock) for p in parts]
+    return Society(robots, transport, clock=clock, paced=paced)
 
 
 def assemble(programs: Sequence[tuple[str, Configure]], registry: Registry) -> Society:

@@ -1,0 +1,175 @@
+"""``cfgplan simulate EXPERIMENT --out DIR``: a scenario run in the 2-D simulator.
+
+EXPERIMENT is ``cross-door``, ``carry-bar`` or ``build-wall`` (the thesis's
+experiments, chapter 6) or a scenario file (README, "Simulation"). The
+configurations are planned, run on :mod:`cfgplan.runtime` in simulated time,
+monitored and reconfigured; DIR receives ``summary.json``, ``trace.jsonl``
+and the pictures. The simulator itself (:mod:`cfgplan.sim`) is imported
+only here, when the command runs: it needs the ``sim`` extra.
+
+Exit codes: 0 the task was accomplished; 1 invalid input (or the ``sim``
+extra missing); 2 usage; 3 no admissible configuration (at the start, or
+none left at the end); 4 the run ended without accomplishing the task (the
+bar fell, a block is not aligned, time ran out); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report
+from cfgplan.diagnostics import CfgplanError, error
+
+EXIT_FAILED = 4
+EXIT_INTERRUPTED = 130
+
+
+def _positive(value: float | None) -> float | None:
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise typer.BadParameter(f"{value}: must be a number of seconds more than 0")
+    return value
+
+
+def _need_extra() -> None:
+    for module in ("numpy", "shapely", "matplotlib"):
+        try:
+            importlib.import_module(module)
+        except ImportError:
+            raise error(
+                f"cfgplan simulate needs {module}, which is not installed",
+                hint="install the simulator's extra: pip install 'cfgplan[sim]'",
+            ) from None
+
+
+@app.command()
+def simulate(
+    experiment: Annotated[
+        str,
+        typer.Argument(
+            metavar="EXPERIMENT",
+            help="cross-door, carry-bar, build-wall (the thesis's experiments), "
+            "or a scenario file (.toml).",
+        ),
+    ],
+    out: Annotated[
+        Path,
+        typer.Option("--out", "-o", help="Folder for summary.json, trace.jsonl and the pictures."),
+    ],
+    seed: Annotated[
+        int | None, typer.Option("--seed", help="Seed of the noise (default: the scenario's).")
+    ] = None,
+    duration: Annotated[
+        float | None,
+        typer.Option(
+            "--duration",
+            callback=_positive,
+            help="Simulated seconds at most (default: the scenario's).",
+        ),
+    ] = None,
+    rank: Annotated[
+        int | None,
+        typer.Option(
+            "--rank",
+            min=1,
+            help="Start with the configuration (or sequence) of this rank, 1 being the cheapest "
+            "(default: the scenario's, else 1).",
+        ),
+    ] = None,
+    animate: Annotated[
+        bool, typer.Option("--animate", help="Also write animation.gif (no system package needed).")
+    ] = False,
+    force: Annotated[
+        bool, typer.Option("--force", help="Overwrite the outputs of an earlier run in --out.")
+    ] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", help="Print only the outcome, not the run's events.")
+    ] = False,
+) -> None:
+    """Run a scenario in the 2-D simulator: plan, run, fail, reconfigure, arrive (chapter 6).
+
+    Exit codes: 0 accomplished, 1 invalid input, 2 usage, 3 no admissible
+    configuration, 4 not accomplished, 130 interrupted.
+    """
+    try:
+        _need_extra()
+        from cfgplan.cli.run import diagnostic
+        from cfgplan.runtime.errors import RunError
+        from cfgplan.sim.outputs import prepare as prepare_folder
+        from cfgplan.sim.run import open_scenario, prepare
+
+        try:
+            ready = prepare(open_scenario(experiment))
+        except RunError as exc:  # the implementations cannot be loaded
+            raise diagnostic(exc) from None
+        prepare_folder(out, force)
+        code = _run(ready, out, seed, duration, rank, animate, quiet)
+    except CfgplanError as exc:
+        report(exc.diagnostics)
+        raise typer.Exit(EXIT_INPUT) from None
+    if code:
+        raise typer.Exit(code)
+
+
+def _run(
+    ready: object,
+    out: Path,
+    seed: int | None,
+    duration: float | None,
+    rank: int | None,
+    animate: bool,
+    quiet: bool,
+) -> int:
+    from cfgplan.cli.run import diagnostic
+    from cfgplan.runtime.errors import RunError
+    from cfgplan.runtime.launch import Printer
+    from cfgplan.sim.outputs import write_all
+    from cfgplan.sim.report import why
+    from cfgplan.sim.run import Prepared
+    from cfgplan.sim.run import simulate as run_simulation
+
+    assert isinstance(ready, Prepared)
+    loaded = ready.loaded
+    s = loaded.scenario
+    # a console that goes away (a closed pipe) is given up, never fatal
+    console = Printer(False, "", sys.stdout, sys.stderr)
+    echo = console.say
+    if not quiet:
+        echo(f"{s.name}: {s.title or loaded.file}")
+    try:
+        with (out / "trace.jsonl").open("w", encoding="utf-8", newline="\n") as trace:
+            run = run_simulation(
+                ready,
+                seed=seed,
+                duration=duration,
+                rank=rank,
+                trace=trace,
+                echo=None if quiet else echo,
+            )
+    except OSError as exc:
+        raise error(f"cannot write {out / 'trace.jsonl'}: {exc.strerror}") from None
+    except RunError as exc:
+        raise diagnostic(exc) from None
+    try:
+        files = write_all(run, out, animate)
+    except OSError as exc:
+        raise error(f"cannot write in {out}: {exc.strerror}") from None
+    reasons = why(run)
+    if not reasons:
+        echo(f"accomplished in {run.world.time:g} s (seed {run.world.seed})")
+    else:
+        console.say("not accomplished: " + reasons[0], sys.stderr)
+        for line in reasons[1:]:
+            console.say("  " + line, sys.stderr)
+    if not quiet:
+        echo(f"wrote {', '.join(files)} in {out}")
+    if run.ended == "interrupted":
+        return EXIT_INTERRUPTED
+    if not reasons:
+        return 0
+    return EXIT_NONE if run.stopped else EXIT_FAILED

@@ -1,0 +1,181 @@
+"""What a simulation records: the trace, the events that matter, the
+configurations that ran and when.
+
+The :class:`Recorder` listens to every robot (a runtime listener, 5.5). Each
+event becomes one JSON line of the trace, the runtime's schema (README,
+"The trace") with simulated time: ``"t"`` is the simulation's clock, and the
+fields that measure the host's wall clock — a call's ``duration``, a
+switch's ``plan_ms`` and ``latency``, a message's ``sent`` — are left out,
+so that one seed gives one trace, byte for byte. Values longer than
+:data:`ELIDE` characters of JSON (a laser scan) are written as
+``{"$elided": "dict"}`` (their type).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import IO, Any
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner.task import Ground
+from cfgplan.runtime.events import Adaptation, Call, Data, Event, Transfer
+from cfgplan.sim.world import World
+
+__all__ = ["ELIDE", "Notable", "Recorder", "Segment"]
+
+ELIDE = 400
+"""Characters of JSON beyond which a value is elided in the trace."""
+
+_WALL_CLOCK = ("duration", "plan_ms", "latency", "sent")
+NOTABLE = (
+    "inject",
+    "failure",
+    "recovery",
+    "facts",
+    "switch",
+    "no-configuration",
+    "abort",
+    "achieved",
+)
+
+
+@dataclass(frozen=True)
+class Notable:
+    """An event of monitoring and reconfiguration, at simulated time ``t``."""
+
+    t: float
+    what: str
+    record: dict[str, Any]
+
+
+@dataclass
+class Segment:
+    """A configuration that ran from ``start`` to ``end`` for ``goal`` (``None``: nothing ran)."""
+
+    id: int
+    config: Configuration | None
+    goal: Ground
+    start: float
+    end: float | None = None
+
+
+@dataclass
+class Recorder:
+    """A listener of every robot of a simulated society (module docstring)."""
+
+    world: World
+    trace: IO[str] | None = None
+    echo: Callable[[str], None] | None = None
+    notable: list[Notable] = field(default_factory=list)
+    last_calls: dict[tuple[str, ...], Call] = field(default_factory=dict)
+    segments: list[Segment] = field(default_factory=list)
+    lines: int = 0
+
+    def __call__(self, event: Event) -> None:
+        if isinstance(event, Call):
+            self.last_calls[event.instance] = event
+            event = replace(event, inputs=_elided(event.inputs), outputs=_elided(event.outputs))
+        elif isinstance(event, Transfer):
+            event = replace(event, value=_elide(event.value))
+        record = event.record()
+        now = round(self.world.time, 4)
+        record["t"] = now
+        for key in _WALL_CLOCK:
+            record.pop(key, None)
+        if self.trace is not None:
+            self.trace.write(json.dumps(record, separators=(",", ":"), sort_keys=False) + "\n")
+            self.lines += 1
+        if isinstance(event, Adaptation) and event.what in NOTABLE:
+            self.notable.append(Notable(now, event.what, record))
+            if self.echo is not None:
+                self.echo(_line(record))
+
+    def running(self, reconfigurator_id: int, config: Configuration | None, goal: Ground) -> None:
+        """After each pass: note a new configuration when the society switched."""
+        if self.segments and self.segments[-1].id == reconfigurator_id:
+            return
+        now = round(self.world.time, 4)
+        if self.segments:
+            self.segments[-1].end = now
+        self.segments.append(Segment(reconfigurator_id, config, goal, now))
+
+    def close(self) -> None:
+        if self.segments and self.segments[-1].end is None:
+            self.segments[-1].end = round(self.world.time, 4)
+
+    def of(self, *what: str) -> list[Notable]:
+        return [n for n in self.notable if n.what in what]
+
+
+def _items(value: object, budget: int) -> int:
+    """How many scalars ``value`` holds, counting no further than ``budget``."""
+    if isinstance(value, dict):
+        value = list(value.values())
+    if not isinstance(value, list | tuple):
+        return 1
+    count = 0
+    for item in value:
+        count += _items(item, budget - count)
+        if count > budget:
+            break
+    return count
+
+
+def _elide(value: object) -> object:
+    """``value``, or a note of its size when its JSON is longer than :data:`ELIDE`."""
+    if _items(value, ELIDE // 4) > ELIDE // 4:  # surely long: no need to write it out
+        return {"$elided": type(value).__name__}
+    try:
+        text = json.dumps(value, separators=(",", ":"))
+    except (TypeError, ValueError):
+        return value  # not JSON: the trace writes it as the runtime does
+    if len(text) <= ELIDE:
+        return value
+    return {"$elided": type(value).__name__}
+
+
+def _elided(pairs: tuple[tuple[Data, object], ...]) -> tuple[tuple[Data, object], ...]:
+    return tuple((data, _elide(value)) for data, value in pairs)
+
+
+def _line(record: dict[str, Any]) -> str:
+    t = f"{record['t']:7.1f} s"
+    what = record["event"]
+    if what == "switch":
+        was = "nothing" if record["from_cost"] is None else record["from_cost"]
+        return (
+            f"{t}  switch {was} -> {record['to_cost']} "
+            f"({record['cause']}; {record['source'] or 'installed'})"
+        )
+    if what == "failure":
+        said = f": {detail(str(record['detail']))}" if record.get("detail") else ""
+        seen = f"{record['how']}, seen by {record['detected_by']}"
+        return f"{t}  failure of {record['resource']} ({seen}){said}"
+    if what == "recovery":
+        return f"{t}  {record['resource']} works again ({record['how']})"
+    if what == "achieved":
+        return f"{t}  accomplished: {record['functionality']}"
+    if what == "no-configuration":
+        return f"{t}  no admissible configuration ({record['cause']})"
+    if what == "inject":
+        return f"{t}  scripted: {record['spec']}"
+    if what == "abort":
+        return f"{t}  switch aborted: {record['reason']}"
+    return f"{t}  {what}: " + ", ".join(
+        f"{k}={record[k]}" for k in ("added", "removed") if k in record
+    )
+
+
+_RAISED = re.compile(
+    r"^the implementation raised ResourceFailure: (?P<what>.*?)(?: \([^()]*:\d+ in [^()]*\))?$"
+)
+
+
+def detail(text: str) -> str:
+    """What a resource failure said, without the implementation's file and line."""
+    found = _RAISED.match(text)
+    return found.group("what") if found else text
+
