@@ -90,7 +90,7 @@ def diagnostic(exc: RunError) -> CfgplanError:
     return CfgplanError([Diagnostic("error", exc.message, span, exc.hint)])
 
 
-@app.command(short_help="Run a configuration: every robot here, or one on the network (5.2).")
+@app.command(short_help="Run a configuration: all robots here, or one on the network (5.2).")
 def run(
     domain: DomainArg,
     state: StateArg,

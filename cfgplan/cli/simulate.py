@@ -16,7 +16,6 @@ bar fell, a block is not aligned, time ran out); 130 interrupted.
 from __future__ import annotations
 
 import importlib
-import math
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -24,16 +23,11 @@ from typing import Annotated
 import typer
 
 from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report
+from cfgplan.cli.options import count_of, number_of
 from cfgplan.diagnostics import CfgplanError, error
 
 EXIT_FAILED = 4
 EXIT_INTERRUPTED = 130
-
-
-def _positive(value: float | None) -> float | None:
-    if value is not None and not (math.isfinite(value) and value > 0):
-        raise typer.BadParameter(f"{value}: must be a number of seconds more than 0")
-    return value
 
 
 def _need_extra() -> None:
@@ -47,10 +41,10 @@ def _need_extra() -> None:
             ) from None
 
 
-@app.command()
+@app.command(short_help="Run a thesis experiment in the 2-D simulator (chapter 6).")
 def simulate(
     experiment: Annotated[
-        str,
+        Path,
         typer.Argument(
             metavar="EXPERIMENT",
             help="cross-door, carry-bar, build-wall (the thesis's experiments), "
@@ -59,16 +53,28 @@ def simulate(
     ],
     out: Annotated[
         Path,
-        typer.Option("--out", "-o", help="Folder for summary.json, trace.jsonl and the pictures."),
+        typer.Option(
+            "--out",
+            "-o",
+            metavar="DIR",
+            help="Folder for summary.json, trace.jsonl and the pictures.",
+        ),
     ],
     seed: Annotated[
-        int | None, typer.Option("--seed", help="Seed of the noise (default: the scenario's).")
+        int | None,
+        typer.Option(
+            "--seed",
+            metavar="N",
+            parser=count_of(0),
+            help="Seed of the noise (default: the scenario's).",
+        ),
     ] = None,
     duration: Annotated[
         float | None,
         typer.Option(
             "--duration",
-            callback=_positive,
+            metavar="S",
+            parser=number_of(0, above=True),
             help="Simulated seconds at most (default: the scenario's).",
         ),
     ] = None,
@@ -76,7 +82,8 @@ def simulate(
         int | None,
         typer.Option(
             "--rank",
-            min=1,
+            metavar="N",
+            parser=count_of(1),
             help="Start with the configuration (or sequence) of this rank, 1 being the cheapest "
             "(default: the scenario's, else 1).",
         ),
@@ -91,7 +98,7 @@ def simulate(
         bool, typer.Option("--quiet", help="Print only the outcome, not the run's events.")
     ] = False,
 ) -> None:
-    """Run a scenario in the 2-D simulator: plan, run, fail, reconfigure, arrive (chapter 6).
+    """Simulate a thesis experiment in 2-D: run, fail, reconfigure (chapter 6).
 
     Exit codes: 0 accomplished, 1 invalid input, 2 usage, 3 no admissible
     configuration, 4 not accomplished, 130 interrupted.
@@ -104,7 +111,7 @@ def simulate(
         from cfgplan.sim.run import open_scenario, prepare
 
         try:
-            ready = prepare(open_scenario(experiment))
+            ready = prepare(open_scenario(str(experiment)))
         except RunError as exc:  # the implementations cannot be loaded
             raise diagnostic(exc) from None
         prepare_folder(out, force)

@@ -13,7 +13,7 @@ from pathlib import Path
 from cfgplan.backends.dot import configuration_dot
 from cfgplan.backends.render import render
 from cfgplan.configuration.cost import fmt
-from cfgplan.configuration.describe import call_text
+from cfgplan.notation import call_text
 from cfgplan.sim.record import Segment
 
 __all__ = ["draw_configurations"]

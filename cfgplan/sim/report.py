@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from cfgplan.configuration.describe import call_text
+from cfgplan.notation import call_text
 from cfgplan.reconfigure.coordinate import upstream
 from cfgplan.sim.blocks import alignment
 from cfgplan.sim.onboard import notes

@@ -34,9 +34,9 @@ from typing import IO
 
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
-from cfgplan.configuration.describe import call_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic, error
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.sequence import SequenceSearch
