@@ -1,10 +1,14 @@
 """Configuration diagrams in DOT, drawn like the thesis's Fig. 4.3, 6.4, 6.8 and 6.11.
 
-A box per functionality shows its NAME and ``label : (ARGS)`` in capitals as
-the figures print them (``CAMERA`` / ``F8 : (EMIL)``). Each robot gets one fill
-colour and one cluster; global channels are bold black arrows, local channels
-thin grey ones (the captions of Fig. 4.3 and 6.11), each labelled with its data
-and, when declared, its bandwidth. A legend names the colours and edge styles.
+A box per functionality shows its name in bold and ``label : (args)`` below,
+laid out as the figures do (``camera`` / ``F8 : (Emil)``) but with the names'
+case kept as written: names are case-sensitive (README), and the figures'
+capitals would turn ``Emil`` and ``EMIL`` into one robot. Each robot gets one
+fill colour and one cluster; global channels are bold black arrows, local
+channels thin grey ones (the captions of Fig. 4.3 and 6.11), each labelled with
+its data and, when declared, its bandwidth. A local channel is drawn inside its
+robot's cluster, so that Graphviz keeps its label there too. A legend names the
+colours and edge styles.
 
 Only DOT source is built here (the ``graphviz`` package needs no binary for
 that); :mod:`cfgplan.backends.render` lays it out. The source is deterministic:
@@ -95,15 +99,15 @@ def robot_colours(robots: Sequence[str]) -> dict[str, str]:
 
 
 def functionality_label(f: FunctionalityInstance) -> str:
-    """``<<B>CAMERA</B><BR/>F8 : (EMIL)>``: the box text of Fig. 4.3 as an HTML-like label."""
-    name = html_text(f.name.upper())
-    where = html_text(f"{f.label} : ({' '.join(a.upper() for a in f.args)})")
+    """``<<B>camera</B><BR/>F8 : (Emil)>``: the box text of Fig. 4.3 as an HTML-like label."""
+    name = html_text(f.name)
+    where = html_text(f"{f.label} : ({' '.join(f.args)})")
     return f"<<B>{name}</B><BR/>{where}>"
 
 
 def channel_label(ch: Channel) -> str:
-    """``IMAGE(EMIL)``, with ``bandwidth 20`` on a second line when declared."""
-    data = dot_text(f"{ch.data[0]}({', '.join(ch.data[1:])})".upper())
+    """``image(Emil)``, with ``bandwidth 20`` on a second line when declared."""
+    data = dot_text(f"{ch.data[0]}({', '.join(ch.data[1:])})")
     if ch.bandwidth is not None:
         data += f"\\nbandwidth {fmt(ch.bandwidth)}"
     return data
@@ -130,11 +134,20 @@ def configuration_graph(
             for f in mine:
                 cluster.node(f.label, functionality_label(f), fillcolor=colours[robot])
             _keep_layers(cluster, [f.label for f in mine], layer, wired)
+            for ch in config.channels:
+                if _inside(ch) and ch.source_robot == robot:
+                    cluster.edge(ch.source, ch.target, channel_label(ch), **LOCAL_EDGE)
     for ch in config.channels:
-        style = GLOBAL_EDGE if ch.kind == "global" else LOCAL_EDGE
-        graph.edge(ch.source, ch.target, channel_label(ch), **style)
+        if not _inside(ch):
+            style = GLOBAL_EDGE if ch.kind == "global" else LOCAL_EDGE
+            graph.edge(ch.source, ch.target, channel_label(ch), **style)
     _legend(graph, robots, colours)
     return graph
+
+
+def _inside(ch: Channel) -> bool:
+    """Whether ``ch`` is drawn inside its robot's cluster: a local channel."""
+    return ch.kind == "local" and ch.source_robot == ch.target_robot
 
 
 def layers(config: Configuration) -> dict[str, int]:

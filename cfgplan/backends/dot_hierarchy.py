@@ -6,10 +6,13 @@ caller's arguments, as the figure prints them (``get-door-info(rh1, r, d)`` ->
 ``get-door-info(rh1, d)`` -> ``camera(rh1)``). Methods are grey boxes,
 functionalities white ones. A method with several versions gets one small
 ``version k`` node per version, showing that version's preconditions, and its
-body hangs from there. The drawing is a tree, like the figure (``camera(rh1)``
-appears under each method that uses it); a method already being expanded
-higher up the same branch is drawn dashed, with a dashed arrow back to it,
-and is not expanded again, so recursive methods end.
+body hangs from there. Functionalities are leaves drawn under each method
+that uses them, like the figure (``camera(rh1)`` appears three times); a
+method call drawn once is not drawn again: every other caller points to the
+one box, so a hierarchy that uses one method in many places (build-wall's
+``get-block-data(robserv, b, w)``) stays readable. A method already being
+expanded higher up the same branch is drawn dashed, with a dashed arrow back
+to it, and is not expanded again, so recursive methods end.
 
 Node ids are the paths of body labels from the root (``goal.f1.v2.f3``), so the
 DOT source is the same on every run.
@@ -44,6 +47,7 @@ class _Builder:
     count: int = 0
     has_versions: bool = False
     path: dict[tuple[str, int], str] = field(default_factory=dict)  # method -> node id
+    drawn: dict[Call, str] = field(default_factory=dict)  # method call -> its one node id
 
     def add(self, node_id: str, label: str, **attrs: str) -> None:
         self.count += 1
@@ -101,9 +105,12 @@ class _Builder:
             self.graph.edge(
                 node_id, self.path[signature], style="dashed", constraint="false", label="recurs"
             )
+        elif item in self.drawn:
+            self.graph.edge(parent, self.drawn[item])
         elif signature in self.task.methods:
             self.add(node_id, text, **METHOD)
             self.graph.edge(parent, node_id)
+            self.drawn[item] = node_id
             return True
         elif signature in self.task.functionalities:
             self.add(node_id, text, **FUNCTIONALITY)
@@ -183,6 +190,7 @@ def hierarchy_graph(task: Task, goal: Sequence[str], *, max_nodes: int = MAX_NOD
     graph = new_graph("hierarchy", f"Methods (grey) and functionalities (white) for {text}")
     builder = _Builder(task, graph, max_nodes)
     builder.add("goal", dot_text(text), **METHOD)
+    builder.drawn[root] = "goal"
     builder.expand("goal", root)
     _legend(graph, builder.has_versions)
     return graph

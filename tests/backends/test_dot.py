@@ -140,7 +140,8 @@ def test_golden_cross_door_hierarchy(tmp_path: Path) -> None:
 @pytest.mark.parametrize("paths", [CROSS, CARRY, WALL], ids=["fig4.3", "fig6.8", "fig6.11"])
 def test_every_functionality_is_a_box_in_its_robots_cluster(paths: tuple[str, str]) -> None:
     """Fig. 4.3 / 6.11: one box per functionality, coloured by its robot (one
-    colour and one cluster per robot), showing NAME and ``label : (ARGS)``."""
+    colour and one cluster per robot), showing its name and ``label : (args)``
+    in the case they were written (issue 10: names are case-sensitive)."""
     problem, config = planned(paths)
     dot = configuration_dot(config, first=problem.goal_call[1:])
     boxes = nodes(dot)
@@ -158,8 +159,8 @@ def test_every_functionality_is_a_box_in_its_robots_cluster(paths: tuple[str, st
         assert f"fillcolor={colours[robot]}]" in blocks["cluster_legend"]
     for f in config.functionalities:
         attrs = boxes[f.label]
-        assert f"<B>{f.name.upper()}</B>" in attrs
-        assert f"{f.label} : ({' '.join(a.upper() for a in f.args)})" in attrs
+        assert f"<B>{f.name}</B>" in attrs
+        assert f"{f.label} : ({' '.join(f.args)})" in attrs
         assert f"fillcolor={colours[f.robot]}" in attrs
 
 
@@ -171,13 +172,41 @@ def test_global_channels_bold_black_local_thin_grey(paths: tuple[str, str]) -> N
     dot = configuration_dot(config)
     drawn = edges(dot)
     assert len(drawn) == len(config.channels)
-    for ch, (tail, head, attrs) in zip(config.channels, drawn, strict=True):
-        assert (tail, head) == (ch.source, ch.target)
+    unmatched = list(drawn)
+    for ch in config.channels:
+        data = f"{ch.data[0]}({', '.join(ch.data[1:])})"
         style = GLOBAL_EDGE if ch.kind == "global" else LOCAL_EDGE
-        for key, value in style.items():
-            assert f"{key}={value}" in attrs
-        data = f"{ch.data[0]}({', '.join(ch.data[1:])})".upper()
-        assert f'label="{data}' in attrs
+        match = [
+            e
+            for e in unmatched
+            if (e[0], e[1]) == (ch.source, ch.target)
+            and f'label="{data}' in e[2]
+            and all(f"{key}={value}" in e[2] for key, value in style.items())
+        ]
+        assert match, f"no arrow for {ch}"
+        unmatched.remove(match[0])
+
+
+@pytest.mark.parametrize("paths", [CROSS, CARRY, WALL], ids=["fig4.3", "fig6.8", "fig6.11"])
+def test_local_channels_are_drawn_inside_their_robots_cluster(paths: tuple[str, str]) -> None:
+    """Issue 10: a local channel's arrow, and so its label, belongs to its
+    robot's cluster; a global channel's arrow to no cluster."""
+    problem, config = planned(paths)
+    dot = configuration_dot(config, first=problem.goal_call[1:])
+    robots = robot_order(config, problem.goal_call[1:])
+    blocks = clusters(dot)
+    outside = dot
+    for block in blocks.values():
+        outside = outside.replace(block, "")
+    for index, robot in enumerate(robots):
+        inside = edges(blocks[f"cluster_{index}_{robot}"])
+        mine = [c for c in config.channels if c.kind == "local" and c.source_robot == robot]
+        assert sorted((t, h) for t, h, _ in inside) == sorted((c.source, c.target) for c in mine)
+    globals_ = [c for c in config.channels if c.kind == "global"]
+    assert sorted((t, h) for t, h, _ in edges(outside)) == sorted(
+        (c.source, c.target) for c in globals_
+    )
+    assert globals_ and len(globals_) < len(config.channels)  # both kinds are drawn
 
 
 def test_cross_door_44_counts_and_colours() -> None:
@@ -214,8 +243,8 @@ def test_bandwidth_is_shown_with_the_data() -> None:
     )
     configs, _ = plan(problem.task, problem.goal_call, limit=1)
     dot = configuration_dot(configs[0])
-    assert 'label="POS(PIPPI, DOOR1)\\nbandwidth 20"' in dot
-    assert 'label="ORIENT(PIPPI, DOOR1)\\nbandwidth 10"' in dot
+    assert 'label="pos(Pippi, Door1)\\nbandwidth 20"' in dot
+    assert 'label="orient(Pippi, Door1)\\nbandwidth 10"' in dot
 
 
 def test_dot_is_deterministic_across_hash_seeds(tmp_path: Path) -> None:
@@ -298,6 +327,24 @@ def test_recursive_method_ends(tmp_path: Path) -> None:
     assert '"goal.f1.v2.f1" [label="relay(o)\\n(recursive)"' in dot
     assert '"goal.f1.v2.f1" -> "goal.f1" [label=recurs constraint=false style=dashed]' in dot
     assert dot.count("relay(") == 2
+
+
+def test_hierarchy_draws_a_method_call_once() -> None:
+    """Issue 10: build-wall's hierarchy uses get-block-data(robserv, b, w) under
+    all four versions of do-push; it is drawn once, and each caller points to
+    it, so the picture stays readable. Functionalities stay leaves under each
+    method that uses them, as in Fig. 4.4."""
+    problem, _ = planned(WALL)
+    dot = hierarchy_dot(problem.task, problem.goal_call)
+    grey = re.findall(r'^\t"?([\w.]+)"? \[label="([^"]+)" fillcolor=gray80', dot, re.M)
+    labels = [label for _, label in grey]
+    assert len(labels) == len(set(labels))  # no method call twice
+    block_data = [node for node, label in grey if label == "get-block-data(robserv, b, w)"]
+    assert len(block_data) == 1
+    callers = re.findall(rf'^\t"?([\w.]+)"? -> "{re.escape(block_data[0])}"$', dot, re.M)
+    assert len(callers) == 4  # version 1 and 2 of do-push(rleft, ...) and (rright, ...)
+    assert dot.count('[label="laser(robserv)"') == 4  # a leaf under each method using it
+    assert len(re.findall(r"^\t\S+ \[label=", dot, re.M)) <= 60  # 130 drawn as a tree
 
 
 def test_hierarchy_too_large_is_an_error() -> None:
