@@ -6,8 +6,10 @@ or ``emil.py`` for :mod:`cfgplan.runtime`; plus ``run_all.py`` for Python)
 and the whole configuration description in ``configuration.txt``, which ends
 with the robot -> file table. A robot's file name is made safe by
 :mod:`cfgplan.safe_names` (``../../x`` cannot leave the folder). The files are
-written all at once by :func:`cfgplan.files.write_folder`; existing files are
-never overwritten without ``--force``.
+written all at once, with the record of what was written, by
+:func:`cfgplan.emission.write_emission`: ``--force`` replaces an earlier
+emission in the folder whole, and files cfgplan did not write are never
+overwritten or removed.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import printable
-from cfgplan.files import write_folder
+from cfgplan.emission import write_emission
 from cfgplan.notation import call_text
 from cfgplan.problem import Problem
 
@@ -115,6 +117,10 @@ def emit(
     """
     problem = load_problem(domain, state, goal, weights)
     texts = files(problem, choose(problem, rank), rank, lang)
-    write_folder(output, {name: text.encode("utf-8") for name, text in texts.items()}, force)
+    removed = write_emission(
+        output, {name: text.encode("utf-8") for name, text in texts.items()}, force
+    )
     for name in texts:
         say(f"wrote {output / name}")
+    for path in removed:
+        say(f"removed {path} (from the earlier emission)")

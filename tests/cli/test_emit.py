@@ -1,4 +1,5 @@
-"""``cfgplan emit``: files per robot, the description, and no silent overwrite."""
+"""``cfgplan emit``: files per robot, the description, and no silent overwrite;
+``--force`` replaces an earlier emission whole and never touches the user's files."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from typer.testing import CliRunner
 import cfgplan.cli.emit  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
+from cfgplan.emission import RECORD
 from tests.backends.support import CROSS, DOMAINS, GOLDEN, UPDATE
 
 ARGS = [str(DOMAINS / CROSS[0]), str(DOMAINS / CROSS[1])]
@@ -18,7 +20,12 @@ def test_emit_lisp_writes_one_file_per_robot_and_the_description(tmp_path: Path)
     out = tmp_path / "code"
     result = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "lisp", "-o", str(out)])
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == ["configuration.txt", "emil.lisp", "pippi.lisp"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        RECORD,
+        "configuration.txt",
+        "emil.lisp",
+        "pippi.lisp",
+    ]
     emil = (out / "emil.lisp").read_text()
     assert emil.startswith(
         ";; Emil's executable individual configuration (thesis 5.3; cfgplan emit).\n"
@@ -34,6 +41,7 @@ def test_emit_python_writes_modules_and_run_all(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in tmp_path.iterdir()) == [
+        RECORD,
         "configuration.txt",
         "emil.py",
         "pippi.py",
@@ -45,17 +53,63 @@ def test_emit_python_writes_modules_and_run_all(tmp_path: Path) -> None:
             assert (tmp_path / name).read_text() == (golden / name).read_text()
 
 
-def test_emit_refuses_to_overwrite_without_force(tmp_path: Path) -> None:
+def test_emit_never_overwrites_a_file_it_did_not_write(tmp_path: Path) -> None:
+    """Issue 10: a file of the user's in the way is refused, even with --force,
+    and named; nothing at all is written."""
     (tmp_path / "emil.lisp").write_text("mine\n")
-    result = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)])
-    assert result.exit_code == 1
-    assert isinstance(result.exception, CfgplanError)
-    assert "emil.lisp" in str(result.exception) and "--force" in str(result.exception)
-    assert (tmp_path / "emil.lisp").read_text() == "mine\n"
-    assert not (tmp_path / "pippi.lisp").exists()  # nothing written at all
-    result = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path), "--force"])
+    for force in ([], ["--force"]):
+        result = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path), *force])
+        assert result.exit_code == 1
+        assert isinstance(result.exception, CfgplanError)
+        assert "emil.lisp" in str(result.exception)
+        assert "did not write" in str(result.exception)
+        assert (tmp_path / "emil.lisp").read_text() == "mine\n"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["emil.lisp"]  # nothing written
+
+
+def test_emit_refuses_an_earlier_emission_without_force(tmp_path: Path) -> None:
+    first = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)])
+    assert first.exit_code == 0, first.output
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    again = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path)])
+    assert again.exit_code == 1
+    assert isinstance(again.exception, CfgplanError)
+    (refusal,) = again.exception.diagnostics
+    assert refusal.message.endswith(
+        "holds an earlier emission (configuration.txt, emil.lisp, pippi.lisp)"
+    )
+    assert refusal.hint is not None and "--force" in refusal.hint
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_emit_force_replaces_the_earlier_emission_whole(tmp_path: Path) -> None:
+    """Issue 10: LISP then Python into one folder with --force: no .lisp robot
+    file of the earlier emission remains; the user's own notes stay."""
+    assert CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)]).exit_code == 0
+    (tmp_path / "notes.txt").write_text("my notes\n")
+    result = CliRunner().invoke(
+        app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path), "--force"]
+    )
     assert result.exit_code == 0, result.output
-    assert (tmp_path / "emil.lisp").read_text() != "mine\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [RECORD, "configuration.txt", "emil.py", "pippi.py", "run_all.py", "notes.txt"]
+    )
+    assert f"removed {tmp_path / 'emil.lisp'} (from the earlier emission)" in result.output
+    assert (tmp_path / "notes.txt").read_text() == "my notes\n"
+
+
+def test_emit_force_keeps_an_emitted_file_the_user_changed(tmp_path: Path) -> None:
+    """An emitted file edited since is the user's now: --force refuses to remove it."""
+    assert CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)]).exit_code == 0
+    edited = tmp_path / "emil.lisp"
+    edited.write_text(edited.read_text() + ";; my change\n")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    result = CliRunner().invoke(
+        app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path), "--force"]
+    )
+    assert result.exit_code == 1
+    assert "emil.lisp" in str(result.exception) and "pippi.lisp" not in str(result.exception)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
 def test_emit_is_deterministic(tmp_path: Path) -> None:
@@ -66,6 +120,15 @@ def test_emit_is_deterministic(tmp_path: Path) -> None:
         assert result.exit_code == 0
     for f in (tmp_path / "a").iterdir():
         assert f.read_bytes() == (tmp_path / "b" / f.name).read_bytes()
+
+
+def test_emit_force_again_gives_the_same_files(tmp_path: Path) -> None:
+    """Replacing an emission by the same one is allowed with --force, byte for byte."""
+    assert CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)]).exit_code == 0
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    result = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path), "--force"])
+    assert result.exit_code == 0, result.output
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
 def test_emit_a_rank_that_does_not_exist_exits_3(tmp_path: Path) -> None:
