@@ -176,6 +176,7 @@ def to_python(part: RobotPart, title: str) -> str:
         objects = f", {_tuple(call.objects)}" if call.objects else ""
         if call.freq is not None:
             objects += f", freq={_number(call.freq)}"
+        objects += f", inputs={len(call.inputs)}"
         lines += _signature(call)
         head = f"{_wrapper(call)} = robot.wrapper"
         lines += _statement("    ", head, f"{_str(f.label)}, {_str(f.name)}{objects}")

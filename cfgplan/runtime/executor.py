@@ -31,6 +31,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
+from cfgplan.notation import instance_text
 from cfgplan.runtime.channel import Channel, make_local_channel
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Event, Lifecycle, Presence, Transfer
@@ -128,16 +129,27 @@ class Robot:
         return channel
 
     def wrapper(
-        self, label: str, name: str, objects: Sequence[str] = (), *, freq: float | None = None
+        self,
+        label: str,
+        name: str,
+        objects: Sequence[str] = (),
+        *,
+        freq: float | None = None,
+        inputs: int | None = None,
     ) -> Wrapper:
         """The wrapper of functionality ``label``, run at ``freq`` per second if
-        given (3.2); fails at once if ``name`` has no implementation."""
+        given (3.2); fails at once if ``name`` has no implementation, or one
+        that cannot take the ``objects`` and ``inputs`` inputs."""
+        implementation = self.registry.lookup(name)
+        implementation.check(
+            instance_text(label, name, (self.name, *objects)), len(objects), inputs
+        )
         wrapper = Wrapper(
             self.name,
             label,
             name,
             objects,
-            self.registry.lookup(name),
+            implementation,
             self._record,
             freq=freq,
             clock=self._now,

@@ -111,7 +111,9 @@ def install(robot: Robot, part: Part) -> Installed:
     for call in part.calls:
         wrapper = old_wrappers.pop((call.label, call.name, call.objects), None)
         if wrapper is None:
-            wrapper = robot.wrapper(call.label, call.name, call.objects, freq=call.freq)
+            wrapper = robot.wrapper(
+                call.label, call.name, call.objects, freq=call.freq, inputs=len(call.inputs)
+            )
             started.append(str(wrapper))
         else:
             kept.append(str(wrapper))

@@ -12,7 +12,9 @@ implemented on a robot". Users declare one with :func:`functionality`::
 
 An implementation receives the object arguments (the functionality's
 arguments after the robot, as the LISP call passes them) and then one value
-per ``:in`` descriptor, in ``:in`` order. It returns a tuple or list with one
+per ``:in`` descriptor, in ``:in`` order (an implementation that cannot take
+them is refused when the robot is configured, before anything runs: see
+:meth:`Implementation.check`). It returns a tuple or list with one
 value per ``:out`` descriptor in ``:out`` order, or the value itself when
 there is one output; an action (no output) returns nothing. ``None`` in place
 of an output means "no data this time": that output's channels are not
@@ -36,6 +38,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import inspect
 import sys
 import traceback
 from collections.abc import Callable, Iterable
@@ -65,6 +68,63 @@ class Implementation:
     def allowed(self, *objects: object) -> bool:
         """Whether the precondition holds for these object arguments."""
         return True if self.precondition is None else bool(self.precondition(*objects))
+
+    def check(self, instance: str, objects: int, inputs: int | None) -> None:
+        """Refuse, before anything runs, an implementation that cannot be called
+        as the functionality ``instance`` calls it: ``objects`` object
+        arguments, then ``inputs`` inputs (``None``: not known, not checked);
+        its ``precondition`` and ``stop`` with the object arguments alone."""
+        parts: list[tuple[str, Callable[..., object] | None, int]] = [
+            ("function", self.function if inputs is not None else None, objects + (inputs or 0)),
+            ("precondition", self.precondition, objects),
+            ("stop", self.stop, objects),
+        ]
+        for role, function, count in parts:
+            if function is None:
+                continue
+            problem = _cannot_take(function, count)
+            if problem is None:
+                continue
+            passed = f"{objects} object argument{'' if objects == 1 else 's'}"
+            if role == "function":
+                passed += f" then {inputs} input{'' if inputs == 1 else 's'} (in :in order)"
+            file, line = _where(function)
+            raise RunError(
+                f"the {role} {_name(function)} declared for {self.name} cannot be called "
+                f"as {instance} calls it, with {passed}: {problem}",
+                hint="an implementation takes the functionality's object arguments (those "
+                "after the robot), then one value per :in descriptor; its precondition and "
+                'stop take the object arguments alone (README, "Writing implementations")',
+                file=file,
+                line=line,
+                column=None if line is None else 1,
+            )
+
+
+def _cannot_take(function: Callable[..., object], count: int) -> str | None:
+    """Why ``function`` cannot be called with ``count`` positional arguments;
+    ``None`` when it can, or when its signature cannot be read (a builtin)."""
+    try:
+        signature = inspect.signature(function)
+    except (TypeError, ValueError):
+        return None
+    try:
+        signature.bind(*range(count))
+    except TypeError as exc:
+        return str(exc)
+    return None
+
+
+def _name(function: Callable[..., object]) -> str:
+    return printable(getattr(function, "__qualname__", None) or repr(function))
+
+
+def _where(function: Callable[..., object]) -> tuple[str | None, int | None]:
+    """The file and line where ``function`` is defined, when Python knows them."""
+    code = getattr(inspect.unwrap(function), "__code__", None)
+    if code is None:
+        return None, None
+    return code.co_filename, code.co_firstlineno
 
 
 def functionality(

@@ -23,6 +23,7 @@ from typer.testing import CliRunner
 import cfgplan.cli.commands  # noqa: F401  (registers the commands)
 from cfgplan.backends.lisp import lisp_symbol
 from cfgplan.cli.app import app
+from cfgplan.emission import RECORD
 from cfgplan.diagnostics import printable
 
 # sense runs on the helper ?h, act on ?r; one global channel joins them, and the
@@ -107,7 +108,7 @@ def test_python_emission_stays_in_its_folder_and_compiles(tmp_path: Path, name: 
     written = _only_inside(root, out)
     files = _robot_files(out)
     assert set(files) == {printable(name), "Emil"}
-    assert {p.name for p in written} == {*files.values(), "run_all.py", "configuration.txt"}
+    assert {p.name for p in written} == {*files.values(), "run_all.py", "configuration.txt", RECORD}
     for path in written:
         if path.suffix != ".py":
             continue
@@ -128,7 +129,7 @@ def test_lisp_emission_stays_in_its_folder_and_reads_back(tmp_path: Path, name: 
     root, out = _emit(tmp_path, name, "Emil", name, "lisp")
     written = _only_inside(root, out)
     files = _robot_files(out)
-    assert {p.name for p in written} == {*files.values(), "configuration.txt"}
+    assert {p.name for p in written} == {*files.values(), "configuration.txt", RECORD}
     mine = read_lisp((out / files[printable(name)]).read_text(encoding="utf-8"))
     assert name in mine or name.upper() in mine  # bare symbols are read in upper case
     if name != lisp_symbol(name):

@@ -181,7 +181,7 @@ def test_a_freq_of_the_domain_reaches_the_emitted_wrapper(tmp_path: Path) -> Non
     compile(text, "ada.py", "exec")
     wrappers = [line.strip() for line in text.splitlines() if "= robot.wrapper(" in line]
     assert [w.split("robot.wrapper")[1] for w in wrappers] == [
-        '("F2", "laser", freq=20)',
-        '("F4", "log")',
-        '("F3", "follow", freq=2.5)',
+        '("F2", "laser", freq=20, inputs=0)',
+        '("F4", "log", inputs=1)',
+        '("F3", "follow", freq=2.5, inputs=1)',
     ]

@@ -120,3 +120,33 @@ def test_a_broken_implementation_file_is_shown_with_a_caret(tmp_path: Path) -> N
     lines = out.stderr.splitlines()
     assert lines[0].startswith(f"{impl}:2:8: error: the implementations in {impl} do not compile")
     assert lines[1:3] == ["    2 | POSE = (1.0, 2.0", "      |        ^"]
+
+
+def test_an_implementation_of_the_wrong_arity_is_refused_before_the_run(tmp_path: Path) -> None:
+    """Issue 10: refused at start, naming the functionality and the function
+    with its file and line, not on the first call; the emitted run_all.py too."""
+    impl = tmp_path / "impl.py"
+    text = EXAMPLE_IMPL.read_text(encoding="utf-8")
+    wrong = "def measure_door(door: str) -> tuple[Pos, float] | None:"
+    text = text.replace(
+        "def measure_door(door: str, image: Image) -> tuple[Pos, float] | None:", wrong
+    )
+    assert wrong in text
+    impl.write_text(text, encoding="utf-8")
+    line = text[: text.index(wrong)].count("\n")  # the decorator's line, as Python reports it
+    emitted = tmp_path / "out"
+    done = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "python", "-o", str(emitted)])
+    assert done.exit_code == 0, done.output
+    commands = (
+        [sys.executable, "-m", "cfgplan", "run", *ARGS, "--impl", str(impl), "--cycles", "3"],
+        [sys.executable, str(emitted / "run_all.py"), "--impl", str(impl), "--cycles", "3"],
+    )
+    for command in commands:
+        out = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=60)
+        assert out.returncode == 1, out.stderr
+        assert "Traceback" not in out.stderr
+        first = out.stderr.splitlines()[0]
+        assert first.startswith(f"{impl}:{line}:1: error: the function measure_door declared for ")
+        assert "measure-door cannot be called as F9: measure-door(Emil, Door1) calls it, " in first
+        assert "with 1 object argument then 1 input (in :in order): too many" in first
+        assert "received" not in out.stdout  # nothing ran

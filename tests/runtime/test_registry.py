@@ -122,3 +122,61 @@ def test_an_exception_in_an_imported_module_by_name(
     with pytest.raises(RunError, match="raised RuntimeError: no camera attached"):
         Registry.load("impl_raising_by_name")
     sys.modules.pop("impl_raising_by_name", None)
+
+
+# -- signatures, checked before anything runs (issue 10) ----------------------------
+
+
+def test_an_implementation_that_cannot_take_the_call_is_refused_naming_both() -> None:
+    @functionality("measure-door")
+    def measure(door: str) -> str:  # forgets the image input
+        return door
+
+    with pytest.raises(RunError) as caught:
+        measure.check("F9: measure-door(Emil, Door1)", objects=1, inputs=1)
+    error = caught.value
+    assert error.message.startswith(
+        "the function test_an_implementation_that_cannot_take_the_call_is_refused_naming_both."
+        "<locals>.measure declared for measure-door cannot be called as "
+        "F9: measure-door(Emil, Door1) calls it, with 1 object argument then 1 input "
+        "(in :in order): too many positional arguments"
+    )
+    assert error.file == __file__
+    assert error.line == measure.function.__code__.co_firstlineno
+    measure.check("F9: measure-door(Emil, Door1)", objects=1, inputs=0)  # that call fits
+
+
+def test_too_few_arguments_precondition_and_stop_are_checked_too() -> None:
+    @functionality("cross-door", precondition=lambda: True, stop=lambda door: None)
+    def cross(door: str, pos: object, orient: object, extra: object) -> None:
+        return None
+
+    with pytest.raises(RunError, match="with 1 object argument then 2 inputs .*missing"):
+        cross.check("F3: cross-door(Pippi, Door1)", objects=1, inputs=2)
+    with pytest.raises(RunError, match=r"the precondition \S*<lambda> declared .*: too many positional"):
+        cross.check("F3: cross-door(Pippi, Door1)", objects=1, inputs=None)
+
+
+def test_variadic_and_defaulted_implementations_fit() -> None:
+    @functionality("any")
+    def anything(*args: object) -> None:
+        return None
+
+    @functionality("opt")
+    def optional(a: object, b: object = None) -> None:
+        return None
+
+    anything.check("F1: any(R)", objects=0, inputs=5)
+    optional.check("F1: opt(R, X)", objects=1, inputs=0)
+    optional.check("F1: opt(R, X)", objects=1, inputs=1)
+    with pytest.raises(RunError):
+        optional.check("F1: opt(R)", objects=0, inputs=0)
+
+
+def test_every_example_implementation_fits_its_domain() -> None:
+    """The bundled implementations pass the check for each call of the cost-44 and
+    cost-47 configurations (they run in tests/cli/test_run.py)."""
+    registry = Registry.load(EXAMPLE_IMPL)
+    fits = {"camera": (0, 0), "measure-door": (1, 1), "transform-info": (2, 4)}
+    for name, (objects, inputs) in fits.items():
+        registry.lookup(name).check(name, objects, inputs)

@@ -48,17 +48,19 @@ def configure(robot: Robot) -> Cycle:
     ch_6 = robot.global_channel("Pippi", "F7", "F5", ("dist", "Emil", "Pippi"))
     # the wrappers of the functionalities (5.2.1), in sorted order
     # F6: laser(Emil): no input -> laser-reading(Emil)
-    f6_laser = robot.wrapper("F6", "laser")
+    f6_laser = robot.wrapper("F6", "laser", inputs=0)
     # F7: meas-robot-angle-dist-laser(Emil, Pippi)
     #   in: laser-reading(Emil)
     #   out: angle(Emil, Pippi), dist(Emil, Pippi)
-    f7_meas_robot_angle_dist_laser = robot.wrapper("F7", "meas-robot-angle-dist-laser", ("Pippi",))
+    f7_meas_robot_angle_dist_laser = robot.wrapper(
+        "F7", "meas-robot-angle-dist-laser", ("Pippi",), inputs=1
+    )
     # F3: calc-robot-speed-diff(Emil, Pippi): dist(Emil, Pippi) -> speed-diff(Emil, Pippi)
-    f3_calc_robot_speed_diff = robot.wrapper("F3", "calc-robot-speed-diff", ("Pippi",))
+    f3_calc_robot_speed_diff = robot.wrapper("F3", "calc-robot-speed-diff", ("Pippi",), inputs=1)
     # F4: stalk-robot(Emil, Pippi)
     #   in: angle(Emil, Pippi), dist(Emil, Pippi), speed-diff(Emil, Pippi)
     #   out: no output
-    f4_stalk_robot = robot.wrapper("F4", "stalk-robot", ("Pippi",))
+    f4_stalk_robot = robot.wrapper("F4", "stalk-robot", ("Pippi",), inputs=3)
 
     def cycle() -> None:
         """LAMBDA: each functionality once, in sorted order."""

@@ -35,7 +35,7 @@ def configure(robot: Robot) -> Cycle:
     ch_1 = robot.global_channel("Emil", "F7", "F5", ("dist", "Emil", "Pippi"))
     # the wrappers of the functionalities (5.2.1), in sorted order
     # F5: lead-robot(Pippi, Emil): dist(Emil, Pippi) -> no output
-    f5_lead_robot = robot.wrapper("F5", "lead-robot", ("Emil",))
+    f5_lead_robot = robot.wrapper("F5", "lead-robot", ("Emil",), inputs=1)
 
     def cycle() -> None:
         """LAMBDA: each functionality once, in sorted order."""

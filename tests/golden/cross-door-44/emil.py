@@ -58,23 +58,23 @@ def configure(robot: Robot) -> Cycle:
     ch_10 = robot.global_channel("Pippi", "F7", "F3", ("orient", "Pippi", "Door1"))
     # the wrappers of the functionalities (5.2.1), in sorted order
     # F11: compass(Emil): no input -> global-orient(Emil)
-    f11_compass = robot.wrapper("F11", "compass")
+    f11_compass = robot.wrapper("F11", "compass", inputs=0)
     # F8: camera(Emil): no input -> image(Emil)
-    f8_camera = robot.wrapper("F8", "camera")
+    f8_camera = robot.wrapper("F8", "camera", inputs=0)
     # F14: measure-robot-pos(Emil, Pippi): image(Emil) -> pos(Emil, Pippi)
-    f14_measure_robot_pos = robot.wrapper("F14", "measure-robot-pos", ("Pippi",))
+    f14_measure_robot_pos = robot.wrapper("F14", "measure-robot-pos", ("Pippi",), inputs=1)
     # F12: measure-robot-orient-compass(Emil, Pippi)
     #   in: global-orient(Emil), global-orient(Pippi)
     #   out: orient(Emil, Pippi)
     f12_measure_robot_orient_compass = robot.wrapper(
-        "F12", "measure-robot-orient-compass", ("Pippi",)
+        "F12", "measure-robot-orient-compass", ("Pippi",), inputs=2
     )
     # F9: measure-door(Emil, Door1): image(Emil) -> pos(Emil, Door1), orient(Emil, Door1)
-    f9_measure_door = robot.wrapper("F9", "measure-door", ("Door1",))
+    f9_measure_door = robot.wrapper("F9", "measure-door", ("Door1",), inputs=1)
     # F7: transform-info(Emil, Pippi, Door1)
     #   in: orient(Emil, Pippi), pos(Emil, Pippi), orient(Emil, Door1), pos(Emil, Door1)
     #   out: orient(Pippi, Door1), pos(Pippi, Door1)
-    f7_transform_info = robot.wrapper("F7", "transform-info", ("Pippi", "Door1"))
+    f7_transform_info = robot.wrapper("F7", "transform-info", ("Pippi", "Door1"), inputs=4)
 
     def cycle() -> None:
         """LAMBDA: each functionality once, in sorted order."""

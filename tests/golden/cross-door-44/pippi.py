@@ -40,9 +40,9 @@ def configure(robot: Robot) -> Cycle:
     ch_3 = robot.global_channel("Emil", "F7", "F3", ("orient", "Pippi", "Door1"))
     # the wrappers of the functionalities (5.2.1), in sorted order
     # F10: compass(Pippi): no input -> global-orient(Pippi)
-    f10_compass = robot.wrapper("F10", "compass")
+    f10_compass = robot.wrapper("F10", "compass", inputs=0)
     # F3: cross-door(Pippi, Door1): pos(Pippi, Door1), orient(Pippi, Door1) -> no output
-    f3_cross_door = robot.wrapper("F3", "cross-door", ("Door1",))
+    f3_cross_door = robot.wrapper("F3", "cross-door", ("Door1",), inputs=2)
 
     def cycle() -> None:
         """LAMBDA: each functionality once, in sorted order."""
