@@ -35,15 +35,28 @@ from dataclasses import dataclass
 from types import FrameType
 from typing import Protocol, TextIO
 
+from cfgplan.notation import call_text
 from cfgplan.runtime.events import Call, Event, Lifecycle
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.society import Society
 from cfgplan.runtime.trace import describe, notice, summary
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 
-__all__ = ["EXIT_NONE", "FAULTS_SHOWN", "Hooks", "Printer", "RunOptions", "execute"]
+__all__ = [
+    "EXIT_NONE",
+    "FAULTS_SHOWN",
+    "WAIT_NOTICE",
+    "Hooks",
+    "Printer",
+    "RunOptions",
+    "execute",
+]
 
 FAULTS_SHOWN = 3
+WAIT_NOTICE = 10
+"""Calls in a row a functionality waits for data before the console says so
+(1 s at the default rate): a robot whose partner has not started does not
+look hung."""
 """Failures printed per functionality; later ones are only counted."""
 
 EXIT_NONE = 3
@@ -102,6 +115,7 @@ class Printer:
         self._faults: dict[str, int] = {}
         self._warned: set[tuple[str, str]] = set()
         self._dead: set[int] = set()
+        self._waits: dict[tuple[str, str], int] = {}  # calls in a row each one waited
 
     def say(self, text: str, stream: TextIO | None = None) -> None:
         """A line on ``stream`` (default: ``out``); a stream that cannot be
@@ -130,6 +144,8 @@ class Printer:
             self.say(line)
 
     def _call(self, event: Call) -> None:
+        if not self.verbose:
+            self._waiting(event)
         if event.status in ("error", "timeout"):
             self.failed = self.failed or not (self.handled and event.failure)
             self._fault(event)
@@ -146,6 +162,21 @@ class Printer:
                     f"(implementations: {self.source})",
                     self.err,
                 )
+
+    def _waiting(self, event: Call) -> None:
+        """Say when a functionality has waited :data:`WAIT_NOTICE` calls in a
+        row for data, and for what; and when it runs again."""
+        key = (event.robot, event.label)
+        if event.status == "waiting":
+            waited = self._waits.get(key, 0) + 1
+            self._waits[key] = waited
+            if waited == WAIT_NOTICE:
+                self.say(f"{describe(event)} ({waited} calls in a row so far)")
+            return
+        waited = self._waits.pop(key, 0)
+        if waited >= WAIT_NOTICE and event.status == "ran":
+            shown = call_text((event.name, *event.args))
+            self.say(f"cycle {event.cycle}: {event.robot} {event.label} {shown} runs again")
 
     def _fault(self, event: Call) -> None:
         key = f"{event.robot} {event.label}"

@@ -20,6 +20,7 @@ Exit status: 0 ran, 1 user error or a failing functionality, 2 usage.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -39,6 +40,7 @@ from cfgplan.runtime.options import (
     UNTIL,
     Option,
     choice,
+    how_long,
 )
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import Society, assemble
@@ -132,6 +134,7 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
             trace = open_trace(args.trace, args.force)
         injections = [parse_injection(text) for text in args.inject]
         hooks = _follow(running, injections, trace)
+        _starting(name, args)
         return execute(running, options_of(args), source=registry.source, trace=trace, hooks=hooks)
     except (RunError, KeyboardInterrupt) as exc:
         if transport is not None:
@@ -139,6 +142,13 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
         if trace is not None:
             trace.close()
         return _failed(exc)
+
+
+def _starting(names: str, args: argparse.Namespace) -> None:
+    """The first line of a run, as ``cfgplan run`` says it: who runs, how long.
+    A console that cannot be written to is reported by the run's printer."""
+    with contextlib.suppress(OSError, ValueError):
+        print(f"{names}: running {how_long(args.cycles, args.duration)}", flush=True)
 
 
 def crash(trace: TraceFile | None) -> None:
@@ -193,6 +203,7 @@ def society_main(
         running = assemble(programs, registry)
         injector = Injector([parse_injection(text) for text in args.inject], running)
         hooks = Scripted(injector) if injector.pending else None
+        _starting(names, args)
         return execute(running, options_of(args), source=registry.source, hooks=hooks)
     except (RunError, KeyboardInterrupt) as exc:
         return _failed(exc)

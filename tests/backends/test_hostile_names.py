@@ -23,8 +23,8 @@ from typer.testing import CliRunner
 import cfgplan.cli.commands  # noqa: F401  (registers the commands)
 from cfgplan.backends.lisp import lisp_symbol
 from cfgplan.cli.app import app
-from cfgplan.emission import RECORD
 from cfgplan.diagnostics import printable
+from cfgplan.emission import RECORD
 
 # sense runs on the helper ?h, act on ?r; one global channel joins them, and the
 # object ?o reaches the code as a quoted argument and in the channel's data.

@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 
 import cfgplan.cli.emit  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
+from cfgplan.runtime.launch import WAIT_NOTICE
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT
 from tests.runtime.netutil import first, processes, read_trace, wait_for
 
@@ -208,12 +209,41 @@ def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None
             "cfgplan: error: cannot write to standard output: No space left on device\n"
         )
     piped = subprocess.run(
-        f"{sys.executable} {' '.join(args)} --cycles 1000 | head -n 1",
+        f"{sys.executable} {' '.join(args)} --cycles 1000 | head -n 2",
         shell=True,
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=60,
     )
-    assert piped.stdout.startswith("cycle 2: Pippi F3 cross-door(Pippi, Door1) received ")
+    first, second = piped.stdout.splitlines()
+    assert first == "Pippi, Emil: running 1000 cycle(s)"
+    assert second.startswith("cycle 2: Pippi F3 cross-door(Pippi, Door1) received ")
     assert "Traceback" not in piped.stderr and "Exception ignored" not in piped.stderr
+
+
+def test_a_robot_alone_says_what_it_waits_for(emitted: Path) -> None:
+    """Issue 10: run alone, Emil never gets Pippi's compass reading; his program
+    says so after WAIT_NOTICE calls instead of looking hung, and says first how
+    long it runs, as cfgplan run does."""
+    out = _run(
+        emitted / "emil.py",
+        "--impl",
+        str(EXAMPLE_IMPL),
+        "--transport",
+        "inprocess",
+        "--rate",
+        "0",
+        "--cycles",
+        str(WAIT_NOTICE + 5),
+    )
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0] == f"Emil: running {WAIT_NOTICE + 5} cycle(s)"
+    assert lines[1:3] == [
+        f"cycle {WAIT_NOTICE}: Emil F12 measure-robot-orient-compass(Emil, Pippi) waits for "
+        f"global-orient(Pippi) ({WAIT_NOTICE} calls in a row so far)",
+        f"cycle {WAIT_NOTICE}: Emil F7 transform-info(Emil, Pippi, Door1) waits for "
+        f"orient(Emil, Pippi) ({WAIT_NOTICE} calls in a row so far)",
+    ]
+    assert "waits for" not in "\n".join(lines[3:]).split("ran in")[0]  # said once each

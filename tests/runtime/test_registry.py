@@ -151,9 +151,10 @@ def test_too_few_arguments_precondition_and_stop_are_checked_too() -> None:
     def cross(door: str, pos: object, orient: object, extra: object) -> None:
         return None
 
-    with pytest.raises(RunError, match="with 1 object argument then 2 inputs .*missing"):
+    with pytest.raises(RunError, match=r"with 1 object argument then 2 inputs .*missing"):
         cross.check("F3: cross-door(Pippi, Door1)", objects=1, inputs=2)
-    with pytest.raises(RunError, match=r"the precondition \S*<lambda> declared .*: too many positional"):
+    precondition = r"the precondition \S*<lambda> declared .*: too many positional"
+    with pytest.raises(RunError, match=precondition):
         cross.check("F3: cross-door(Pippi, Door1)", objects=1, inputs=None)
 
 

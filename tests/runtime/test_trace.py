@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from cfgplan.runtime import Call, Presence, RunError, show
-from cfgplan.runtime.launch import Printer
+from cfgplan.runtime.launch import WAIT_NOTICE, Printer
 from cfgplan.runtime.trace import describe, show_checked
 from cfgplan.runtime.tracefile import open_trace
 
@@ -87,6 +87,26 @@ def test_the_printer_shows_a_functionalitys_first_failures_then_counts() -> None
     assert len(lines) == 4 and lines[3].startswith("cfgplan: further failures of F3")
     assert out.getvalue() == "cycle 7: Pippi: robot Emil lost\n"
     assert printer.failed
+
+
+def test_the_printer_says_what_a_functionality_waits_for_then_that_it_runs_again() -> None:
+    """Issue 10: after WAIT_NOTICE calls in a row without its data, once; and
+    when the data comes, once; a short wait is not worth a line."""
+    out, err = io.StringIO(), io.StringIO()
+    printer = Printer(verbose=False, source="impl.py", out=out, err=err)
+    pos = (("pos", "Pippi", "Door1"),)
+    for cycle in range(1, WAIT_NOTICE + 3):
+        printer(_call(cycle=cycle, status="waiting", waiting=pos, action=True))
+    printer(_call(cycle=WAIT_NOTICE + 3, status="ran", action=False))
+    for cycle in range(WAIT_NOTICE + 4, WAIT_NOTICE + 6):  # two calls: not said
+        printer(_call(cycle=cycle, status="waiting", waiting=pos, action=True))
+    printer(_call(cycle=WAIT_NOTICE + 6, status="ran", action=False))
+    assert out.getvalue().splitlines() == [
+        f"cycle {WAIT_NOTICE}: Pippi F3 cross-door(Pippi, Door1) waits for pos(Pippi, Door1) "
+        f"({WAIT_NOTICE} calls in a row so far)",
+        f"cycle {WAIT_NOTICE + 3}: Pippi F3 cross-door(Pippi, Door1) runs again",
+    ]
+    assert err.getvalue() == ""
 
 
 def test_describe_says_why_a_functionality_did_not_run() -> None:
