@@ -105,6 +105,8 @@ class Coordinator:
     _suspects: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
     _backlog: list[Detection] = field(default_factory=list)
     _deploying: bool = False
+    _achieved: Configuration | None = None  # the configuration whose task was accomplished
+    _installed_at: float = 0.0  # when the running configuration was deployed (time.time())
 
     # -- input --------------------------------------------------------------
 
@@ -142,6 +144,8 @@ class Coordinator:
                 detection,
             )
         elif kind == "achieved":
+            if not self._accomplishes(detection):
+                return
             self._note(
                 "achieved",
                 detection,
@@ -151,6 +155,26 @@ class Coordinator:
             if not self.reconfigurator.goals:
                 self.finished = "achieved"  # the last step of a sequence, or the only one
             self._apply(self.reconfigurator.achieved(), detection)
+
+    def _accomplishes(self, detection: Detection) -> bool:
+        """Whether ``detection`` is the first report that the running
+        configuration's task is accomplished. A second action, or the same one
+        in the next cycle, reporting it again before the switch is deployed
+        must not end a step twice (and skip the next step of a sequence): a
+        report made before the running configuration was deployed, or by an
+        instance it does not run, is not about it."""
+        running = self.reconfigurator.running
+        if running is None or running is self._achieved or self.finished is not None:
+            return False
+        if detection.t < self._installed_at:
+            return False
+        mine = any(
+            f.label == detection.label and (f.name, *f.args) == tuple(detection.instance)
+            for f in running.functionalities
+        )
+        if mine:
+            self._achieved = running
+        return mine
 
     def install(self, config: Configuration | None, cause: str = "install") -> None:
         """Put ``config`` on the running society with the least disruption (or
@@ -288,6 +312,7 @@ class Coordinator:
 
         def done() -> None:
             self._deploying = False
+            self._installed_at = time.time()
             self._report(decision, detection)
             if self.ahead is not None:
                 self.ahead.notify()

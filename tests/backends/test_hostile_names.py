@@ -141,7 +141,7 @@ def test_names_differing_only_in_case_get_files_of_their_own(tmp_path: Path) -> 
     files = _robot_files(out)
     assert len(set(files.values())) == 2
     assert all(re.fullmatch(r"emil-[0-9a-f]{16}\.py", f) for f in files.values())
-    assert len(_only_inside(root, out)) == 4
+    assert len(_only_inside(root, out)) == 5  # two robots, run_all, the description, the record
 
 
 def test_an_absolute_name_with_force_overwrites_nothing_elsewhere(tmp_path: Path) -> None:

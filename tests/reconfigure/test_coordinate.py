@@ -6,6 +6,8 @@ clock is stepped by hand, so the settling of stale suspicions is exact.
 
 from __future__ import annotations
 
+import time
+
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan
 from cfgplan.problem import load
@@ -162,6 +164,51 @@ def test_an_achieved_task_ends_the_run() -> None:
     assert [e.kind for e in events] == ["achieved"]
     ((decision, parts),) = deployer.deployed
     assert decision.action == "stop" and all(p.calls == () for p in parts.values())
+
+
+def test_a_task_reported_accomplished_twice_ends_once() -> None:
+    """Two reports in one pass (both robots' actions, or one action in two
+    cycles before the stop is deployed) end the run once; a report from an
+    instance that is not running is ignored."""
+    coordinator, deployer, _, events, config = _coordinator()
+    label = _label(config, "cross-door", "Emil")
+    stranger = Detection(
+        "achieved", "Pippi", 0.0, instance=("cross-door", "Pippi", "Door1"), label=label
+    )
+    coordinator.handle(stranger)
+    assert coordinator.finished is None and events == [] and deployer.deployed == []
+    done = Detection("achieved", "Emil", 0.0, instance=("cross-door", "Emil", "Door1"), label=label)
+    coordinator.handle(done)
+    coordinator.handle(done)
+    assert coordinator.finished == "achieved"
+    assert [e.kind for e in events] == ["achieved"]
+    assert len(deployer.deployed) == 1
+
+
+def test_a_second_report_does_not_skip_a_step_of_a_sequence() -> None:
+    """A sequence of two steps (the same crossing twice): the first step's
+    task reported twice in one pass (made before the switch) moves to the
+    second step once; a report made after the switch ends the second step."""
+    problem = load(*STEP2)
+    configs, _ = plan(problem.task, problem.goal_call)
+    goal = problem.goal_call
+    r = Reconfigurator(problem.task, problem.domain, goal, configs[0], goals=(goal,))
+    events: list[Event] = []
+    deployer = Deployer()
+    coordinator = Coordinator(r, events.append, "Emil", deployer, Clock())
+    label = _label(configs[0], "cross-door", "Emil")
+    done = Detection("achieved", "Emil", 0.0, instance=("cross-door", "Emil", "Door1"), label=label)
+    coordinator.handle(done)
+    coordinator.handle(done)
+    assert coordinator.finished is None  # the second step runs
+    assert r.goals == () and r.running is not None
+    assert [e.kind for e in events].count("achieved") == 1
+    second = r.running
+    assert any(f.label == label for f in second.functionalities)  # the same crossing again
+    later = Detection("achieved", "Emil", time.time() + 1, instance=done.instance, label=label)
+    coordinator.handle(later)  # reported once the second step runs: it ends that step
+    assert coordinator.finished == "achieved"
+    assert [e.kind for e in events].count("achieved") == 2
 
 
 def test_installing_a_configuration_keeps_what_is_shared() -> None:
