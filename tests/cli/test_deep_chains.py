@@ -115,4 +115,4 @@ def test_run(files: dict[str, str]) -> None:
 def test_render(files: dict[str, str]) -> None:
     output = Path(files["out"] + ".dot")
     ok(run("render", files["330"], files["state"], "-o", str(output)))
-    assert "SENSE" in output.read_text()
+    assert "<B>sense</B>" in output.read_text()
