@@ -1,0 +1,44 @@
+"""The stronger bound is given up where it does not pay (cfgplan/planner/grow.py),
+and giving it up never changes what is found."""
+
+from __future__ import annotations
+
+import pytest
+
+from benchmarks.families import chain, ecology, wall
+from cfgplan.planner import grow
+from cfgplan.planner.plan import Run
+from tests.planner.test_scale import problem_of
+
+
+def _run(texts: tuple[str, str], limit: int) -> tuple[list[tuple[float, str]], Run]:
+    problem = problem_of(texts)
+    run = Run(problem.task, problem.goal_call, limit=limit)
+    found = [(c.cost, str(sorted(map(str, c.functionalities)))) for c in run]
+    return found, run
+
+
+def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains() -> None:
+    """On wall K=3 N=4 L=3 it never raises a priority: dropped after TRIAL
+    refinements; on chain D=8 it raises every one: kept."""
+    _, on_wall = _run(wall(3, 4, 3), 1)
+    _, on_chain = _run(chain(8), 1)
+    assert on_wall.strategy.grower.refine is None
+    assert on_chain.strategy.grower.refine is not None
+
+
+@pytest.mark.parametrize(
+    "texts", [wall(3, 4, 3), chain(8), ecology(6, 2, 1)], ids=["wall", "chain", "ecology"]
+)
+def test_giving_the_bound_up_changes_nothing_found(
+    texts: tuple[str, str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The ten cheapest, with the bound kept throughout (TRIAL never reached)
+    and with the usual rule, are the same configurations at the same costs."""
+    usual, _ = _run(texts, 10)
+    monkeypatch.setattr(grow, "TRIAL", 10**9)
+    kept, run = _run(texts, 10)
+    assert run.strategy.grower.refine is not None
+    assert [cost for cost, _ in usual] == [cost for cost, _ in kept]
+    last = usual[-1][0]  # ties at the last cost may be cut differently
+    assert sorted(c for c in usual if c[0] < last) == sorted(c for c in kept if c[0] < last)
