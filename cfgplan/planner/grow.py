@@ -26,7 +26,7 @@ from cfgplan.planner.successors import successors
 Heuristic = Callable[[Partial], float | None]
 """A lower bound on what a node still costs; None when it has no completion."""
 
-TRIAL = 16
+TRIAL = 8
 """Refinements by the stronger bound a search tries before it may give that
 bound up: from then on, when fewer than one refinement in :data:`PAYS` raised
 a priority (or pruned a node), the bound is dropped for the rest of the
