@@ -26,14 +26,15 @@ from cfgplan.planner.successors import successors
 Heuristic = Callable[[Partial], float | None]
 """A lower bound on what a node still costs; None when it has no completion."""
 
-TRIAL = 8
+TRIAL = 4
 """Refinements by the stronger bound a search tries before it may give that
-bound up: from then on, when fewer than one refinement in :data:`PAYS` raised
-a priority (or pruned a node), the bound is dropped for the rest of the
-search. Where it rarely beats the first bound (build-wall, the wall and relay
-families) it would only cost time; where it helps (ecology, fusion,
-media-tight, chain) it raises nearly every priority. Dropping an admissible
-bound never changes the answer, only how many nodes are taken."""
+bound up: from then on, when fewer than one refinement in :data:`PAYS` paid
+(pruned a node, or raised its priority past the next node's, so that another
+node is taken first), the bound is dropped for the rest of the search. Where
+it seldom pays (build-wall, the wall and relay families) it only costs time;
+where it helps (ecology, fusion, media-tight, chain) most of its raises pay.
+Dropping an admissible bound never changes the answer, only how many nodes
+are taken (tests/planner/test_grow.py)."""
 PAYS = 4
 
 
@@ -115,8 +116,12 @@ class Grower:
             priority = math.ceil(priority - 1e-6)
         return priority
 
-    def refined(self, node: Partial, priority: float) -> float | None:
-        """The node's priority under the larger of both bounds; None: pruned."""
+    def refined(
+        self, node: Partial, priority: float, beaten: float | None = None
+    ) -> float | None:
+        """The node's priority under the larger of both bounds; None: pruned.
+        ``beaten``: the priority a raised node must pass for the raise to pay
+        (best-first: the next node's; else any raise pays)."""
         if self.refine is None:
             return priority
         rest = self.refine(node)
@@ -126,7 +131,7 @@ class Grower:
             self.stats.pruned += 1
             return None
         raised = self.priority(node, rest)
-        if raised > priority:
+        if raised > priority and (beaten is None or raised > beaten):
             self._raised += 1
         elif self._tried >= TRIAL and self._raised * PAYS < self._tried:
             self.refine = None  # it seldom helps here: give it up for this search

@@ -79,7 +79,8 @@ class BestFirst:
                 # so a node taken with its refined priority is the least in the
                 # order of refined priorities (then paths): refining lazily
                 # changes no order, only how many nodes are refined.
-                raised = grower.refined(node, total)
+                beaten = self._heap[0][0] if self._heap else None
+                raised = grower.refined(node, total, beaten)
                 if raised is None:
                     continue
                 if raised > total:
