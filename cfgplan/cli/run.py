@@ -219,9 +219,13 @@ def run(
         )
         names = ", ".join(r.name for r in running.robots)
         lasting = how_long(options.cycles, options.duration)
-        typer.echo(f"{title(problem, config, rank)}: {names}; {lasting}")
         code = execute(
-            running, options, source=registry.source, trace=written, hooks=adapting
+            running,
+            options,
+            source=registry.source,
+            trace=written,
+            hooks=adapting,
+            heading=f"{title(problem, config, rank)}: {names}; {lasting}",
         )
     except RunError as exc:
         if opened is not None:

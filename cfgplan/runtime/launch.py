@@ -234,8 +234,10 @@ def execute(
     err: TextIO | None = None,
     trace: TraceFile | None = None,
     hooks: Hooks | None = None,
+    heading: str | None = None,
 ) -> int:
-    """Run ``society`` as ``options`` say; print the summary; the exit status.
+    """Run ``society`` as ``options`` say; print ``heading`` first (who runs,
+    how long) and the summary last; the exit status.
 
     Opens ``options.trace`` unless a ``trace`` is given; closes the
     transports whatever happens. A :class:`~cfgplan.runtime.errors.RunError`
@@ -251,6 +253,8 @@ def execute(
         raise
     handled = hooks is not None and hooks.reconfigures
     printer = Printer(options.verbose, source, out, err, handled=handled)
+    if heading is not None:
+        printer.say(heading)
     if trace is not None:
         society.subscribe(trace)
     society.subscribe(printer)

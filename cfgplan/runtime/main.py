@@ -20,7 +20,6 @@ Exit status: 0 ran, 1 user error or a failing functionality, 2 usage.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -134,8 +133,14 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
             trace = open_trace(args.trace, args.force)
         injections = [parse_injection(text) for text in args.inject]
         hooks = _follow(running, injections, trace)
-        _starting(name, args)
-        return execute(running, options_of(args), source=registry.source, trace=trace, hooks=hooks)
+        return execute(
+            running,
+            options_of(args),
+            source=registry.source,
+            trace=trace,
+            hooks=hooks,
+            heading=_heading(name, args),
+        )
     except (RunError, KeyboardInterrupt) as exc:
         if transport is not None:
             transport.close()
@@ -144,11 +149,9 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
         return _failed(exc)
 
 
-def _starting(names: str, args: argparse.Namespace) -> None:
-    """The first line of a run, as ``cfgplan run`` says it: who runs, how long.
-    A console that cannot be written to is reported by the run's printer."""
-    with contextlib.suppress(OSError, ValueError):
-        print(f"{names}: running {how_long(args.cycles, args.duration)}", flush=True)
+def _heading(names: str, args: argparse.Namespace) -> str:
+    """The first line of a run, as ``cfgplan run`` says it: who runs, how long."""
+    return f"{names}: running {how_long(args.cycles, args.duration)}"
 
 
 def crash(trace: TraceFile | None) -> None:
@@ -203,8 +206,13 @@ def society_main(
         running = assemble(programs, registry)
         injector = Injector([parse_injection(text) for text in args.inject], running)
         hooks = Scripted(injector) if injector.pending else None
-        _starting(names, args)
-        return execute(running, options_of(args), source=registry.source, hooks=hooks)
+        return execute(
+            running,
+            options_of(args),
+            source=registry.source,
+            hooks=hooks,
+            heading=_heading(names, args),
+        )
     except (RunError, KeyboardInterrupt) as exc:
         return _failed(exc)
 

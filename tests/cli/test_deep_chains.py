@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks.fuzz_inputs import chain
+
 ROOT = Path(__file__).resolve().parents[2]
 
 IMPL = """\
@@ -33,28 +35,10 @@ def act(data: int) -> None:
 """
 
 
-def chain(levels: int) -> str:
-    """A domain whose goal (top ?r) reaches (sense ?r) through ``levels`` methods."""
-    lines = [
-        "(make-functionality :name '(sense ?r) :out '((data ?r)))",
-        "(make-functionality :name '(act ?r) :in '((data ?r)))",
-    ]
-    for i in range(levels):
-        below = f"(m{i + 1} ?r)" if i + 1 < levels else "(sense ?r)"
-        lines.append(
-            f"(make-config-method :name '(m{i} ?r) :out '((?f1 (data ?r))) :body '((?f1 {below})))"
-        )
-    lines.append(
-        "(make-config-method :name '(top ?r) :channels '(((local ?r) ?f1 ?f2 (data ?r)))"
-        " :body '((?f1 (m0 ?r)) (?f2 (act ?r))))"
-    )
-    return "\n".join(lines) + "\n"
-
-
 @pytest.fixture
 def files(tmp_path: Path) -> dict[str, str]:
     for levels in (330, 1500):
-        (tmp_path / f"chain-{levels}.lisp").write_text(chain(levels))
+        (tmp_path / f"chain-{levels}.lisp").write_bytes(chain(levels))
     (tmp_path / "state.lisp").write_text("(state (robot Pippi))\n(goal (top Pippi))\n")
     (tmp_path / "impl.py").write_text(IMPL)
     return {
