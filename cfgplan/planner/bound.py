@@ -255,7 +255,11 @@ class Bound:
     def feasible(self, node: Partial) -> float | None:
         """0 when every pending item may still complete, else None (no
         completion): what ``--all`` needs, where no estimate can stop early."""
-        return 0.0 if all(self.summary(item.call).feasible for item in node.stack) else None
+        summary = self.summary
+        for item in node.stack:
+            if not summary(item.call).feasible:
+                return None
+        return 0.0
 
     def certain_agents(self, node: Partial) -> frozenset[str]:
         """Agents some pending item runs something on in every expansion."""

@@ -20,14 +20,13 @@ are remembered (distinct mode) as 128-bit digests of their label-free form.
 
 from __future__ import annotations
 
-import hashlib
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from cfgplan.configuration.model import Configuration
+from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
-from cfgplan.planner.finish import Identity, identity
+from cfgplan.planner.finish import build, fingerprint
 from cfgplan.planner.grow import Grower, Heuristic, Stats
 from cfgplan.planner.partial import Partial, canonical, root
 from cfgplan.planner.report import Report, StopReason
@@ -42,11 +41,15 @@ MOST_HELD = 250_000
 
 @dataclass
 class Found:
-    """A complete derivation met in a window, in depth-first order ``index``."""
+    """A complete derivation met in a window, in depth-first order ``index``:
+    admissible with its media assignment, or not listed (``node`` None:
+    inadmissible, or a repeat). It is built into a configuration when it is
+    listed, numbered then."""
 
     cost: float
     index: int
-    config: Configuration | None  # None: inadmissible (not counted), or a repeat
+    node: Partial | None
+    media: tuple[Assignment, ...] = ()
     repeat: bool = False  # its configuration was met before in this window
 
 
@@ -114,7 +117,7 @@ class Windows:
         up to ``window.high`` (which may come down), listing them in order.
         One cost level (whole costs, width 1) is listed as it is walked: the
         depth-first order is then the listing order."""
-        grower = self.grower
+        grower, stats = self.grower, self.stats
         streaming = grower.integral and window.high - window.low <= 1
         admitted: set[bytes] = set()
         found: list[Found] = []
@@ -131,10 +134,10 @@ class Windows:
                 raised = grower.refined(node, priority)
                 if raised is None or window.cut(raised):
                     continue
-            self.stats.nodes += 1
+            stats.nodes += 1
             elapsed = time.perf_counter() - self._start
             if self.progress is not None and elapsed > next_tick:
-                self.progress(self.stats, elapsed)
+                self.progress(stats, elapsed)
                 next_tick = elapsed + 0.5
             if node.done:
                 index += 1
@@ -148,7 +151,7 @@ class Windows:
                     found, window.high = _halve(found)
                 continue
             if grower.distinct:
-                key = canonical(node, grower.grounder.task)
+                key = canonical(node, grower.grounder)
                 if key in closed:
                     continue
                 closed.add(key)
@@ -158,38 +161,33 @@ class Windows:
         yield from self._list(found)
 
     def _found(self, node: Partial, cost: float, index: int, admitted: set[bytes]) -> Found:
-        """A complete derivation met: finished, unless (distinct mode) its
+        """A complete derivation met: checked, unless (distinct mode) its
         configuration was admitted before in this window. Both have one cost,
         and the walk meets derivations in depth-first order, so the first met
         is the one listed, as in the best-first search."""
-        ident = digest(identity(node)) if self.grower.distinct else None
+        grower = self.grower
+        ident = fingerprint(node, grower.grounder.numbering) if grower.distinct else None
         if ident is not None and ident in admitted:
             return Found(cost, index, None, repeat=True)
-        config = self.grower.finish(node, cost)
-        if config is not None and ident is not None:
+        media = grower.admissible(node)
+        if media is None:
+            return Found(cost, index, None)
+        if ident is not None:
             admitted.add(ident)
-        return Found(cost, index, config)
+        return Found(cost, index, node, media)
 
     def _list(self, found: list[Found]) -> Iterator[Configuration]:
         """Sorted derivations of a window, numbered as :meth:`Grower.complete`
         numbers them (repeats counted, inadmissible ones not)."""
         stats = self.stats
+        task, models = self.grower.grounder.task, self.grower.models
         for f in found:
             if f.repeat:
                 stats.derivations += 1
                 stats.duplicates += 1
-            elif f.config is not None:
+            elif f.node is not None:
                 stats.derivations += 1
-                yield f.config.model_copy(update={"derivation": stats.derivations})
-
-
-def digest(parts: Identity) -> bytes:
-    """A 128-bit BLAKE2 digest of a label-free form (a tuple of sets of
-    tuples), independent of set order. Two different forms share one with
-    odds of about 2^-128 per pair, far below anything a run can meet; it
-    takes 16 bytes where the form takes kilobytes."""
-    text = "\n".join("\t".join(sorted(map(repr, part))) for part in parts)
-    return hashlib.blake2b(text.encode(), digest_size=16).digest()
+                yield build(f.node, f.cost, task, models, f.media, stats.derivations)
 
 
 def _halve(found: list[Found]) -> tuple[list[Found], float]:

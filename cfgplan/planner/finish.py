@@ -15,7 +15,8 @@ from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
-from cfgplan.planner.partial import Partial
+from cfgplan.planner.numbering import Numbering
+from cfgplan.planner.partial import Partial, channel_numbers, digest, placed_names
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task
 
@@ -118,28 +119,41 @@ def _on_cycle(succ: dict[int, set[int]], stuck: set[int]) -> list[int]:
     return cycle[start:] + cycle[:start]
 
 
+def _postcondition(effect: tuple[bool, Ground]) -> str:
+    positive, atom = effect
+    return atom_text(atom) if positive else f"(not {atom_text(atom)})"
+
+
 def postconditions(node: Partial) -> tuple[str, ...]:
     """P as the thesis prints it: atoms and ``(not ATOM)``, each once, in order."""
-    post = (atom_text(a) if positive else f"(not {atom_text(a)})" for positive, a in node.effects)
-    return tuple(dict.fromkeys(post))
+    return tuple(dict.fromkeys(map(_postcondition, node.effects)))
 
 
-Identity = tuple[frozenset[object], frozenset[object], frozenset[object]]
-"""Functionality instances, channels (ends by instance) and P: a configuration
-without its labels."""
+def fingerprint(node: Partial, number: Numbering) -> bytes:
+    """The configuration of a complete node without its labels —
+    :meth:`Configuration.identity`: its functionality instances, its channels
+    with their ends named by instance, and P — as a 128-bit :func:`digest`,
+    without building the configuration. Two configurations
+    are the same when their fingerprints are; it takes 16 bytes, so every
+    configuration listed can be remembered. A channel's robots follow from
+    its ends, so they add nothing."""
+    names = placed_names(node)
+    ends = sorted(set(names.values()))
+    channels = sorted(set(channel_numbers(node, names, number)))
+    post = sorted({number.text(effect, _postcondition) for effect in node.effects})
+    return digest([len(ends), *ends, len(channels), *channels, *post])
 
 
-def identity(node: Partial) -> Identity:
-    """:meth:`Configuration.identity` of the node's configuration, without building it."""
-    key = {p.label: p.call for p in node.placed}
-    channels = frozenset(
-        (ch.kind, key[ch.source], key[ch.target], ch.data, ch.bandwidth) for ch in node.channels
-    )
-    return frozenset(key.values()), channels, frozenset(postconditions(node))
-
-
-def build(node: Partial, total: float, task: Task, models: Models) -> Configuration:
-    """The configuration of a finished node, in the thesis's list order.
+def build(
+    node: Partial,
+    total: float,
+    task: Task,
+    models: Models,
+    media: tuple[Assignment, ...] = (),
+    derivation: int = 0,
+) -> Configuration:
+    """The configuration of a finished node, in the thesis's list order, with
+    its media assignment and its derivation number (in listing order).
 
     The planner's own data is already valid, so the models are constructed
     without validation (it is the hot path of listing many configurations);
@@ -171,55 +185,78 @@ def build(node: Partial, total: float, task: Task, models: Models) -> Configurat
                 bandwidth=ch.bandwidth,
             )
         channels.append(cmade)
-    agents = dict.fromkeys(f.args[0] for f in functionalities)
-    reliability = 1.0
-    for p in node.placed:
-        reliability *= task.functionality_reliability(p.schema, p.call)
-    for c in channels:
-        if c.kind == "global" and c.source_robot != c.target_robot:
-            reliability *= task.links.get((c.source_robot, c.target_robot), 1.0)
     return Configuration.model_construct(
         functionalities=tuple(functionalities),
         channels=tuple(channels),
         postconditions=postconditions(node),
         cost=total,
         weights=task.weights,
-        media=(),
-        derivation=0,
+        media=media,
+        derivation=derivation,
         proven=True,
-        devices=tuple(a for a in agents if a in task.devices),
-        reliability=reliability,
+        devices=_devices(node, task),
+        reliability=_reliability(node, task),
         effects=tuple(dict.fromkeys(node.effects)),
     )
 
 
-def demands(config: Configuration) -> list[Demand | None]:
-    """What each channel needs of the media: global channels between two robots."""
-    return [
-        Demand(c.source_robot, c.target_robot, c.bandwidth or 0.0)
-        if c.kind == "global" and c.source_robot != c.target_robot
-        else None
-        for c in config.channels
-    ]
+def _devices(node: Partial, task: Task) -> tuple[str, ...]:
+    """The agents of the configuration the state declares devices, in the
+    order of its functionality list."""
+    if not task.devices:
+        return ()
+    agents = dict.fromkeys(p.robot for p in reversed(node.placed))
+    return tuple(a for a in agents if a in task.devices)
 
 
-def finish(
-    node: Partial, task: Task, total: float, models: Models | None = None
-) -> Configuration | DeadEnd:
-    """The admissible configuration of a finished node, or why it is not."""
+def _reliability(node: Partial, task: Task) -> float:
+    """The product of the reliabilities of its functionalities and of the
+    media its global channels between two robots use (7.2)."""
+    if not task.uncertain:
+        return 1.0
+    reliability = 1.0
+    for p in node.placed:
+        reliability *= task.functionality_reliability(p.schema, p.call)
+    for ch in node.channels:
+        src, dst = node.located[ch.source].robot, node.located[ch.target].robot
+        if ch.kind == "global" and src != dst:
+            reliability *= task.links.get((src, dst), 1.0)
+    return reliability
+
+
+def _demands(node: Partial) -> list[Demand | None]:
+    """What each channel needs of the media, in the configuration's channel
+    order: global channels between two robots."""
+    located = node.located
+    out: list[Demand | None] = []
+    for ch in node.channels:
+        src, dst = located[ch.source].robot, located[ch.target].robot
+        out.append(
+            Demand(src, dst, ch.bandwidth or 0.0) if ch.kind == "global" and src != dst else None
+        )
+    return out
+
+
+def admissible(node: Partial, task: Task) -> tuple[Assignment, ...] | DeadEnd:
+    """Step 4's checks left for a finished node — information, cycles and,
+    when the state declares media, communication: the media assignment
+    (empty without media), or the condition it breaks."""
     for dead in (_information(node), _cycle(node)):
         if dead is not None:
             return dead
-    config = build(node, total, task, Models() if models is None else models)
-    if task.media:
-        result = assign(demands(config), task.media, clock.check)
-        if result.assignment is None:
-            return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
-        config = config.model_copy(
-            update={
-                "media": tuple(
-                    Assignment(channel=c, medium=m) for c, m in result.assignment.items()
-                )
-            }
-        )
-    return config
+    if not task.media:
+        return ()
+    result = assign(_demands(node), task.media, clock.check)
+    if result.assignment is None:
+        return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
+    return tuple(Assignment(channel=c, medium=m) for c, m in result.assignment.items())
+
+
+def finish(
+    node: Partial, task: Task, total: float, models: Models | None = None, derivation: int = 0
+) -> Configuration | DeadEnd:
+    """The admissible configuration of a finished node, or why it is not."""
+    media = admissible(node, task)
+    if isinstance(media, DeadEnd):
+        return media
+    return build(node, total, task, Models() if models is None else models, media, derivation)

@@ -5,12 +5,12 @@ method hierarchy decides what is reachable). What it grounds depends only on
 the task, so it is computed once per task and shared by every search of it:
 
 - the bindings of a schema's preconditions for a call (4.5, step 2b);
-- a method version instantiated under one binding: its :class:`Expansion`
-  with labels as offsets (4.5, step 3a);
-- a functionality's inputs, outputs and postconditions under one binding.
+- a method version instantiated for a call under each binding: its
+  :class:`Expansion` with labels as offsets (4.5, step 3a);
+- a functionality call's inputs, outputs and postconditions under each binding.
 
-Each memo is keyed by everything its value depends on: the schema (name,
-arity and version), and the call or the complete binding.
+Each memo is keyed by everything its value depends on: the call (which names
+the schema: name and arity) and, for a method, the version.
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from cfgplan.notation import atom_text
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner.match import Failure, bindings
+from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import (
     FunctionalitySchema,
@@ -30,7 +31,7 @@ from cfgplan.planner.task import (
     Task,
     Test,
 )
-from cfgplan.planner.unify import Bindings, bind_name, is_ground, key, substitute
+from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
 
 Effects = tuple[tuple[bool, Ground], ...]
 """Postconditions P: (positive, atom); ``(not ATOM)`` is ``(False, atom)``."""
@@ -40,9 +41,6 @@ IO = tuple[tuple[Ground, ...], tuple[Ground, ...]]
 
 ChannelSpec = tuple[str, Ground, int, int, Ground, float | None]
 """(kind, robots, source offset, target offset, data, bandwidth)."""
-
-BindingKey = tuple[tuple[str, str], ...]
-"""Bindings in a hashable form: :func:`cfgplan.planner.unify.key`."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,14 +54,30 @@ class Expansion:
     outputs: dict[Ground, tuple[int, float | None]]  # data -> (offset, bandwidth)
     inputs: dict[Ground, tuple[int, ...]]  # data -> offsets
     effects: Effects
+    where: str = ""  # "CALL, version N": where a dead end met expanding it is
 
 
 @dataclass(frozen=True, slots=True)
 class FunctionalityInstance:
-    """A functionality call under one binding of its preconditions."""
+    """A functionality call under one binding of its preconditions, with the
+    numbers canonical forms name it by (:class:`Numbering`): ``number`` for
+    the call with its inputs and outputs, ``name`` for the call alone."""
 
     io: IO
     effects: Effects
+    number: int
+    name: int
+
+
+def _instance(
+    schema: FunctionalitySchema, call: Ground, env: Bindings, number: Numbering
+) -> FunctionalityInstance:
+    io = (
+        tuple(substitute(i, env) for i in schema.inputs),
+        tuple(substitute(o, env) for o in schema.outputs),
+    )
+    effects = tuple((e.positive, substitute(e.pattern, env)) for e in schema.effects)
+    return FunctionalityInstance(io, effects, number((call, *io)), number(call))
 
 
 def _ground(p: Pattern, env: Bindings, where: str) -> Ground | DeadEnd:
@@ -115,7 +129,9 @@ def instantiate(method: MethodSchema, env: Bindings, where: str) -> Expansion | 
         data = substitute(port.data, env)
         inputs[data] = (*inputs.get(data, ()), offset[port.label])
     effects = tuple((eff.positive, substitute(eff.pattern, env)) for eff in method.effects)
-    return Expansion(len(method.body), tuple(channels), tuple(body), outputs, inputs, effects)
+    return Expansion(
+        len(method.body), tuple(channels), tuple(body), outputs, inputs, effects, where
+    )
 
 
 @dataclass
@@ -127,13 +143,13 @@ class Grounder:
         default_factory=dict
     )
     _functionality_bindings: dict[Ground, tuple[Bindings, ...]] = field(default_factory=dict)
-    _expansions: dict[tuple[Signature, int, BindingKey], Expansion | DeadEnd] = field(
+    _expansions: dict[tuple[Ground, int], tuple[Expansion | DeadEnd, ...]] = field(
         default_factory=dict
     )
-    _instances: dict[tuple[Signature, BindingKey], FunctionalityInstance] = field(
-        default_factory=dict
-    )
+    _instances: dict[Ground, tuple[FunctionalityInstance, ...]] = field(default_factory=dict)
     _failures: dict[tuple[Signature, int, Ground], Failure] = field(default_factory=dict)
+    numbering: Numbering = field(default_factory=Numbering)
+    """Numbers for the values of the task's search nodes (canonical forms, fingerprints)."""
 
     def method_bindings(self, method: MethodSchema, call: Ground) -> tuple[Bindings, ...]:
         """Every binding of a method version's preconditions for ``call``
@@ -161,27 +177,32 @@ class Grounder:
         env = bind_name(params, call[1:])
         return () if env is None else tuple(bindings(self.task, tests, env))
 
-    def expansion(self, method: MethodSchema, env: Bindings, where: str) -> Expansion | DeadEnd:
-        """``method`` instantiated under ``env``, made once."""
-        memo = ((method.name, len(method.params)), method.version, key(env))
+    def expansions(self, method: MethodSchema, call: Ground) -> tuple[Expansion | DeadEnd, ...]:
+        """A method version instantiated for ``call`` under each binding of its
+        preconditions (state order), made once: the same for every node that
+        expands ``call``, whatever its ancestors."""
+        memo = (call, method.version)
         found = self._expansions.get(memo)
         if found is None:
-            found = self._expansions[memo] = instantiate(method, env, where)
+            where = f"{call_text(call)}, version {method.version}"
+            found = self._expansions[memo] = tuple(
+                instantiate(method, env, where) for env in self.method_bindings(method, call)
+            )
         return found
 
-    def instance(self, schema: FunctionalitySchema, env: Bindings) -> FunctionalityInstance:
-        """The inputs, outputs and postconditions of a functionality under one
-        binding of its preconditions: they may use variables the preconditions
-        bind (``(loc ?r) :precond ((in ?r ?room)) :out ((pos ?r ?room))``)."""
-        memo = ((schema.name, len(schema.params)), key(env))
-        found = self._instances.get(memo)
+    def instances(
+        self, schema: FunctionalitySchema, call: Ground
+    ) -> tuple[FunctionalityInstance, ...]:
+        """The inputs, outputs and postconditions of a functionality call under
+        each binding of its preconditions (state order), made once: they may
+        use variables the preconditions bind (``(loc ?r) :precond ((in ?r
+        ?room)) :out ((pos ?r ?room))``)."""
+        found = self._instances.get(call)
         if found is None:
-            io = (
-                tuple(substitute(i, env) for i in schema.inputs),
-                tuple(substitute(o, env) for o in schema.outputs),
+            found = self._instances[call] = tuple(
+                _instance(schema, call, env, self.numbering)
+                for env in self.functionality_bindings(schema, call)
             )
-            effects = tuple((e.positive, substitute(e.pattern, env)) for e in schema.effects)
-            found = self._instances[memo] = FunctionalityInstance(io, effects)
         return found
 
     def failure(

@@ -15,9 +15,9 @@ import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
-from cfgplan.configuration.model import Configuration
+from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
-from cfgplan.planner.finish import Models, finish, identity
+from cfgplan.planner.finish import Models, admissible, build, fingerprint
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import DeadEnd, Report
@@ -63,7 +63,7 @@ class Grower:
     distinct: bool = True
     stats: Stats = field(default_factory=Stats)
     report: Report = field(default_factory=Report)
-    seen: set[object] = field(default_factory=set)  # configurations listed (distinct)
+    seen: set[bytes] = field(default_factory=set)  # fingerprints listed (distinct)
     models: Models = field(default_factory=Models)
 
     def __post_init__(self) -> None:
@@ -90,9 +90,10 @@ class Grower:
         todo = [node]
         while todo:
             current = todo.pop()
-            if current.done or task.is_method(current.stack[0].call):
+            stack = current.stack
+            if not stack or task.is_method(stack[0].call):
                 priority = current.cost
-                if not current.done:
+                if stack:
                     rest = self.heuristic(current)
                     if rest is None:
                         self.stats.pruned += 1
@@ -140,22 +141,30 @@ class Grower:
     def complete(self, node: Partial, total: float) -> Configuration | None:
         """Step 4 for a complete node, in the order configurations are listed:
         the configuration, or None (a repeat in distinct mode, or inadmissible)."""
-        ident = identity(node) if self.distinct else None
+        ident = fingerprint(node, self.grounder.numbering) if self.distinct else None
         if ident is not None and ident in self.seen:
             self.stats.derivations += 1
             self.stats.duplicates += 1
             return None
-        config = self.finish(node, total)
+        config = self.finish(node, total, self.stats.derivations + 1)
         if config is None:
             return None
         self.stats.derivations += 1
         if ident is not None:
             self.seen.add(ident)
-        return config.model_copy(update={"derivation": self.stats.derivations})
+        return config
 
-    def finish(self, node: Partial, total: float) -> Configuration | None:
+    def finish(self, node: Partial, total: float, derivation: int = 0) -> Configuration | None:
         """The admissible configuration of a complete node, or None (rejection reported)."""
-        result = finish(node, self.grounder.task, total, self.models)
+        media = self.admissible(node)
+        if media is None:
+            return None
+        return build(node, total, self.grounder.task, self.models, media, derivation)
+
+    def admissible(self, node: Partial) -> tuple[Assignment, ...] | None:
+        """Step 4's checks: the media assignment of a complete node, or None
+        (rejection reported)."""
+        result = admissible(node, self.grounder.task)
         if isinstance(result, DeadEnd):
             self.stats.rejected += 1
             self.report.reject(result)

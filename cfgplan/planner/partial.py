@@ -15,13 +15,15 @@ functionality keeps the label of its first instance.
 from __future__ import annotations
 
 import hashlib
+from array import array
 from dataclasses import dataclass
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Span
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
-from cfgplan.planner.ground import Expansion
+from cfgplan.planner.ground import Expansion, FunctionalityInstance, Grounder
+from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task
 
@@ -39,7 +41,7 @@ class Item:
     label: int
     call: Ground  # (name, *args)
     ancestors: frozenset[Ground]  # method instances above it: the recursion guard
-    text: str = ""  # its part of canonical(), made once
+    number: int = -1  # its part of canonical(), numbered once
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -52,7 +54,7 @@ class Channel:
     target: int
     data: Ground
     bandwidth: float | None
-    text: str = ""  # its label-free part of canonical(), made once
+    number: int = -1  # its label-free part of canonical(), numbered once
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -66,8 +68,8 @@ class Placed:
     robot: str
     inputs: tuple[Ground, ...]
     outputs: tuple[Ground, ...]
-    text: str = ""  # its part of canonical(), made once
-    name: str = ""  # its call as canonical() names it, made once
+    number: int  # its part of canonical(): FunctionalityInstance.number
+    name: int  # its call, as canonical() names it: FunctionalityInstance.name
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -112,7 +114,7 @@ def root(goal: Ground) -> Partial:
 
 
 def expand_method(
-    node: Partial, item: Item, expansion: Expansion, where: str, span: Span | None, choice: int
+    node: Partial, item: Item, expansion: Expansion, span: Span | None, choice: int
 ) -> Partial | DeadEnd:
     """Step 3 of 4.5: fresh labels (a), add the method's channels (b), push its
     body (c), and re-wire every channel at the expanded instance through
@@ -136,7 +138,7 @@ def expand_method(
             port = expansion.outputs.get(ch.data)
             if port is None:
                 missing = f"no :out entry produces {atom_text(ch.data)}"
-                return DeadEnd(where, missing, span, Condition.INFORMATION)
+                return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
             source = first + port[0]
             if bandwidth is None and ch.kind == "global":
                 bandwidth = port[1]  # a global channel allocates the :out's bandwidth
@@ -145,7 +147,7 @@ def expand_method(
             offsets = expansion.inputs.get(ch.data)
             if not offsets:
                 missing = f"no :in entry consumes {atom_text(ch.data)}"
-                return DeadEnd(where, missing, span, Condition.INFORMATION)
+                return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
             targets = tuple(first + k for k in offsets)  # an :in may feed several
         rewired.extend(Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth) for t in targets)
     ancestors = item.ancestors | {item.call}
@@ -210,16 +212,18 @@ def place_functionality(
     node: Partial,
     item: Item,
     schema: FunctionalitySchema,
-    io: tuple[tuple[Ground, ...], tuple[Ground, ...]],
-    effects: tuple[tuple[bool, Ground], ...],
+    instance: FunctionalityInstance,
     choice: int | None,
     task: Task,
 ) -> Partial | DeadEnd:
     """Step 2a of 4.5: add the functionality to C at its robot (its first
-    argument), with its inputs and outputs ``io`` and postconditions
-    ``effects`` instantiated under one binding of its preconditions; ``choice``
-    is that binding's index when there are several."""
-    new = Placed(item.label, item.call, schema, item.call[1], *io)
+    argument), with its inputs, outputs and postconditions instantiated under
+    one binding of its preconditions (``instance``); ``choice`` is that
+    binding's index when there are several."""
+    inputs, outputs = instance.io
+    new = Placed(item.label, item.call, schema, item.call[1], inputs, outputs,
+                 instance.number, instance.name)
+    effects = instance.effects
     located = dict(node.located)
     located[item.label] = new
     touching = [
@@ -333,39 +337,66 @@ def _misplaced(ch: Channel, src: Placed, dst: Placed) -> DeadEnd:
     )
 
 
-def canonical(node: Partial, task: Task) -> bytes:
+# Nodes share most of their items, placed instances and channels: each one's
+# number (for canonical() and finish.fingerprint()) is found once and kept on
+# it; they are never changed.
+
+
+def placed_names(node: Partial) -> dict[int, int]:
+    """Each placed instance's call, numbered, by label."""
+    return {p.label: p.name for p in node.placed}
+
+
+def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> list[int]:
+    """Each channel with its ends named by ``names``, numbered as a whole
+    (one number to sort), in the node's order."""
+    get = number.numbers.get
+    out = []
+    for ch in node.channels:
+        n = ch.number
+        if n < 0:
+            n = ch.number = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
+        key = (n, names[ch.source], names[ch.target])
+        found = get(key)
+        out.append(number(key) if found is None else found)
+    return out
+
+
+def digest(numbers: list[int]) -> bytes:
+    """A list of numbers as a 128-bit BLAKE2 digest: two different lists share
+    one with odds of about 2^-128 per pair, far below anything a run can meet."""
+    return hashlib.blake2b(array("q", numbers).tobytes(), digest_size=16).digest()
+
+
+def canonical(node: Partial, grounder: Grounder) -> bytes:
     """The node up to labels — placed instances, channels, stack and P — as a
-    128-bit BLAKE2 digest. Two nodes with the same canonical form have the
+    128-bit :func:`digest`. Two nodes with the same canonical form have the
     same completions (up to labels). An item's ancestors count only where they
     can matter: those whose method can recur (:attr:`Task.recursive`); in a
     domain without recursion the order in which items were reached is
-    forgotten. Two different forms share a digest with odds of about 2^-128
-    per pair (far below anything a run can meet); it takes 16 bytes where the
-    form takes kilobytes, so every expanded node can be remembered."""
-    # Nodes share most of their items, placed instances and channels: each
-    # one's text is made once and kept on it (they are never changed).
-    names: dict[int, str] = {}
-    for p in node.placed:
-        if not p.text:
-            p.text = repr((p.call, p.inputs, p.outputs))
-            p.name = repr(p.call)
-        names[p.label] = p.name
+    forgotten. It takes 16 bytes where the form takes kilobytes, so every
+    expanded node can be remembered."""
+    number = grounder.numbering
+    names = placed_names(node)
+    placed = sorted(p.number for p in node.placed)
     for index, item in enumerate(node.stack):
-        names[item.label] = str(index)
-    channels = []
-    for ch in node.channels:
-        if not ch.text:
-            ch.text = repr((ch.kind, ch.robots, ch.data, ch.bandwidth))
-        channels.append(f"{ch.text}{names[ch.source]}>{names[ch.target]}")
+        names[item.label] = -1 - index
+    channels = channel_numbers(node, names, number)
     channels.sort()
-    recursive = task.recursive
     stack = []
     for item in node.stack:
-        if not item.text:
+        if item.number < 0:
+            recursive = grounder.task.recursive
             relevant = sorted(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)
-            item.text = repr((item.call, relevant)) if relevant else repr(item.call)
-        stack.append(item.text)
-    placed = sorted(p.text for p in node.placed)
-    effects = sorted(map(repr, node.effects))
-    text = "\n".join("\t".join(part) for part in (placed, channels, stack, effects))
-    return hashlib.blake2b(text.encode(), digest_size=16).digest()
+            item.number = number((item.call, tuple(relevant)))
+        stack.append(item.number)
+    get = number.numbers.get
+    effects = []
+    for effect in node.effects:
+        found = get(effect)
+        effects.append(number(effect) if found is None else found)
+    effects.sort()
+    # The lengths of the first three parts make the list say where each ends.
+    return digest(
+        [len(placed), *placed, len(channels), *channels, len(stack), *stack, *effects]
+    )

@@ -104,8 +104,7 @@ class Partition:
             else:
                 options = []
                 for method in task.versions(call):
-                    for env in self.grounder.method_bindings(method, call):
-                        expansion = self.grounder.expansion(method, env, "")
+                    for expansion in self.grounder.expansions(method, call):
                         if not isinstance(expansion, DeadEnd):
                             options.append(_option(task, expansion))
                 found = Instance(call, False, tuple(options))

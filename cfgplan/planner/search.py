@@ -96,7 +96,7 @@ class BestFirst:
             if grower.distinct:
                 # The same partial configuration reached by another order of
                 # choices has the same completions: only the first one counts.
-                key = canonical(node, grower.grounder.task)
+                key = canonical(node, grower.grounder)
                 if key in self._closed:
                     continue
                 self._closed.add(key)

@@ -57,17 +57,16 @@ def _expand(
         return
     choice = 0
     for method in versions:
-        where = f"{call_text(item.call)}, version {method.version}"
-        options = grounder.method_bindings(method, item.call)
+        options = grounder.expansions(method, item.call)
         if not options:
+            where = f"{call_text(item.call)}, version {method.version}"
             yield _no_binding(grounder, method, item.call, where)
             continue
-        for env in options:
-            expansion = grounder.expansion(method, env, where)
+        for expansion in options:
             if isinstance(expansion, DeadEnd):
                 yield expansion
             else:
-                yield expand_method(node, item, expansion, where, method.span, choice)
+                yield expand_method(node, item, expansion, method.span, choice)
             choice += 1
 
 
@@ -85,16 +84,13 @@ def _place(grounder: Grounder, node: Partial, item: Item) -> Iterator[Child]:
     if existing is not None:
         yield reuse_functionality(node, item, existing, task)
         return
-    options = grounder.functionality_bindings(schema, item.call)
+    options = grounder.instances(schema, item.call)
     if not options:
         yield _no_binding(grounder, schema, item.call, call_text(item.call))
         return
-    for index, env in enumerate(options):
-        instance = grounder.instance(schema, env)
+    for index, instance in enumerate(options):
         choice = index if len(options) > 1 else None
-        yield place_functionality(
-            node, item, schema, instance.io, instance.effects, choice, task
-        )
+        yield place_functionality(node, item, schema, instance, choice, task)
 
 
 def _no_binding(

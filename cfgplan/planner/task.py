@@ -183,6 +183,16 @@ class Task:
         whole += [f.cost for f in self.functionalities.values() if f.cost is not None]
         return not w.reliability and all(float(x).is_integer() for x in whole)
 
+    @cached_property
+    def uncertain(self) -> bool:
+        """Some functionality or medium is less than fully reliable (7.2):
+        otherwise every configuration's reliability is 1."""
+        return (
+            any(p != 1.0 for p in self.reliability.values())
+            or any(p != 1.0 for p in self.links.values())
+            or any(f.reliability not in (None, 1.0) for f in self.functionalities.values())
+        )
+
     def is_method(self, call: Ground) -> bool:
         return (call[0], len(call) - 1) in self.methods
 

@@ -55,7 +55,7 @@ def test_rewiring_moves_both_ends_of_a_channel_at_the_expanded_instance() -> Non
         inputs={d: (0, 1)},
         effects=(),
     )
-    child = expand_method(node, node.stack[0], expansion, "m(A)", None, 0)
+    child = expand_method(node, node.stack[0], expansion, None, 0)
     assert isinstance(child, Partial)
     ends = [(ch.source, ch.target) for ch in child.channels]
     assert ends == [(9, 2), (9, 3), (2, 2), (2, 3), (2, 8)]
@@ -67,7 +67,7 @@ def test_rewiring_a_global_channel_takes_the_bandwidth_of_the_out_entry() -> Non
     d = ("d", "A")
     node = with_channels(node, Channel("global", ("A", "B"), 1, 7, d, None))
     expansion = Expansion(1, (), (("flt", "A"),), {d: (0, 20.0)}, {}, ())
-    child = expand_method(node, node.stack[0], expansion, "m(A)", None, 0)
+    child = expand_method(node, node.stack[0], expansion, None, 0)
     assert isinstance(child, Partial)
     assert child.channels[0].bandwidth == 20.0
 
@@ -75,7 +75,7 @@ def test_rewiring_a_global_channel_takes_the_bandwidth_of_the_out_entry() -> Non
 def test_a_channel_no_out_entry_produces_is_a_dead_end() -> None:
     node = with_channels(root(("m", "A")), local(1, 7, ("d", "A")))
     expansion = Expansion(1, (), (("flt", "A"),), {}, {}, ())
-    dead = expand_method(node, node.stack[0], expansion, "m(A)", None, 0)
+    dead = expand_method(node, node.stack[0], expansion, None, 0)
     assert isinstance(dead, DeadEnd)
     assert dead.condition is Condition.INFORMATION
     assert dead.reason == "no :out entry produces (d A)"
@@ -84,9 +84,8 @@ def test_a_channel_no_out_entry_produces_is_a_dead_end() -> None:
 def place(t: Task, node: Partial, call: tuple[str, ...]) -> Partial | DeadEnd:
     schema = t.functionality(call)
     assert schema is not None
-    (env,) = Grounder(t).functionality_bindings(schema, call)
-    instance = Grounder(t).instance(schema, env)
-    return place_functionality(node, node.stack[0], schema, instance.io, instance.effects, None, t)
+    (instance,) = Grounder(t).instances(schema, call)
+    return place_functionality(node, node.stack[0], schema, instance, None, t)
 
 
 def test_placing_both_ends_resolves_and_costs_the_channel() -> None:
@@ -152,7 +151,7 @@ def test_canonical_forgets_labels() -> None:
     one = with_channels(root(("x",)), local(2, 3, img), stack=stack)
     relabelled = (Item(7, ("cam", "A"), frozenset()), Item(5, ("use", "A", "A"), frozenset()))
     other = with_channels(root(("x",)), local(7, 5, img), stack=relabelled)
-    t = task()
-    assert canonical(one, t) == canonical(other, t)
+    g = Grounder(task())
+    assert canonical(one, g) == canonical(other, g)
     swapped = with_channels(root(("x",)), local(5, 7, img), stack=relabelled)
-    assert canonical(one, t) != canonical(swapped, t)
+    assert canonical(one, g) != canonical(swapped, g)
