@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
-from cfgplan.planner.finish import build, fingerprint
+from cfgplan.planner.finish import Parts, build, fingerprint
 from cfgplan.planner.grow import Grower, Heuristic, Stats
 from cfgplan.planner.partial import Partial, canonical, root
 from cfgplan.planner.report import Report, StopReason
@@ -42,13 +42,13 @@ MOST_HELD = 250_000
 @dataclass
 class Found:
     """A complete derivation met in a window, in depth-first order ``index``:
-    admissible with its media assignment, or not listed (``node`` None:
+    admissible with its media assignment, or not listed (``parts`` None:
     inadmissible, or a repeat). It is built into a configuration when it is
     listed, numbered then."""
 
     cost: float
     index: int
-    node: Partial | None
+    parts: Parts | None
     media: tuple[Assignment, ...] = ()
     repeat: bool = False  # its configuration was met before in this window
 
@@ -174,7 +174,7 @@ class Windows:
             return Found(cost, index, None)
         if ident is not None:
             admitted.add(ident)
-        return Found(cost, index, node, media)
+        return Found(cost, index, Parts(node.placed, node.channels, node.effects), media)
 
     def _list(self, found: list[Found]) -> Iterator[Configuration]:
         """Sorted derivations of a window, numbered as :meth:`Grower.complete`
@@ -185,9 +185,9 @@ class Windows:
             if f.repeat:
                 stats.derivations += 1
                 stats.duplicates += 1
-            elif f.node is not None:
+            elif f.parts is not None:
                 stats.derivations += 1
-                yield build(f.node, f.cost, task, models, f.media, stats.derivations)
+                yield build(f.parts, f.cost, task, models, f.media, stats.derivations)
 
 
 def _halve(found: list[Found]) -> tuple[list[Found], float]:

@@ -10,13 +10,16 @@ state declares media, communication (4.6). :func:`finish` returns the
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
+from cfgplan.planner.ground import Effects
 from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Partial, channel_numbers, digest, placed_names
+from cfgplan.planner.partial import Channel as PartialChannel
+from cfgplan.planner.partial import Partial, Placed, channel_numbers, digest, placed_names
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task
 
@@ -124,7 +127,7 @@ def _postcondition(effect: tuple[bool, Ground]) -> str:
     return atom_text(atom) if positive else f"(not {atom_text(atom)})"
 
 
-def postconditions(node: Partial) -> tuple[str, ...]:
+def postconditions(node: Finished) -> tuple[str, ...]:
     """P as the thesis prints it: atoms and ``(not ATOM)``, each once, in order."""
     return tuple(dict.fromkeys(map(_postcondition, node.effects)))
 
@@ -144,8 +147,30 @@ def fingerprint(node: Partial, number: Numbering) -> bytes:
     return digest([len(ends), *ends, len(channels), *channels, *post])
 
 
+class Finished(Protocol):
+    """What a configuration is built from: a complete :class:`Partial`, or
+    the three parts of one kept to be built later (:class:`Parts`)."""
+
+    @property
+    def placed(self) -> tuple[Placed, ...]: ...
+    @property
+    def channels(self) -> tuple[PartialChannel, ...]: ...
+    @property
+    def effects(self) -> Effects: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Parts:
+    """A complete node's parts a configuration is built from: smaller than
+    the node (no stack, no indexes), to hold many until they are listed."""
+
+    placed: tuple[Placed, ...]
+    channels: tuple[PartialChannel, ...]
+    effects: Effects
+
+
 def build(
-    node: Partial,
+    node: Finished,
     total: float,
     task: Task,
     models: Models,
@@ -159,7 +184,7 @@ def build(
     without validation (it is the hot path of listing many configurations);
     ``models`` shares the immutable parts between configurations.
     """
-    located = node.located
+    robot = {p.label: p.robot for p in node.placed}
     functionalities: list[FunctionalityInstance] = []
     for p in reversed(node.placed):
         fkey = (p.label, p.call)
@@ -171,7 +196,7 @@ def build(
         functionalities.append(made)
     channels: list[Channel] = []
     for ch in node.channels:
-        src, dst = located[ch.source].robot, located[ch.target].robot
+        src, dst = robot[ch.source], robot[ch.target]
         ckey = (ch.kind, ch.source, ch.target, src, dst, ch.data, ch.bandwidth)
         cmade = models.channels.get(ckey)
         if cmade is None:
@@ -195,12 +220,12 @@ def build(
         derivation=derivation,
         proven=True,
         devices=_devices(node, task),
-        reliability=_reliability(node, task),
+        reliability=_reliability(node, robot, task),
         effects=tuple(dict.fromkeys(node.effects)),
     )
 
 
-def _devices(node: Partial, task: Task) -> tuple[str, ...]:
+def _devices(node: Finished, task: Task) -> tuple[str, ...]:
     """The agents of the configuration the state declares devices, in the
     order of its functionality list."""
     if not task.devices:
@@ -209,7 +234,7 @@ def _devices(node: Partial, task: Task) -> tuple[str, ...]:
     return tuple(a for a in agents if a in task.devices)
 
 
-def _reliability(node: Partial, task: Task) -> float:
+def _reliability(node: Finished, robot: dict[int, str], task: Task) -> float:
     """The product of the reliabilities of its functionalities and of the
     media its global channels between two robots use (7.2)."""
     if not task.uncertain:
@@ -218,7 +243,7 @@ def _reliability(node: Partial, task: Task) -> float:
     for p in node.placed:
         reliability *= task.functionality_reliability(p.schema, p.call)
     for ch in node.channels:
-        src, dst = node.located[ch.source].robot, node.located[ch.target].robot
+        src, dst = robot[ch.source], robot[ch.target]
         if ch.kind == "global" and src != dst:
             reliability *= task.links.get((src, dst), 1.0)
     return reliability

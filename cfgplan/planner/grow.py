@@ -26,6 +26,10 @@ from cfgplan.planner.successors import successors
 Heuristic = Callable[[Partial], float | None]
 """A lower bound on what a node still costs; None when it has no completion."""
 
+WARM = 64
+"""Nodes a search takes before it tries the stronger bound at all: a small
+search (the thesis's instances) is over before it could pay for itself."""
+
 TRIAL = 4
 """Refinements by the stronger bound a search tries before it may give that
 bound up: from then on, when fewer than one refinement in :data:`PAYS` paid
@@ -68,8 +72,8 @@ class Grower:
 
     def __post_init__(self) -> None:
         self.integral = self.grounder.task.integral
-        self._tried = 0  # refinements so far
-        self._raised = 0  # refinements that raised a priority (or pruned)
+        self.tried = 0  # refinements by the stronger bound so far
+        self.raised = 0  # those that raised a priority (or pruned)
 
     def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children with
@@ -123,18 +127,18 @@ class Grower:
         """The node's priority under the larger of both bounds; None: pruned.
         ``beaten``: the priority a raised node must pass for the raise to pay
         (best-first: the next node's; else any raise pays)."""
-        if self.refine is None:
+        if self.refine is None or self.stats.nodes < WARM:
             return priority
         rest = self.refine(node)
-        self._tried += 1
+        self.tried += 1
         if rest is None:
-            self._raised += 1
+            self.raised += 1
             self.stats.pruned += 1
             return None
         raised = self.priority(node, rest)
         if raised > priority and (beaten is None or raised > beaten):
-            self._raised += 1
-        elif self._tried >= TRIAL and self._raised * PAYS < self._tried:
+            self.raised += 1
+        elif self.tried >= TRIAL and self.raised * PAYS < self.tried:
             self.refine = None  # it seldom helps here: give it up for this search
         return max(priority, raised)
 

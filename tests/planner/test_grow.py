@@ -3,11 +3,14 @@ and giving it up never changes what is found."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from benchmarks.families import chain, ecology, wall
 from cfgplan.planner import grow
 from cfgplan.planner.plan import Run
+from cfgplan.problem import load
 from tests.planner.test_scale import problem_of
 
 
@@ -18,9 +21,13 @@ def _run(texts: tuple[str, str], limit: int) -> tuple[list[tuple[float, str]], R
     return found, run
 
 
-def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains() -> None:
+def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """On wall K=3 N=4 L=3 it never raises a priority: dropped after TRIAL
-    refinements; on chain D=8 it raises every one: kept."""
+    refinements; on chain D=8 it raises every one: kept (both tried from the
+    first node)."""
+    monkeypatch.setattr(grow, "WARM", 0)
     _, on_wall = _run(wall(3, 4, 3), 1)
     _, on_chain = _run(chain(8), 1)
     assert on_wall.strategy.grower.refine is None
@@ -35,6 +42,7 @@ def test_giving_the_bound_up_changes_nothing_found(
 ) -> None:
     """The ten cheapest, with the bound kept throughout (TRIAL never reached)
     and with the usual rule, are the same configurations at the same costs."""
+    monkeypatch.setattr(grow, "WARM", 0)
     usual, _ = _run(texts, 10)
     monkeypatch.setattr(grow, "TRIAL", 10**9)
     kept, run = _run(texts, 10)
@@ -42,3 +50,18 @@ def test_giving_the_bound_up_changes_nothing_found(
     assert [cost for cost, _ in usual] == [cost for cost, _ in kept]
     last = usual[-1][0]  # ties at the last cost may be cut differently
     assert sorted(c for c in usual if c[0] < last) == sorted(c for c in kept if c[0] < last)
+
+
+def test_a_small_search_never_tries_the_stronger_bound() -> None:
+    """Build-wall (6.4) finds its cheapest configuration in fewer than WARM
+    nodes: the partition bound is not computed once; ecology N=18, larger,
+    tries it."""
+    domains = Path(__file__).resolve().parents[2] / "domains" / "build-wall"
+    problem = load(domains / "domain.lisp", domains / "state-6.4.lisp")
+    small = Run(problem.task, problem.goal_call, limit=1)
+    assert [c.cost for c in small] == [53]
+    assert small.stats.nodes < grow.WARM
+    assert small.strategy.grower.tried == 0
+    _, large = _run(ecology(18, 3, 3), 1)
+    assert large.stats.nodes > grow.WARM
+    assert large.strategy.grower.tried > 0
