@@ -41,6 +41,12 @@ Dropping an admissible bound never changes the answer, only how many nodes
 are taken (tests/planner/test_grow.py)."""
 PAYS = 4
 
+RELY = 32
+"""Refinements after which, if the stronger bound was at least the first one
+every time, the first one is no longer computed (only whether a node can
+complete is: :attr:`Grower.feasible`): where the stronger bound always
+dominates (fusion), the first adds only its cost."""
+
 
 @dataclass
 class Stats:
@@ -65,6 +71,9 @@ class Grower:
     refine: Heuristic | None = None
     """A costlier, stronger bound; the strategy decides when to use it."""
     distinct: bool = True
+    feasible: Heuristic | None = None
+    """The cheapest test that a node can complete (0, or None: no completion),
+    to price nodes with while :attr:`refine` dominates :attr:`heuristic`."""
     stats: Stats = field(default_factory=Stats)
     report: Report = field(default_factory=Report)
     seen: set[bytes] = field(default_factory=set)  # fingerprints listed (distinct)
@@ -74,6 +83,8 @@ class Grower:
         self.integral = self.grounder.task.integral
         self.tried = 0  # refinements by the stronger bound so far
         self.raised = 0  # those that raised a priority (or pruned)
+        self.dominated = 0  # those at least the first bound
+        self.first = self.heuristic
 
     def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children with
@@ -136,10 +147,15 @@ class Grower:
             self.stats.pruned += 1
             return None
         raised = self.priority(node, rest)
+        if raised >= priority:
+            self.dominated += 1
         if raised > priority and (beaten is None or raised > beaten):
             self.raised += 1
         elif self.tried >= TRIAL and self.raised * PAYS < self.tried:
             self.refine = None  # it seldom helps here: give it up for this search
+            self.heuristic = self.first
+        if self.tried == RELY and self.dominated == RELY and self.feasible is not None:
+            self.heuristic = self.feasible  # the stronger bound is all that counts here
         return max(priority, raised)
 
     def complete(self, node: Partial, total: float) -> Configuration | None:

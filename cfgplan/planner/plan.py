@@ -99,7 +99,7 @@ class Run:
     def __post_init__(self) -> None:
         grounder, bound, partition = parts(self.task)
         refine = partitioned(bound, partition)
-        grower = Grower(grounder, bound.estimate, refine, self.distinct)
+        grower = Grower(grounder, bound.estimate, refine, self.distinct, bound.feasible)
         if self.limit is None:
             self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
         else:

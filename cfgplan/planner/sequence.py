@@ -103,7 +103,9 @@ class Ranked:
 
     def __post_init__(self) -> None:
         grounder, bound, partition = parts(self.task)
-        grower = Grower(grounder, bound.estimate, partitioned(bound, partition))
+        grower = Grower(
+            grounder, bound.estimate, partitioned(bound, partition), feasible=bound.feasible
+        )
         self.search = BestFirst(grower, self.goal)
         self._more = iter(self.search)
 
