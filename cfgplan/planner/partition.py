@@ -193,15 +193,19 @@ class Partition:
             return 0.0
         task = self.grounder.task
         totals: Counts = {}
+        get = totals.get
         for item in node.stack:
             counts = self.counts(item.call)
             if counts is None:
                 return 0.0
-            for key, n in counts.items():
-                totals[key] = totals.get(key, 0) + n
+            if totals:
+                for key, n in counts.items():
+                    totals[key] = get(key, 0) + n
+            else:
+                totals.update(counts)
             if not task.is_method(item.call):  # a pending functionality places itself
                 key = ("@", item.call[1])
-                totals[key] = totals.get(key, 0) + 1
+                totals[key] = get(key, 0) + 1
         present, future = self._channels(node)
         for key in future:
             for counted in (key, ("*", *key[1:3])):
@@ -249,7 +253,7 @@ class Partition:
             return found
         # The hot loop of the search: prices inlined (see Prices for each rule).
         instances = self._instances
-        agent_price = prices.agent
+        agent_price, agent_prices = prices.agent, prices.agents
         totals, present, placed = prices.totals, prices.present, prices.node.labels
         for current in self.order(call):
             if current in memo:
@@ -270,7 +274,8 @@ class Partition:
                     elif wire.every not in present:
                         cost += wire.weight / totals[wire.every]
                 for agent in option.agents:
-                    cost += agent_price(agent)
+                    price = agent_prices.get(agent)
+                    cost += agent_price(agent) if price is None else price
                 if cost < best:
                     best = cost
             memo[current] = best
@@ -286,7 +291,7 @@ class Prices:
     certain: frozenset[str]
     totals: Counts
     present: set[Key]
-    _agents: dict[str, float] = field(default_factory=dict)
+    agents: dict[str, float] = field(default_factory=dict)  # the agent prices found so far
 
     def functionality(self, call: Ground) -> float:
         if call in self.node.labels:
@@ -296,12 +301,12 @@ class Prices:
         return self.task.functionality_cost(schema, call) / self.totals[call]
 
     def agent(self, agent: str) -> float:
-        found = self._agents.get(agent)
+        found = self.agents.get(agent)
         if found is None:
             found = 0.0
             if agent not in self.node.robots and agent not in self.certain:
                 found = self.task.agent_cost(agent) / self.totals[("@", agent)]
-            self._agents[agent] = found
+            self.agents[agent] = found
         return found
 
     def channel(self, key: Key) -> float:
