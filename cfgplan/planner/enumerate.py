@@ -7,10 +7,15 @@ first, in the thesis's order (4.5), keeping only the path, and collects the
 admissible configurations whose cost falls in a window ``[low, high)``;
 nodes whose bound reaches ``high`` are cut. At the end of a pass the window
 is sorted by cost, then depth-first order (6.3.2) — exactly the order the
-best-first search gives — and listed. The first window is the cheapest cost
-alone (listed as it is walked: depth-first order is then the listing order),
-the second everything else. A configuration has one cost, so it falls in
-one window: distinct configurations stay distinct across windows.
+best-first search gives — and listed; the cheapest whole cost of a window
+is listed as it is walked (depth-first order is then the listing order).
+A configuration has one cost, so it falls in one window: distinct
+configurations stay distinct across windows.
+
+The first pass is one window over every cost, priced only by whether a node
+can complete: a small instance is listed in one walk. When it has taken
+:data:`ONE_PASS` nodes it is given up for windows pruned by the bounds —
+the cheapest cost first, the rest after — which skip what it listed.
 
 When a window holds more than :data:`MOST_HELD` configurations, its upper
 edge is lowered to keep the cheaper half and the next window starts there,
@@ -26,17 +31,28 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
-from cfgplan.planner.finish import Parts, build, fingerprint
+from cfgplan.planner.finish import Parts, admissible, build, fingerprint
 from cfgplan.planner.grow import Grower, Heuristic, Stats
 from cfgplan.planner.partial import Partial, canonical, root
-from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.report import DeadEnd, Report, StopReason
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground
 
 MOST_HELD = 250_000
 """Configurations one window may hold before its upper edge comes down."""
 
+ONE_PASS = 20_000
+"""Nodes the first walk, over every cost at once, may take."""
 
+
+class _TooBig(Exception):
+    """The first walk took :data:`ONE_PASS` nodes: what it listed so far
+    (complete derivations at the cheapest cost, and the configurations
+    admitted among them)."""
+
+    def __init__(self, listed: int, admitted: set[bytes]) -> None:
+        super().__init__(listed)
+        self.listed, self.admitted = listed, admitted
 
 
 @dataclass
@@ -51,6 +67,7 @@ class Found:
     parts: Parts | None
     media: tuple[Assignment, ...] = ()
     repeat: bool = False  # its configuration was met before in this window
+    dead: DeadEnd | None = None  # why it is inadmissible (reported when listed)
 
 
 @dataclass
@@ -100,30 +117,48 @@ class Windows:
         self.stats.seconds = time.perf_counter() - self._start
 
     def _windows(self) -> Iterator[Configuration]:
-        start = [(p, n) for p, n in self.grower.settle(root(self.goal))]
+        grower = self.grower
+        start = [(p, n) for p, n in grower.settle(root(self.goal))]
         if not start:
             return
         low = min(p for p, _ in start)
-        window = Window(low, low + 1 if self.grower.integral else low + 1e-9)
-        while True:
-            yield from self._walk(start, window)
-            if window.beyond is None:
-                return  # nothing was cut: every derivation has been met
+        bounds = grower.heuristic, grower.refine
+        grower.heuristic, grower.refine = self.feasible, None
+        window = Window(low, float("inf"))
+        try:
+            yield from self._walk(start, window, budget=ONE_PASS)
+        except _TooBig as big:
+            # A large instance: the cheapest cost first, pruned by the bounds.
+            grower.heuristic, grower.refine = bounds
+            window = Window(low, low + 1 if grower.integral else low + 1e-9)
+            yield from self._walk(start, window, skip=big.listed, admitted=big.admitted)
+            grower.heuristic, grower.refine = self.feasible, None
+        while window.beyond is not None:  # something was cut: the costs above
             window = Window(max(window.high, window.beyond), float("inf"))
-            self.grower.heuristic, self.grower.refine = self.feasible, None
+            yield from self._walk(start, window)
 
-    def _walk(self, start: list[tuple[float, Partial]], window: Window) -> Iterator[Configuration]:
+    def _walk(
+        self,
+        start: list[tuple[float, Partial]],
+        window: Window,
+        budget: int | None = None,
+        skip: int = 0,
+        admitted: set[bytes] | None = None,
+    ) -> Iterator[Configuration]:
         """One depth-first pass over the derivations costing from ``window.low``
         up to ``window.high`` (which may come down), listing them in order.
-        One cost level (whole costs, width 1) is listed as it is walked: the
-        depth-first order is then the listing order."""
+        The cheapest whole cost is listed as it is walked (depth-first order
+        is then the listing order), but its first ``skip`` derivations, which
+        an earlier pass listed (its configurations ``admitted``). Raises
+        :class:`_TooBig` when the pass has taken ``budget`` nodes."""
         grower, stats = self.grower, self.stats
-        streaming = grower.integral and window.high - window.low <= 1
-        admitted: set[bytes] = set()
+        streamed = window.low + 1 if grower.integral else window.low
+        listed: set[bytes] = set() if admitted is None else admitted
+        held: set[bytes] = set()
         found: list[Found] = []
         closed: set[bytes] = set()
         stack = list(reversed(start))
-        index = 0
+        index = taken = through = 0
         next_tick = 1.0
         while stack:
             clock.check()
@@ -135,6 +170,9 @@ class Windows:
                 if raised is None or window.cut(raised):
                     continue
             stats.nodes += 1
+            taken += 1
+            if budget is not None and taken > budget:
+                raise _TooBig(through, listed)
             elapsed = time.perf_counter() - self._start
             if self.progress is not None and elapsed > next_tick:
                 self.progress(stats, elapsed)
@@ -143,10 +181,12 @@ class Windows:
                 index += 1
                 if priority < window.low:
                     continue  # listed in an earlier window
-                if streaming:
-                    yield from self._list([self._found(node, priority, index, admitted)])
+                if priority < streamed:
+                    through += 1
+                    if through > skip:
+                        yield from self._list([self._found(node, priority, index, listed)])
                     continue
-                found.append(self._found(node, priority, index, admitted))
+                found.append(self._found(node, priority, index, held))
                 if len(found) > MOST_HELD:
                     found, window.high = _halve(found)
                 continue
@@ -169,9 +209,9 @@ class Windows:
         ident = fingerprint(node, grower.grounder.numbering) if grower.distinct else None
         if ident is not None and ident in admitted:
             return Found(cost, index, None, repeat=True)
-        media = grower.admissible(node)
-        if media is None:
-            return Found(cost, index, None)
+        media = admissible(node, grower.grounder.task)
+        if isinstance(media, DeadEnd):
+            return Found(cost, index, None, dead=media)
         if ident is not None:
             admitted.add(ident)
         return Found(cost, index, Parts(node.placed, node.channels, node.effects), media)
@@ -182,7 +222,10 @@ class Windows:
         stats = self.stats
         task, models = self.grower.grounder.task, self.grower.models
         for f in found:
-            if f.repeat:
+            if f.dead is not None:
+                stats.rejected += 1
+                self.report.reject(f.dead)
+            elif f.repeat:
                 stats.derivations += 1
                 stats.duplicates += 1
             elif f.parts is not None:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.families import chain, delegation, ecology, fusion, media_tight, wall
+from benchmarks.families import chain, delegation, ecology, fusion, media_tight, relay, wall
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import enumerate as windows
 from cfgplan.planner import plan
@@ -94,6 +94,49 @@ def test_listing_in_small_windows_gives_what_best_first_gives(
         (c.cost, c.identity(), c.derivation) for c in configs
     ]
     assert len(listed) == 4236
+
+
+CYCLES = (
+    """(make-functionality :name '(s ?r) :out '((d ?r)))
+(make-functionality :name '(flt ?r) :in '((d ?r)) :out '((d ?r)))
+(make-functionality :name '(act ?r) :in '((d ?r)))
+(make-config-method :name '(m ?r) :in '((?g1 (d ?r))) :out '((?g1 (d ?r))) :body '((?g1 (flt ?r))))
+(make-config-method :name '(do ?r) :precond '((robot ?r))
+  :channels '(((local ?r) ?f0 ?f1 (d ?r)) ((local ?r) ?f1 ?f1 (d ?r)) ((local ?r) ?f1 ?f2 (d ?r)))
+  :body '((?f0 (s ?r)) (?f1 (m ?r)) (?f2 (act ?r))))
+(make-config-method :name '(do ?r) :precond '((robot ?r))
+  :channels '(((local ?r) ?f0 ?f1 (d ?r)) ((local ?r) ?f1 ?f2 (d ?r)))
+  :body '((?f0 (s ?r)) (?f1 (m ?r)) (?f2 (act ?r))))
+""",
+    "(state (robot r1) (robot r2) (robot r1)) (goal (do r1))",
+)
+"""Issue 8's self-loop beside a version without it: derivations rejected (a cycle)."""
+
+
+@pytest.mark.parametrize("one_pass", [0, 3, 7, 200])
+@pytest.mark.parametrize(
+    "texts",
+    [wall(3, 4, 3), media_tight(4, 2, 1), relay(4, 4, 3), CYCLES],
+    ids=["wall-3-4-3", "media-tight-4", "relay-4", "cycles"],
+)
+def test_giving_up_the_first_walk_lists_the_same(
+    texts: tuple[str, str], one_pass: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--all walks every cost at once while the instance looks small; when
+    that walk is given up (after ONE_PASS nodes) for the windows, what it
+    listed is skipped: the list, its derivation numbers and the counts of
+    repeats (wall) and rejections (cycles) are those of one whole walk."""
+    problem = problem_of(texts)
+    whole, run = plan(problem.task, problem.goal_call, limit=None)
+    monkeypatch.setattr(windows, "ONE_PASS", one_pass)
+    parts, again = plan(problem.task, problem.goal_call, limit=None)
+    assert [(c.cost, c.identity(), c.derivation) for c in parts] == [
+        (c.cost, c.identity(), c.derivation) for c in whole
+    ]
+    counted = ("derivations", "duplicates", "rejected")
+    assert [getattr(again.stats, k) for k in counted] == [getattr(run.stats, k) for k in counted]
+    if one_pass < run.stats.nodes:
+        assert again.stats.nodes > run.stats.nodes  # the walk given up was not free
 
 
 def test_a_fact_repeated_forty_times_costs_nothing() -> None:
