@@ -83,8 +83,9 @@ class Grower:
         self.integral = self.grounder.task.integral
         self.tried = 0  # refinements by the stronger bound so far
         self.raised = 0  # those that raised a priority (or pruned)
-        self.dominated = 0  # those at least the first bound
+        self.dominated = 0  # those at least the first bound (or pruned)
         self.first = self.heuristic
+        self.repriced = False  # the bounds in use changed (the strategy re-prices its nodes)
 
     def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children with
@@ -144,6 +145,7 @@ class Grower:
         self.tried += 1
         if rest is None:
             self.raised += 1
+            self.dominated += 1
             self.stats.pruned += 1
             return None
         raised = self.priority(node, rest)
@@ -153,9 +155,10 @@ class Grower:
             self.raised += 1
         elif self.tried >= TRIAL and self.raised * PAYS < self.tried:
             self.refine = None  # it seldom helps here: give it up for this search
-            self.heuristic = self.first
+            self.heuristic, self.repriced = self.first, True
         if self.tried == RELY and self.dominated == RELY and self.feasible is not None:
-            self.heuristic = self.feasible  # the stronger bound is all that counts here
+            # The stronger bound is all that counts here.
+            self.heuristic, self.repriced = self.feasible, True
         return max(priority, raised)
 
     def complete(self, node: Partial, total: float) -> Configuration | None:

@@ -81,6 +81,10 @@ class BestFirst:
                 # changes no order, only how many nodes are refined.
                 beaten = self._heap[0][0] if self._heap else None
                 raised = grower.refined(node, total, beaten)
+                if grower.repriced:
+                    grower.repriced = False
+                    self._reprice(node, raised is None)
+                    continue
                 if raised is None:
                     continue
                 if raised > total:
@@ -101,6 +105,30 @@ class BestFirst:
                     continue
                 self._closed.add(key)
             self._queue(grower.children(node))
+
+    def _reprice(self, taken: Partial, pruned: bool) -> None:
+        """The bounds in use changed (one given up, or one no longer needed):
+        price every open node, and ``taken`` unless it was ``pruned``, by the
+        bounds now in use. Two nodes with one canonical form must have one
+        priority, or the later of them in depth-first order could be expanded
+        first and close the form to the earlier one (the order of equal-cost
+        configurations would then not be the thesis's)."""
+        grower = self.grower
+        nodes = [node for *_, node in self._heap]
+        if not pruned:
+            nodes.append(taken)
+        self._heap = []
+        priced: list[tuple[float, Partial]] = []
+        for node in nodes:
+            if node.done:
+                priced.append((node.cost, node))
+                continue
+            rest = grower.heuristic(node)
+            if rest is None:
+                grower.stats.pruned += 1
+            else:
+                priced.append((grower.priority(node, rest), node))
+        self._queue(iter(priced))
 
     def _queue(self, entries: Iterator[tuple[float, Partial]]) -> None:
         lazy = self.grower.refine is not None

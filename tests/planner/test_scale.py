@@ -28,6 +28,7 @@ from cfgplan.planner.bound import Bound
 from cfgplan.planner.finish import finish
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.plan import Run
 from cfgplan.planner.successors import successors
 from cfgplan.problem import Problem, load
 
@@ -94,6 +95,24 @@ def test_listing_in_small_windows_gives_what_best_first_gives(
         (c.cost, c.identity(), c.derivation) for c in configs
     ]
     assert len(listed) == 4236
+
+
+@pytest.mark.parametrize("texts", [fusion(4, 3, 4, 3), chain(8)], ids=["fusion-4", "chain-8"])
+def test_best_first_lists_in_the_order_of_the_windows_when_the_first_bound_is_dropped(
+    texts: tuple[str, str],
+) -> None:
+    """On fusion and chain the stronger bound dominates the first, which the
+    search then stops computing (grow.RELY) and re-prices its open nodes:
+    the 200 cheapest come out in the depth-first order --all lists them in,
+    equal costs included, with the same derivation numbers."""
+    problem = problem_of(texts)
+    run = Run(problem.task, problem.goal_call, limit=200)
+    best = list(run)
+    assert run.strategy.grower.heuristic is run.strategy.grower.feasible
+    listed, _ = plan(problem.task, problem.goal_call, limit=None)
+    assert [(c.cost, c.identity(), c.derivation) for c in best] == [
+        (c.cost, c.identity(), c.derivation) for c in listed[:200]
+    ]
 
 
 CYCLES = (
