@@ -7,8 +7,9 @@ first, in the thesis's order (4.5), keeping only the path, and collects the
 admissible configurations whose cost falls in a window ``[low, high)``;
 nodes whose bound reaches ``high`` are cut. At the end of a pass the window
 is sorted by cost, then depth-first order (6.3.2) — exactly the order the
-best-first search gives — and listed; the cheapest whole cost of a window
-is listed as it is walked (depth-first order is then the listing order).
+best-first search gives — and listed; when costs are whole, the cheapest
+cost of a window is listed as it is walked (depth-first order is then the
+listing order).
 A configuration has one cost, so it falls in one window: distinct
 configurations stay distinct across windows.
 
@@ -46,7 +47,7 @@ ONE_PASS = 20_000
 
 
 class _TooBig(Exception):
-    """The first walk took :data:`ONE_PASS` nodes: what it listed so far
+    """The first walk needs more than :data:`ONE_PASS` nodes: what it listed so far
     (complete derivations at the cheapest cost, and the configurations
     admitted among them)."""
 
@@ -147,10 +148,11 @@ class Windows:
     ) -> Iterator[Configuration]:
         """One depth-first pass over the derivations costing from ``window.low``
         up to ``window.high`` (which may come down), listing them in order.
-        The cheapest whole cost is listed as it is walked (depth-first order
-        is then the listing order), but its first ``skip`` derivations, which
-        an earlier pass listed (its configurations ``admitted``). Raises
-        :class:`_TooBig` when the pass has taken ``budget`` nodes."""
+        When costs are whole, the cheapest is listed as it is walked
+        (depth-first order is then the listing order), but its first ``skip``
+        derivations, which an earlier pass listed (its configurations
+        ``admitted``). Raises :class:`_TooBig` on the node after ``budget``;
+        the nodes, expansions and prunings of a walk given up stay counted."""
         grower, stats = self.grower, self.stats
         streamed = window.low + 1 if grower.integral else window.low
         listed: set[bytes] = set() if admitted is None else admitted

@@ -3,9 +3,11 @@
 A node's canonical form (:func:`cfgplan.planner.partial.canonical`) and a
 configuration's fingerprint (:func:`cfgplan.planner.finish.fingerprint`) are
 sets of instances, channels and postconditions. Numbering each distinct value
-once per task lets both be written as a short run of integers — equal values,
-equal numbers; different values, different numbers — instead of texts made
-anew for every node.
+once per task lets both be written as a short run of integers — equal values
+(Python's ``==``: a bandwidth 1 is 1.0), equal numbers; different values,
+different numbers — instead of texts made anew for every node. The table
+lives as long as the task's grounding memo and grows with the distinct
+values its searches meet.
 """
 
 from __future__ import annotations
