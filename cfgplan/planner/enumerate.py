@@ -14,9 +14,10 @@ A configuration has one cost, so it falls in one window: distinct
 configurations stay distinct across windows.
 
 The first pass is one window over every cost, priced only by whether a node
-can complete: a small instance is listed in one walk. When it has taken
-:data:`ONE_PASS` nodes it is given up for windows pruned by the bounds —
-the cheapest cost first, the rest after — which skip what it listed.
+can complete: most instances are listed in this one walk. Only when it has
+taken :data:`ONE_PASS` nodes without meeting a configuration of the cheapest
+cost is it given up, for windows pruned by the bounds — the cheapest cost
+first, the rest after — so that the first configurations come soon.
 
 When a window holds more than :data:`MOST_HELD` configurations, its upper
 edge is lowered to keep the cheaper half and the next window starts there,
@@ -42,18 +43,13 @@ from cfgplan.planner.task import Ground
 MOST_HELD = 250_000
 """Configurations one window may hold before its upper edge comes down."""
 
-ONE_PASS = 20_000
-"""Nodes the first walk, over every cost at once, may take."""
+ONE_PASS = 5_000
+"""Nodes the first walk, over every cost at once, may take before it has
+listed anything."""
 
 
 class _TooBig(Exception):
-    """The first walk needs more than :data:`ONE_PASS` nodes: what it listed so far
-    (complete derivations at the cheapest cost, and the configurations
-    admitted among them)."""
-
-    def __init__(self, listed: int, admitted: set[bytes]) -> None:
-        super().__init__(listed)
-        self.listed, self.admitted = listed, admitted
+    """The first walk took :data:`ONE_PASS` nodes and listed nothing yet."""
 
 
 @dataclass
@@ -128,11 +124,11 @@ class Windows:
         window = Window(low, float("inf"))
         try:
             yield from self._walk(start, window, budget=ONE_PASS)
-        except _TooBig as big:
-            # A large instance: the cheapest cost first, pruned by the bounds.
+        except _TooBig:
+            # The cheapest lie deep: look for them first, pruned by the bounds.
             grower.heuristic, grower.refine = bounds
             window = Window(low, low + 1 if grower.integral else low + 1e-9)
-            yield from self._walk(start, window, skip=big.listed, admitted=big.admitted)
+            yield from self._walk(start, window)
             grower.heuristic, grower.refine = self.feasible, None
         while window.beyond is not None:  # something was cut: the costs above
             window = Window(max(window.high, window.beyond), float("inf"))
@@ -143,24 +139,22 @@ class Windows:
         start: list[tuple[float, Partial]],
         window: Window,
         budget: int | None = None,
-        skip: int = 0,
-        admitted: set[bytes] | None = None,
     ) -> Iterator[Configuration]:
         """One depth-first pass over the derivations costing from ``window.low``
         up to ``window.high`` (which may come down), listing them in order.
         When costs are whole, the cheapest is listed as it is walked
-        (depth-first order is then the listing order), but its first ``skip``
-        derivations, which an earlier pass listed (its configurations
-        ``admitted``). Raises :class:`_TooBig` on the node after ``budget``;
-        the nodes, expansions and prunings of a walk given up stay counted."""
+        (depth-first order is then the listing order). Raises
+        :class:`_TooBig` on the node after ``budget`` if none of them was met
+        yet; the nodes, expansions and prunings of a walk given up stay
+        counted."""
         grower, stats = self.grower, self.stats
         streamed = window.low + 1 if grower.integral else window.low
-        listed: set[bytes] = set() if admitted is None else admitted
+        listed: set[bytes] = set()
         held: set[bytes] = set()
         found: list[Found] = []
         closed: set[bytes] = set()
         stack = list(reversed(start))
-        index = taken = through = 0
+        index = taken = 0
         next_tick = 1.0
         while stack:
             clock.check()
@@ -174,7 +168,7 @@ class Windows:
             stats.nodes += 1
             taken += 1
             if budget is not None and taken > budget:
-                raise _TooBig(through, listed)
+                raise _TooBig
             elapsed = time.perf_counter() - self._start
             if self.progress is not None and elapsed > next_tick:
                 self.progress(stats, elapsed)
@@ -184,9 +178,8 @@ class Windows:
                 if priority < window.low:
                     continue  # listed in an earlier window
                 if priority < streamed:
-                    through += 1
-                    if through > skip:
-                        yield from self._list([self._found(node, priority, index, listed)])
+                    budget = None  # something to list: this walk goes on to the end
+                    yield from self._list([self._found(node, priority, index, listed)])
                     continue
                 found.append(self._found(node, priority, index, held))
                 if len(found) > MOST_HELD:

@@ -26,9 +26,11 @@ from cfgplan.planner.successors import successors
 Heuristic = Callable[[Partial], float | None]
 """A lower bound on what a node still costs; None when it has no completion."""
 
-WARM = 64
-"""Nodes a search takes before it tries the stronger bound at all: a small
-search (the thesis's instances) is over before it could pay for itself."""
+WARM = 32
+"""Nodes a search prices (settles) before it tries the stronger bound at
+all: a small search (the thesis's instances) is over before it could pay
+for itself. Counted in nodes priced, not taken: where every expansion has
+many children (fusion) the bound is soon worth its cost."""
 
 TRIAL = 4
 """Refinements by the stronger bound a search tries before it may give that
@@ -81,6 +83,7 @@ class Grower:
 
     def __post_init__(self) -> None:
         self.integral = self.grounder.task.integral
+        self.settled = 0  # nodes priced so far
         self.tried = 0  # refinements by the stronger bound so far
         self.raised = 0  # those that raised a priority (or pruned)
         self.dominated = 0  # those at least the first bound (or pruned)
@@ -115,6 +118,7 @@ class Grower:
                         self.stats.pruned += 1
                         continue
                     priority = self.priority(current, rest)
+                self.settled += 1
                 yield priority, current
                 continue
             placed: list[Partial] = []
@@ -139,7 +143,7 @@ class Grower:
         """The node's priority under the larger of both bounds; None: pruned.
         ``beaten``: the priority a raised node must pass for the raise to pay
         (best-first: the next node's; else any raise pays)."""
-        if self.refine is None or self.stats.nodes < WARM:
+        if self.refine is None or self.settled < WARM:
             return priority
         rest = self.refine(node)
         self.tried += 1

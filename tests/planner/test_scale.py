@@ -141,10 +141,10 @@ CYCLES = (
 def test_giving_up_the_first_walk_lists_the_same(
     texts: tuple[str, str], one_pass: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """--all walks every cost at once while the instance looks small; when
-    that walk is given up (after ONE_PASS nodes) for the windows, what it
-    listed is skipped: the list, its derivation numbers and the counts of
-    repeats (wall) and rejections (cycles) are those of one whole walk."""
+    """--all walks every cost at once; when that walk is given up for the
+    windows (after ONE_PASS nodes with nothing listed yet), the list, its
+    derivation numbers and the counts of repeats (wall) and rejections
+    (cycles) are those of one whole walk."""
     problem = problem_of(texts)
     whole, run = plan(problem.task, problem.goal_call, limit=None)
     monkeypatch.setattr(windows, "ONE_PASS", one_pass)
@@ -154,8 +154,9 @@ def test_giving_up_the_first_walk_lists_the_same(
     ]
     counted = ("derivations", "duplicates", "rejected")
     assert [getattr(again.stats, k) for k in counted] == [getattr(run.stats, k) for k in counted]
-    if one_pass < run.stats.nodes:
-        assert again.stats.nodes > run.stats.nodes  # the walk given up was not free
+    assert again.stats.nodes >= run.stats.nodes
+    if one_pass == 0:  # given up at its first node, whatever the instance
+        assert again.stats.nodes > run.stats.nodes
 
 
 def test_a_fact_repeated_forty_times_costs_nothing() -> None:
