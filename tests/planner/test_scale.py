@@ -146,6 +146,7 @@ def test_giving_up_the_first_walk_lists_the_same(
     derivation numbers and the counts of repeats (wall) and rejections
     (cycles) are those of one whole walk."""
     problem = problem_of(texts)
+    monkeypatch.setattr(windows, "ONE_PASS", 10**9)
     whole, run = plan(problem.task, problem.goal_call, limit=None)
     monkeypatch.setattr(windows, "ONE_PASS", one_pass)
     parts, again = plan(problem.task, problem.goal_call, limit=None)
