@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from enum import Enum
 
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
@@ -48,6 +49,13 @@ RELY = 32
 every time, the first one is no longer computed (only whether a node can
 complete is: :attr:`Grower.feasible`): where the stronger bound always
 dominates (fusion), the first adds only its cost."""
+
+
+class Reprice(Enum):
+    """Which open nodes a strategy must price again when the bounds change."""
+
+    ALL = "all"
+    REFINED = "refined"  # only those the stronger bound priced
 
 
 @dataclass
@@ -88,7 +96,7 @@ class Grower:
         self.raised = 0  # those that raised a priority (or pruned)
         self.dominated = 0  # those at least the first bound (or pruned)
         self.first = self.heuristic
-        self.repriced = False  # the bounds in use changed (the strategy re-prices its nodes)
+        self.repriced: Reprice | None = None  # the bounds in use changed: what to re-price
 
     def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children with
@@ -159,10 +167,13 @@ class Grower:
             self.raised += 1
         elif self.tried >= TRIAL and self.raised * PAYS < self.tried:
             self.refine = None  # it seldom helps here: give it up for this search
-            self.heuristic, self.repriced = self.first, True
+            # Nodes priced by the first bound stay right; the others are re-priced.
+            refined_only = self.heuristic is self.first
+            self.repriced = Reprice.REFINED if refined_only else Reprice.ALL
+            self.heuristic = self.first
         if self.tried == RELY and self.dominated == RELY and self.feasible is not None:
             # The stronger bound is all that counts here.
-            self.heuristic, self.repriced = self.feasible, True
+            self.heuristic, self.repriced = self.feasible, Reprice.ALL
         return max(priority, raised)
 
     def complete(self, node: Partial, total: float) -> Configuration | None:

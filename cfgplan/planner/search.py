@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
-from cfgplan.planner.grow import Grower, Stats
+from cfgplan.planner.grow import Grower, Reprice, Stats
 from cfgplan.planner.partial import Partial, canonical, root
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.task import Ground
@@ -81,9 +81,9 @@ class BestFirst:
                 # changes no order, only how many nodes are refined.
                 beaten = self._heap[0][0] if self._heap else None
                 raised = grower.refined(node, total, beaten)
-                if grower.repriced:
-                    grower.repriced = False
-                    self._reprice(node, raised is None)
+                if grower.repriced is not None:
+                    self._reprice(node, raised is None, grower.repriced)
+                    grower.repriced = None
                     continue
                 if raised is None:
                     continue
@@ -106,18 +106,25 @@ class BestFirst:
                 self._closed.add(key)
             self._queue(grower.children(node))
 
-    def _reprice(self, taken: Partial, pruned: bool) -> None:
+    def _reprice(self, taken: Partial, pruned: bool, which: Reprice) -> None:
         """The bounds in use changed (one given up, or one no longer needed):
-        price every open node, and ``taken`` unless it was ``pruned``, by the
-        bounds now in use. Two nodes with one canonical form must have one
-        priority, or the later of them in depth-first order could be expanded
-        first and close the form to the earlier one (the order of equal-cost
-        configurations would then not be the thesis's)."""
+        price the open nodes ``which`` says, and ``taken`` unless it was
+        ``pruned``, by the bounds now in use. Two nodes with one canonical
+        form must have one priority, or the later of them in depth-first order
+        could be expanded first and close the form to the earlier one (the
+        order of equal-cost configurations would then not be the thesis's)."""
         grower = self.grower
-        nodes = [node for *_, node in self._heap]
+        nodes = []
+        kept = []
+        for entry in self._heap:
+            if which is Reprice.REFINED and not entry[2]:
+                kept.append(entry)  # priced by the bound still in use
+            else:
+                nodes.append(entry[3])
         if not pruned:
             nodes.append(taken)
-        self._heap = []
+        self._heap = kept
+        heapq.heapify(self._heap)
         priced: list[tuple[float, Partial]] = []
         for node in nodes:
             if node.done:
