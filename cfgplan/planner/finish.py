@@ -12,14 +12,21 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from cfgplan.configuration.media import Demand, assign
+from cfgplan.configuration.media import assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
 from cfgplan.planner.ground import Effects
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Channel as PartialChannel
-from cfgplan.planner.partial import Partial, Placed, channel_numbers, digest, placed_names
+from cfgplan.planner.partial import (
+    Partial,
+    Placed,
+    channel_numbers,
+    demands,
+    digest,
+    placed_names,
+)
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task
 
@@ -249,19 +256,6 @@ def _reliability(node: Finished, robot: dict[int, str], task: Task) -> float:
     return reliability
 
 
-def _demands(node: Partial) -> list[Demand | None]:
-    """What each channel needs of the media, in the configuration's channel
-    order: global channels between two robots."""
-    located = node.located
-    out: list[Demand | None] = []
-    for ch in node.channels:
-        src, dst = located[ch.source].robot, located[ch.target].robot
-        out.append(
-            Demand(src, dst, ch.bandwidth or 0.0) if ch.kind == "global" and src != dst else None
-        )
-    return out
-
-
 def admissible(node: Partial, task: Task) -> tuple[Assignment, ...] | DeadEnd:
     """Step 4's checks left for a finished node — information, cycles and,
     when the state declares media, communication: the media assignment
@@ -271,7 +265,7 @@ def admissible(node: Partial, task: Task) -> tuple[Assignment, ...] | DeadEnd:
             return dead
     if not task.media:
         return ()
-    result = assign(_demands(node), task.media, clock.check)
+    result = assign(demands(node.channels, node.located), task.media, clock.check)
     if result.assignment is None:
         return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
     return tuple(Assignment(channel=c, medium=m) for c, m in result.assignment.items())

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 from array import array
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from cfgplan.configuration.media import Demand, assign
@@ -312,16 +313,25 @@ def _settle(
     return tuple(out), added, resolved | new if new else resolved
 
 
+def demands(channels: Sequence[Channel], located: dict[int, Placed]) -> list[Demand | None]:
+    """What each channel needs of the media, in order: a global channel whose
+    two ends are placed on different robots needs its bandwidth; any other
+    needs nothing (None)."""
+    out: list[Demand | None] = []
+    for ch in channels:
+        src, dst = located.get(ch.source), located.get(ch.target)
+        if ch.kind == "global" and src is not None and dst is not None and src.robot != dst.robot:
+            out.append(Demand(src.robot, dst.robot, ch.bandwidth or 0.0))
+        else:
+            out.append(None)
+    return out
+
+
 def _media(channels: list[Channel], located: dict[int, Placed], task: Task) -> DeadEnd | None:
     """Communication admissibility (4.6) of the global channels whose two ends
     are placed: they are final (a merge only raises a bandwidth), so if they
     overflow the media now, every completion does (step 4 would reject it)."""
-    placed: list[Demand | None] = []
-    for ch in channels:
-        src, dst = located.get(ch.source), located.get(ch.target)
-        if ch.kind == "global" and src is not None and dst is not None and src.robot != dst.robot:
-            placed.append(Demand(src.robot, dst.robot, ch.bandwidth or 0.0))
-    result = assign(placed, task.media, clock.check)
+    result = assign(demands(channels, located), task.media, clock.check)
     if result.ok:
         return None
     return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
