@@ -14,13 +14,17 @@ whole convoy. Here, instead, every cost that can be shared is *divided*
 - a robot or device not in C, and not certain to be used, is charged once
   per expansion that places something on it directly, ``w / S``, S counted
   likewise over expansions;
-- a channel whose two ends are known functionality instances costs ``w / S``
-  over the channels with that identity (kind, data, ends) *and* the channels
-  of its kind and data whose ends are not known yet (they might turn out
-  identical); such an open channel costs ``w / S`` over all channels of its
-  kind and data. A channel costs nothing when C already holds one it might
-  merge with. So the channels that end up as one channel are charged ``w``
-  at most, together.
+- a channel costs ``w / S`` over the channels it might turn out identical
+  to (merged, 4.5): of its kind and data, with the same ends where its ends
+  are known functionality instances. An end at a method is not known until
+  that method is expanded (the channel is re-wired then), so a channel with
+  both ends known may merge with those that have the same sender or the
+  same receiver and the other end open, or both ends open; a channel with
+  only its receiver known, with every channel of that receiver, every one
+  with only its sender known, and every open one; and so on. A channel
+  costs nothing when C already holds one it might merge with. So the
+  channels that end up as one channel are charged ``w`` at most, together:
+  each of them counts all the others among its S.
 
 Then the cost of each pending item is a plain minimum over its expansions,
 computed bottom-up over ground instances, and the items' costs add up: in
@@ -34,7 +38,7 @@ itself) have no finite occurrence count: for such tasks this bound is off.
 
 from __future__ import annotations
 
-from collections.abc import Container
+from collections.abc import Callable, Container
 from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
@@ -44,23 +48,54 @@ from cfgplan.planner.task import Ground, Task
 
 Key = tuple[object, ...]
 """What costs, as counted: a functionality call; ``("@", agent)``; for
-channels ``("=", kind, data, sender, receiver)`` (both ends known),
-``("?", kind, data)`` (an end open) and ``("*", kind, data)`` (every channel
-of that kind and data)."""
+channels of one kind and data: ``("=", kind, data, sender, receiver)`` (both
+ends known), ``("?r", kind, data, receiver)`` (only the receiver known),
+``("?s", kind, data, sender)`` (only the sender), ``("?", kind, data)`` (both
+ends open), and the sums ``("*", kind, data)`` (every channel),
+``("to", kind, data, receiver)`` and ``("from", kind, data, sender)`` (every
+one with that end known), ``("?r*", kind, data)`` and ``("?s*", kind, data)``
+(every one with only a receiver, only a sender known)."""
 
-Counts = dict[Key, int]
-"""Most occurrences of each key in one derivation."""
+Counts = dict[int, int]
+"""Most occurrences of each key in one derivation, keys by their numbers
+(:meth:`Partition.number`: small integers hash faster than nested tuples)."""
 
 
 @dataclass(frozen=True, slots=True)
 class Wire:
-    """An own channel of an expansion, as this bound prices it."""
+    """A channel as this bound prices it: ``weight / S``, S the sum of the
+    counts of ``shares`` (the channels it might merge with, itself included);
+    nothing when C holds a channel with key ``free``. Its occurrence counts
+    towards ``counted``. Keys by their numbers."""
 
-    key: Key  # its identity, or its open key
-    known: bool  # the identity is known
     weight: float
-    opened: Key  # the open key of its kind and data
-    every: Key  # the key counting every channel of its kind and data
+    counted: tuple[int, ...]
+    shares: tuple[int, ...]
+    free: int
+
+
+def wire_keys(
+    kind: str, data: object, sender: Ground | None, receiver: Ground | None
+) -> tuple[tuple[Key, ...], tuple[Key, ...], Key]:
+    """What a channel whose known ends (functionality calls) are given counts
+    towards, what it shares with, and what makes it free (:class:`Wire`)."""
+    every: Key = ("*", kind, data)
+    opened: Key = ("?", kind, data)
+    if sender is not None and receiver is not None:
+        key: Key = ("=", kind, data, sender, receiver)
+        to: Key = ("to", kind, data, receiver)
+        by: Key = ("from", kind, data, sender)
+        shares = (key, ("?r", kind, data, receiver), ("?s", kind, data, sender), opened)
+        return (key, every, to, by), shares, key
+    if receiver is not None:
+        to = ("to", kind, data, receiver)
+        counted = (("?r", kind, data, receiver), every, to, ("?r*", kind, data))
+        return counted, (to, ("?s*", kind, data), opened), to
+    if sender is not None:
+        by = ("from", kind, data, sender)
+        counted = (("?s", kind, data, sender), every, by, ("?s*", kind, data))
+        return counted, (by, ("?r*", kind, data), opened), by
+    return (opened, every), (every,), every
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,6 +105,7 @@ class Option:
     children: tuple[Ground, ...]
     channels: tuple[Wire, ...]
     agents: tuple[str, ...]  # agents its functionality children run on, each once
+    agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,6 +117,7 @@ class Instance:
     functionality: bool
     options: tuple[Option, ...] = ()
     weight: float = 0.0
+    key: int = -1  # a functionality's number as a key
 
 
 @dataclass
@@ -91,7 +128,30 @@ class Partition:
     _instances: dict[Ground, Instance] = field(default_factory=dict)
     _counts: dict[Ground, Counts] = field(default_factory=dict)
     _orders: dict[Ground, tuple[Ground, ...]] = field(default_factory=dict)
+    _numbers: dict[Key, int] = field(default_factory=dict)
+    _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
+
+    def number(self, key: Key) -> int:
+        """The small integer that stands for ``key`` in counts and totals."""
+        found = self._numbers.get(key)
+        if found is None:
+            found = self._numbers[key] = len(self._numbers)
+        return found
+
+    def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
+        """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
+        ident = (kind, data, sender, receiver)
+        found = self._wires.get(ident)
+        if found is None:
+            counted, shares, free = wire_keys(kind, data, sender, receiver)
+            weight = self.grounder.task.channel_cost(kind)
+            number = self.number
+            found = Wire(
+                weight, tuple(map(number, counted)), tuple(map(number, shares)), number(free)
+            )
+            self._wires[ident] = found
+        return found
 
     # -- the AND/OR graph of ground instances, made once ----------------------
     def instance(self, call: Ground) -> Instance:
@@ -100,13 +160,14 @@ class Partition:
             task = self.grounder.task
             schema = task.functionality(call)
             if schema is not None:
-                found = Instance(call, True, weight=task.functionality_cost(schema, call))
+                weight = task.functionality_cost(schema, call)
+                found = Instance(call, True, weight=weight, key=self.number(call))
             else:
                 options = []
                 for method in task.versions(call):
                     for expansion in self.grounder.expansions(method, call):
                         if not isinstance(expansion, DeadEnd):
-                            options.append(_option(task, expansion))
+                            options.append(self._option(expansion))
                 found = Instance(call, False, tuple(options))
             self._instances[call] = found
         return found
@@ -166,23 +227,39 @@ class Partition:
 
     def _count(self, instance: Instance) -> Counts:
         if instance.functionality:
-            return {instance.call: 1}
+            return {instance.key: 1}
         most: Counts = {}
         for option in instance.options:
             total: Counts = {}
             for child in option.children:
                 for key, n in self._counts[child].items():
                     total[key] = total.get(key, 0) + n
-            for wire in option.channels:
-                for key in (wire.key, wire.every):
+            for own in option.channels:
+                for key in own.counted:
                     total[key] = total.get(key, 0) + 1
-            for agent in option.agents:
-                key = ("@", agent)
+            for key in option.agent_keys:
                 total[key] = total.get(key, 0) + 1
             for key, n in total.items():
                 if n > most.get(key, 0):
                     most[key] = n
         return most
+
+    def _option(self, expansion: Expansion) -> Option:
+        task = self.grounder.task
+        channels = tuple(self._own(expansion, spec) for spec in expansion.channels)
+        agents = tuple(dict.fromkeys(c[1] for c in expansion.body if not task.is_method(c)))
+        keys = tuple(self.number(("@", agent)) for agent in agents)
+        return Option(expansion.body, channels, agents, keys)
+
+    def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
+        """An own channel of an expansion: an end at a functionality of the body
+        is known, one at a method is not (it is re-wired when that is expanded)."""
+        task = self.grounder.task
+        kind, _, source, target, data, _ = spec
+        sender, receiver = expansion.body[source], expansion.body[target]
+        known_sender = None if task.is_method(sender) else sender
+        known_receiver = None if task.is_method(receiver) else receiver
+        return self.wire(kind, data, known_sender, known_receiver)
 
     # -- the bound of a node ----------------------------------------------------
     def estimate(self, node: Partial, certain: frozenset[str]) -> float | None:
@@ -204,14 +281,14 @@ class Partition:
             else:
                 totals.update(counts)
             if not task.is_method(item.call):  # a pending functionality places itself
-                key = ("@", item.call[1])
+                key = self.number(("@", item.call[1]))
                 totals[key] = get(key, 0) + 1
         present, future = self._channels(node)
-        for key in future:
-            for counted in (key, ("*", *key[1:3])):
-                totals[counted] = totals.get(counted, 0) + 1
-        prices = Prices(task, node, certain, totals, present)
-        total = sum(prices.channel(key) for key in future)
+        for waiting in future:
+            for key in waiting.counted:
+                totals[key] = get(key, 0) + 1
+        prices = Prices(task, node, certain, totals, present, self.number)
+        total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
         memo: dict[Ground, float] = {}
         for item in node.stack:
@@ -220,30 +297,25 @@ class Partition:
                 total += prices.agent(item.call[1])
         return None if total == float("inf") else total
 
-    def _channels(self, node: Partial) -> tuple[set[Key], list[Key]]:
-        """The keys of the channels already in C (resolved), and of those
-        waiting for an end (each will be one channel of the configuration)."""
-        present: set[Key] = set()
-        future: list[Key] = []
+    def _channels(self, node: Partial) -> tuple[set[int], list[Wire]]:
+        """The keys of the channels already in C (resolved), and the wires of
+        those waiting for an end (each will be one channel of the configuration)."""
+        present: set[int] = set()
+        future: list[Wire] = []
         pending = {item.label: item.call for item in node.stack}
         task = self.grounder.task
         for ch in node.channels:
             src, dst = node.located.get(ch.source), node.located.get(ch.target)
             if src is not None and dst is not None:
-                present.add(("=", ch.kind, ch.data, src.call, dst.call))
-                present.add(("*", ch.kind, ch.data))
+                present.update(self.wire(ch.kind, ch.data, src.call, dst.call).counted)
                 continue
             sender = src.call if src is not None else pending.get(ch.source)
             receiver = dst.call if dst is not None else pending.get(ch.target)
-            if (
-                sender is not None
-                and receiver is not None
-                and not task.is_method(sender)
-                and not task.is_method(receiver)
-            ):
-                future.append(("=", ch.kind, ch.data, sender, receiver))
-            else:
-                future.append(("?", ch.kind, ch.data))
+            if sender is not None and task.is_method(sender):
+                sender = None
+            if receiver is not None and task.is_method(receiver):
+                receiver = None
+            future.append(self.wire(ch.kind, ch.data, sender, receiver))
         return present, future
 
     def _least(self, call: Ground, memo: dict[Ground, float], prices: Prices) -> float:
@@ -255,24 +327,25 @@ class Partition:
         instances = self._instances
         agent_price, agent_prices = prices.agent, prices.agents
         totals, present, placed = prices.totals, prices.present, prices.node.labels
+        count = totals.get
         for current in self.order(call):
             if current in memo:
                 continue
             instance = instances[current]
             if instance.functionality:
-                memo[current] = 0.0 if current in placed else instance.weight / totals[current]
+                memo[current] = 0.0 if current in placed else instance.weight / totals[instance.key]
                 continue
             best = float("inf")
             for option in instance.options:
                 cost = 0.0
                 for child in option.children:
                     cost += memo[child]
-                for wire in option.channels:
-                    if wire.known:
-                        if wire.key not in present:
-                            cost += wire.weight / (totals[wire.key] + totals.get(wire.opened, 0))
-                    elif wire.every not in present:
-                        cost += wire.weight / totals[wire.every]
+                for own in option.channels:
+                    if own.free not in present:
+                        share = 0
+                        for key in own.shares:
+                            share += count(key, 0)
+                        cost += own.weight / share
                 for agent in option.agents:
                     price = agent_prices.get(agent)
                     cost += agent_price(agent) if price is None else price
@@ -290,50 +363,20 @@ class Prices:
     node: Partial
     certain: frozenset[str]
     totals: Counts
-    present: set[Key]
+    present: set[int]
+    number: Callable[[Key], int]
     agents: dict[str, float] = field(default_factory=dict)  # the agent prices found so far
-
-    def functionality(self, call: Ground) -> float:
-        if call in self.node.labels:
-            return 0.0
-        schema = self.task.functionality(call)
-        assert schema is not None
-        return self.task.functionality_cost(schema, call) / self.totals[call]
 
     def agent(self, agent: str) -> float:
         found = self.agents.get(agent)
         if found is None:
             found = 0.0
             if agent not in self.node.robots and agent not in self.certain:
-                found = self.task.agent_cost(agent) / self.totals[("@", agent)]
+                found = self.task.agent_cost(agent) / self.totals[self.number(("@", agent))]
             self.agents[agent] = found
         return found
 
-    def channel(self, key: Key) -> float:
-        kind, data = key[1], key[2]
-        assert isinstance(kind, str)
-        if key[0] == "=":
-            if key in self.present:
-                return 0.0
-            opened = self.totals.get(("?", kind, data), 0)
-            return self.task.channel_cost(kind) / (self.totals[key] + opened)
-        if ("*", kind, data) in self.present:
+    def channel(self, own: Wire) -> float:
+        if own.free in self.present:
             return 0.0
-        return self.task.channel_cost(kind) / self.totals[("*", kind, data)]
-
-
-def _option(task: Task, expansion: Expansion) -> Option:
-    channels = tuple(_wire(task, expansion, spec) for spec in expansion.channels)
-    agents = tuple(dict.fromkeys(c[1] for c in expansion.body if not task.is_method(c)))
-    return Option(expansion.body, channels, agents)
-
-
-def _wire(task: Task, expansion: Expansion, spec: ChannelSpec) -> Wire:
-    """An own channel: its identity when both its ends are functionality calls
-    of the body, else its open key."""
-    kind, _, source, target, data, _ = spec
-    sender, receiver = expansion.body[source], expansion.body[target]
-    opened: Key = ("?", kind, data)
-    known = not task.is_method(sender) and not task.is_method(receiver)
-    key: Key = ("=", kind, data, sender, receiver) if known else opened
-    return Wire(key, known, task.channel_cost(kind), opened, ("*", kind, data))
+        return own.weight / sum(self.totals.get(key, 0) for key in own.shares)

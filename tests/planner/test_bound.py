@@ -101,3 +101,27 @@ def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
     assert Bound(problem.task).summary(("m0", "A")).minimum == 1.0
     (config,), _ = plan(problem.task, problem.goal_call)
     assert config.cost == 10 + 2 + 1
+
+
+ONE_SOURCE_TWO_USERS = """\
+(make-functionality :name '(sense ?r) :out '((d ?r)))
+(make-functionality :name '(use1 ?r) :in '((d ?r)))
+(make-functionality :name '(use2 ?r) :in '((d ?r)))
+(make-config-method :name '(get ?r) :out '((?s (d ?r))) :body '((?s (sense ?r))))
+(make-config-method :name '(go ?r)
+  :channels '(((local ?r) ?g ?a (d ?r)) ((local ?r) ?g ?b (d ?r)))
+  :body '((?g (get ?r)) (?a (use1 ?r)) (?b (use2 ?r))))
+"""
+
+
+def test_channels_with_one_end_open_are_told_apart_by_the_other() -> None:
+    """Issue 11 (media-tight: a member's pose goes to both its follower and
+    its avoider): two channels of one data from a method not yet expanded
+    to two different receivers can never merge, so the partitioned bound
+    charges both in full. Before, it shared one weight among them."""
+    problem = load_text(ONE_SOURCE_TWO_USERS, "(state (robot A)) (goal (go A))")
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    start = root(problem.goal_call)
+    truth = least_completion(grounder, start)
+    assert truth == 10 + 3 + 2  # the robot, three functionalities, two local channels
+    assert Partition(grounder).estimate(start, bound.certain_agents(start)) == truth
