@@ -47,7 +47,8 @@ from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.task import Ground, Task
 
 Key = tuple[object, ...]
-"""What costs, as counted: a functionality call; ``("@", agent)``; for
+"""What costs, as counted: ``("f", call)`` for a functionality (so that no
+call, a tuple of names, is ever mistaken for another key); ``("@", agent)``; for
 channels of one kind and data: ``("=", kind, data, sender, receiver)`` (both
 ends known), ``("?r", kind, data, receiver)`` (only the receiver known),
 ``("?s", kind, data, sender)`` (only the sender), ``("?", kind, data)`` (both
@@ -103,6 +104,7 @@ class Option:
     """One expansion of a method, as this bound sees it."""
 
     children: tuple[Ground, ...]
+    child_keys: tuple[int, ...]  # their numbers
     channels: tuple[Wire, ...]
     agents: tuple[str, ...]  # agents its functionality children run on, each once
     agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
@@ -117,7 +119,7 @@ class Instance:
     functionality: bool
     options: tuple[Option, ...] = ()
     weight: float = 0.0
-    key: int = -1  # a functionality's number as a key
+    key: int = -1  # its number: the key of a functionality; a method's in memos
 
 
 @dataclass
@@ -127,7 +129,7 @@ class Partition:
     grounder: Grounder
     _instances: dict[Ground, Instance] = field(default_factory=dict)
     _counts: dict[Ground, Counts] = field(default_factory=dict)
-    _orders: dict[Ground, tuple[Ground, ...]] = field(default_factory=dict)
+    _orders: dict[Ground, tuple[Instance, ...]] = field(default_factory=dict)
     _numbers: dict[Key, int] = field(default_factory=dict)
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
@@ -161,14 +163,14 @@ class Partition:
             schema = task.functionality(call)
             if schema is not None:
                 weight = task.functionality_cost(schema, call)
-                found = Instance(call, True, weight=weight, key=self.number(call))
+                found = Instance(call, True, weight=weight, key=self.number(("f", call)))
             else:
                 options = []
                 for method in task.versions(call):
                     for expansion in self.grounder.expansions(method, call):
                         if not isinstance(expansion, DeadEnd):
                             options.append(self._option(expansion))
-                found = Instance(call, False, tuple(options))
+                found = Instance(call, False, tuple(options), key=self.number(("f", call)))
             self._instances[call] = found
         return found
 
@@ -188,14 +190,14 @@ class Partition:
             self._counts[current] = self._count(self.instance(current))
         return self._counts[call]
 
-    def order(self, call: Ground) -> tuple[Ground, ...]:
+    def order(self, call: Ground) -> tuple[Instance, ...]:
         """Every instance below ``call`` (itself last), children before
         parents: the order :meth:`_least` evaluates them in, made once."""
         found = self._orders.get(call)
         if found is None:
             below = self._below(call, ())
             assert below is not None  # counts() found no recursion below the pending items
-            found = self._orders[call] = tuple(below)
+            found = self._orders[call] = tuple(map(self.instance, below))
         return found
 
     def _below(self, call: Ground, done: Container[Ground]) -> list[Ground] | None:
@@ -249,7 +251,8 @@ class Partition:
         channels = tuple(self._own(expansion, spec) for spec in expansion.channels)
         agents = tuple(dict.fromkeys(c[1] for c in expansion.body if not task.is_method(c)))
         keys = tuple(self.number(("@", agent)) for agent in agents)
-        return Option(expansion.body, channels, agents, keys)
+        children = tuple(self.number(("f", call)) for call in expansion.body)
+        return Option(expansion.body, children, channels, agents, keys)
 
     def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
         """An own channel of an expansion: an end at a functionality of the body
@@ -290,7 +293,7 @@ class Partition:
         prices = Prices(task, node, certain, totals, present, self.number)
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
-        memo: dict[Ground, float] = {}
+        memo: dict[int, float] = {}
         for item in node.stack:
             total += self._least(item.call, memo, prices)
             if not task.is_method(item.call):
@@ -318,41 +321,43 @@ class Partition:
             future.append(self.wire(ch.kind, ch.data, sender, receiver))
         return present, future
 
-    def _least(self, call: Ground, memo: dict[Ground, float], prices: Prices) -> float:
-        """The cheapest derivation of ``call`` at ``prices`` (bottom-up)."""
-        found = memo.get(call)
+    def _least(self, call: Ground, memo: dict[int, float], prices: Prices) -> float:
+        """The cheapest derivation of ``call`` at ``prices`` (bottom-up); ``memo``
+        by instance number."""
+        key = self.instance(call).key
+        found = memo.get(key)
         if found is not None:
             return found
         # The hot loop of the search: prices inlined (see Prices for each rule).
-        instances = self._instances
         agent_price, agent_prices = prices.agent, prices.agents
         totals, present, placed = prices.totals, prices.present, prices.node.labels
         count = totals.get
-        for current in self.order(call):
-            if current in memo:
+        for instance in self.order(call):
+            if instance.key in memo:
                 continue
-            instance = instances[current]
             if instance.functionality:
-                memo[current] = 0.0 if current in placed else instance.weight / totals[instance.key]
+                memo[instance.key] = (
+                    0.0 if instance.call in placed else instance.weight / totals[instance.key]
+                )
                 continue
             best = float("inf")
             for option in instance.options:
                 cost = 0.0
-                for child in option.children:
+                for child in option.child_keys:
                     cost += memo[child]
                 for own in option.channels:
                     if own.free not in present:
                         share = 0
-                        for key in own.shares:
-                            share += count(key, 0)
+                        for counted in own.shares:
+                            share += count(counted, 0)
                         cost += own.weight / share
                 for agent in option.agents:
                     price = agent_prices.get(agent)
                     cost += agent_price(agent) if price is None else price
                 if cost < best:
                     best = cost
-            memo[current] = best
-        return memo[call]
+            memo[instance.key] = best
+        return memo[key]
 
 
 @dataclass
