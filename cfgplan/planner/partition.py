@@ -328,7 +328,7 @@ class Partition:
         found = memo.get(key)
         if found is not None:
             return found
-        # The hot loop of the search: prices inlined (see Prices for each rule).
+        # The hot loop of the search: prices inlined (the rules: module docstring, Prices).
         agent_price, agent_prices = prices.agent, prices.agents
         totals, present, placed = prices.totals, prices.present, prices.node.labels
         count = totals.get
