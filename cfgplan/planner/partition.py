@@ -42,6 +42,7 @@ from collections.abc import Callable, Container
 from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
+from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.task import Ground, Task
@@ -59,7 +60,7 @@ one with that end known), ``("?r*", kind, data)`` and ``("?s*", kind, data)``
 
 Counts = dict[int, int]
 """Most occurrences of each key in one derivation, keys by their numbers
-(:meth:`Partition.number`: small integers hash faster than nested tuples)."""
+(:attr:`Partition.number`: small integers hash faster than nested tuples)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,16 +131,10 @@ class Partition:
     _instances: dict[Ground, Instance] = field(default_factory=dict)
     _counts: dict[Ground, Counts] = field(default_factory=dict)
     _orders: dict[Ground, tuple[Instance, ...]] = field(default_factory=dict)
-    _numbers: dict[Key, int] = field(default_factory=dict)
+    number: Numbering = field(default_factory=Numbering)
+    """The small integers that stand for keys in counts and totals."""
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
-
-    def number(self, key: Key) -> int:
-        """The small integer that stands for ``key`` in counts and totals."""
-        found = self._numbers.get(key)
-        if found is None:
-            found = self._numbers[key] = len(self._numbers)
-        return found
 
     def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
         """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
