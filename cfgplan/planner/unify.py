@@ -58,8 +58,3 @@ def bind_name(params: Pattern, args: Ground) -> Bindings | None:
         elif param != arg:
             return None
     return env
-
-
-def key(env: Mapping[str, str]) -> tuple[tuple[str, str], ...]:
-    """A hashable form of bindings, independent of the order they were made in."""
-    return tuple(sorted(env.items()))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from cfgplan.planner.unify import bind_name, is_ground, key, substitute, unify
+from cfgplan.planner.unify import bind_name, is_ground, substitute, unify
 
 
 def test_substitute_replaces_bound_variables_only() -> None:
@@ -37,8 +37,3 @@ def test_bind_name_matches_constants_and_repeated_variables() -> None:
     assert bind_name(("?r", "Fancy"), ("Pippi", "Plain")) is None
     assert bind_name(("?r", "?r"), ("Pippi", "Emil")) is None
     assert bind_name(("?r", "?r"), ("Pippi", "Pippi")) == {"?r": "Pippi"}
-
-
-def test_key_does_not_depend_on_the_order_of_binding() -> None:
-    assert key({"?a": "1", "?b": "2"}) == key({"?b": "2", "?a": "1"})
-    assert key({"?a": "1"}) != key({"?a": "2"})
