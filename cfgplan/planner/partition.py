@@ -27,7 +27,9 @@ whole convoy. Here, instead, every cost that can be shared is *divided*
   each of them counts all the others among its S.
 
 Then the cost of each pending item is a plain minimum over its expansions,
-computed bottom-up over ground instances, and the items' costs add up: in
+leaving out those whose own global channels the media cannot carry on top
+of the node's (:mod:`cfgplan.planner.room`), computed bottom-up over ground
+instances, and the items' costs add up: in
 any completion, a shared cost is charged at most as often as it can occur,
 each time ``w / S``, so never more than ``w`` in all. The search takes the
 larger of the two bounds (:func:`cfgplan.planner.plan.combined`).
@@ -45,6 +47,7 @@ from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import DeadEnd
+from cfgplan.planner.room import Load, Need, Room
 from cfgplan.planner.task import Ground, Task
 
 Key = tuple[object, ...]
@@ -109,6 +112,7 @@ class Option:
     channels: tuple[Wire, ...]
     agents: tuple[str, ...]  # agents its functionality children run on, each once
     agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
+    needs: tuple[Need, ...]  # what its own global channels need of the media
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,6 +139,9 @@ class Partition:
     """The small integers that stand for keys in counts and totals."""
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
+
+    def __post_init__(self) -> None:
+        self.room = Room(self.grounder.task, self.number)
 
     def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
         """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
@@ -247,7 +254,8 @@ class Partition:
         agents = tuple(dict.fromkeys(c[1] for c in expansion.body if not task.is_method(c)))
         keys = tuple(self.number(("@", agent)) for agent in agents)
         children = tuple(self.number(("f", call)) for call in expansion.body)
-        return Option(expansion.body, children, channels, agents, keys)
+        needs = self.room.needs(expansion.channels)
+        return Option(expansion.body, children, channels, agents, keys, needs)
 
     def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
         """An own channel of an expansion: an end at a functionality of the body
@@ -285,7 +293,8 @@ class Partition:
         for waiting in future:
             for key in waiting.counted:
                 totals[key] = get(key, 0) + 1
-        prices = Prices(task, node, certain, totals, present, self.number)
+        load = self.room.load(node.channels) if self.room.active else {}
+        prices = Prices(task, node, certain, totals, present, self.number, load)
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
         memo: dict[int, float] = {}
@@ -327,6 +336,7 @@ class Partition:
         agent_price, agent_prices = prices.agent, prices.agents
         totals, present, placed = prices.totals, prices.present, prices.node.labels
         count = totals.get
+        fits, load = self.room.fits, prices.load
         for instance in self.order(call):
             if instance.key in memo:
                 continue
@@ -337,6 +347,8 @@ class Partition:
                 continue
             best = float("inf")
             for option in instance.options:
+                if option.needs and not fits(option.needs, load):
+                    continue  # communication-inadmissible below this node
                 cost = 0.0
                 for child in option.child_keys:
                     cost += memo[child]
@@ -365,6 +377,7 @@ class Prices:
     totals: Counts
     present: set[int]
     number: Callable[[Key], int]
+    load: Load  # what the node's global channels load the media with (room.py)
     agents: dict[str, float] = field(default_factory=dict)  # the agent prices found so far
 
     def agent(self, agent: str) -> float:

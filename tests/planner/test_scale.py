@@ -69,11 +69,12 @@ def branch_and_bound(problem: Problem) -> float | None:
     [
         ecology(10, 3, 2),
         media_tight(5, 2, 1),
+        media_tight(7, 4, 4),  # the media test of room.py prunes here
         fusion(5, 3, 4, 3),
         chain(12),
         wall(3, 6, 3),
     ],
-    ids=["ecology-10", "media-tight-5", "fusion-5", "chain-12", "wall-3-6-3"],
+    ids=["ecology-10", "media-tight-5", "media-tight-7", "fusion-5", "chain-12", "wall-3-6-3"],
 )
 def test_the_cheapest_agrees_with_branch_and_bound(texts: tuple[str, str]) -> None:
     problem = problem_of(texts)
