@@ -66,6 +66,12 @@ Counts = dict[int, int]
 (:attr:`Partition.number`: small integers hash faster than nested tuples)."""
 
 
+STACKS = 64
+"""Stacks of pending items whose summed counts are kept, then forgotten all
+at once: siblings are refined soon after each other (the search takes them
+at nearly the same priority), so a few suffice, and memory stays bounded."""
+
+
 @dataclass(frozen=True, slots=True)
 class Wire:
     """A channel as this bound prices it: ``weight / S``, S the sum of the
@@ -139,6 +145,7 @@ class Partition:
     """The small integers that stand for keys in counts and totals."""
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
+    _stacks: dict[tuple[Ground, ...], Counts | None] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.room = Room(self.grounder.task, self.number)
@@ -275,20 +282,11 @@ class Partition:
         if self._cyclic:
             return 0.0
         task = self.grounder.task
-        totals: Counts = {}
+        pending = self._pending(tuple(item.call for item in node.stack))
+        if pending is None:
+            return 0.0
+        totals = dict(pending)
         get = totals.get
-        for item in node.stack:
-            counts = self.counts(item.call)
-            if counts is None:
-                return 0.0
-            if totals:
-                for key, n in counts.items():
-                    totals[key] = get(key, 0) + n
-            else:
-                totals.update(counts)
-            if not task.is_method(item.call):  # a pending functionality places itself
-                key = self.number(("@", item.call[1]))
-                totals[key] = get(key, 0) + 1
         present, future = self._channels(node)
         for waiting in future:
             for key in waiting.counted:
@@ -303,6 +301,32 @@ class Partition:
             if not task.is_method(item.call):
                 total += prices.agent(item.call[1])
         return None if total == float("inf") else total
+
+    def _pending(self, calls: tuple[Ground, ...]) -> Counts | None:
+        """The summed counts of the pending items ``calls`` (None: off, some
+        can recur), made once per stack: the children of an expansion whose
+        body is all functionalities share one (fusion: every sibling)."""
+        found = self._stacks.get(calls)
+        if found is not None or calls in self._stacks:
+            return found
+        task = self.grounder.task
+        totals: Counts | None = {}
+        for call in calls:
+            counts = self.counts(call)
+            if counts is None:
+                totals = None
+                break
+            assert totals is not None
+            get = totals.get
+            for key, n in counts.items():
+                totals[key] = get(key, 0) + n
+            if not task.is_method(call):  # a pending functionality places itself
+                key = self.number(("@", call[1]))
+                totals[key] = get(key, 0) + 1
+        if len(self._stacks) >= STACKS:
+            self._stacks.clear()
+        self._stacks[calls] = totals
+        return totals
 
     def _channels(self, node: Partial) -> tuple[set[int], list[Wire]]:
         """The keys of the channels already in C (resolved), and the wires of

@@ -12,6 +12,7 @@ import sys
 
 from hypothesis import given
 
+from benchmarks.families import fusion
 from cfgplan.planner import plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
@@ -125,3 +126,18 @@ def test_channels_with_one_end_open_are_told_apart_by_the_other() -> None:
     truth = least_completion(grounder, start)
     assert truth == 10 + 3 + 2  # the robot, three functionalities, two local channels
     assert Partition(grounder).estimate(start, bound.certain_agents(start)) == truth
+
+
+def test_the_partitioned_bound_is_the_same_with_its_stack_memo_warm_or_cold() -> None:
+    """The summed counts of a stack of pending items are kept for the
+    siblings that share it (partition.STACKS): a kept sum must be the sum."""
+    problem = load_text(*fusion(4, 3, 4, 3))
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    warm = Partition(grounder)
+    nodes = some_nodes(grounder, problem.goal_call)
+    assert len({tuple(i.call for i in n.stack) for n in nodes}) < len(nodes)  # shared stacks
+    first = [warm.estimate(node, bound.certain_agents(node)) for node in nodes]
+    for node, estimate in zip(nodes, first, strict=True):
+        cold = Partition(grounder)
+        assert cold.estimate(node, bound.certain_agents(node)) == estimate
+        assert warm.estimate(node, bound.certain_agents(node)) == estimate
