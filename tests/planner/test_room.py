@@ -5,7 +5,11 @@ partitioned bound that leaves out expansions the media cannot carry
 
 from __future__ import annotations
 
+import re
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from benchmarks.families import media_tight
 from cfgplan.planner import plan
@@ -17,9 +21,9 @@ from cfgplan.planner.partition import Partition
 from cfgplan.planner.room import Room
 from cfgplan.planner.successors import successors
 from cfgplan.problem import Problem
-from tests.planner.generated import load_text
+from tests.planner.generated import PROPERTY, load_text
 from tests.planner.test_bound import least_completion
-from tests.planner.test_scale import problem_of
+from tests.planner.test_scale import branch_and_bound, problem_of
 
 DOMAIN = """\
 (make-functionality :name '(sense ?r) :out '((d ?r)))
@@ -152,3 +156,41 @@ def test_leaving_out_what_the_media_cannot_carry_changes_no_ranked_list(
         (c.cost, c.identity(), c.derivation) for c in blind
     ]
     assert (nodes_with < run.stats.nodes) == fewer
+
+
+@st.composite
+def tight_media(draw: st.DrawFn) -> tuple[str, str]:
+    """A small media-tight instance whose media are redrawn: each capacity
+    from tight to loose, some media left out (no medium for that pair)."""
+    n, cameras = draw(st.integers(2, 5)), draw(st.integers(0, 2))
+    domain, state = media_tight(n, 2, cameras)
+
+    def redraw(match: re.Match[str]) -> str:
+        capacity = draw(st.sampled_from([None, 4, 5, 10, 40, 45, 100]))
+        return "" if capacity is None else f"{match.group(1)} {capacity})"
+
+    return domain, re.sub(r"(\(medium wifi \S+ \S+) 40\)", redraw, state)
+
+
+@settings(PROPERTY, max_examples=40)
+@given(tight_media())
+def test_with_any_media_the_cheapest_is_branch_and_bounds_and_the_list_unchanged(
+    texts: tuple[str, str],
+) -> None:
+    """Whatever the media: the cheapest configuration costs what branch and
+    bound (without the partitioned bound) finds, and the five cheapest are
+    the five the search lists with the media test off."""
+    problem = problem_of(texts)
+    found, _ = plan(problem.task, problem.goal_call, limit=5)
+    least = branch_and_bound(problem)
+    assert [c.cost for c in found[:1]] == ([] if least is None else [least])
+    active = Room.active
+    try:
+        Room.active = property(lambda self: False)  # type: ignore[method-assign, assignment]
+        problem = problem_of(texts)
+        blind, _ = plan(problem.task, problem.goal_call, limit=5)
+    finally:
+        Room.active = active  # type: ignore[method-assign]
+    assert [(c.cost, c.identity(), c.derivation) for c in found] == [
+        (c.cost, c.identity(), c.derivation) for c in blind
+    ]
