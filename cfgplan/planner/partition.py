@@ -291,7 +291,7 @@ class Partition:
         for waiting in future:
             for key in waiting.counted:
                 totals[key] = get(key, 0) + 1
-        load = self.room.load(node.channels) if self.room.active else {}
+        load = self.room.load(node.channels)
         prices = Prices(task, node, certain, totals, present, self.number, load)
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
@@ -306,26 +306,26 @@ class Partition:
         """The summed counts of the pending items ``calls`` (None: off, some
         can recur), made once per stack: the children of an expansion whose
         body is all functionalities share one (fusion: every sibling)."""
-        found = self._stacks.get(calls)
-        if found is not None or calls in self._stacks:
-            return found
+        if calls in self._stacks:
+            return self._stacks[calls]
+        if len(self._stacks) >= STACKS:
+            self._stacks.clear()
+        found = self._stacks[calls] = self._sum(calls)
+        return found
+
+    def _sum(self, calls: tuple[Ground, ...]) -> Counts | None:
         task = self.grounder.task
-        totals: Counts | None = {}
+        totals: Counts = {}
+        get = totals.get
         for call in calls:
             counts = self.counts(call)
             if counts is None:
-                totals = None
-                break
-            assert totals is not None
-            get = totals.get
+                return None
             for key, n in counts.items():
                 totals[key] = get(key, 0) + n
             if not task.is_method(call):  # a pending functionality places itself
                 key = self.number(("@", call[1]))
                 totals[key] = get(key, 0) + 1
-        if len(self._stacks) >= STACKS:
-            self._stacks.clear()
-        self._stacks[calls] = totals
         return totals
 
     def _channels(self, node: Partial) -> tuple[set[int], list[Wire]]:
