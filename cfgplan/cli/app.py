@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import importlib
 import os
 import sys
 from collections.abc import Callable
@@ -72,6 +73,7 @@ def _options(
 ) -> None:
     """Plan-based configuration of robot societies (R. Lundh, 2006): plan, draw,
     emit and run configurations of robots lending each other functionalities."""
+
 
 EXIT_INPUT = 1
 EXIT_NONE = 3
@@ -171,12 +173,28 @@ def _run() -> int | str | None:
     return status
 
 
+COMMANDS = ("check", "emit", "plan", "render", "run", "simulate")
+"""Every command, each defined (and registered on :data:`app`) by the module
+of its name, ``cfgplan.cli.<name>``; :mod:`cfgplan.cli.commands` imports them all."""
+
+
+def register(args: list[str]) -> None:
+    """Import the module of the command ``args`` name, and only that one: ``cfgplan
+    plan`` need not load the runtime, Graphviz or the simulator (a fifth of its
+    start-up). Every command for anything else: help, shell completion, a
+    mistyped name (typer lists the commands)."""
+    name = next((a for a in args if not a.startswith("-")), None)
+    if name in COMMANDS and "_CFGPLAN_COMPLETE" not in os.environ:
+        importlib.import_module(f"cfgplan.cli.{name}")
+    else:
+        importlib.import_module("cfgplan.cli.commands")
+
+
 def main() -> None:
     """Entry point of the console script."""
     sys.unraisablehook = _unraisable
     try:
-        from cfgplan.cli import commands  # noqa: F401  (registers the commands)
-
+        register(sys.argv[1:])
         status = _run()
     except CfgplanError as exc:
         report(exc.diagnostics)

@@ -21,11 +21,11 @@ from cfgplan.configuration.cost import Weights, parse_weights
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.notation import call_text
+from cfgplan.option_values import choice, number, whole
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.report import Report
 from cfgplan.problem import GOAL_SOURCE, Problem, load
-from cfgplan.runtime.options import choice, number, whole
 
 __all__ = [
     "DomainArg",

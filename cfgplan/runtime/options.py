@@ -13,11 +13,11 @@ Light, like the rest of :mod:`cfgplan.runtime`: no typer, no pydantic.
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
+from cfgplan.option_values import choice, number, whole
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.faults import SYNTAX, parse_injection
@@ -58,50 +58,6 @@ UNTIL = (
     "or until the action's task is accomplished."
 )
 """How long a run lasts: the same for ``cfgplan run`` and the emitted programs."""
-
-
-def whole(low: int) -> Callable[[str], int]:
-    """A parser of whole numbers of at least ``low``."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise ValueError(f"{text!r} is not a whole number") from None
-        if value < low:
-            raise ValueError(f"{text}: must be {low} or more")
-        return value
-
-    return parse
-
-
-def number(low: float, *, above: bool = False) -> Callable[[str], float]:
-    """A parser of finite numbers of at least ``low`` (``above``: more than ``low``)."""
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise ValueError(f"{text!r} is not a number") from None
-        if not math.isfinite(value):
-            raise ValueError(f"{text}: must be a finite number")
-        if value < low or (above and value == low):
-            raise ValueError(f"{text}: must be {'more than' if above else 'at least'} {low:g}")
-        return value
-
-    return parse
-
-
-def choice(values: Sequence[str], what: str) -> Callable[[str], str]:
-    """A parser of one of ``values``: ``'yaml' is not a format: choose table, lisp or json``."""
-
-    def parse(text: str) -> str:
-        if text in values:
-            return text
-        shown = ", ".join(values[:-1]) + " or " + values[-1] if len(values) > 1 else values[0]
-        raise ValueError(f"{text!r} is not {what}: choose {shown}")
-
-    return parse
 
 
 def endpoint(text: str) -> str:

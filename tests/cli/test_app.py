@@ -7,13 +7,17 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
 from importlib.metadata import version
 
 import pytest
 import typer
 
 from cfgplan.cli import commands
+from cfgplan.cli.app import COMMANDS as COMMANDS_REGISTERED
 from cfgplan.cli.app import app
+from tests.backends.support import ROOT
 from tests.cli.conftest import Run
 
 DOCKING = ("domains/docking/domain.lisp", "domains/docking/state-kitchen.lisp")
@@ -52,6 +56,31 @@ def test_h_is_help_everywhere(cfgplan: Run, command: str) -> None:
     short, long = cfgplan(*words, "-h"), cfgplan(*words, "--help")
     assert short.returncode == long.returncode == 0
     assert short.stdout == long.stdout and "Usage: cfgplan" in short.stdout
+
+
+def _modules_after(args: list[str]) -> set[str]:
+    """The modules loaded once :func:`register` has read the command line ``args``."""
+    code = (
+        "import json, sys\nfrom cfgplan.cli.app import register\n"
+        f"register({args!r})\nprint(json.dumps(sorted(sys.modules)))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60
+    )
+    assert out.returncode == 0, out.stderr
+    return set(json.loads(out.stdout))
+
+
+def test_a_command_loads_its_own_module_only() -> None:
+    """``cfgplan plan`` does not load the runtime, Graphviz or the simulator;
+    help, completion and unknown commands load every command (typer lists them)."""
+    assert sorted(COMMANDS_REGISTERED) == COMMANDS
+    others = {f"cfgplan.cli.{c}" for c in COMMANDS if c != "plan"}
+    planning = _modules_after(["plan", "-k", "2", "d.lisp", "s.lisp"])
+    assert "cfgplan.cli.plan" in planning
+    assert not planning & (others | {"cfgplan.runtime", "graphviz", "cfgplan.sim"})
+    for args in (["-h"], ["--version"], ["pln", "d.lisp"]):
+        assert others <= _modules_after(args)
 
 
 def test_shell_completion_as_typer_offers_it(cfgplan: Run) -> None:
