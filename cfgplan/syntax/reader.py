@@ -8,16 +8,17 @@ errors are built from Lark's ``UnexpectedInput`` by :mod:`cfgplan.syntax.unexpec
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from lark import Lark, Token, v_args
-from lark.exceptions import UnexpectedInput, VisitError
-from lark.visitors import Transformer_NonRecursive
+from lark.exceptions import UnexpectedInput
+from lark.visitors import Transformer
 
 from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.files import read_source
@@ -26,8 +27,11 @@ from cfgplan.syntax import forms
 from cfgplan.syntax.sx import Sx
 from cfgplan.syntax.unexpected import syntax_error
 
+T = TypeVar("T")
+
 MAX_NESTING = 64
 """Lists may nest this deep; deeper input is refused (no recursion anywhere)."""
+
 
 @cache
 def grammar_text() -> str:
@@ -56,20 +60,48 @@ class SourceFile:
     sequences: list[tuple[Goal, ...]] = field(default_factory=list)
 
 
-class _ToIR(Transformer_NonRecursive[Token, Any]):
-    """Maps grammar rules to Sx nodes (generic s-expressions) and IR objects."""
+class _ToIR(Transformer[Token, Any]):
+    """Maps grammar rules to Sx nodes (generic s-expressions) and IR objects.
 
-    def __init__(self, filename: str) -> None:
-        super().__init__(visit_tokens=False)
-        self.filename = filename
+    It runs inside the LALR parser (each rule as it is reduced: no parse tree
+    is built, nothing recurses), so it takes no ``meta``: a form's or a list's
+    span runs from its first token to its last, the parentheses the grammar
+    keeps (``LPAR``, ``RPAR``). Lark calls every method named like a rule,
+    an inlined ``_rule`` too: the helpers' names are none of the grammar's
+    (:meth:`begin`, not ``start``, readies it for each file).
 
-    def _span(self, meta: Any) -> Span:
+    A form or list found wrong is noted (:attr:`failed`, the first one) and the
+    parse goes on: a syntax error anywhere in the file is reported before it,
+    as when the whole tree was read first."""
+
+    filename = "<text>"
+    failed: CfgplanError | None = None
+
+    def begin(self, filename: str) -> None:
+        self.filename, self.failed = filename, None
+
+    def _fail(self, exc: CfgplanError) -> None:
+        if self.failed is None:
+            self.failed = exc
+
+    def _build(self, build: Callable[[], T]) -> T | None:
+        """``build()``, or None when it finds the form wrong (noted)."""
+        try:
+            return build()
+        except CfgplanError as exc:
+            self._fail(exc)
+            return None
+
+    def _span(self, first: Token | Sx, last: Token | Sx) -> Span:
+        """From the start of ``first`` to the end of ``last``."""
+        start = first.span if isinstance(first, Sx) else self._token_span(first)
+        end = last.span if isinstance(last, Sx) else self._token_span(last)
         return Span(
             file=self.filename,
-            line=meta.line,
-            column=meta.column,
-            end_line=meta.end_line,
-            end_column=meta.end_column,
+            line=start.line,
+            column=start.column,
+            end_line=end.end_line,
+            end_column=end.end_column,
         )
 
     def _token_span(self, tok: Token) -> Span:
@@ -89,67 +121,77 @@ class _ToIR(Transformer_NonRecursive[Token, Any]):
     def number(self, tok: Token) -> Sx:
         return Sx("number", self._token_span(tok), text=str(tok))
 
-    @v_args(meta=True)
-    def list(self, meta: Any, children: Sequence[Any]) -> Sx:
-        return self._list(self._span(meta), children)
+    def list(self, children: Sequence[Any]) -> Sx:
+        return self._list(self._span(children[0], children[-1]), children[1:-1])
 
     def _list(self, span: Span, items: Sequence[Any]) -> Sx:
         depth = 1 + max((i.depth for i in items), default=0)
         if depth > MAX_NESTING:
-            raise error(
-                f"lists nest more than {MAX_NESTING} levels deep here",
-                span,
-                "domains and states need only a few levels; check for a runaway '('",
+            self._fail(
+                error(
+                    f"lists nest more than {MAX_NESTING} levels deep here",
+                    span,
+                    "domains and states need only a few levels; check for a runaway '('",
+                )
             )
+            items = ()  # nothing deeper is kept: no check ever walks it
         return Sx("list", span, items=tuple(items), depth=depth)
 
-    @v_args(meta=True)
-    def quote(self, meta: Any, children: Sequence[Any]) -> Sx:
+    def quote(self, children: Sequence[Any]) -> Sx:
         quote_tok, value = children
-        span = self._span(meta)
         head = Sx("symbol", self._token_span(quote_tok), text="quote")
-        return self._list(span, [head, value])
+        return self._list(self._span(quote_tok, value), [head, value])
 
-    @v_args(meta=True)
-    def call(self, meta: Any, children: Sequence[Any]) -> Sx:
-        name_tok, *args = children
+    def call(self, children: Sequence[Any]) -> Sx:
+        name_tok, *args, _ = children
         head = Sx("symbol", self._token_span(name_tok), text=str(name_tok))
-        return self._list(self._span(meta), [head, *(a for a in args if a is not None)])
+        span = self._span(name_tok, children[-1])
+        return self._list(span, [head, *(a for a in args if a is not None)])
 
-    @v_args(meta=True)
-    def option(self, meta: Any, children: Sequence[Any]) -> forms.Option:
+    def option(self, children: Sequence[Any]) -> forms.Option:
         keyword, *rest = children
         value = rest[-1]
         return forms.Option(str(keyword), self._token_span(keyword), value)
 
-    @v_args(meta=True)
-    def functionality(self, meta: Any, children: Sequence[Any]) -> Functionality:
-        return forms.functionality(self._span(meta), children[1:])
+    def functionality(self, children: Sequence[Any]) -> Functionality | None:
+        span = self._span(children[0], children[-1])
+        return self._build(lambda: forms.functionality(span, children[2:-1]))
 
-    @v_args(meta=True)
-    def method(self, meta: Any, children: Sequence[Any]) -> Method:
-        return forms.method(self._span(meta), children[1:])
+    def method(self, children: Sequence[Any]) -> Method | None:
+        span = self._span(children[0], children[-1])
+        return self._build(lambda: forms.method(span, children[2:-1]))
 
-    @v_args(meta=True)
-    def state(self, meta: Any, children: Sequence[Any]) -> State:
-        return forms.state(self._span(meta), children[1:])
+    def state(self, children: Sequence[Any]) -> State | None:
+        span = self._span(children[0], children[-1])
+        return self._build(lambda: forms.state(span, children[2:-1]))
 
-    @v_args(meta=True)
-    def goal(self, meta: Any, children: Sequence[Any]) -> Goal:
-        value = next(c for c in children[1:] if isinstance(c, Sx))
-        return forms.goal(self._span(meta), value)
+    def goal(self, children: Sequence[Any]) -> Goal | None:
+        value = next(c for c in children[2:-1] if isinstance(c, Sx))
+        span = self._span(children[0], children[-1])
+        return self._build(lambda: forms.goal(span, value))
 
-    @v_args(meta=True)
-    def sequence(self, meta: Any, children: Sequence[Any]) -> GoalSequence:
-        span = self._span(meta)
-        return GoalSequence(
-            tuple(forms.goal(c.span, c) for c in children[1:] if isinstance(c, Sx)), span
-        )
+    def sequence(self, children: Sequence[Any]) -> GoalSequence | None:
+        span = self._span(children[0], children[-1])
+        goals = [c for c in children[2:-1] if isinstance(c, Sx)]
+        return self._build(lambda: GoalSequence(tuple(forms.goal(c.span, c) for c in goals), span))
+
+
+_lock = threading.Lock()
 
 
 @cache
-def _parser() -> Lark:
-    return Lark(grammar_text(), parser="lalr", propagate_positions=True, maybe_placeholders=True)
+def _parser() -> tuple[Lark, _ToIR]:
+    """The parser, its transformer inside (LALR only: faster than transforming
+    a tree afterwards, and no tree is held)."""
+    transformer = _ToIR()
+    parser = Lark(
+        grammar_text(),
+        parser="lalr",
+        propagate_positions=True,
+        maybe_placeholders=True,
+        transformer=transformer,
+    )
+    return parser, transformer
 
 
 BOM = "\ufeff"
@@ -194,18 +236,18 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
     ):
         span = Span(file=filename, line=1, column=1, end_line=1, end_column=1)
         raise error("the file is empty: it holds no forms", span)
+    parser, transformer = _parser()
     try:
-        tree = _parser().parse(text)
+        with _lock:  # one parser, and its transformer told which file it reads
+            transformer.begin(filename)
+            items = parser.parse(text).children
+            failed = transformer.failed
     except UnexpectedInput as exc:
         raise syntax_error(exc, filename, text) from None
     except RecursionError:  # pragma: no cover - the grammar and transformer are iterative
         raise error("input too deeply nested") from None
-    try:
-        items = _ToIR(filename).transform(tree).children
-    except VisitError as exc:
-        if isinstance(exc.orig_exc, CfgplanError):
-            raise exc.orig_exc from None
-        raise
+    if failed is not None:
+        raise failed
     for item in items:
         if isinstance(item, Functionality):
             source.functionalities.append(item)

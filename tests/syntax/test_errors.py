@@ -162,6 +162,17 @@ def test_state_fact_printed_with_space_before_paren() -> None:
     assert d.hint is not None and "write robot(Pippi)" in d.hint
 
 
+def test_a_syntax_error_anywhere_comes_before_a_wrong_form() -> None:
+    """The reader builds each form as the parser closes it, but reports as if it
+    had read the whole file first: a later syntax error before an earlier
+    wrong form; of two wrong forms, the first."""
+    wrong = "(state (robot ?r))\n"
+    text = wrong + "(state (robot Emil) \"x\")\n"
+    assert_rendered(reader_error(text), text, 2, 21, "unexpected character '\"'")
+    text = wrong + "(state Pippi)\n"
+    assert_rendered(reader_error(text), text, 1, 8, "a fact holds no variables")
+
+
 def test_state_fact_with_variable() -> None:
     text = "(state (robot ?r))\n"
     d = reader_error(text)
