@@ -17,7 +17,6 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from weakref import WeakKeyDictionary
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
@@ -39,15 +38,15 @@ GRACE = 0.35
 EXPLAIN_SECONDS = 2.0
 """The least time the search for "why nothing" may take (more if planning took more)."""
 
-_parts: WeakKeyDictionary[Task, tuple[Grounder, Bound, Partition]] = WeakKeyDictionary()
-
 
 def parts(task: Task) -> tuple[Grounder, Bound, Partition]:
-    """The grounding memo and the bounds of ``task``, made once per task."""
-    found = _parts.get(task)
+    """The grounding memo and the bounds of ``task``, made once per task and
+    kept on it (:attr:`Task.memo`): they are freed with the task, as a run that
+    reconfigures plans on one derived task after another."""
+    found: tuple[Grounder, Bound, Partition] | None = task.memo.get("parts")
     if found is None:
         grounder = Grounder(task)
-        found = _parts[task] = (grounder, Bound(task), Partition(grounder))
+        found = task.memo["parts"] = (grounder, Bound(task), Partition(grounder))
     return found
 
 

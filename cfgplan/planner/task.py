@@ -15,10 +15,11 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 from functools import cached_property
 from types import MappingProxyType
+from typing import Any
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import (
@@ -150,6 +151,9 @@ class Task:
     """(sender, receiver) -> the most reliable medium's reliability (1 if unsaid)."""
     state_names: frozenset[str]
     """Every symbol of the state: for "differs only in case" hints."""
+    memo: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+    """What the planner works out once per task (:func:`cfgplan.planner.plan.parts`),
+    kept here so that it goes when the task goes; a derived task starts empty."""
 
     @cached_property
     def recursive(self) -> frozenset[Signature]:

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -109,6 +110,11 @@ def uses(resource: Resource, config: Configuration | None) -> bool:
     return any(a.medium == resource.medium for a in config.media)
 
 
+TASKS_KEPT = 8
+"""Derived tasks a :class:`Reconfigurator` keeps, the most recently used: the
+current situation's, and those a recovery may return to."""
+
+
 @dataclass
 class Reconfigurator:
     """The planning side of a running society (module docstring)."""
@@ -123,7 +129,7 @@ class Reconfigurator:
     situation: Situation = field(default_factory=Situation)
     id: int = 0
     next_label: int = 0
-    _tasks: dict[Situation, Task] = field(default_factory=dict)
+    _tasks: OrderedDict[Situation, Task] = field(default_factory=OrderedDict)
     _fallbacks: dict[tuple[Situation, Resource], Configuration | None] = field(default_factory=dict)
     _pending: list[Resource] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -136,11 +142,16 @@ class Reconfigurator:
     # -- the situation -----------------------------------------------------
 
     def derived(self, situation: Situation | None = None) -> Task:
-        """The task of ``situation`` (default: the current one), derived once."""
+        """The task of ``situation`` (default: the current one), derived once
+        while it is among the :data:`TASKS_KEPT` last used (each task keeps
+        its grounding and bounds: a long run meets ever new situations)."""
         s = self.situation if situation is None else situation
         found = self._tasks.get(s)
         if found is None:
             found = self._tasks[s] = derive(self.task, s)
+            if len(self._tasks) > TASKS_KEPT:
+                self._tasks.popitem(last=False)
+        self._tasks.move_to_end(s)
         return found
 
     def _failing(self, situation: Situation, resource: Resource) -> Situation:

@@ -6,7 +6,7 @@ from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 from cfgplan.reconfigure.fallbacks import Resource
-from cfgplan.reconfigure.policy import Hysteresis, Reconfigurator, uses
+from cfgplan.reconfigure.policy import TASKS_KEPT, Hysteresis, Reconfigurator, uses
 from tests.backends.support import DOMAINS
 
 STEP2 = (DOMAINS / "cross-door/domain.lisp", DOMAINS / "cross-door/state-6.2.2-step2.lisp")
@@ -159,3 +159,17 @@ def test_a_search_cut_by_its_time_limit_keeps_no_fallback() -> None:
     r.compute(r.situation, r.running, COMPASS)
     known, found = r._fallback((r.situation, COMPASS))
     assert known and found is not None and found.cost == 47
+
+
+def test_it_keeps_the_derived_tasks_of_the_last_few_situations_only() -> None:
+    """A long run meets ever new situations (here reliabilities lowered step by
+    step); each derived task keeps its grounding and bounds once planned on, so
+    only the :data:`TASKS_KEPT` most recently used are kept."""
+    _, r = _start(STEP2)
+    situations = [r.situation.with_reliability(("compass", "Emil"), 0.5 ** n) for n in range(20)]
+    tasks = [r.derived(s) for s in situations]
+    assert len({id(t) for t in tasks}) == 20
+    assert r.derived(situations[-1]) is tasks[-1]  # among the last used: kept
+    assert r.derived(situations[-TASKS_KEPT]) is tasks[-TASKS_KEPT]
+    assert r.derived(situations[0]) is not tasks[0]  # dropped, derived again
+    assert len(r._tasks) == TASKS_KEPT
