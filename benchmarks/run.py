@@ -127,6 +127,9 @@ def checkout(rev: str, folder: Path) -> Path:
         ["git", "archive", "--format=tar", rev], cwd=ROOT, capture_output=True, check=True
     ).stdout
     subprocess.run(["tar", "-x", "-C", str(folder / "tree")], input=archive, check=True)
+    # Its own grammar where it looks for cfgplan.grammar first (the installed
+    # package maps that name to this work tree's grammar/ folder).
+    shutil.copytree(folder / "tree" / "grammar", folder / "tree" / "cfgplan" / "grammar")
     shutil.copytree(ROOT / "benchmarks", folder / "harness" / "benchmarks")
     (folder / "harness" / "domains").symlink_to(ROOT / "domains")  # the same inputs
     return folder
@@ -229,16 +232,18 @@ def _row(instance: Instance, args: argparse.Namespace) -> list[str]:
     ]
 
 
-def end_to_end(instance: Instance, repeat: int = 3) -> float | None:
-    """``cfgplan plan DOMAIN STATE -k 1``, process start to exit, best of a few."""
+def end_to_end(instance: Instance, repeat: int = 3, against: Path | None = None) -> float | None:
+    """``cfgplan plan DOMAIN STATE -k 1``, process start to exit, best of a few;
+    with ``against`` (a folder made by :func:`checkout`), that older cfgplan's."""
     best: float | None = None
+    cwd = ROOT if against is None else against / "tree"  # python -m finds cfgplan there
     with tempfile.TemporaryDirectory() as tmp:
         domain, state = problem_files(instance, Path(tmp))
         command = [sys.executable, "-m", "cfgplan", "plan", str(domain), str(state), "-k", "1"]
         command += ["--format", "json", "--time-limit", f"{CAP:g}"]
         for _ in range(repeat):
             start = time.perf_counter()
-            out = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+            out = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
             took = time.perf_counter() - start
             if out.returncode != 0 or json.loads(out.stdout)["stats"]["stopped"]:
                 return None
@@ -253,7 +258,7 @@ def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
     columns = ["instance", "configs"]
     for _, name in modes:
         columns += [f"{name} ms {rev}", f"{name} ms", "ratio"]
-    columns += [f"MiB {rev}", "MiB"]
+    columns += [f"CLI top-1 ms {rev}", "CLI top-1 ms", "ratio", f"MiB {rev}", "MiB"]
     print("| " + " | ".join(columns) + " |")
     print("|" + "---|" * len(columns))
     for instance in INSTANCES:
@@ -279,6 +284,9 @@ def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
             peak = (f"{_f(old['peak_mib']):.0f}", f"{_f(new['peak_mib']):.0f}")
             if mode == "all":
                 count = str(new["count"])
+        old_cli, new_cli = end_to_end(instance, repeat, against), end_to_end(instance, repeat)
+        ratio = f"{new_cli / old_cli:.2f}" if old_cli and new_cli is not None else "-"
+        cells += [ms(old_cli), ms(new_cli), ratio]
         row += [count, *cells, *peak]
         print("| " + " | ".join(row) + " |", flush=True)
 
