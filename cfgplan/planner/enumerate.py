@@ -184,6 +184,7 @@ class Windows:
                 found.append(self._found(node, priority, index, held))
                 if len(found) > MOST_HELD:
                     found, window.high = _halve(found)
+                    window.cut(window.high)  # what it dropped, a later window lists
                 continue
             if grower.distinct:
                 key = canonical(node, grower.grounder)

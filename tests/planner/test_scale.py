@@ -98,6 +98,24 @@ def test_listing_in_small_windows_gives_what_best_first_gives(
     assert len(listed) == 4236
 
 
+@pytest.mark.parametrize("held", [1, 2, 3])
+def test_windows_halved_after_the_first_walk_is_given_up_lose_nothing(
+    held: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The first walk given up at once, and room for ``held`` configurations a
+    window: what a window drops when its upper edge comes down is listed by
+    the next one. Before, media-tight(4, 2, 1) lost 2 of its 36 (held 1)."""
+    problem = problem_of(media_tight(4, 2, 1))
+    whole, _ = plan(problem.task, problem.goal_call, limit=None)
+    monkeypatch.setattr(windows, "ONE_PASS", 0)
+    monkeypatch.setattr(windows, "MOST_HELD", held)
+    halved, _ = plan(problem.task, problem.goal_call, limit=None)
+    assert len(whole) == 36
+    assert [(c.cost, c.identity(), c.derivation) for c in halved] == [
+        (c.cost, c.identity(), c.derivation) for c in whole
+    ]
+
+
 @pytest.mark.parametrize("texts", [fusion(4, 3, 4, 3), chain(8)], ids=["fusion-4", "chain-8"])
 def test_best_first_lists_in_the_order_of_the_windows_when_the_first_bound_is_dropped(
     texts: tuple[str, str],
