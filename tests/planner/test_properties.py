@@ -13,7 +13,11 @@ Properties (4.5 and the ranking of 6.3.2):
   a literal depth-first reading of 4.5, stably sorted by cost: the same
   configurations, costs and, at equal cost, the same (depth-first) order;
 - the order of the state's facts changes no configuration: the same set,
-  the same costs (only which of equal-cost configurations comes first).
+  the same costs (only which of equal-cost configurations comes first);
+- the bounds change nothing found: with the partitioned bound (and its media
+  test) on every node, which a search this small would otherwise never
+  compute, best-first lists the depth-first planner's first ``k``, and
+  ``--all`` in windows by cost, halved again and again, lists them all.
 
 Planner bugs found this way are kept as reproducers in ``test_reproducers.py``.
 """
@@ -22,16 +26,20 @@ from __future__ import annotations
 
 import re
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from itertools import pairwise
 from random import Random
+from unittest.mock import patch
 
 from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
 from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner import plan
+from cfgplan.planner import enumerate as windows
+from cfgplan.planner import grow, plan
 from cfgplan.planner.report import Condition
 from tests.planner.generated import PROPERTY, Generated, generated, load_generated, run, solve
 from tests.planner.oracle import depth_first
@@ -104,6 +112,52 @@ def test_same_derivations_as_depth_first(example: Generated) -> None:
     problem = solve(example)
     derivations = run(problem, distinct=False)
     assert [(c.cost, c.identity()) for c in derivations] == depth_first(problem, example.weights)
+
+
+@contextmanager
+def bounds_from_the_first_node() -> Iterator[None]:
+    """The partitioned bound (and its media test) tried from the first node and
+    never given up: left to itself, a search this small never computes it
+    (:data:`cfgplan.planner.grow.WARM`)."""
+    with patch.object(grow, "WARM", 0), patch.object(grow, "TRIAL", 10**9):
+        yield
+
+
+@PROPERTY
+@given(generated(), st.integers(1, 6))
+def test_the_bounds_change_nothing_found(example: Generated, k: int) -> None:
+    """The ``k`` cheapest, best first with both bounds on every node, are the
+    first ``k`` of the depth-first planner (derivations), and of the distinct
+    list planned without them."""
+    problem = solve(example)
+    with bounds_from_the_first_node():
+        derivations = run(problem, limit=k, distinct=False)
+        distinct = run(problem, limit=k, distinct=True)
+    oracle = depth_first(problem, example.weights)
+    assert [(c.cost, c.identity()) for c in derivations] == oracle[:k]
+    assert distinct == run(problem, distinct=True)[:k]
+
+
+@PROPERTY
+@given(generated(), st.integers(1, 4))
+def test_all_in_windows_lists_everything(example: Generated, held: int) -> None:
+    """``--all`` as on a large instance: the first walk given up at once for
+    windows by cost, priced by both bounds, each window holding at most
+    ``held`` configurations (its upper edge lowered again and again). The
+    derivations are the depth-first planner's, the distinct list the one
+    walk's. (Found this way: configurations a window dropped when it was
+    halved were never listed again.)"""
+    problem = solve(example)
+    whole = run(problem, distinct=True)
+    with (
+        bounds_from_the_first_node(),
+        patch.object(windows, "ONE_PASS", 0),
+        patch.object(windows, "MOST_HELD", held),
+    ):
+        derivations = run(problem, distinct=False)
+        distinct = run(problem, distinct=True)
+    assert [(c.cost, c.identity()) for c in derivations] == depth_first(problem, example.weights)
+    assert distinct == whole
 
 
 # -- the order of facts -------------------------------------------------------------------
