@@ -107,6 +107,7 @@ class Coordinator:
     _deploying: bool = False
     _achieved: Configuration | None = None  # the configuration whose task was accomplished
     _installed_at: float = 0.0  # when the running configuration was deployed (time.time())
+    _installed: int = -1  # its id; -1: the first, deployed before the coordinator started
 
     # -- input --------------------------------------------------------------
 
@@ -162,11 +163,16 @@ class Coordinator:
         in the next cycle, reporting it again before the switch is deployed
         must not end a step twice (and skip the next step of a sequence): a
         report made before the running configuration was deployed, or by an
-        instance it does not run, is not about it."""
+        instance it does not run, is not about it. A robot's report says
+        which configuration it ran (:attr:`Detection.config`); only what was
+        seen here is placed by its time, on this robot's clock."""
         running = self.reconfigurator.running
         if running is None or running is self._achieved or self.finished is not None:
             return False
-        if detection.t < self._installed_at:
+        if detection.config >= 0:
+            if self._installed >= 0 and detection.config != self._installed:
+                return False
+        elif detection.t < self._installed_at:
             return False
         mine = any(
             f.label == detection.label and (f.name, *f.args) == tuple(detection.instance)
@@ -312,7 +318,7 @@ class Coordinator:
 
         def done() -> None:
             self._deploying = False
-            self._installed_at = time.time()
+            self._installed_at, self._installed = time.time(), decision.id
             self._report(decision, detection)
             if self.ahead is not None:
                 self.ahead.notify()

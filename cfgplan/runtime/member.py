@@ -19,7 +19,9 @@ configuration and nobody runs half of two:
 Answers go to the coordinator's key as ``{"type": "ack", "robot": R, "id":
 N, "phase": "ready" | "refused" | "installed", "reason": ...}``; a robot's
 detections go there too as ``{"type": "report", "robot": R, "detection":
-...}``. A commit may carry the part itself (``"part"``): the coordinator so
+...}``, each stamped with the id of the configuration it ran (its
+``config``: a report is placed by that, not by the robots' clocks). A
+commit may carry the part itself (``"part"``): the coordinator so
 re-synchronises a robot that appears (started late, or back after a crash).
 ``{"op": "finish"}`` ends the run when the action's task is accomplished.
 Messages are idempotent: a repeated prepare or commit is answered again,
@@ -36,6 +38,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from typing import Any, Protocol
 
 from cfgplan.runtime.errors import RunError
@@ -172,10 +175,11 @@ class Member:
         if self.monitor is None or not self.forward:
             return
         for detection in self.monitor.drain():
+            made_under = replace(detection, config=self.current)  # the cycle just run's
             message = {
                 "type": "report",
                 "robot": self.robot.name,
-                "detection": json.loads(detection.message()),
+                "detection": json.loads(made_under.message()),
             }
             send(self.network, coordinator_key(self.network.society), message)
 

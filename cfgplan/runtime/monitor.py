@@ -78,6 +78,10 @@ class Detection:
     added: tuple[Term, ...] = ()  # facts
     removed: tuple[Term, ...] = ()  # facts
     limit: float = 0.0  # stale: seconds without data that made it stale
+    config: int = -1
+    """The configuration the reporting robot ran when it sent this (its id in
+    the switch protocol, :mod:`cfgplan.runtime.member`); -1: seen where it is
+    read. Robots' clocks may differ, so ``t`` cannot tell."""
 
     def message(self) -> bytes:
         """As JSON, to send to the coordinator."""

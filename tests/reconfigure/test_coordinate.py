@@ -185,18 +185,24 @@ def test_a_task_reported_accomplished_twice_ends_once() -> None:
     assert len(deployer.deployed) == 1
 
 
-def test_a_second_report_does_not_skip_a_step_of_a_sequence() -> None:
-    """A sequence of two steps (the same crossing twice): the first step's
-    task reported twice in one pass (made before the switch) moves to the
-    second step once; a report made after the switch ends the second step."""
+def _twice() -> tuple[Coordinator, Reconfigurator, Deployer, list[Event], Configuration]:
+    """A sequence of two steps, the same crossing twice: its coordinator,
+    reconfigurator, deployer, events and the first step's configuration."""
     problem = load(*STEP2)
     configs, _ = plan(problem.task, problem.goal_call)
     goal = problem.goal_call
     r = Reconfigurator(problem.task, problem.domain, goal, configs[0], goals=(goal,))
     events: list[Event] = []
     deployer = Deployer()
-    coordinator = Coordinator(r, events.append, "Emil", deployer, Clock())
-    label = _label(configs[0], "cross-door", "Emil")
+    return Coordinator(r, events.append, "Emil", deployer, Clock()), r, deployer, events, configs[0]
+
+
+def test_a_second_report_does_not_skip_a_step_of_a_sequence() -> None:
+    """A sequence of two steps (the same crossing twice): the first step's
+    task reported twice in one pass (made before the switch) moves to the
+    second step once; a report made after the switch ends the second step."""
+    coordinator, r, _, events, first = _twice()
+    label = _label(first, "cross-door", "Emil")
     done = Detection("achieved", "Emil", 0.0, instance=("cross-door", "Emil", "Door1"), label=label)
     coordinator.handle(done)
     coordinator.handle(done)
@@ -207,6 +213,31 @@ def test_a_second_report_does_not_skip_a_step_of_a_sequence() -> None:
     assert any(f.label == label for f in second.functionalities)  # the same crossing again
     later = Detection("achieved", "Emil", time.time() + 1, instance=done.instance, label=label)
     coordinator.handle(later)  # reported once the second step runs: it ends that step
+    assert coordinator.finished == "achieved"
+    assert [e.kind for e in events].count("achieved") == 2
+
+
+def test_a_robots_report_is_placed_by_the_configuration_it_ran_not_its_clock() -> None:
+    """Robots' clocks may differ. After the switch to the sequence's second
+    step, a report from a robot whose clock is an hour behind, made under the
+    second step's configuration, ends that step; one from a clock an hour
+    ahead, made under the first step's, is not about the second step."""
+    coordinator, r, deployer, events, first = _twice()
+    label = _label(first, "cross-door", "Emil")
+    instance = ("cross-door", "Emil", "Door1")
+    coordinator.handle(Detection("achieved", "Emil", 0.0, instance=instance, label=label))
+    ((second_step, _),) = deployer.deployed
+    assert second_step.previous is first and r.running is second_step.config
+    assert second_step.id > 0
+    ahead = time.time() + 3600
+    old = Detection("achieved", "Emil", ahead, instance=instance, label=label, config=0)
+    coordinator.handle(old)
+    assert coordinator.finished is None
+    behind = time.time() - 3600
+    now = Detection(
+        "achieved", "Emil", behind, instance=instance, label=label, config=second_step.id
+    )
+    coordinator.handle(now)
     assert coordinator.finished == "achieved"
     assert [e.kind for e in events].count("achieved") == 2
 
