@@ -129,7 +129,9 @@ def checkout(rev: str, folder: Path) -> Path:
     subprocess.run(["tar", "-x", "-C", str(folder / "tree")], input=archive, check=True)
     # Its own grammar where it looks for cfgplan.grammar first (the installed
     # package maps that name to this work tree's grammar/ folder).
-    shutil.copytree(folder / "tree" / "grammar", folder / "tree" / "cfgplan" / "grammar")
+    grammar, inside = folder / "tree" / "grammar", folder / "tree" / "cfgplan" / "grammar"
+    if grammar.is_dir() and not inside.exists():
+        shutil.copytree(grammar, inside)
     shutil.copytree(ROOT / "benchmarks", folder / "harness" / "benchmarks")
     (folder / "harness" / "domains").symlink_to(ROOT / "domains")  # the same inputs
     return folder
