@@ -40,7 +40,9 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import enumerate as windows
 from cfgplan.planner import grow, plan
+from cfgplan.planner.plan import Run, parts
 from cfgplan.planner.report import Condition
+from cfgplan.planner.room import Load, Need, Room
 from tests.planner.generated import PROPERTY, Generated, generated, load_generated, run, solve
 from tests.planner.oracle import depth_first
 
@@ -208,6 +210,8 @@ class Coverage:
     fan_out: bool  # a configuration holds the monitor fed through do-act's :in
     repeated_channel: bool  # a channel written twice, and configurations found
     repeated_call: bool  # a call twice in a body, and configurations found
+    raised: bool  # the partitioned bound, on from the first node, raised a priority
+    media_cut: bool  # ... and left out an expansion the media cannot carry (room.py)
 
 
 def _coverage(example: Generated) -> Coverage:
@@ -221,6 +225,16 @@ def _coverage(example: Generated) -> Coverage:
     text = example.domain
     wrapped = "(?f0 (do-act" in text or ("(?f0 (w" in text and "(?f0 (p" not in text)
     channels = re.findall(r"\(\((?:local|global) [^()]*\) [^()]*\([^()]*\)", text)
+    room = parts(problem.task)[2].room
+    cut: list[bool] = []
+
+    def fits(needs: tuple[Need, ...], load: Load) -> bool:
+        cut.append(not Room.fits(room, needs, load))
+        return not cut[-1]
+
+    with bounds_from_the_first_node(), patch.object(room, "fits", fits):
+        bounded = Run(problem.task, problem.goal_call, limit=3, distinct=False)
+        list(bounded)
     return Coverage(
         derivations=len(derivations),
         distinct=len({c.identity() for c in derivations}),
@@ -231,6 +245,8 @@ def _coverage(example: Generated) -> Coverage:
         fan_out="mon" in names,
         repeated_channel=bool(derivations) and len(channels) > len(set(channels)),
         repeated_call=bool(derivations) and "(?t2 " in text,
+        raised=bounded.strategy.grower.raised > 0,
+        media_cut=any(cut),
     )
 
 
@@ -255,3 +271,5 @@ def test_the_generator_covers_what_it_should() -> None:
     assert any(s.fan_out for s in seen)
     assert any(s.repeated_channel for s in seen)
     assert any(s.repeated_call for s in seen)
+    assert any(s.raised for s in seen)
+    assert any(s.media_cut for s in seen)
