@@ -22,10 +22,15 @@ from cfgplan.planner.finish import Models, admissible, build, fingerprint
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import DeadEnd, Report
+from cfgplan.planner.split import Split
 from cfgplan.planner.successors import successors
 
 Heuristic = Callable[[Partial], float | None]
 """A lower bound on what a node still costs; None when it has no completion."""
+
+Splitter = Callable[[Partial], tuple[float | None, Split | None]]
+"""The stronger bound, with the node's bound taken apart at its top item
+(:mod:`cfgplan.planner.split`)."""
 
 WARM = 32
 """Nodes a search prices (settles) before it tries the stronger bound at
@@ -36,8 +41,9 @@ many children (fusion) the bound is soon worth its cost."""
 TRIAL = 4
 """Refinements by the stronger bound a search tries before it may give that
 bound up: from then on, when fewer than one refinement in :data:`PAYS` paid
-(pruned a node, or raised its priority past the next node's, so that another
-node is taken first), the bound is dropped for the rest of the search. Where
+(pruned a node, raised its priority past the next node's, so that another
+node is taken first, or priced some of its children above their own bound,
+:mod:`cfgplan.planner.split`), the bound is dropped for the rest of the search. Where
 it seldom pays (build-wall, the wall and relay families) it only costs time;
 where it helps (ecology, fusion, media-tight, chain) most of its raises pay.
 Dropping an admissible bound never changes the answer, only how many nodes
@@ -84,6 +90,9 @@ class Grower:
     feasible: Heuristic | None = None
     """The cheapest test that a node can complete (0, or None: no completion),
     to price nodes with while :attr:`refine` dominates :attr:`heuristic`."""
+    split: Splitter | None = None
+    """:attr:`refine` taken apart at the top item: when given, a refined node's
+    children are priced from its split (:mod:`cfgplan.planner.split`)."""
     stats: Stats = field(default_factory=Stats)
     report: Report = field(default_factory=Report)
     seen: set[bytes] = field(default_factory=set)  # fingerprints listed (distinct)
@@ -97,17 +106,45 @@ class Grower:
         self.dominated = 0  # those at least the first bound (or pruned)
         self.first = self.heuristic
         self.repriced: Reprice | None = None  # the bounds in use changed: what to re-price
+        self.splits: dict[tuple[int, ...], Split] = {}  # refined nodes not yet expanded, by path
+        self.lifted = 0  # children priced above their own bound by their parent's split
 
     def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children with
         their priorities (dead ends go to the report)."""
         self.stats.expansions += 1
+        split = self.splits.pop(node.path, None)
+        lifted = self.lifted
         for child in successors(self.grounder, node):
             clock.check()
             if isinstance(child, DeadEnd):
                 self.report.note(child)
-            else:
+            elif split is None:
                 yield from self.settle(child)
+            else:
+                yield from self._lift(node, split, self.settle(child))
+        if split is not None and self.lifted > lifted:
+            self.raised += 1  # the node's refinement paid: it priced its children
+
+    def _lift(
+        self, node: Partial, split: Split, settled: Iterator[tuple[float, Partial]]
+    ) -> Iterator[tuple[float, Partial]]:
+        """The settled children of one expansion of ``node``, priced at least
+        by ``node``'s split (pruned where the media cannot carry it)."""
+        depth = len(node.path)
+        for priority, child in settled:
+            if not child.done:
+                price = split.prices.get(child.path[depth])
+                if price == float("inf"):
+                    self.stats.pruned += 1
+                    continue
+                if price is not None:
+                    # Less a hair: the sums are floats, and a bound must not pass a cost.
+                    lifted = self.priority(node, split.rest + price - 1e-9)
+                    if lifted > priority:
+                        self.lifted += 1
+                        priority = lifted
+            yield priority, child
 
     def settle(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Place the functionalities on top of the stack (one child per binding
@@ -153,7 +190,12 @@ class Grower:
         (best-first: the next node's; else any raise pays)."""
         if self.refine is None or self.settled < WARM:
             return priority
-        rest = self.refine(node)
+        if self.split is not None:
+            rest, split = self.split(node)
+            if split is not None:
+                self.splits[node.path] = split
+        else:
+            rest = self.refine(node)
         self.tried += 1
         if rest is None:
             self.raised += 1
@@ -166,7 +208,8 @@ class Grower:
         if raised > priority and (beaten is None or raised > beaten):
             self.raised += 1
         elif self.tried >= TRIAL and self.raised * PAYS < self.tried:
-            self.refine = None  # it seldom helps here: give it up for this search
+            self.refine = self.split = None  # it seldom helps here: give it up for this search
+            self.splits.clear()
             # Nodes priced by the first bound stay right; the others are re-priced.
             refined_only = self.heuristic is self.first
             self.repriced = Reprice.REFINED if refined_only else Reprice.ALL

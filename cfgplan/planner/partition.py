@@ -40,73 +40,22 @@ itself) have no finite occurrence count: for such tasks this bound is off.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Container
+from collections.abc import Container
 from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
+from cfgplan.planner.prices import Counts, Prices, Wire, wire_keys
 from cfgplan.planner.report import DeadEnd
-from cfgplan.planner.room import Load, Need, Room
-from cfgplan.planner.task import Ground, Task
-
-Key = tuple[object, ...]
-"""What costs, as counted: ``("f", call)`` for a functionality (so that no
-call, a tuple of names, is ever mistaken for another key); ``("@", agent)``; for
-channels of one kind and data: ``("=", kind, data, sender, receiver)`` (both
-ends known), ``("?r", kind, data, receiver)`` (only the receiver known),
-``("?s", kind, data, sender)`` (only the sender), ``("?", kind, data)`` (both
-ends open), and the sums ``("*", kind, data)`` (every channel),
-``("to", kind, data, receiver)`` and ``("from", kind, data, sender)`` (every
-one with that end known), ``("?r*", kind, data)`` and ``("?s*", kind, data)``
-(every one with only a receiver, only a sender known)."""
-
-Counts = dict[int, int]
-"""Most occurrences of each key in one derivation, keys by their numbers
-(:attr:`Partition.number`: small integers hash faster than nested tuples)."""
-
+from cfgplan.planner.room import Need, Room
+from cfgplan.planner.split import Split, split_at
+from cfgplan.planner.task import Ground
 
 STACKS = 64
 """Stacks of pending items whose summed counts are kept, then forgotten all
 at once: siblings are refined soon after each other (the search takes them
 at nearly the same priority), so a few suffice, and memory stays bounded."""
-
-
-@dataclass(frozen=True, slots=True)
-class Wire:
-    """A channel as this bound prices it: ``weight / S``, S the sum of the
-    counts of ``shares`` (the channels it might merge with, itself included);
-    nothing when C holds a channel with key ``free``. Its occurrence counts
-    towards ``counted``. Keys by their numbers."""
-
-    weight: float
-    counted: tuple[int, ...]
-    shares: tuple[int, ...]
-    free: int
-
-
-def wire_keys(
-    kind: str, data: object, sender: Ground | None, receiver: Ground | None
-) -> tuple[tuple[Key, ...], tuple[Key, ...], Key]:
-    """What a channel whose known ends (functionality calls) are given counts
-    towards, what it shares with, and what makes it free (:class:`Wire`)."""
-    every: Key = ("*", kind, data)
-    opened: Key = ("?", kind, data)
-    if sender is not None and receiver is not None:
-        key: Key = ("=", kind, data, sender, receiver)
-        to: Key = ("to", kind, data, receiver)
-        by: Key = ("from", kind, data, sender)
-        shares = (key, ("?r", kind, data, receiver), ("?s", kind, data, sender), opened)
-        return (key, every, to, by), shares, key
-    if receiver is not None:
-        to = ("to", kind, data, receiver)
-        counted = (("?r", kind, data, receiver), every, to, ("?r*", kind, data))
-        return counted, (to, ("?s*", kind, data), opened), to
-    if sender is not None:
-        by = ("from", kind, data, sender)
-        counted = (("?s", kind, data, sender), every, by, ("?s*", kind, data))
-        return counted, (by, ("?r*", kind, data), opened), by
-    return (opened, every), (every,), every
 
 
 @dataclass(frozen=True, slots=True)
@@ -119,6 +68,7 @@ class Option:
     agents: tuple[str, ...]  # agents its functionality children run on, each once
     agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
     needs: tuple[Need, ...]  # what its own global channels need of the media
+    choice: int = 0  # its number among the method's expansions, as successors numbers them
 
 
 @dataclass(frozen=True, slots=True)
@@ -175,10 +125,12 @@ class Partition:
                 found = Instance(call, True, weight=weight, key=self.number(("f", call)))
             else:
                 options = []
+                choice = 0
                 for method in task.versions(call):
                     for expansion in self.grounder.expansions(method, call):
                         if not isinstance(expansion, DeadEnd):
-                            options.append(self._option(expansion))
+                            options.append(self._option(expansion, choice))
+                        choice += 1
                 found = Instance(call, False, tuple(options), key=self.number(("f", call)))
             self._instances[call] = found
         return found
@@ -255,14 +207,14 @@ class Partition:
                     most[key] = n
         return most
 
-    def _option(self, expansion: Expansion) -> Option:
+    def _option(self, expansion: Expansion, choice: int) -> Option:
         task = self.grounder.task
         channels = tuple(self._own(expansion, spec) for spec in expansion.channels)
         agents = tuple(dict.fromkeys(c[1] for c in expansion.body if not task.is_method(c)))
         keys = tuple(self.number(("@", agent)) for agent in agents)
         children = tuple(self.number(("f", call)) for call in expansion.body)
         needs = self.room.needs(expansion.channels)
-        return Option(expansion.body, children, channels, agents, keys, needs)
+        return Option(expansion.body, children, channels, agents, keys, needs, choice)
 
     def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
         """An own channel of an expansion: an end at a functionality of the body
@@ -279,12 +231,20 @@ class Partition:
         """A lower bound on the cost still to come (0 when off), or None when
         some pending item has no derivation; ``certain`` are agents every
         completion uses: they are counted in full, once."""
+        return self.split(node, certain, apart=False)[0]
+
+    def split(
+        self, node: Partial, certain: frozenset[str], apart: bool = True
+    ) -> tuple[float | None, Split | None]:
+        """:meth:`estimate`, and (``apart``) the bound taken apart at the top
+        item, which the node expands next (:mod:`cfgplan.planner.split`; None
+        when the bound is off)."""
         if self._cyclic:
-            return 0.0
+            return 0.0, None
         task = self.grounder.task
         pending = self._pending(tuple(item.call for item in node.stack))
         if pending is None:
-            return 0.0
+            return 0.0, None
         totals = dict(pending)
         get = totals.get
         present, future = self._channels(node)
@@ -296,11 +256,19 @@ class Partition:
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
         memo: dict[int, float] = {}
-        for item in node.stack:
-            total += self._least(item.call, memo, prices)
+        top = 0.0
+        for index, item in enumerate(node.stack):
+            least = self._least(item.call, memo, prices)
+            top = least if index == 0 else top
+            total += least
             if not task.is_method(item.call):
                 total += prices.agent(item.call[1])
-        return None if total == float("inf") else total
+        if total == float("inf"):
+            return None, None
+        if not apart:
+            return total, None
+        top_item = self.instance(node.stack[0].call)
+        return total, split_at(top_item, total - top, memo, prices, self.room.fits)
 
     def _pending(self, calls: tuple[Ground, ...]) -> Counts | None:
         """The summed counts of the pending items ``calls`` (None: off, some
@@ -389,31 +357,3 @@ class Partition:
                     best = cost
             memo[instance.key] = best
         return memo[key]
-
-
-@dataclass
-class Prices:
-    """What each key costs at one node: its weight, shared (module docstring)."""
-
-    task: Task
-    node: Partial
-    certain: frozenset[str]
-    totals: Counts
-    present: set[int]
-    number: Callable[[Key], int]
-    load: Load  # what the node's global channels load the media with (room.py)
-    agents: dict[str, float] = field(default_factory=dict)  # the agent prices found so far
-
-    def agent(self, agent: str) -> float:
-        found = self.agents.get(agent)
-        if found is None:
-            found = 0.0
-            if agent not in self.node.robots and agent not in self.certain:
-                found = self.task.agent_cost(agent) / self.totals[self.number(("@", agent))]
-            self.agents[agent] = found
-        return found
-
-    def channel(self, own: Wire) -> float:
-        if own.free in self.present:
-            return 0.0
-        return own.weight / sum(self.totals.get(key, 0) for key in own.shares)

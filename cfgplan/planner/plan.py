@@ -24,11 +24,12 @@ from cfgplan.planner.bound import Bound
 from cfgplan.planner.dive import dive
 from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.grow import Grower, Heuristic, Stats
+from cfgplan.planner.grow import Grower, Heuristic, Splitter, Stats
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst, Progress
+from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
 
 GRACE = 0.35
@@ -73,6 +74,16 @@ def partitioned(bound: Bound, partition: Partition) -> Heuristic:
     return estimate
 
 
+def splitting(bound: Bound, partition: Partition) -> Splitter:
+    """:func:`partitioned`, taken apart at the top item for the children
+    (:mod:`cfgplan.planner.split`)."""
+
+    def split(node: Partial) -> tuple[float | None, Split | None]:
+        return partition.split(node, bound.certain_agents(node))
+
+    return split
+
+
 def _no_bound(node: Partial) -> float:
     return 0.0
 
@@ -102,6 +113,7 @@ class Run:
         if self.limit is None:
             self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
         else:
+            grower.split = splitting(bound, partition)
             self.strategy = BestFirst(grower, self.goal, self.progress)
 
     @property

@@ -12,6 +12,13 @@ versions, state order of facts, 6.3.2). Nothing is enumerated and then sorted.
 
 Nodes are grown by a :class:`cfgplan.planner.grow.Grower`; this module only
 orders them. The time limit is the one :mod:`cfgplan.planner.clock` holds.
+
+In distinct mode a partial configuration reached again (its canonical form)
+is expanded once, by the node taken first; bounds of the node alone price
+both alike, so that is the first in depth-first order. A child priced from
+its parent's split (:mod:`cfgplan.planner.split`) may not be; should the
+later node have been taken first, the search starts over without the
+splits (:meth:`BestFirst._again`).
 """
 
 from __future__ import annotations
@@ -31,6 +38,11 @@ from cfgplan.planner.task import Ground
 Progress = Callable[[Stats, float], None]
 
 
+class _Twins(Exception):
+    """A node's canonical form was closed by a node that comes after it in
+    depth-first order (:meth:`BestFirst._again`)."""
+
+
 @dataclass
 class BestFirst:
     """An iterator over configurations, best first."""
@@ -40,7 +52,9 @@ class BestFirst:
     progress: Progress | None = None
     stopped: StopReason | None = None
     _heap: list[tuple[float, tuple[int, ...], bool, Partial]] = field(default_factory=list)
-    _closed: set[bytes] = field(default_factory=set)  # partial nodes expanded (distinct)
+    _closed: dict[bytes, tuple[int, ...]] = field(default_factory=dict)
+    """The canonical forms of the partial nodes expanded (distinct), each with
+    the path of the node that was expanded."""
 
     @property
     def stats(self) -> Stats:
@@ -52,8 +66,18 @@ class BestFirst:
 
     def __iter__(self) -> Iterator[Configuration]:
         start = time.perf_counter()
+        listed = 0
         try:
-            yield from self._search(start)
+            try:
+                for config in self._search(start):
+                    listed += 1
+                    yield config
+            except _Twins:
+                self._again()
+                for config in self._search(start):
+                    listed -= 1
+                    if listed < 0:
+                        yield config
         except clock.OutOfTime:
             self.stats.complete = False
             self.stopped = StopReason.TIME_LIMIT
@@ -101,10 +125,32 @@ class BestFirst:
                 # The same partial configuration reached by another order of
                 # choices has the same completions: only the first one counts.
                 key = canonical(node, grower.grounder)
-                if key in self._closed:
+                first = self._closed.get(key)
+                if first is not None:
+                    if node.path < first and grower.lifted:
+                        raise _Twins
                     continue
-                self._closed.add(key)
+                self._closed[key] = node.path
             self._queue(grower.children(node))
+
+    def _again(self) -> None:
+        """Start over, the children priced by their own bounds only. Priced
+        from their parents' splits (:mod:`cfgplan.planner.split`), two nodes
+        of one canonical form were taken out of depth-first order, so that
+        the later one stood for both: its configurations would be listed in
+        its place among those of equal cost. None of them was listed yet
+        (they cost at least what the earlier node was taken at, and come
+        after it at that cost), and what was listed before is listed again,
+        numbered alike, and skipped."""
+        grower = self.grower
+        grower.split = None
+        grower.splits.clear()
+        grower.lifted = 0
+        grower.seen.clear()
+        grower.report = Report()
+        for counted in ("derivations", "duplicates", "rejected"):
+            setattr(grower.stats, counted, 0)
+        self._heap, self._closed = [], {}
 
     def _reprice(self, taken: Partial, pruned: bool, which: Reprice) -> None:
         """The bounds in use changed (one given up, or one no longer needed):

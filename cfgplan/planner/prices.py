@@ -1,0 +1,93 @@
+"""What each key of the partitioned bound costs at one node
+(:mod:`cfgplan.planner.partition`, whose docstring gives the rules): the
+keys counted, channels as the bound prices them (:class:`Wire`), and the
+prices of one node (:class:`Prices`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from cfgplan.planner.partial import Partial
+from cfgplan.planner.room import Load
+from cfgplan.planner.task import Ground, Task
+
+Key = tuple[object, ...]
+"""What costs, as counted: ``("f", call)`` for a functionality (so that no
+call, a tuple of names, is ever mistaken for another key); ``("@", agent)``; for
+channels of one kind and data: ``("=", kind, data, sender, receiver)`` (both
+ends known), ``("?r", kind, data, receiver)`` (only the receiver known),
+``("?s", kind, data, sender)`` (only the sender), ``("?", kind, data)`` (both
+ends open), and the sums ``("*", kind, data)`` (every channel),
+``("to", kind, data, receiver)`` and ``("from", kind, data, sender)`` (every
+one with that end known), ``("?r*", kind, data)`` and ``("?s*", kind, data)``
+(every one with only a receiver, only a sender known)."""
+
+Counts = dict[int, int]
+"""Most occurrences of each key in one derivation, keys by their numbers
+(:attr:`Partition.number`: small integers hash faster than nested tuples)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Wire:
+    """A channel as this bound prices it: ``weight / S``, S the sum of the
+    counts of ``shares`` (the channels it might merge with, itself included);
+    nothing when C holds a channel with key ``free``. Its occurrence counts
+    towards ``counted``. Keys by their numbers."""
+
+    weight: float
+    counted: tuple[int, ...]
+    shares: tuple[int, ...]
+    free: int
+
+
+def wire_keys(
+    kind: str, data: object, sender: Ground | None, receiver: Ground | None
+) -> tuple[tuple[Key, ...], tuple[Key, ...], Key]:
+    """What a channel whose known ends (functionality calls) are given counts
+    towards, what it shares with, and what makes it free (:class:`Wire`)."""
+    every: Key = ("*", kind, data)
+    opened: Key = ("?", kind, data)
+    if sender is not None and receiver is not None:
+        key: Key = ("=", kind, data, sender, receiver)
+        to: Key = ("to", kind, data, receiver)
+        by: Key = ("from", kind, data, sender)
+        shares = (key, ("?r", kind, data, receiver), ("?s", kind, data, sender), opened)
+        return (key, every, to, by), shares, key
+    if receiver is not None:
+        to = ("to", kind, data, receiver)
+        counted = (("?r", kind, data, receiver), every, to, ("?r*", kind, data))
+        return counted, (to, ("?s*", kind, data), opened), to
+    if sender is not None:
+        by = ("from", kind, data, sender)
+        counted = (("?s", kind, data, sender), every, by, ("?s*", kind, data))
+        return counted, (by, ("?r*", kind, data), opened), by
+    return (opened, every), (every,), every
+
+
+@dataclass
+class Prices:
+    """What each key costs at one node: its weight, shared (module docstring)."""
+
+    task: Task
+    node: Partial
+    certain: frozenset[str]
+    totals: Counts
+    present: set[int]
+    number: Callable[[Key], int]
+    load: Load  # what the node's global channels load the media with (room.py)
+    agents: dict[str, float] = field(default_factory=dict)  # the agent prices found so far
+
+    def agent(self, agent: str) -> float:
+        found = self.agents.get(agent)
+        if found is None:
+            found = 0.0
+            if agent not in self.node.robots and agent not in self.certain:
+                found = self.task.agent_cost(agent) / self.totals[self.number(("@", agent))]
+            self.agents[agent] = found
+        return found
+
+    def channel(self, own: Wire) -> float:
+        if own.free in self.present:
+            return 0.0
+        return own.weight / sum(self.totals.get(key, 0) for key in own.shares)
