@@ -129,6 +129,7 @@ class BestFirst:
                 if first is not None:
                     if node.path < first and grower.lifted:
                         raise _Twins
+                    grower.splits.pop(node.path, None)  # it is not expanded
                     continue
                 self._closed[key] = node.path
             self._queue(grower.children(node))
