@@ -25,7 +25,8 @@ one with that end known), ``("?r*", kind, data)`` and ``("?s*", kind, data)``
 
 Counts = dict[int, int]
 """Most occurrences of each key in one derivation, keys by their numbers
-(:attr:`Partition.number`: small integers hash faster than nested tuples)."""
+(:attr:`cfgplan.planner.partition.Partition.number`: small integers hash
+faster than nested tuples)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,7 +68,8 @@ def wire_keys(
 
 @dataclass
 class Prices:
-    """What each key costs at one node: its weight, shared (module docstring)."""
+    """What each key costs at one node: its weight, shared (the rules:
+    :mod:`cfgplan.planner.partition`)."""
 
     task: Task
     node: Partial
