@@ -114,7 +114,7 @@ class Grower:
         their priorities (dead ends go to the report)."""
         self.stats.expansions += 1
         split = self.splits.pop(node.path, None)
-        lifted = self.lifted
+        before = self.lifted
         for child in successors(self.grounder, node):
             clock.check()
             if isinstance(child, DeadEnd):
@@ -123,7 +123,7 @@ class Grower:
                 yield from self.settle(child)
             else:
                 yield from self._lift(node, split, self.settle(child))
-        if split is not None and self.lifted > lifted:
+        if split is not None and self.lifted > before:
             self.raised += 1  # the node's refinement paid: it priced its children
 
     def _lift(

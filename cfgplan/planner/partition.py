@@ -256,19 +256,16 @@ class Partition:
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
         memo: dict[int, float] = {}
-        top = 0.0
-        for index, item in enumerate(node.stack):
-            least = self._least(item.call, memo, prices)
-            top = least if index == 0 else top
-            total += least
+        for item in node.stack:
+            total += self._least(item.call, memo, prices)
             if not task.is_method(item.call):
                 total += prices.agent(item.call[1])
         if total == float("inf"):
             return None, None
         if not apart:
             return total, None
-        top_item = self.instance(node.stack[0].call)
-        return total, split_at(top_item, total - top, memo, prices, self.room.fits)
+        top = self.instance(node.stack[0].call)  # its cheapest is in the memo
+        return total, split_at(top, total - memo[top.key], memo, prices, self.room.fits)
 
     def _pending(self, calls: tuple[Ground, ...]) -> Counts | None:
         """The summed counts of the pending items ``calls`` (None: off, some
