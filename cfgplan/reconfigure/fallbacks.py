@@ -17,6 +17,7 @@ configurations).
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -102,6 +103,42 @@ class Fallback:
             "why": list(self.why) if c is None else None,
             "proven": self.proven,
         }
+
+
+@dataclass
+class Prepared:
+    """The fallbacks computed ahead of time, by the situation they were
+    computed in and the resource whose failure they answer, for the
+    ``situations`` last stored in only: a long run meets ever new situations
+    (each failure, recovery and update is one), and a fallback is looked up
+    only in the situation it was computed in (a recovery may return to one
+    met shortly before). A fallback of ``None``: nothing is admissible then."""
+
+    situations: int
+    _by: OrderedDict[Situation, dict[Resource, Configuration | None]] = field(
+        default_factory=OrderedDict
+    )
+
+    def get(self, situation: Situation, resource: Resource) -> tuple[bool, Configuration | None]:
+        """Whether the fallback is known, and what it is."""
+        found = self._by.get(situation, {})
+        return resource in found, found.get(resource)
+
+    def put(self, situation: Situation, resource: Resource, config: Configuration | None) -> None:
+        """Keep a fallback; forget those of the situation stored in longest
+        ago when more than ``situations`` have some."""
+        found = self._by.setdefault(situation, {})
+        self._by.move_to_end(situation)
+        found[resource] = config
+        while len(self._by) > self.situations:
+            self._by.popitem(last=False)
+
+    def clear(self) -> None:
+        """Forget every fallback (they were for another goal)."""
+        self._by.clear()
+
+    def __len__(self) -> int:
+        return sum(map(len, self._by.values()))
 
 
 def _configuration(config: Configuration) -> dict[str, Any]:

@@ -56,7 +56,7 @@ from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.planner.task import Ground, Task
-from cfgplan.reconfigure.fallbacks import Resource, fallback, resources
+from cfgplan.reconfigure.fallbacks import Prepared, Resource, fallback, resources
 from cfgplan.reconfigure.situation import Situation, derive
 from cfgplan.reconfigure.switch import Change, change, highest_label, relabel
 from cfgplan.runtime.part import Part
@@ -112,7 +112,8 @@ def uses(resource: Resource, config: Configuration | None) -> bool:
 
 TASKS_KEPT = 8
 """Derived tasks a :class:`Reconfigurator` keeps, the most recently used: the
-current situation's, and those a recovery may return to."""
+current situation's, and those a recovery may return to; its fallbacks are
+kept for as many situations, the last entered."""
 
 
 @dataclass
@@ -130,7 +131,7 @@ class Reconfigurator:
     id: int = 0
     next_label: int = 0
     _tasks: OrderedDict[Situation, Task] = field(default_factory=OrderedDict)
-    _fallbacks: dict[tuple[Situation, Resource], Configuration | None] = field(default_factory=dict)
+    _fallbacks: Prepared = field(default_factory=lambda: Prepared(TASKS_KEPT))
     _pending: list[Resource] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
     """Guards the fallbacks, which :mod:`~cfgplan.reconfigure.ahead` computes on a thread."""
@@ -180,7 +181,7 @@ class Reconfigurator:
         with self.lock:
             while self._pending and self.running is not None:
                 resource = self._pending.pop(0)
-                if (self.situation, resource) not in self._fallbacks:
+                if not self._fallbacks.get(self.situation, resource)[0]:
                     return self.situation, self.running, resource
             return None
 
@@ -207,7 +208,7 @@ class Reconfigurator:
         )
         if found.proven:
             with self.lock:
-                self._fallbacks[(situation, resource)] = found.config
+                self._fallbacks.put(situation, resource, found.config)
 
     def prepare(self) -> bool:
         """Compute one fallback of the running configuration now (in idle
@@ -220,7 +221,7 @@ class Reconfigurator:
 
     def _fallback(self, key: tuple[Situation, Resource]) -> tuple[bool, Configuration | None]:
         with self.lock:
-            return key in self._fallbacks, self._fallbacks.get(key)
+            return self._fallbacks.get(*key)
 
     # -- changes ------------------------------------------------------------
 

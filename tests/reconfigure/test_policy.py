@@ -173,3 +173,19 @@ def test_it_keeps_the_derived_tasks_of_the_last_few_situations_only() -> None:
     assert r.derived(situations[-TASKS_KEPT]) is tasks[-TASKS_KEPT]
     assert r.derived(situations[0]) is not tasks[0]  # dropped, derived again
     assert len(r._tasks) == TASKS_KEPT
+
+
+def test_it_keeps_the_fallbacks_of_the_last_few_situations_only() -> None:
+    """Fallbacks are looked up in the situation they were computed in: those of
+    situations left long ago are forgotten, :data:`TASKS_KEPT` situations are
+    kept (a long run would otherwise keep one set per situation it met)."""
+    _, r = _start(STEP2)
+    assert r.running is not None
+    situations = [r.situation.with_reliability(("compass", "Emil"), 0.5**n) for n in range(12)]
+    for situation in situations:
+        r.compute(situation, r.running, COMPASS)
+    assert len(r._fallbacks) == TASKS_KEPT
+    known, found = r._fallback((situations[-1], COMPASS))
+    assert known and found is not None and found.cost == 47
+    assert r._fallback((situations[-TASKS_KEPT], COMPASS))[0]
+    assert r._fallback((situations[-TASKS_KEPT - 1], COMPASS)) == (False, None)
