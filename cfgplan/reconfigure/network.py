@@ -18,6 +18,13 @@ two-phase switch of :mod:`cfgplan.runtime.member`:
   without them. A commit not answered in time is taken as done (the robot
   installs it when it gets it, or liveliness reports it lost).
 
+A robot taken as lost for its silence while liveliness still shows it alive
+(a message lost: a robot just back declares its token before its
+subscribers are known everywhere; or a robot busy catching up) would
+otherwise never be seen again, since its token never went away: it is
+tried again, as if it had come back, :data:`RETRY` seconds later, twice as
+long after each silence in a row (at most :data:`RETRY_MOST`).
+
 A robot that appears (started late, or back after a crash) gets the running
 configuration's part at once (a commit carrying the part). When the task is
 accomplished every robot is told to **finish**.
@@ -45,10 +52,22 @@ from cfgplan.runtime.part import Part, part_to_json
 from cfgplan.runtime.society import Society
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
-__all__ = ["SWITCH_TIMEOUT", "NetworkAdaptive", "NetworkDeployer", "coordinate"]
+__all__ = [
+    "RETRY",
+    "RETRY_MOST",
+    "SWITCH_TIMEOUT",
+    "NetworkAdaptive",
+    "NetworkDeployer",
+    "coordinate",
+]
 
 SWITCH_TIMEOUT = 2.0
 """Seconds the coordinator waits for every robot to answer a step of a switch."""
+
+RETRY = 1.0
+"""Seconds after a robot alive but silent in a switch is tried again; doubled
+after each silence in a row, up to :data:`RETRY_MOST`."""
+RETRY_MOST = 30.0
 
 
 @dataclass
@@ -73,6 +92,10 @@ class NetworkDeployer:
     switch: _Switch | None = None
     parts: dict[str, Part] = field(default_factory=dict)  # what every robot runs now
     current: int = 0
+    silent: dict[str, float] = field(default_factory=dict)
+    """Robots taken as lost for not answering a prepare, with when (clock) to
+    try them again should they still be alive (:meth:`due`)."""
+    _wait: dict[str, float] = field(default_factory=dict)  # the last wait of each, doubled
 
     @property
     def me(self) -> str:
@@ -130,6 +153,7 @@ class NetworkDeployer:
         switch = self.switch
         if switch is None or number != switch.decision.id or robot not in switch.waiting:
             return
+        self._wait.pop(robot, None)  # it answers again
         if phase == "refused":
             self._abort([robot], f"refused: {reason}")
             return
@@ -156,9 +180,29 @@ class NetworkDeployer:
         if switch is None or self.clock() < switch.deadline:
             return
         if switch.phase == "prepare":
+            for robot in switch.waiting:
+                wait = min(RETRY_MOST, 2 * self._wait[robot]) if robot in self._wait else RETRY
+                self._wait[robot] = wait
+                self.silent[robot] = self.clock() + wait
             self._abort(sorted(switch.waiting), "silent")
         else:
             self._finish()
+
+    def due(self) -> list[str]:
+        """The robots taken as lost for their silence to try again now: those
+        whose wait is over and that liveliness still shows alive (one that
+        is not will be seen when it comes back); none while a switch is on."""
+        now, alive = self.clock(), self.transport.alive
+        out: list[str] = []
+        if self.switch is not None:
+            return out
+        for robot, at in sorted(self.silent.items()):
+            if robot not in alive:
+                del self.silent[robot]
+            elif at <= now:
+                del self.silent[robot]
+                out.append(robot)
+        return out
 
     def resync(self, robot: str) -> None:
         """Send ``robot`` the part it should be running (it just appeared)."""
@@ -195,6 +239,10 @@ class NetworkAdaptive:
         for detection in self.monitor.drain():
             self.take(detection)
         self.deployer.tick()
+        for robot in self.deployer.due():
+            detail = "alive, silent in the last switch: tried again"
+            me = self.deployer.me
+            self.take(Detection("seen", me, time.time(), other=robot, how="retry", detail=detail))
         self.coordinator.tick()
         if self.coordinator.finished and not self._told:
             self._told = True

@@ -328,7 +328,7 @@ class Reconfigurator:
             if best is None:
                 return self._stay(cause)
             return self._to(best, "search", seconds, (), (), cause)
-        valid = still_valid or self._derivable(running)
+        valid = (still_valid or self._derivable(running)) and not self.situation.breaks(running)
         if not valid:
             return self._to(best, "search", seconds, why, (), cause)
         if best is None or best.identity() == running.identity():

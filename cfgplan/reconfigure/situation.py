@@ -33,6 +33,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 
+from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Medium
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task, Test, TestKind, index_facts
 from cfgplan.reconfigure.withdraw import withdrawn_by_failure, withdrawn_by_loss
@@ -107,6 +108,16 @@ class Situation:
     def with_reliability(self, instance: Ground, p: float) -> Situation:
         kept = tuple((k, v) for k, v in self.reliability if k != instance)
         return dataclasses.replace(self, reliability=(*kept, (instance, p)))
+
+    def breaks(self, config: Configuration) -> bool:
+        """Whether ``config`` relies on something out of service here: a failed
+        functionality instance, a lost robot, a medium down (a configuration
+        rolled back to after an aborted switch may)."""
+        return (
+            any(f.key in self.failed for f in config.functionalities)
+            or any(agent in self.lost for agent in config.agents)
+            or any(a.medium in self.media_down for a in config.media)
+        )
 
     def withdrawn(self, base: Task) -> tuple[Ground, ...]:
         """The facts of ``base``'s state that the failures and losses withdraw."""

@@ -73,7 +73,7 @@ class Detection:
     instance: Term = ()  # failure, recovery: the functionality instance
     label: str = ""  # failure, achieved: its label; stale, fresh: the sender's label
     other: str = ""  # lost, seen: that robot; stale, fresh: the sender's robot
-    how: str = ""  # reported, injected, probe, operator, postconditions
+    how: str = ""  # reported, injected, probe, operator, postconditions, retry
     detail: str = ""
     added: tuple[Term, ...] = ()  # facts
     removed: tuple[Term, ...] = ()  # facts

@@ -189,3 +189,18 @@ def test_it_keeps_the_fallbacks_of_the_last_few_situations_only() -> None:
     assert known and found is not None and found.cost == 47
     assert r._fallback((situations[-TASKS_KEPT], COMPASS))[0]
     assert r._fallback((situations[-TASKS_KEPT - 1], COMPASS)) == (False, None)
+
+
+def test_after_a_rollback_a_broken_configuration_is_left_at_the_next_chance() -> None:
+    """The switch away from the failed compass could not be deployed, so the
+    society still runs the configuration that uses it: the next change (here
+    an operator's update that changes nothing) must not keep it as valid,
+    whatever the hysteresis says of the costs (44 against 47)."""
+    _, r = _start(STEP2)
+    decision = r.failed(COMPASS)
+    assert decision.config is not None and decision.config.cost == 47
+    r.rollback(decision.previous)
+    assert r.running is decision.previous and r.situation.breaks(r.running)  # type: ignore[arg-type]
+    after = r.updated((), ())
+    assert after.action == "switch" and after.config is not None and after.config.cost == 47
+    assert not r.situation.breaks(after.config)
