@@ -79,8 +79,10 @@ class Processes:
 
     def __init__(self) -> None:
         self.started: list[subprocess.Popen[str]] = []
+        self.logs: list[Path] = []
 
     def start(self, args: list[str], log: Path) -> subprocess.Popen[str]:
+        self.logs.append(log)
         out = open(log, "w", encoding="utf-8")  # noqa: SIM115  (closed by the process ending)
         process = subprocess.Popen(
             [sys.executable, *args],
@@ -102,10 +104,25 @@ class Processes:
                 process.wait(timeout=30)
 
 
+    def tails(self, lines: int = 25) -> str:
+        """The last lines of every process's output, to say why a test failed."""
+        out = []
+        for log in self.logs:
+            text = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
+            out.append(f"--- {log.name} (last {lines} lines)")
+            out.extend(text.splitlines()[-lines:])
+        return "\n".join(out)
+
+
 @contextlib.contextmanager
 def processes() -> Iterator[Processes]:
+    """Processes started for a test, stopped when it ends; a failed assertion
+    carries the end of each one's output."""
     running = Processes()
     try:
         yield running
+    except AssertionError as failure:
+        running.stop_all()
+        raise AssertionError(f"{failure}\n{running.tails()}") from failure
     finally:
         running.stop_all()
