@@ -197,8 +197,9 @@ class NetworkDeployer:
         if self.switch is not None:
             return out
         for robot, at in sorted(self.silent.items()):
-            if robot not in alive:
+            if robot not in alive:  # gone: back, it starts afresh
                 del self.silent[robot]
+                self._wait.pop(robot, None)
             elif at <= now:
                 del self.silent[robot]
                 out.append(robot)

@@ -15,7 +15,10 @@ the configuration the society runs, and answers each change with a
   is admissible, the configuration is *stopped* (the action halts) and the
   planner's explanation says why;
 * **a resource it does not use fails**: the state changes, the
-  configuration stays;
+  configuration stays, unless it relies on something else out of service
+  (a configuration rolled back to after an aborted switch may,
+  :meth:`~cfgplan.reconfigure.situation.Situation.breaks`): then the
+  society switches as for a failure it uses;
 * **a resource comes back, or the operator adds or removes facts**: the
   cheapest configuration is planned again; the society switches to it only
   when the running configuration is no longer derivable (the operator
@@ -232,7 +235,9 @@ class Reconfigurator:
         withdrawn = tuple(
             f for f in self.situation.withdrawn(self.task) if f not in before.withdrawn(self.task)
         )
-        if not uses(resource, self.running):
+        if self.running is None or not self.situation.breaks(self.running):
+            # Not used (and nothing else of it out: after an aborted switch,
+            # the configuration rolled back to may rely on a failure).
             return self._stay(cause, withdrawn)
         started = time.perf_counter()
         known, best = (False, None) if self.goals else self._fallback((before, resource))

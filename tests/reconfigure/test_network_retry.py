@@ -157,4 +157,4 @@ def test_a_silent_robot_that_is_gone_is_left_to_liveliness() -> None:
     network.alive.discard("Pippi")
     _wait(adaptive, clock, RETRY_MOST)
     assert ("recovery", "retry") not in _what(events)
-    assert adaptive.deployer.silent == {}
+    assert adaptive.deployer.silent == {} and adaptive.deployer._wait == {}

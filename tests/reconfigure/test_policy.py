@@ -204,3 +204,16 @@ def test_after_a_rollback_a_broken_configuration_is_left_at_the_next_chance() ->
     after = r.updated((), ())
     assert after.action == "switch" and after.config is not None and after.config.cost == 47
     assert not r.situation.breaks(after.config)
+
+
+def test_after_a_rollback_a_failure_of_something_unused_still_leaves_it() -> None:
+    """Rolled back to the configuration with the failed compass, the society
+    meets another failure, of something that configuration does not use: it
+    must not stay on it."""
+    _, r = _start(STEP2)
+    decision = r.failed(COMPASS)
+    r.rollback(decision.previous)
+    assert r.running is not None and not uses(LASER, r.running)
+    after = r.failed(LASER)
+    assert after.action in ("switch", "stop")
+    assert after.config is None or not r.situation.breaks(after.config)
