@@ -64,7 +64,7 @@ from cfgplan.reconfigure.situation import Situation, derive
 from cfgplan.reconfigure.switch import Change, change, highest_label, relabel
 from cfgplan.runtime.part import Part
 
-__all__ = ["Decision", "Hysteresis", "Reconfigurator", "uses"]
+__all__ = ["Decision", "Hysteresis", "Reconfigurator"]
 
 
 @dataclass(frozen=True)
@@ -100,17 +100,6 @@ class Decision:
     why: tuple[str, ...] = ()
     withdrawn: tuple[Ground, ...] = ()
     cause: str = ""
-
-
-def uses(resource: Resource, config: Configuration | None) -> bool:
-    """Whether ``config`` relies on ``resource``."""
-    if config is None:
-        return False
-    if resource.kind == "functionality":
-        return any(f.key == resource.instance for f in config.functionalities)
-    if resource.kind == "robot":
-        return resource.robot in config.agents
-    return any(a.medium == resource.medium for a in config.media)
 
 
 TASKS_KEPT = 8

@@ -6,7 +6,8 @@ from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 from cfgplan.reconfigure.fallbacks import Resource
-from cfgplan.reconfigure.policy import TASKS_KEPT, Hysteresis, Reconfigurator, uses
+from cfgplan.reconfigure.policy import TASKS_KEPT, Hysteresis, Reconfigurator
+from cfgplan.reconfigure.situation import Situation
 from tests.backends.support import DOMAINS
 
 STEP2 = (DOMAINS / "cross-door/domain.lisp", DOMAINS / "cross-door/state-6.2.2-step2.lisp")
@@ -120,11 +121,14 @@ def test_achieved_plays_the_configuration_out_and_applies_postconditions() -> No
     assert ("in", "Emil", "Room1") in r.situation.retracted
 
 
-def test_uses_knows_functionalities_robots_and_media() -> None:
+def test_breaks_knows_functionalities_robots_and_media() -> None:
     _, r = _start(STEP2)
-    assert uses(COMPASS, r.running) and uses(PIPPI, r.running)
-    assert not uses(Resource("medium", medium=0, text="m"), r.running)
-    assert not uses(COMPASS, None)
+    assert r.running is not None
+    assert COMPASS.fail(Situation()).breaks(r.running)
+    assert PIPPI.fail(Situation()).breaks(r.running)
+    assert not Resource("medium", medium=0, text="m").fail(Situation()).breaks(r.running)
+    r.running = None  # nothing runs: nothing to leave
+    assert r.failed(COMPASS).action == "stay"
 
 
 def test_parts_give_every_robot_of_both_configurations_a_part() -> None:
@@ -213,7 +217,7 @@ def test_after_a_rollback_a_failure_of_something_unused_still_leaves_it() -> Non
     _, r = _start(STEP2)
     decision = r.failed(COMPASS)
     r.rollback(decision.previous)
-    assert r.running is not None and not uses(LASER, r.running)
+    assert r.running is not None and not LASER.fail(Situation()).breaks(r.running)
     after = r.failed(LASER)
     assert after.action in ("switch", "stop")
     assert after.config is None or not r.situation.breaks(after.config)
