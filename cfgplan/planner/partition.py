@@ -40,10 +40,9 @@ itself) have no finite occurrence count: for such tasks this bound is off.
 
 from __future__ import annotations
 
-from collections.abc import Container, Iterable
+from collections.abc import Container
 from dataclasses import dataclass, field
 
-from cfgplan.planner.carry import Carry
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
@@ -57,16 +56,6 @@ STACKS = 64
 """Stacks of pending items whose summed counts are kept, then forgotten all
 at once: siblings are refined soon after each other (the search takes them
 at nearly the same priority), so a few suffice, and memory stays bounded."""
-
-
-CARRY_FROM = 64
-"""How many instances the deepest pending item must have below it for a
-node's costs to start from the last node's (:mod:`cfgplan.planner.carry`).
-Carrying pays where an item's derivations are deep and one expansion
-changes few of their costs (a convoy: ecology, media-tight, 20-30% less
-time). Where every item is shallow (fusion: a piece from a few versions)
-nearly every item reads a price that changed, and finding that costs more
-than pricing them afresh."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,15 +96,9 @@ class Partition:
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
     _stacks: dict[tuple[Ground, ...], Counts | None] = field(default_factory=dict)
-    _keys: dict[Ground, frozenset[int]] = field(default_factory=dict)  # of each order
-    _rank: dict[int, int] = field(default_factory=dict)
-    """Instance numbers in an order where children come before parents."""
-    _by_key: dict[int, Instance] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.room = Room(self.grounder.task, self.number)
-        self.carry = Carry(self.number)  # the last node's cheapest costs
-        self.carry_from = CARRY_FROM
 
     def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
         """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
@@ -150,7 +133,6 @@ class Partition:
                         choice += 1
                 found = Instance(call, False, tuple(options), key=self.number(("f", call)))
             self._instances[call] = found
-            self.carry.add(found)
         return found
 
     def counts(self, call: Ground) -> Counts | None:
@@ -177,22 +159,7 @@ class Partition:
             below = self._below(call, ())
             assert below is not None  # counts() found no recursion below the pending items
             found = self._orders[call] = tuple(map(self.instance, below))
-            self._keys[call] = frozenset(instance.key for instance in found)
-            for instance in found:  # children before parents, in every order
-                if instance.key not in self._rank:
-                    self._rank[instance.key] = len(self._rank)
-                    self._by_key[instance.key] = instance
         return found
-
-    def _missing(self, call: Ground, memo: dict[int, float]) -> Iterable[Instance]:
-        """The instances below ``call`` (itself included) not in ``memo``,
-        children before parents."""
-        order = self.order(call)
-        missing = self._keys[call].difference(memo)
-        if len(missing) == len(order):
-            return order
-        by_key = self._by_key
-        return [by_key[key] for key in sorted(missing, key=self._rank.__getitem__)]
 
     def _below(self, call: Ground, done: Container[Ground]) -> list[Ground] | None:
         """The instances below ``call`` (itself included) not in ``done``,
@@ -288,15 +255,11 @@ class Partition:
         prices = Prices(task, node, certain, totals, present, self.number, load)
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
-        carry = max(len(self.order(item.call)) for item in node.stack) >= self.carry_from
-        placed, agents = node.labels.keys(), node.robots | certain
-        memo = self.carry.start(totals, present, placed, agents, load) if carry else {}
+        memo: dict[int, float] = {}
         for item in node.stack:
             total += self._least(item.call, memo, prices)
             if not task.is_method(item.call):
                 total += prices.agent(item.call[1])
-        if carry:
-            self.carry.keep(memo)
         if total == float("inf"):
             return None, None
         if not apart:
@@ -363,7 +326,9 @@ class Partition:
         totals, present, placed = prices.totals, prices.present, prices.node.labels
         count = totals.get
         fits, load = self.room.fits, prices.load
-        for instance in self._missing(call, memo):
+        for instance in self.order(call):
+            if instance.key in memo:
+                continue
             if instance.functionality:
                 memo[instance.key] = (
                     0.0 if instance.call in placed else instance.weight / totals[instance.key]
