@@ -74,7 +74,6 @@ def _options(
     """Plan-based configuration of robot societies (R. Lundh, 2006): plan, draw,
     emit and run configurations of robots lending each other functionalities."""
 
-
 EXIT_INPUT = 1
 EXIT_NONE = 3
 

@@ -192,10 +192,10 @@ class NetworkDeployer:
         """The robots taken as lost for their silence to try again now: those
         whose wait is over and that liveliness still shows alive (one that
         is not will be seen when it comes back); none while a switch is on."""
-        now, alive = self.clock(), self.transport.alive
         out: list[str] = []
         if self.switch is not None:
             return out
+        now, alive = self.clock(), self.transport.alive
         for robot, at in sorted(self.silent.items()):
             if robot not in alive:  # gone: back, it starts afresh
                 del self.silent[robot]

@@ -105,7 +105,7 @@ class Decision:
 TASKS_KEPT = 8
 """Derived tasks a :class:`Reconfigurator` keeps, the most recently used: the
 current situation's, and those a recovery may return to; its fallbacks are
-kept for as many situations, the last entered."""
+kept for as many situations, those last stored in (:class:`Prepared`)."""
 
 
 @dataclass
