@@ -11,8 +11,9 @@ The planner claims all of this for what it returns ("information and causal
 admissibility are guaranteed implicitly by the planning algorithm", 4.6). This
 module re-checks it from the domain, the state and the configuration alone and
 shares no code with :mod:`cfgplan.planner`: it has its own precondition matcher
-and its own reading of labels, locations, channels, media and cost. Only the
-``(eval ...)`` interpreter of :mod:`cfgplan.check.evaluate` is shared.
+(:mod:`cfgplan.configuration.matching`) and its own reading of labels,
+locations, channels, media and cost. Only the ``(eval ...)`` interpreter of
+:mod:`cfgplan.check.evaluate` is shared.
 
 :func:`problems` returns the reasons a configuration is not admissible, one
 line each and prefixed by the condition it violates; an empty list means
@@ -22,104 +23,17 @@ admissible.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping
 
-from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.configuration.cost import Weights, fmt
+from cfgplan.configuration.matching import Env, Ground, atom_of, is_var, satisfying, subst, unify
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
-from cfgplan.ir.model import (
-    Atom,
-    Condition,
-    Domain,
-    Eval,
-    Functionality,
-    Medium,
-    Negation,
-    State,
-)
+from cfgplan.ir.model import Domain, Functionality, Medium, State
 from cfgplan.notation import atom_text
-
-Ground = tuple[str, ...]
-Env = dict[str, str]
-
-
-def _is_var(term: str) -> bool:
-    return term.startswith("?")
 
 
 def _channel_text(index: int, ch: Channel) -> str:
     return f"channel {index} ({ch.kind} {ch.source} -> {ch.target} {atom_text(ch.data)})"
-
-
-# -- matching preconditions ---------------------------------------------------
-
-
-def _unify(pattern: Sequence[str], fact: Sequence[str], env: Mapping[str, str]) -> Env | None:
-    """``env`` extended so that ``pattern`` equals ``fact`` (both as tuples
-    ``(predicate, *args)``), or None."""
-    if len(pattern) != len(fact) or pattern[0] != fact[0]:
-        return None
-    out = dict(env)
-    for term, value in zip(pattern[1:], fact[1:], strict=True):
-        if _is_var(term):
-            if out.setdefault(term, value) != value:
-                return None
-        elif term != value:
-            return None
-    return out
-
-
-def _atom(atom: Atom) -> Ground:
-    return (atom.predicate, *atom.args)
-
-
-def _subst(atom: Ground, env: Mapping[str, str]) -> Ground:
-    return tuple(env.get(t, t) for t in atom)
-
-
-def satisfying(conditions: Sequence[Condition], facts: Sequence[Ground], env: Env) -> Iterator[Env]:
-    """Every binding extending ``env`` under which ``conditions`` hold in ``facts``.
-
-    Atoms bind variables against the facts; ``(not ATOM)`` and ``(eval EXPR)``
-    are tests on the complete binding: no fact unifies with the negated atom
-    (variables still unbound match anything), and the expression evaluates to
-    true (an unbound variable or an evaluation error makes it false).
-    """
-    atoms = [_atom(c) for c in conditions if isinstance(c, Atom)]
-    tests = [c for c in conditions if not isinstance(c, Atom)]
-
-    def passes(current: Env) -> bool:
-        for test in tests:
-            if isinstance(test, Negation):
-                negated = _atom(test.atom)
-                if any(_unify(negated, fact, current) is not None for fact in facts):
-                    return False
-            elif isinstance(test, Eval):
-                try:
-                    if not holds(test.expr, current):
-                        return False
-                except EvalFailure:
-                    return False
-        return True
-
-    if not atoms:
-        if passes(env):
-            yield env
-        return
-    # Depth first over the atoms, facts in order; an explicit stack (one entry
-    # per atom matched so far), so that a long precondition list needs no recursion.
-    stack: list[tuple[Env, Iterator[Ground]]] = [(env, iter(facts))]
-    while stack:
-        current, remaining = stack[-1]
-        atom = atoms[len(stack) - 1]
-        bound = next((b for f in remaining if (b := _unify(atom, f, current)) is not None), None)
-        if bound is None:
-            stack.pop()
-        elif len(stack) == len(atoms):
-            if passes(bound):
-                yield bound
-        else:
-            stack.append((bound, iter(facts)))
 
 
 # -- the checks ---------------------------------------------------------------
@@ -140,7 +54,7 @@ class _Checker:
         self.weights = weights
         self.reliability = reliability
         self.found: list[str] = []
-        self.facts = [_atom(a) for a in state.facts]
+        self.facts = [atom_of(a) for a in state.facts]
         # label -> instance (first one when a label repeats)
         self.by_label: dict[str, FunctionalityInstance] = {}
         # label -> (schema, binding of its name) for instances that resolve
@@ -184,10 +98,10 @@ class _Checker:
                 continue
             if not f.args:
                 self.report("location", f"{f} has no first argument to run on")
-            variables = [a for a in f.args if _is_var(a)]
+            variables = [a for a in f.args if is_var(a)]
             if variables:
                 self.report("causal", f"{f} is not ground: {', '.join(variables)}")
-            env = _unify(_atom(schema.name), (f.name, *f.args), {})
+            env = unify(atom_of(schema.name), (f.name, *f.args), {})
             if env is None:
                 self.report("domain", f"{f} does not match the schema {schema.name}")
                 continue
@@ -209,8 +123,8 @@ class _Checker:
         sent = {ch.data for ch in self.config.channels if ch.source == label}
         received = {ch.data for ch in self.config.channels if ch.target == label}
         for env in options:
-            outputs = {_subst(_atom(a), env) for a in schema.outputs}
-            inputs = {_subst(_atom(a), env) for a in schema.inputs}
+            outputs = {subst(atom_of(a), env) for a in schema.outputs}
+            inputs = {subst(atom_of(a), env) for a in schema.inputs}
             if sent <= outputs and inputs == received:
                 return env
         return options[0] if options else None
@@ -221,7 +135,7 @@ class _Checker:
             return None
         schema, env = self.schemas[label]
         atoms = schema.inputs if side == "in" else schema.outputs
-        return [_subst(_atom(a), env) for a in atoms]
+        return [subst(atom_of(a), env) for a in atoms]
 
     # channels -----------------------------------------------------------------
 

@@ -15,7 +15,7 @@ from collections.abc import Iterator, Sequence
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cfgplan.configuration.admissible import Env, Ground, _atom, _unify, satisfying
+from cfgplan.configuration.matching import Env, Ground, atom_of, satisfying, unify
 from cfgplan.configuration.media import Demand, MediaResult, assign
 from cfgplan.ir.model import Atom, Medium
 
@@ -113,7 +113,7 @@ def reference_satisfying(
             yield current
             return
         for fact in facts:
-            bound = _unify(atoms[index], fact, current)
+            bound = unify(atoms[index], fact, current)
             if bound is not None:
                 yield from extend(index + 1, bound)
 
@@ -132,7 +132,7 @@ def test_satisfying_gives_the_recursive_bindings_in_order(
 ) -> None:
     atoms = [Atom(predicate=p, args=args) for p, *args in patterns]
     ours = list(satisfying(atoms, facts, {}))
-    theirs = list(reference_satisfying([_atom(a) for a in atoms], facts, {}))
+    theirs = list(reference_satisfying([atom_of(a) for a in atoms], facts, {}))
     assert ours == theirs
 
 

@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from cfgplan.configuration.admissible import satisfying
 from cfgplan.configuration.cost import Weights
+from cfgplan.configuration.matching import satisfying
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Atom, Functionality, Method, Negation
 from cfgplan.notation import atom_text
