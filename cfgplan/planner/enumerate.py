@@ -33,9 +33,10 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
+from cfgplan.planner.canonical import canonical
 from cfgplan.planner.finish import Parts, admissible, build, fingerprint
 from cfgplan.planner.grow import Grower, Heuristic, Stats
-from cfgplan.planner.partial import Partial, canonical, root
+from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.report import DeadEnd, Report, StopReason
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground

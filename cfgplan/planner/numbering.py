@@ -1,6 +1,6 @@
 """Small whole numbers for the values search nodes are made of.
 
-A node's canonical form (:func:`cfgplan.planner.partial.canonical`) and a
+A node's canonical form (:func:`cfgplan.planner.canonical.canonical`) and a
 configuration's fingerprint (:func:`cfgplan.planner.finish.fingerprint`) are
 sets of instances, channels and postconditions. Numbering each distinct value
 once per task lets both be written as a short run of integers — equal values

@@ -14,8 +14,6 @@ functionality keeps the label of its first instance.
 
 from __future__ import annotations
 
-import hashlib
-from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -23,8 +21,7 @@ from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Span
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
-from cfgplan.planner.ground import Expansion, FunctionalityInstance, Grounder
-from cfgplan.planner.numbering import Numbering
+from cfgplan.planner.ground import Expansion, FunctionalityInstance
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task
 
@@ -344,69 +341,4 @@ def _misplaced(ch: Channel, src: Placed, dst: Placed) -> DeadEnd:
         f"{call_text(src.call)} on {src.robot} to "
         f"{call_text(dst.call)} on {dst.robot}",
         condition=Condition.LOCATION,
-    )
-
-
-# Nodes share most of their items, placed instances and channels: each one's
-# number (for canonical() and finish.fingerprint()) is found once and kept on
-# it; they are never changed.
-
-
-def placed_names(node: Partial) -> dict[int, int]:
-    """Each placed instance's call, numbered, by label."""
-    return {p.label: p.name for p in node.placed}
-
-
-def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> list[int]:
-    """Each channel with its ends named by ``names``, numbered as a whole
-    (one number to sort), in the node's order."""
-    get = number.numbers.get
-    out = []
-    for ch in node.channels:
-        n = ch.number
-        if n < 0:
-            n = ch.number = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
-        key = (n, names[ch.source], names[ch.target])
-        found = get(key)
-        out.append(number(key) if found is None else found)
-    return out
-
-
-def digest(numbers: list[int]) -> bytes:
-    """A list of numbers as a 128-bit BLAKE2 digest: two different lists share
-    one with odds of about 2^-128 per pair, far below anything a run can meet."""
-    return hashlib.blake2b(array("q", numbers).tobytes(), digest_size=16).digest()
-
-
-def canonical(node: Partial, grounder: Grounder) -> bytes:
-    """The node up to labels — placed instances, channels, stack and P — as a
-    128-bit :func:`digest`. Two nodes with the same canonical form have the
-    same completions (up to labels). An item's ancestors count only where they
-    can matter: those whose method can recur (:attr:`Task.recursive`); in a
-    domain without recursion the order in which items were reached is
-    forgotten. It takes 16 bytes where the form takes kilobytes, so every
-    expanded node can be remembered."""
-    number = grounder.numbering
-    names = placed_names(node)
-    placed = sorted(p.number for p in node.placed)
-    for index, item in enumerate(node.stack):
-        names[item.label] = -1 - index
-    channels = channel_numbers(node, names, number)
-    channels.sort()
-    stack = []
-    for item in node.stack:
-        if item.number < 0:
-            recursive = grounder.task.recursive
-            relevant = sorted(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)
-            item.number = number((item.call, tuple(relevant)))
-        stack.append(item.number)
-    get = number.numbers.get
-    effects = []
-    for effect in node.effects:
-        found = get(effect)
-        effects.append(number(effect) if found is None else found)
-    effects.sort()
-    # The lengths of the first three parts make the list say where each ends.
-    return digest(
-        [len(placed), *placed, len(channels), *channels, len(stack), *stack, *effects]
     )

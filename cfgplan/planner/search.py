@@ -30,8 +30,9 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
+from cfgplan.planner.canonical import canonical
 from cfgplan.planner.grow import Grower, Reprice, Stats
-from cfgplan.planner.partial import Partial, canonical, root
+from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.task import Ground
 

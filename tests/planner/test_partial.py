@@ -9,7 +9,6 @@ from cfgplan.planner.partial import (
     Channel,
     Item,
     Partial,
-    canonical,
     expand_method,
     place_functionality,
     reuse_functionality,
@@ -143,15 +142,3 @@ def test_reuse_moves_channels_and_merges_identical_ones_keeping_the_larger_bandw
     assert isinstance(reused, Partial)
     assert [(c.source, c.target, c.bandwidth) for c in reused.channels] == [(2, 3, 9.0)]
     assert reused.cost == placed.cost  # nothing new: the channel was there already
-
-
-def test_canonical_forgets_labels() -> None:
-    img = ("img", "A")
-    stack = (Item(2, ("cam", "A"), frozenset()), Item(3, ("use", "A", "A"), frozenset()))
-    one = with_channels(root(("x",)), local(2, 3, img), stack=stack)
-    relabelled = (Item(7, ("cam", "A"), frozenset()), Item(5, ("use", "A", "A"), frozenset()))
-    other = with_channels(root(("x",)), local(7, 5, img), stack=relabelled)
-    g = Grounder(task())
-    assert canonical(one, g) == canonical(other, g)
-    swapped = with_channels(root(("x",)), local(5, 7, img), stack=relabelled)
-    assert canonical(one, g) != canonical(swapped, g)
