@@ -50,7 +50,10 @@ def _one(data: bytes) -> None:
 
 
 def main() -> None:
-    atheris: Any = importlib.import_module("atheris")
+    try:
+        atheris: Any = importlib.import_module("atheris")
+    except ImportError:
+        sys.exit("benchmarks.fuzz_atheris needs atheris: pip install atheris (Linux x86_64)")
     with atheris.instrument_imports(include=["cfgplan"]):
         import cfgplan.check
         import cfgplan.syntax.reader  # noqa: F401

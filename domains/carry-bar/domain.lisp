@@ -1,6 +1,6 @@
 ;;; Carry a bar: Appendix A.2 of R. Lundh, "Plan-Based Configuration of a
 ;;; Group of Robots" (2006). The PDF interleaves the laser version of
-;;; get-global-pos; its text here follows shared/notes/thesis-guide.md.
+;;; get-global-pos; its text here is de-interleaved by hand.
 ;;; As printed, with the state of 6.3.2 the planner finds five configurations
 ;;; (33, 45, 45, 45, 45): two of them localize Emil with the laser. The thesis
 ;;; reports three; without the laser version of get-global-pos it is exactly

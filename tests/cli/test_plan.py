@@ -51,6 +51,19 @@ def test_json_schema_and_values(cfgplan: Run) -> None:
     assert config["media_loads"] == [10, 30]  # 4.6: global-orient 10; pos 20 + orient 10
 
 
+def test_json_without_media_leaves_the_media_keys_out(cfgplan: Run) -> None:
+    """README, 'JSON output': no media declared, no ``media`` and no
+    ``media_loads`` (rather than empty lists), and communication not checked."""
+    out = cfgplan("plan", *CROSS, "--format", "json")
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert list(doc) == ["goal", "configurations", "communication_checked", "stats"]
+    assert doc["communication_checked"] is False
+    assert [c["cost"] for c in doc["configurations"]] == [44, 47]
+    assert all("media_loads" not in c for c in doc["configurations"])
+    assert all(ch["medium"] is None for c in doc["configurations"] for ch in c["channels"])
+
+
 def test_json_is_byte_identical_across_runs(cfgplan: Run) -> None:
     """Determinism: the same input gives the same bytes, whatever the hash seed."""
     a = cfgplan("plan", *WALL, "--all", "--format", "json", env={"PYTHONHASHSEED": "1"})

@@ -1,6 +1,6 @@
 ;;; Cross a door: Appendix A.1 of R. Lundh, "Plan-Based Configuration of a
 ;;; Group of Robots" (2006). The PDF interleaves the lines of do-cross-door;
-;;; its text here follows section 4.6 (see shared/notes/thesis-guide.md).
+;;; its text here is de-interleaved to agree with section 4.6.
 
 ;; A.1.1 Sensing resources
 (make-functionality :name ‘(camera ?r) :out ’((image ?r)))
