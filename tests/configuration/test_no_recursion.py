@@ -1,7 +1,7 @@
 """Searches over the user's input without recursion (issue 9, item 4).
 
 :func:`cfgplan.configuration.media.assign` backtracks over the global channels
-and :func:`cfgplan.configuration.admissible.satisfying` over the atoms of a
+and :func:`cfgplan.configuration.matching.satisfying` over the atoms of a
 precondition; both used to recurse once per item, so 3,000 channels or
 precondition atoms overflowed Python's stack. They now keep an explicit stack;
 on small inputs they give exactly what the recursive versions (kept here as
