@@ -1,7 +1,8 @@
 """Matching preconditions against the facts of a state, for the independent
 admissibility checker (:mod:`cfgplan.configuration.admissible`; thesis 3.5,
 causal admissibility). It shares no code with the planner's matcher
-(:mod:`cfgplan.planner.match`), so that the two check each other.
+(:mod:`cfgplan.planner.unify`, :mod:`cfgplan.planner.match`), so that the two
+check each other.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ Env = dict[str, str]
 
 
 def is_var(term: str) -> bool:
+    """A variable is written ``?name``."""
     return term.startswith("?")
 
 
@@ -35,10 +37,12 @@ def unify(pattern: Sequence[str], fact: Sequence[str], env: Mapping[str, str]) -
 
 
 def atom_of(atom: Atom) -> Ground:
+    """An atom as the tuple ``(predicate, *args)`` the matcher works on."""
     return (atom.predicate, *atom.args)
 
 
 def subst(atom: Ground, env: Mapping[str, str]) -> Ground:
+    """``atom`` with the variables ``env`` binds replaced by their values."""
     return tuple(env.get(t, t) for t in atom)
 
 
