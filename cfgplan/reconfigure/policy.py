@@ -211,9 +211,12 @@ class Reconfigurator:
         with self.lock:
             return bool(self._pending)
 
-    def _fallback(self, key: tuple[Situation, Resource]) -> tuple[bool, Configuration | None]:
+    def _fallback(
+        self, situation: Situation, resource: Resource
+    ) -> tuple[bool, Configuration | None]:
+        """Whether the fallback for ``resource`` in ``situation`` is known, and what it is."""
         with self.lock:
-            return self._fallbacks.get(*key)
+            return self._fallbacks.get(situation, resource)
 
     # -- changes ------------------------------------------------------------
 
@@ -229,7 +232,7 @@ class Reconfigurator:
             # the configuration rolled back to may rely on a failure).
             return self._stay(cause, withdrawn)
         started = time.perf_counter()
-        known, best = (False, None) if self.goals else self._fallback((before, resource))
+        known, best = (False, None) if self.goals else self._fallback(before, resource)
         source: Literal["fallback", "search"] = "fallback" if known else "search"
         why: tuple[str, ...] = ()
         if not known or best is None:

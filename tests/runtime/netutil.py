@@ -103,7 +103,6 @@ class Processes:
                     os.kill(process.pid, signal.SIGKILL)
                 process.wait(timeout=30)
 
-
     def tails(self, lines: int = 25) -> str:
         """The last lines of every process's output, to say why a test failed."""
         out = []
@@ -122,7 +121,7 @@ def processes() -> Iterator[Processes]:
     try:
         yield running
     except AssertionError as failure:
-        running.stop_all()
+        running.stop_all()  # so that their output is whole before it is read
         raise AssertionError(f"{failure}\n{running.tails()}") from failure
     finally:
         running.stop_all()
