@@ -5,26 +5,26 @@ file position. It covers the well-formedness the thesis takes for granted:
 functionalities with inputs or outputs (3.2), calls that resolve by name and
 arity (4.4, 4.5), channels and ``:in``/``:out`` ports between body labels whose
 callees produce or consume the data (3.4, 4.4, 4.5 step d), bound variables,
-and ``(eval ...)`` tests inside the safe subset (Appendix A).
+and ``(eval ...)`` tests inside the safe subset (Appendix A); the state and
+goal are checked against the domain by :mod:`cfgplan.check.state`.
 """
 
 from __future__ import annotations
 
-import difflib
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from typing import Literal
 
 from cfgplan.check import evaluate
+from cfgplan.check.findings import Findings
 from cfgplan.check.messages import (
     alternatives,
-    by_position,
-    case_hint,
     position,
     sig_text,
     where,
 )
+from cfgplan.check.state import check_goal, check_state
 from cfgplan.check.unify import Signature, caller_equations, instantiate, match
-from cfgplan.diagnostics import Diagnostic, Severity
+from cfgplan.diagnostics import Diagnostic
 from cfgplan.ir.model import (
     Atom,
     BodyItem,
@@ -58,48 +58,19 @@ def check(domain: Domain, state: State | None = None, goal: Goal | None = None) 
     for method in domain.methods:
         checker.method(method)
     if state is not None:
-        checker.state(state)
+        check_state(checker, state)
     if goal is not None:
-        checker.goal(goal)
+        check_goal(checker, goal)
     elif state is not None:
         for target in (state.goal,) if state.goal is not None else state.sequence:
-            checker.goal(target)
+            check_goal(checker, target)
     return checker.sorted()
 
 
-class _Checker:
-    """Collects diagnostics while walking one domain (and state, goal)."""
-
-    def __init__(self, domain: Domain) -> None:
-        self.domain = domain
-        self.found: list[Diagnostic] = []
-        self.funcs: dict[Signature, Functionality] = {}
-        self.versions: dict[Signature, list[Method]] = {}
-        for f in domain.functionalities:
-            self.funcs.setdefault(f.name.signature, f)
-        for m in domain.methods:
-            self.versions.setdefault(m.name.signature, []).append(m)
-
-    # -- collecting ------------------------------------------------------
-
-    def report(
-        self, severity: Severity, message: str, span: Span | None, hint: str | None = None
-    ) -> None:
-        self.found.append(Diagnostic(severity, message, span, hint))
-
-    def sorted(self) -> list[Diagnostic]:
-        """The domain's file first, then the state's (and the goal's)."""
-        spans = [self.domain.span, *(x.span for x in self.domain.functionalities)]
-        spans += [m.span for m in self.domain.methods]
-        return by_position(self.found, [s.file for s in spans if s is not None])
+class _Checker(Findings):
+    """The checks of one domain's definitions, functionalities and methods."""
 
     # -- names -----------------------------------------------------------
-
-    def _case_hint(self, name: str, methods_only: bool = False) -> str | None:
-        names = [sig[0] for sig in self.versions]
-        if not methods_only:
-            names += [sig[0] for sig in self.funcs]
-        return case_hint(name, names)
 
     def definitions(self) -> None:
         """Duplicate functionalities; names that are a functionality and a method (4.4)."""
@@ -244,7 +215,7 @@ class _Checker:
             f"{item.label} calls {call}, but no functionality or method "
             f"{sig_text(call.signature)} is defined",
             call.span,
-            self._case_hint(call.predicate),
+            self.case_hint(call.predicate),
         )
 
     def _offers(self, call: Atom, side: Side) -> list[tuple[Atom, Atom]] | None:
@@ -354,87 +325,3 @@ class _Checker:
                         cond.span,
                         f"bind {v} with an atom precondition of {name}",
                     )
-
-    # -- state and goal --------------------------------------------------
-
-    def _tested(self) -> dict[str, Atom]:
-        tested: dict[str, Atom] = {}
-        conds = [c for f in self.domain.functionalities for c in f.precond]
-        conds += [c for m in self.domain.methods for c in m.precond]
-        for cond in conds:
-            atom = cond.atom if isinstance(cond, Negation) else cond
-            if isinstance(atom, Atom):
-                tested.setdefault(atom.predicate, atom)
-        return tested
-
-    def state(self, state: State) -> None:
-        """Facts no precondition tests whose predicate is close to one that is
-        (a typo: ``(lazer Robby)``), and preconditions whose predicate the state
-        writes only in another case (4.4)."""
-        tested = self._tested()
-        stated: dict[str, Atom] = {}
-        for fact in state.facts:
-            stated.setdefault(fact.predicate, fact)
-        for pred, fact in stated.items():
-            if pred in tested or pred in PLANNER_FACTS:
-                continue
-            hint = _did_you_mean(pred, tested)
-            if hint is not None:
-                self.report(
-                    "warning",
-                    f"no precondition tests ({pred} ...), so the fact {fact} is never used",
-                    fact.span,
-                    hint,
-                )
-        for pred, atom in tested.items():
-            close = sorted(s for s in stated if s != pred and s.lower() == pred.lower())
-            if pred not in stated and close:
-                self.report(
-                    "warning",
-                    f"the state has no ({pred} ...) fact for the precondition {atom}",
-                    atom.span,
-                    f"symbols are case-sensitive: the state writes {' and '.join(close)}",
-                )
-
-    def goal(self, goal: Goal) -> None:
-        """The goal names a method by name and arity (4.5)."""
-        call = goal.call
-        if call.signature in self.versions:
-            return
-        span = call.span or goal.span
-        if call.signature in self.funcs:
-            self.report(
-                "error",
-                f"the goal {call} names a functionality, not a method",
-                span,
-                "a goal is a method instance such as (do-cross-door Pippi Door1)",
-            )
-            return
-        arities = [s[1] for s in self.versions if s[0] == call.predicate]
-        hint = _did_you_mean(call.predicate, {s[0] for s in self.versions})
-        if arities:
-            hint = f"({call.predicate} ...) takes {alternatives(arities)}, found {call.arity}"
-        self.report(
-            "error",
-            f"the goal {call} names no method {sig_text(call.signature)}",
-            span,
-            hint,
-        )
-
-
-PLANNER_FACTS = frozenset({"device"})
-"""Fact predicates the planner itself reads (:mod:`cfgplan.configuration.cost`):
-used even when no precondition tests them."""
-
-
-def _did_you_mean(name: str, known: Iterable[str]) -> str | None:
-    """A hint naming the known names ``name`` may be a slip for: differing
-    only in case, or close in spelling; None when none is."""
-    names = sorted(set(known) - {name})
-    same = [n for n in names if n.lower() == name.lower()]
-    if same:
-        return f"symbols are case-sensitive: did you mean {' or '.join(same)}?"
-    close = difflib.get_close_matches(name, names, n=2, cutoff=0.75)
-    if close:
-        return f"did you mean {' or '.join(close)}?"
-    return None

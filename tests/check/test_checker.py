@@ -8,7 +8,7 @@ import pytest
 
 from cfgplan.check import check
 from cfgplan.diagnostics import Diagnostic, render_all
-from cfgplan.ir.model import Atom, Goal
+from cfgplan.ir.model import Goal
 from cfgplan.syntax.reader import domain_from, parse, read_domain, read_state, state_from
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -445,93 +445,6 @@ def test_method_with_empty_body(body: str) -> None:
     d = only(run(text))
     assert d.message == "method (nothing ?r) has an empty :body"
     assert loc(d) == "4:1"
-
-
-# -- goal and state --------------------------------------------------------------
-
-STATE = "(state (robot Pippi) (camera Pippi) (door Door1))\n"
-
-
-def test_goal_from_state_naming_a_method_is_fine() -> None:
-    assert run(BASE + GOOD, STATE + "(goal (get-door-info Pippi Door1))\n") == []
-
-
-def test_goal_names_no_method() -> None:
-    state = STATE + "(goal (open-door Pippi Door1))\n"
-    d = only(run(BASE + GOOD, state))
-    assert (
-        d.message
-        == "the goal (open-door Pippi Door1) names no method (open-door ...) with 2 arguments"
-    )
-    assert d.span is not None and d.span.file == "s.lisp"
-    assert loc(d) == "2:7"
-
-
-def test_goal_case_hint() -> None:
-    d = only(run(BASE + GOOD, STATE + "(goal (Get-Door-Info Pippi Door1))\n"))
-    assert d.hint == "symbols are case-sensitive: did you mean get-door-info?"
-
-
-def test_goal_arity_hint() -> None:
-    d = only(run(BASE + GOOD, STATE + "(goal (get-door-info Pippi))\n"))
-    assert "names no method (get-door-info ...) with 1 argument" in d.message
-    assert d.hint == "(get-door-info ...) takes 2 arguments, found 1"
-
-
-def test_goal_names_a_functionality() -> None:
-    d = only(run(BASE + GOOD, STATE + "(goal (camera Pippi))\n"))
-    assert d.message == "the goal (camera Pippi) names a functionality, not a method"
-    assert loc(d) == "2:7"
-
-
-def test_goal_argument_overrides_state_goal() -> None:
-    goal = Goal(call=Atom(predicate="nope", args=("Pippi",)))
-    d = only(run(BASE + GOOD, STATE + "(goal (get-door-info Pippi Door1))\n", goal))
-    assert d.message.startswith("the goal (nope Pippi) names no method")
-    assert d.span is None
-
-
-def test_state_predicate_differing_in_case_warns_twice() -> None:
-    text = BASE + GOOD
-    found = run(text, "(state (Camera Pippi) (door Door1))\n")
-    assert [d.severity for d in found] == ["warning", "warning"]
-    domain_side, state_side = found  # the domain file is reported first
-    assert (
-        domain_side.message == "the state has no (camera ...) fact for the precondition (camera ?r)"
-    )
-    assert domain_side.hint == "symbols are case-sensitive: the state writes Camera"
-    assert loc(domain_side) == at(text, "(camera ?r) (door") == "5:14"
-    assert (
-        state_side.message
-        == "no precondition tests (Camera ...), so the fact (Camera Pippi) is never used"
-    )
-    assert state_side.hint == "symbols are case-sensitive: did you mean camera?"
-    assert state_side.span is not None and state_side.span.file == "s.lisp"
-    assert loc(state_side) == "1:8"
-
-
-def test_unused_state_predicate_without_case_twin_is_silent() -> None:
-    """A state may describe more of the world than a domain tests."""
-    assert run(BASE + GOOD, "(state (heavy B1) (camera Pippi) (door Door1))\n") == []
-
-
-def test_a_misspelt_fact_is_a_warning_with_a_suggestion() -> None:
-    """Issue 10: (camrea Pippi) is tested by nothing; camera is close."""
-    d = only(run(BASE + GOOD, "(state (camrea Pippi) (door Door1))\n"), "warning")
-    assert d.message == (
-        "no precondition tests (camrea ...), so the fact (camrea Pippi) is never used"
-    )
-    assert d.hint == "did you mean camera?"
-    assert loc(d) == "1:8"
-
-
-def test_devices_are_read_by_the_planner_even_when_untested() -> None:
-    assert run(BASE + GOOD, "(state (device Cam) (camera Pippi) (door Door1))\n") == []
-
-
-def test_goal_spelling_hint() -> None:
-    d = only(run(BASE + GOOD, STATE + "(goal (get-dor-info Pippi Door1))\n"))
-    assert d.hint == "did you mean get-door-info?"
 
 
 def test_diagnostics_are_sorted_by_position() -> None:

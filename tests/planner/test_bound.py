@@ -2,18 +2,14 @@
 
 The bound must never exceed what a node still costs: checked against the
 true cheapest completion, found by exhaustive depth-first search below the
-node, on generated problems. And it must work on hierarchies far deeper than
-Python's recursion limit.
+node, on generated problems.
 """
 
 from __future__ import annotations
 
-import sys
-
 from hypothesis import given
 
 from benchmarks.families import fusion
-from cfgplan.planner import plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Partial, root
@@ -73,35 +69,6 @@ def test_the_bounds_never_exceed_the_cheapest_completion(example: Generated) -> 
         for estimate in estimates:
             assert estimate is not None, "cut a node with a completion"
             assert estimate <= truth - node.cost + 1e-9
-
-
-def chain(depth: int) -> str:
-    """``m0 -> m1 -> ... -> sense``: one method a level, each passing data up."""
-    forms = [
-        "(make-functionality :name '(sense ?r) :out '((d ?r)))",
-        "(make-functionality :name '(act ?r) :in '((d ?r)))",
-    ]
-    for level in range(depth):
-        below = f"(m{level + 1} ?r)" if level + 1 < depth else "(sense ?r)"
-        forms.append(
-            f"(make-config-method :name '(m{level} ?r) :out '((?f (d ?r))) :body '((?f {below})))"
-        )
-    forms.append(
-        "(make-config-method :name '(go ?r) :channels '(((local ?r) ?s ?a (d ?r)))"
-        " :body '((?s (m0 ?r)) (?a (act ?r))))"
-    )
-    return "\n".join(forms) + "\n"
-
-
-def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
-    """Issue 9, item 4: a chain of methods deeper than Python's recursion limit
-    is summarised and planned without recursion (before: RecursionError in
-    the bound at about 330 levels)."""
-    depth = sys.getrecursionlimit() + 200
-    problem = load_text(chain(depth), "(state (robot A)) (goal (go A))")
-    assert Bound(problem.task).summary(("m0", "A")).minimum == 1.0
-    (config,), _ = plan(problem.task, problem.goal_call)
-    assert config.cost == 10 + 2 + 1
 
 
 ONE_SOURCE_TWO_USERS = """\

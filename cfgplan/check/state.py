@@ -1,0 +1,100 @@
+"""The static checker's checks of a state and a goal against a domain (4.4,
+4.5): facts that no precondition tests but one nearly does (a typo),
+preconditions the state writes only in another case, and a goal that names
+no method."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+from cfgplan.check.findings import Findings
+from cfgplan.check.messages import alternatives, sig_text
+from cfgplan.ir.model import Atom, Domain, Goal, Negation, State
+
+
+def _tested(domain: Domain) -> dict[str, Atom]:
+    """The predicates the domain's preconditions test (negated or not), each
+    with the first atom that tests it."""
+    tested: dict[str, Atom] = {}
+    conds = [c for f in domain.functionalities for c in f.precond]
+    conds += [c for m in domain.methods for c in m.precond]
+    for cond in conds:
+        atom = cond.atom if isinstance(cond, Negation) else cond
+        if isinstance(atom, Atom):
+            tested.setdefault(atom.predicate, atom)
+    return tested
+
+
+def check_state(findings: Findings, state: State) -> None:
+    """Facts no precondition tests whose predicate is close to one that is
+    (a typo: ``(lazer Robby)``), and preconditions whose predicate the state
+    writes only in another case (4.4)."""
+    tested = _tested(findings.domain)
+    stated: dict[str, Atom] = {}
+    for fact in state.facts:
+        stated.setdefault(fact.predicate, fact)
+    for pred, fact in stated.items():
+        if pred in tested or pred in PLANNER_FACTS:
+            continue
+        hint = _did_you_mean(pred, tested)
+        if hint is not None:
+            findings.report(
+                "warning",
+                f"no precondition tests ({pred} ...), so the fact {fact} is never used",
+                fact.span,
+                hint,
+            )
+    for pred, atom in tested.items():
+        close = sorted(s for s in stated if s != pred and s.lower() == pred.lower())
+        if pred not in stated and close:
+            findings.report(
+                "warning",
+                f"the state has no ({pred} ...) fact for the precondition {atom}",
+                atom.span,
+                f"symbols are case-sensitive: the state writes {' and '.join(close)}",
+            )
+
+
+def check_goal(findings: Findings, goal: Goal) -> None:
+    """The goal names a method by name and arity (4.5)."""
+    call = goal.call
+    if call.signature in findings.versions:
+        return
+    span = call.span or goal.span
+    if call.signature in findings.funcs:
+        findings.report(
+            "error",
+            f"the goal {call} names a functionality, not a method",
+            span,
+            "a goal is a method instance such as (do-cross-door Pippi Door1)",
+        )
+        return
+    arities = [s[1] for s in findings.versions if s[0] == call.predicate]
+    hint = _did_you_mean(call.predicate, {s[0] for s in findings.versions})
+    if arities:
+        hint = f"({call.predicate} ...) takes {alternatives(arities)}, found {call.arity}"
+    findings.report(
+        "error",
+        f"the goal {call} names no method {sig_text(call.signature)}",
+        span,
+        hint,
+    )
+
+
+PLANNER_FACTS = frozenset({"device"})
+"""Fact predicates the planner itself reads (:mod:`cfgplan.configuration.cost`):
+used even when no precondition tests them."""
+
+
+def _did_you_mean(name: str, known: Iterable[str]) -> str | None:
+    """A hint naming the known names ``name`` may be a slip for: differing
+    only in case, or close in spelling; None when none is."""
+    names = sorted(set(known) - {name})
+    same = [n for n in names if n.lower() == name.lower()]
+    if same:
+        return f"symbols are case-sensitive: did you mean {' or '.join(same)}?"
+    close = difflib.get_close_matches(name, names, n=2, cutoff=0.75)
+    if close:
+        return f"did you mean {' or '.join(close)}?"
+    return None

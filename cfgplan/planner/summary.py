@@ -1,0 +1,264 @@
+"""What every feasible expansion of a ground instance contains: the static
+summaries the bound of a node is made of (:mod:`cfgplan.planner.bound`).
+
+A :class:`Summary` intersects the expansions of one ground instance (4.5:
+its method versions and precondition bindings): the functionality
+instances, robots and channels all of them hold, and the least their
+functionalities and channels can cost. They depend only on the task, so one
+:class:`Summaries` serves every search of a task. Summaries are computed
+without recursion (a method hierarchy may be thousands of levels deep):
+:meth:`Summaries.summary` runs the summarising generators on an explicit
+stack.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator, Iterable, Set
+from dataclasses import dataclass, field
+
+from cfgplan.planner import clock
+from cfgplan.planner.ground import channel_kind
+from cfgplan.planner.match import bindings
+from cfgplan.planner.partial import Key
+from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
+from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
+
+ChannelId = tuple[str, Ground, Key | None, Key | None]
+"""(kind, data, sender, receiver): None where the end is not known yet."""
+
+
+@dataclass(frozen=True)
+class Summary:
+    """What every feasible expansion of one ground instance contains."""
+
+    feasible: bool
+    functionalities: frozenset[Key] = frozenset()
+    robots: frozenset[str] = frozenset()  # where some functionality runs, in every expansion
+    channels: frozenset[ChannelId] = frozenset()
+    producers: tuple[tuple[Ground, Key | None], ...] = ()  # :out data -> certain producer
+    minimum: float = 0.0  # the least its functionalities can cost, if none is in C yet
+    wiring: float = 0.0  # the least the channels of its expansions can cost, likewise
+
+    def producer(self, data: Ground) -> Key | None:
+        for d, key in self.producers:
+            if d == data:
+                return key
+        return None
+
+
+@dataclass(frozen=True)
+class Expanded:
+    """One expansion of a method: what it certainly contains."""
+
+    functionalities: frozenset[Key]
+    robots: frozenset[str]
+    channels: frozenset[ChannelId]
+    producers: dict[Ground, Key | None]
+    minimum: float
+    wiring: float
+
+
+INFEASIBLE = Summary(False)
+UNKNOWN = Summary(True)
+"""The summary of an instance met again inside its own expansion.
+
+It claims the least possible: feasible, nothing certain, costing nothing.
+Summaries are intersections (of contents) and minimums (of costs) over
+expansions, so a part that claims less can only make the summaries built on
+it claim less: they stay below what every real expansion contains and costs,
+and the bound stays admissible. Claiming *feasible* is the optimistic side
+too: the search prunes the recursion on its own path, but another version
+may still complete, and the bound must not cut a node that has a completion.
+"""
+
+Summarising = Generator[Ground, Summary, Summary]
+"""A summary being made: it yields each call whose summary it needs, is sent
+that summary, and returns its own."""
+
+
+@dataclass
+class Summaries:
+    """The summaries of one task's ground instances, and the names each
+    signature can reach, memoised."""
+
+    task: Task
+    _memo: dict[Ground, Summary] = field(default_factory=dict)
+    _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(
+        default_factory=dict
+    )
+
+    def summary(self, call: Ground) -> Summary:
+        """What every feasible expansion of ``call`` contains (memoised)."""
+        found = self._memo.get(call)
+        if found is not None:
+            return found
+        frames: list[tuple[Ground, Summarising]] = [(call, self._summarise(call))]
+        active = {call}
+        reply: Summary | None = None
+        while frames:
+            clock.check()
+            current, making = frames[-1]
+            try:
+                need = making.send(reply)  # type: ignore[arg-type]  # None starts it
+            except StopIteration as made:
+                self._memo[current] = made.value
+                active.discard(current)
+                frames.pop()
+                reply = made.value
+                continue
+            reply = self._memo.get(need)
+            if reply is None:
+                if need in active:
+                    reply = UNKNOWN  # see UNKNOWN: recursion is summarised as unknown
+                else:
+                    active.add(need)
+                    frames.append((need, self._summarise(need)))
+        return self._memo[call]
+
+    def _summarise(self, call: Ground) -> Summarising:
+        schema = self.task.functionality(call)
+        if schema is not None:
+            env = bind_name(schema.params, call[1:])
+            if env is None or next(iter(bindings(self.task, schema.tests, env)), None) is None:
+                return INFEASIBLE
+            # Outputs that use a variable its preconditions bind stay open
+            # (not ground), so they name no certain producer: weaker, still a bound.
+            outs = tuple((substitute(o, env), call) for o in schema.outputs)
+            cost = self.task.functionality_cost(schema, call)
+            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost)
+        expansions: list[Expanded] = []
+        for method in self.task.versions(call):
+            env0 = bind_name(method.params, call[1:])
+            if env0 is None:
+                continue
+            for env in bindings(self.task, method.tests, env0):
+                expansion = yield from self._expansion(method, env)
+                if expansion is not None:
+                    expansions.append(expansion)
+        if not expansions:
+            return INFEASIBLE
+        funcs = frozenset.intersection(*(e.functionalities for e in expansions))
+        robots = frozenset.intersection(*(e.robots for e in expansions))
+        channels = common_channels([e.channels for e in expansions])
+        first = expansions[0].producers
+        producers = tuple(
+            (data, key if all(e.producers.get(data) == key for e in expansions) else None)
+            for data, key in first.items()
+        )
+        minimum = min(e.minimum for e in expansions)
+        wiring = min(e.wiring for e in expansions)
+        return Summary(True, funcs, robots, channels, producers, minimum, wiring)
+
+    def _expansion(
+        self, method: MethodSchema, env: Bindings
+    ) -> Generator[Ground, Summary, Expanded | None]:
+        body: dict[str, tuple[Ground, Summary, bool]] = {}
+        funcs: set[Key] = set()
+        robots: set[str] = set()
+        channels: set[ChannelId] = set()
+        for label, pattern in method.body:
+            call = substitute(pattern, env)
+            if not is_ground(call):
+                return None
+            sub = yield call
+            if not sub.feasible:
+                return None
+            body[label] = (call, sub, not self.task.is_method(call))
+            funcs |= sub.functionalities
+            robots |= sub.robots
+            channels |= sub.channels
+        own: set[tuple[str, Ground]] = set()
+        for spec in method.channels:
+            data = substitute(spec.data, env)
+            ends = substitute(("robots", *spec.robots), env)
+            if not is_ground(data) or not is_ground(ends):
+                return None
+            kind = channel_kind(spec.kind, ends[1:])[0]
+            own.add((kind, data))
+            src_call, src_sum, src_func = body[spec.source]
+            dst_call, _, dst_func = body[spec.target]
+            sender = src_call if src_func else src_sum.producer(data)
+            receiver = dst_call if dst_func else None
+            channels.add((kind, data, sender, receiver))
+        producers: dict[Ground, Key | None] = {}
+        for port in method.outputs:
+            data = substitute(port.data, env)
+            call, sub, is_functionality = body[port.label]
+            producers.setdefault(data, call if is_functionality else sub.producer(data))
+        parts = [(self.names(call), sub.minimum) for call, sub, _ in body.values()]
+        own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
+        wires: list[tuple[Set[str], float]] = [({data[0] for _, data in own}, own_cost)]
+        wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
+        return Expanded(
+            frozenset(funcs),
+            frozenset(robots),
+            frozenset(channels),
+            producers,
+            least(parts),
+            least(wires),
+        )
+
+    # -- what a signature can reach ---------------------------------------------
+    def names(self, call: Ground) -> frozenset[str]:
+        """The functionality names an instance can reach through method bodies."""
+        return self._reach(call)[0]
+
+    def data_names(self, call: Ground) -> frozenset[str]:
+        """The data predicates of the channels its expansions can create."""
+        return self._reach(call)[1]
+
+    def _reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str]]:
+        sig = (call[0], len(call) - 1)
+        found = self._reached.get(sig)
+        if found is not None:
+            return found
+        names: set[str] = set()
+        data: set[str] = set()
+        seen = {sig}
+        todo = [sig]
+        while todo:
+            current = todo.pop()
+            if current in self.task.functionalities:
+                names.add(current[0])
+                continue
+            for method in self.task.methods.get(current, ()):
+                data.update(c.data[0] for c in method.channels)
+                for _, pattern in method.body:
+                    child = (pattern[0], len(pattern) - 1)
+                    if child not in seen:
+                        seen.add(child)
+                        todo.append(child)
+        result = self._reached[sig] = (frozenset(names), frozenset(data))
+        return result
+
+
+def least(parts: Iterable[tuple[Set[str], float]]) -> float:
+    """The least a set of parts can cost together, each part given by the
+    names it can reach (functionality names, or channel data predicates) and
+    its own least cost: parts whose names are disjoint cannot share an
+    instance, so their costs add; parts that may share count as the largest
+    of them."""
+    groups: list[tuple[set[str], float]] = []
+    for names, cost in parts:
+        merged_names, merged_cost = set(names), cost
+        rest = []
+        for group_names, group_cost in groups:
+            if group_names & merged_names:
+                merged_names |= group_names
+                merged_cost = max(merged_cost, group_cost)
+            else:
+                rest.append((group_names, group_cost))
+        groups = [*rest, (merged_names, merged_cost)]
+    return sum(cost for _, cost in groups)
+
+
+def common_channels(sets: list[frozenset[ChannelId]]) -> frozenset[ChannelId]:
+    """Channels in every expansion; where only the sender differs, keep the
+    channel with its sender unknown."""
+    exact = frozenset.intersection(*sets)
+    loose: set[ChannelId] = set(exact)
+    receivers = [{(k, d, r) for k, d, _, r in s if r is not None} for s in sets]
+    for kind, data, receiver in set.intersection(*receivers):
+        if not any(c[0] == kind and c[1] == data and c[3] == receiver for c in exact):
+            loose.add((kind, data, None, receiver))
+    return frozenset(loose)

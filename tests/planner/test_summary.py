@@ -1,0 +1,59 @@
+"""The static summaries of ground instances (cfgplan.planner.summary): what
+every expansion of an instance holds, intersected over its method versions
+and bindings, and the least it can cost; computed without recursion, so a
+hierarchy far deeper than Python's recursion limit is summarised.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from benchmarks.fuzz_inputs import chain
+from cfgplan.planner import plan
+from cfgplan.planner.summary import Summaries
+from tests.planner.generated import load_text
+
+TWO_VERSIONS = """\
+(make-functionality :name '(sense ?r) :out '((d ?r)))
+(make-functionality :name '(filter ?r) :in '((d ?r)) :out '((e ?r)))
+(make-functionality :name '(smooth ?r) :in '((d ?r)) :out '((e ?r)))
+(make-functionality :name '(act ?r) :in '((e ?r)))
+(make-config-method :name '(get ?r) :out '((?f (e ?r)))
+  :channels '(((local ?r) ?s ?f (d ?r)))
+  :body '((?s (sense ?r)) (?f (filter ?r))))
+(make-config-method :name '(get ?r) :precond '((helper ?h))
+  :out '((?f (e ?r)))
+  :channels '(((global ?h ?r) ?s ?f (d ?h)))
+  :body '((?s (sense ?h)) (?f (smooth ?r))))
+(make-config-method :name '(go ?r) :channels '(((local ?r) ?g ?a (e ?r)))
+  :body '((?g (get ?r)) (?a (act ?r))))
+"""
+
+
+def test_a_summary_holds_what_every_expansion_holds() -> None:
+    """``(get A)`` expands by its first version (sense and filter on A) or by
+    its second with helper B (sense on B, smooth on A): only A is certain,
+    no functionality instance is in both, and the least is two
+    functionalities and one local channel."""
+    problem = load_text(TWO_VERSIONS, "(state (robot A) (robot B) (helper B)) (goal (go A))")
+    summary = Summaries(problem.task).summary(("get", "A"))
+    assert summary.feasible
+    assert summary.robots == frozenset({"A"})
+    assert summary.functionalities == frozenset()
+    assert (summary.minimum, summary.wiring) == (2.0, 1.0)
+    assert summary.producer(("e", "A")) is None  # filter or smooth: not certain
+    only_own = load_text(TWO_VERSIONS, "(state (robot A)) (goal (go A))")
+    alone = Summaries(only_own.task).summary(("get", "A"))
+    assert alone.functionalities == frozenset({("sense", "A"), ("filter", "A")})
+    assert alone.producer(("e", "A")) == ("filter", "A")
+
+
+def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
+    """Issue 9, item 4: a chain of methods deeper than Python's recursion limit
+    is summarised and planned without recursion (before: RecursionError in
+    the bound at about 330 levels)."""
+    depth = sys.getrecursionlimit() + 200
+    problem = load_text(chain(depth).decode(), "(state (robot A)) (goal (top A))")
+    assert Summaries(problem.task).summary(("m0", "A")).minimum == 1.0
+    (config,), _ = plan(problem.task, problem.goal_call)
+    assert config.cost == 10 + 2 + 1
