@@ -216,26 +216,39 @@ class Coordinator:
             )
         return None
 
-    def _failure(self, detection: Detection) -> None:
-        resource = self._resource(detection)
-        if resource is None:
-            return
+    def _failure(self, detection: Detection, together: tuple[Detection, ...] = ()) -> None:
+        """A resource failed or a robot was lost, and with it those of
+        ``together`` (robots silent in one switch): one decision for all,
+        noted one by one (the facts withdrawn on the first)."""
         situation = self.reconfigurator.situation
-        if (resource.kind == "robot" and resource.robot in situation.lost) or (
-            resource.kind == "functionality" and resource.instance in situation.failed
-        ):
-            return  # known already
-        decision = self.reconfigurator.failed(resource, f"{resource.text} failed")
-        self._note(
-            "failure",
-            detection,
-            resource=resource.text,
-            kind=resource.kind,
-            how=detection.how or detection.kind,
-            detail=detection.detail,
-            withdrawn=[atom_text(f) for f in decision.withdrawn],
-        )
-        self._apply(decision, detection)
+        found: list[tuple[Detection, Resource]] = []
+        for each in (detection, *together):
+            resource = self._resource(each)
+            if resource is None:
+                continue
+            if (resource.kind == "robot" and resource.robot in situation.lost) or (
+                resource.kind == "functionality" and resource.instance in situation.failed
+            ):
+                continue  # known already
+            found.append((each, resource))
+        if not found:
+            return
+        resources = tuple(resource for _, resource in found)
+        texts = " and ".join(resource.text for resource in resources)
+        decision = self.reconfigurator.failed(resources[0], f"{texts} failed", resources[1:])
+        withdrawn = [atom_text(f) for f in decision.withdrawn]
+        for each, resource in found:
+            self._note(
+                "failure",
+                each,
+                resource=resource.text,
+                kind=resource.kind,
+                how=each.how or each.kind,
+                detail=each.detail,
+                withdrawn=withdrawn,
+            )
+            withdrawn = []
+        self._apply(decision, found[0][0])
 
     def _recovery(self, detection: Detection) -> None:
         resource = self._resource(detection)
@@ -335,10 +348,12 @@ class Coordinator:
                 )
             )
             how, _, detail = reason.partition(": ")
-            for robot in robots:
-                self._failure(
-                    Detection("lost", self.robot, detection.t, other=robot, how=how, detail=detail)
-                )
+            lost = tuple(
+                Detection("lost", self.robot, detection.t, other=robot, how=how, detail=detail)
+                for robot in robots
+            )
+            if lost:
+                self._failure(lost[0], lost[1:])
 
         self.deployer.deploy(decision, parts, done, failed)
 

@@ -14,9 +14,12 @@ two-phase switch of :mod:`cfgplan.runtime.member`:
   latency is measured to that moment);
 * a refusal, or no answer within :data:`SWITCH_TIMEOUT` seconds while
   preparing, **aborts** the switch (nobody changed anything); the robots that
-  failed to answer are taken as lost, and the coordinator plans again
-  without them. A commit not answered in time is taken as done (the robot
-  installs it when it gets it, or liveliness reports it lost).
+  failed to answer are taken as lost (in one decision), and the coordinator
+  plans again without them. A commit not answered in time is taken as done
+  (the robot installs it when it gets it, or liveliness reports it lost); a
+  commit refused (the robot lost what it prepared) is sent again with the
+  part, and refused again makes the robot lost: nothing is rolled back,
+  the others run the new configuration.
 
 A robot taken as lost for its silence while liveliness still shows it alive
 (a message lost: a robot just back declares its token before its
@@ -33,6 +36,7 @@ accomplished every robot is told to **finish**.
 from __future__ import annotations
 
 import json
+import secrets
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -46,7 +50,7 @@ from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
-from cfgplan.runtime.member import Member, send
+from cfgplan.runtime.member import Member, message_id, send
 from cfgplan.runtime.monitor import HOLD, Detection, Monitor
 from cfgplan.runtime.part import Part, part_to_json
 from cfgplan.runtime.society import Society
@@ -73,7 +77,8 @@ RETRY_MOST = 30.0
 @dataclass
 class _Switch:
     decision: Decision
-    parts: dict[str, Part]
+    parts: dict[str, Part]  # those of the robots alive, which take part
+    everyone: dict[str, Part]  # of every robot: what one that appears later is sent
     done: Done
     failed: Failed
     phase: str  # "prepare" | "commit"
@@ -96,12 +101,20 @@ class NetworkDeployer:
     """Robots taken as lost for not answering a prepare, with when (clock) to
     try them again should they still be alive (:meth:`due`)."""
     _wait: dict[str, float] = field(default_factory=dict)  # the last wait of each, doubled
+    epoch: str = field(default_factory=lambda: secrets.token_hex(8))
+    """This coordinator's run, on every message it sends: a robot that hears a
+    new one (the coordinator started again) follows its numbering afresh."""
+    refused: list[tuple[str, str]] = field(default_factory=list)
+    """Robots that could not install a configuration the others did, with why
+    (:meth:`acked`): taken as lost by the coordinator (:class:`NetworkAdaptive`)."""
+    _resent: set[str] = field(default_factory=set)  # sent their part again in this commit
 
     @property
     def me(self) -> str:
         return self.member.robot.name
 
     def _to(self, robot: str, message: dict[str, object]) -> None:
+        message["epoch"] = self.epoch
         send(self.transport, configure_key(self.transport.society, robot), message)
 
     def deploy(
@@ -111,8 +124,14 @@ class NetworkDeployer:
         targets = {r: p for r, p in parts.items() if r == self.me or r in alive}
         others = sorted(r for r in targets if r != self.me)
         self.switch = _Switch(
-            decision, targets, done, failed, "prepare", set(others), self.clock() + self.timeout
+            decision, targets, parts, done, failed, "prepare", set(others),
+            self.clock() + self.timeout,
         )
+        own = targets.get(self.me)
+        refusal = None if own is None else self.member.refusal(own)
+        if refusal is not None:  # as a robot refuses a prepare
+            self._abort([self.me], f"refused: {refusal}")
+            return
         for robot in others:
             self._to(
                 robot,
@@ -138,8 +157,9 @@ class NetworkDeployer:
         own = switch.parts.get(self.me)
         if own is not None:
             self.member.install(number, own)
-        self.parts = {**self.parts, **switch.parts}
+        self.parts = {**self.parts, **switch.everyone}
         self.current = number
+        self._resent.clear()
         if not others:
             self._finish()
 
@@ -154,11 +174,30 @@ class NetworkDeployer:
         if switch is None or number != switch.decision.id or robot not in switch.waiting:
             return
         self._wait.pop(robot, None)  # it answers again
-        if phase == "refused":
+        if phase == "refused" and switch.phase == "commit":
+            # The others install (this robot did too): no abort. It lost
+            # what it prepared (started again since?): it is sent the part
+            # itself, once; refused again, it is taken as lost.
+            if robot in self._resent:
+                switch.waiting.discard(robot)
+                self.refused.append((robot, reason))
+            else:
+                self._resent.add(robot)
+                self._to(
+                    robot,
+                    {
+                        "op": "commit",
+                        "id": number,
+                        "from": self.me,
+                        "part": part_to_json(switch.parts[robot]),
+                    },
+                )
+                return
+        elif phase == "refused":
             self._abort([robot], f"refused: {reason}")
             return
         expected = "ready" if switch.phase == "prepare" else "installed"
-        if phase != expected:
+        if phase != expected and phase != "refused":
             return
         switch.waiting.discard(robot)
         if not switch.waiting:
@@ -240,10 +279,14 @@ class NetworkAdaptive:
         for detection in self.monitor.drain():
             self.take(detection)
         self.deployer.tick()
+        me = self.deployer.me
         for robot in self.deployer.due():
             detail = "alive, silent in the last switch: tried again"
-            me = self.deployer.me
             self.take(Detection("seen", me, time.time(), other=robot, how="retry", detail=detail))
+        refused, self.deployer.refused = self.deployer.refused, []
+        for robot, reason in refused:
+            detail = f"could not install what the others did: {reason}"
+            self.take(Detection("lost", me, time.time(), other=robot, how="refused", detail=detail))
         self.coordinator.tick()
         if self.coordinator.finished and not self._told:
             self._told = True
@@ -262,15 +305,17 @@ class NetworkAdaptive:
         try:
             message = json.loads(payload)
             if message["type"] == "ack":
+                if message.get("epoch", self.deployer.epoch) != self.deployer.epoch:
+                    return  # an answer to the coordinator before this one
                 self.deployer.acked(
                     str(message["robot"]),
-                    int(message["id"]),
+                    message_id(message["id"]),
                     str(message["phase"]),
                     str(message.get("reason", "")),
                 )
             elif message["type"] == "report":
                 self.take(Detection.read(json.dumps(message["detection"]).encode()))
-        except (ValueError, KeyError, TypeError):
+        except (ValueError, KeyError, TypeError, AttributeError):
             return  # not a message of this protocol: ignored
 
     @property

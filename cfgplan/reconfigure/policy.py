@@ -220,10 +220,16 @@ class Reconfigurator:
 
     # -- changes ------------------------------------------------------------
 
-    def failed(self, resource: Resource, cause: str = "") -> Decision:
-        """``resource`` failed (or a robot was lost)."""
+    def failed(
+        self, resource: Resource, cause: str = "", together: tuple[Resource, ...] = ()
+    ) -> Decision:
+        """``resource`` failed (or a robot was lost), and with it ``together``
+        (robots silent in one switch): one decision for all."""
         before = self.situation
-        self.situation = self._failing(before, resource)
+        after = self._failing(before, resource)
+        for other in together:
+            after = self._failing(after, other)
+        self.situation = after
         withdrawn = tuple(
             f for f in self.situation.withdrawn(self.task) if f not in before.withdrawn(self.task)
         )
@@ -232,7 +238,10 @@ class Reconfigurator:
             # the configuration rolled back to may rely on a failure).
             return self._stay(cause, withdrawn)
         started = time.perf_counter()
-        known, best = (False, None) if self.goals else self._fallback(before, resource)
+        if self.goals or together:  # fallbacks are planned for one failure each
+            known, best = False, None
+        else:
+            known, best = self._fallback(before, resource)
         source: Literal["fallback", "search"] = "fallback" if known else "search"
         why: tuple[str, ...] = ()
         if not known or best is None:

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from cfgplan.notation import instance_text
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.executor import Robot, wired
 from cfgplan.runtime.part import ChannelSpec, Part
@@ -77,12 +78,28 @@ class Installed:
         )
 
 
-def install(robot: Robot, part: Part) -> Installed:
-    """Make ``robot`` run ``part``, keeping what both share (module docstring)."""
+def runnable(robot: Robot, part: Part) -> None:
+    """Refuse a part ``robot`` cannot run, before anything changes: a part of
+    another robot (``ValueError``), a functionality without implementation,
+    or one whose implementation cannot take its arguments
+    (:class:`~cfgplan.runtime.errors.RunError`). What :func:`install` checks,
+    so that a robot that answered a prepare ``ready`` installs at commit."""
     if part.robot != robot.name:
-        raise ValueError(f"part of {part.robot} installed on {robot.name}")
+        raise ValueError(f"a part of {part.robot}, not of {robot.name}")
     registry = robot.registry
     registry.require(c.name for c in part.calls)
+    for call in part.calls:
+        registry.lookup(call.name).check(
+            instance_text(call.label, call.name, (robot.name, *call.objects)),
+            len(call.objects),
+            len(call.inputs),
+        )
+
+
+def install(robot: Robot, part: Part) -> Installed:
+    """Make ``robot`` run ``part``, keeping what both share (module docstring);
+    a part it cannot run (:func:`runnable`) is refused before anything changes."""
+    runnable(robot, part)
     partners = robot.partners
     old_channels = {_identity(c): c for c in robot.channels}
     channels: list[Channel] = []

@@ -52,7 +52,8 @@ def chunk(text: str) -> str:
 
 
 def unchunk(part: str) -> str:
-    """The text a chunk stands for (the inverse of :func:`chunk`)."""
+    """The text a chunk stands for (the inverse of :func:`chunk`);
+    ``UnicodeDecodeError`` when its escapes are not UTF-8 (``%FF``)."""
     if part == "%":
         return ""
     return _ESCAPED.sub(lambda m: bytes.fromhex(m.group(0).replace("%", "")).decode(), part)
@@ -96,4 +97,7 @@ def robot_of_alive(key: str, society: str) -> str | None:
         return None
     if parts[3] != "alive":
         return None
-    return unchunk(parts[2])
+    try:
+        return unchunk(parts[2])
+    except UnicodeDecodeError:  # not written by chunk: no robot of ours
+        return None

@@ -25,7 +25,11 @@ commit may carry the part itself (``"part"``): the coordinator so
 re-synchronises a robot that appears (started late, or back after a crash).
 ``{"op": "finish"}`` ends the run when the action's task is accomplished.
 Messages are idempotent: a repeated prepare or commit is answered again,
-an old id is ignored.
+an old id is ignored. Every message carries the coordinator's ``epoch``,
+drawn when it starts: a coordinator started again numbers its
+configurations afresh, and a robot that hears a new epoch on a prepare or
+commit follows it from its first id. Messages come from other processes:
+what cannot be read is recorded as an error and ignored.
 
 Channels the two configurations share carry the same data either side of a
 commit (the same instances at both ends, :mod:`~cfgplan.reconfigure.switch`),
@@ -44,12 +48,12 @@ from typing import Any, Protocol
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Adaptation, Lifecycle
 from cfgplan.runtime.executor import Robot
-from cfgplan.runtime.install import install
+from cfgplan.runtime.install import install, runnable
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.part import Part, part_from_json
 
-__all__ = ["Member", "Membership", "Network", "send"]
+__all__ = ["Member", "Membership", "Network", "message_id", "send"]
 
 
 class Network(Protocol):
@@ -64,6 +68,14 @@ class Network(Protocol):
 
 def send(network: Network, key: str, message: dict[str, object]) -> None:
     network.publish(key, json.dumps(message, separators=(",", ":")).encode())
+
+
+def message_id(value: object) -> int:
+    """A configuration id as the protocol sends it, a whole JSON number
+    (``ValueError`` for anything else: ``1e999`` is not one)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{value!r} is not a configuration id")
+    return value
 
 
 class Member:
@@ -82,6 +94,7 @@ class Member:
         self.monitor = monitor
         self.forward = forward  # False on the coordinator: it reads its monitor itself
         self.current = 0  # the configuration id it runs
+        self.epoch = ""  # the coordinator's run it follows (``epoch`` of its messages)
         self.pending: dict[int, Part] = {}
         self.finished: str | None = None
         network.subscribe(configure_key(network.society, robot.name), self.receive)
@@ -93,10 +106,20 @@ class Member:
         """One message from the coordinator (on the robot's thread, between cycles)."""
         try:
             message = json.loads(payload)
-            op, number = message["op"], int(message["id"])
-        except (ValueError, KeyError, TypeError) as exc:
+            op, number = message["op"], message_id(message["id"])
+            epoch = message.get("epoch", "")
+            if not isinstance(op, str) or not isinstance(epoch, str):
+                raise ValueError("op and epoch are strings")
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
             self._error(f"a switch message that cannot be read: {exc}")
             return
+        if epoch != self.epoch and op in ("prepare", "commit"):
+            # A coordinator started again (or another one): it numbers its
+            # configurations afresh, and this robot keeps running its part
+            # until that coordinator installs one.
+            self.epoch, self.current, self.pending = epoch, 0, {}
+        elif epoch != self.epoch and op == "abort":
+            return  # of a switch of a coordinator no longer followed
         if op == "prepare":
             self._prepare(number, message.get("part"))
         elif op == "commit":
@@ -106,17 +129,28 @@ class Member:
         elif op == "finish":
             self.finished = "achieved"
 
+    def refusal(self, part: Part) -> str | None:
+        """Why this robot cannot run ``part`` (:func:`~cfgplan.runtime.install.runnable`),
+        or None: what it answers a prepare with."""
+        try:
+            runnable(self.robot, part)
+        except (ValueError, RunError) as exc:
+            return str(exc)
+        return None
+
     def _part(self, data: object) -> Part:
         part = part_from_json(data)
-        if part.robot != self.robot.name:
-            raise ValueError(f"a part for {part.robot}, not {self.robot.name}")
-        self.robot.registry.require(c.name for c in part.calls)
+        refusal = self.refusal(part)
+        if refusal is not None:
+            raise ValueError(refusal)
         return part
 
     def _prepare(self, number: int, data: object) -> None:
-        if number <= self.current and number in self.pending:
+        if number in self.pending:  # a repeated prepare
             self._ack(number, "ready")
             return
+        if number <= self.current:
+            return  # a switch older than the configuration it runs: ignored
         try:
             part = self._part(data)
         except (ValueError, RunError) as exc:
@@ -165,6 +199,7 @@ class Member:
             "robot": self.robot.name,
             "id": number,
             "phase": phase,
+            "epoch": self.epoch,
         }
         if reason:
             message["reason"] = reason

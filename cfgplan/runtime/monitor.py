@@ -36,11 +36,12 @@ of its own process sends them to the coordinator over the network.
 from __future__ import annotations
 
 import json
+import math
 import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from typing import Literal
+from typing import Literal, get_args
 
 from cfgplan.notation import atom_text
 from cfgplan.runtime.events import Adaptation, Call, Event, Presence, Staleness
@@ -89,13 +90,30 @@ class Detection:
 
     @classmethod
     def read(cls, payload: bytes) -> Detection:
-        """The inverse of :meth:`message` (``ValueError`` when it is not one)."""
+        """The inverse of :meth:`message` (``ValueError`` when it is not one).
+        It comes from another process: every field is checked for the type
+        :meth:`message` writes, so that one read cannot fail later, when the
+        coordinator acts on it (after a switch, say)."""
         data = json.loads(payload)
         if not isinstance(data, dict):
             raise ValueError("not a detection")
-        data["instance"] = tuple(data.get("instance", ()))
-        data["added"] = tuple(tuple(f) for f in data.get("added", ()))
-        data["removed"] = tuple(tuple(f) for f in data.get("removed", ()))
+        if data.get("kind") not in get_args(Kind):
+            raise ValueError(f"not a kind of detection: {data.get('kind')!r}")
+        for name in ("robot", "label", "other", "how", "detail"):
+            if not isinstance(data.get(name, ""), str):
+                raise ValueError(f"{name} of a detection is a string")
+        for name in ("t", "limit"):
+            value = data.get(name, 0.0)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(f"{name} of a detection is a number")
+            if not math.isfinite(value):
+                raise ValueError(f"{name} of a detection is finite")
+        config = data.get("config", -1)
+        if isinstance(config, bool) or not isinstance(config, int):
+            raise ValueError("config of a detection is a configuration id")
+        data["instance"] = _term(data.get("instance", []))
+        data["added"] = tuple(_term(f) for f in _listed(data.get("added", [])))
+        data["removed"] = tuple(_term(f) for f in _listed(data.get("removed", [])))
         try:
             return cls(**data)
         except TypeError as exc:
@@ -113,6 +131,20 @@ class Detection:
             shown += [f"-{atom_text(f)}" for f in self.removed]
             return f"state update ({self.how}): {' '.join(shown)}"
         return f"{self.kind} {self.label} on {self.other or self.robot}"
+
+
+def _listed(value: object) -> list[object]:
+    if not isinstance(value, list):
+        raise ValueError(f"{value!r} is not a list")
+    return value
+
+
+def _term(value: object) -> Term:
+    """A functionality instance or fact as a detection's JSON writes it."""
+    items = _listed(value)
+    if not all(isinstance(x, str) for x in items):
+        raise ValueError(f"{value!r} is not a list of names")
+    return tuple(str(x) for x in items)
 
 
 @dataclass

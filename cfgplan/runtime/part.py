@@ -10,6 +10,7 @@ build it (:func:`cfgplan.backends.part.runtime_part`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -69,30 +70,70 @@ def part_to_json(part: Part) -> dict[str, Any]:
 
 
 def part_from_json(data: Any) -> Part:
-    """The inverse of :func:`part_to_json`; ``ValueError`` when ``data`` is not a part."""
+    """The inverse of :func:`part_to_json`; ``ValueError`` when ``data`` is not a part.
+
+    A part comes from another process: every value is checked for the type
+    :func:`part_to_json` writes (names are strings, channel indexes whole
+    numbers, a frequency a positive finite number), so that one that passes
+    cannot fail later, when it is installed or run."""
     try:
         channels = tuple(
-            ChannelSpec(kind, str(source), str(target), tuple(map(str, d)), other)
+            ChannelSpec(
+                _kind(kind), _text(source), _text(target), _texts(d),
+                None if other is None else _text(other),
+            )
             for kind, source, target, d, other in data["channels"]
         )
         calls = tuple(
             CallSpec(
-                str(label),
-                str(name),
-                tuple(map(str, objects)),
-                tuple(tuple(int(i) for i in x) for x in inputs),
-                tuple(tuple(int(i) for i in x) for x in outputs),
-                None if freq is None else float(freq),
+                _text(label),
+                _text(name),
+                _texts(objects),
+                tuple(tuple(_index(i) for i in x) for x in inputs),
+                tuple(tuple(_index(i) for i in x) for x in outputs),
+                None if freq is None else _freq(freq),
             )
             for label, name, objects, inputs, outputs, freq in data["calls"]
         )
-        robot = str(data["robot"])
+        robot = _text(data["robot"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"not a part of a configuration: {exc}") from None
     for c in channels:
-        if c.kind not in ("local", "global") or (c.kind == "global") != (c.other is not None):
+        if (c.kind == "global") != (c.other is not None):
             raise ValueError(f"not a channel: {c}")
     width = len(channels)
     if any(i >= width or i < 0 for c in calls for x in (*c.inputs, *c.outputs) for i in x):
         raise ValueError("a call names a channel the part does not have")
     return Part(robot, channels, calls)
+
+
+def _text(value: Any) -> str:
+    if not isinstance(value, str):
+        raise ValueError(f"{value!r} is not a name")
+    return value
+
+
+def _texts(values: Any) -> tuple[str, ...]:
+    if not isinstance(values, list):
+        raise ValueError(f"{values!r} is not a list of names")
+    return tuple(_text(v) for v in values)
+
+
+def _kind(value: Any) -> Literal["local", "global"]:
+    if value == "local" or value == "global":
+        return "local" if value == "local" else "global"
+    raise ValueError(f"{value!r} is not a kind of channel")
+
+
+def _index(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{value!r} is not a channel index")
+    return value
+
+
+def _freq(value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{value!r} is not a frequency")
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{value!r} Hz is not a frequency a functionality can run at")
+    return float(value)

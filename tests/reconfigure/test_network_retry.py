@@ -56,6 +56,9 @@ class Me:
     def install(self, number: int, part: Part) -> None:
         self.installed.append(number)
 
+    def refusal(self, part: Part) -> str | None:
+        return None  # it runs every part
+
 
 class Idle:
     """No injections."""

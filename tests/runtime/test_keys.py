@@ -46,3 +46,9 @@ def test_a_robot_is_read_back_from_its_token_only_in_its_society() -> None:
     assert robot_of_alive(alive_key("lab", "Ro/bot*"), "lab") == "Ro/bot*"
     assert robot_of_alive(alive_key("lab", "Emil"), "other") is None
     assert robot_of_alive("cfgplan/lab/Emil/ch/F1", "lab") is None
+
+
+def test_a_token_whose_name_is_no_utf8_names_no_robot() -> None:
+    """A foreign token under the society's prefix (``%FF``) is not ours: no
+    UnicodeDecodeError in the liveliness callback of every robot."""
+    assert robot_of_alive("cfgplan/lab/%FF/alive", "lab") is None

@@ -4,13 +4,18 @@ it sends the coordinator."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from typing import Any
+
+import pytest
 
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
 from cfgplan.runtime import Registry, society
+from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.member import Member
 from cfgplan.runtime.monitor import Detection, Monitor
+from cfgplan.runtime.part import part_to_json
 from tests.backends.support import EXAMPLE_IMPL, cross_door_44
 
 
@@ -48,3 +53,109 @@ def test_a_report_says_which_configuration_the_robot_ran() -> None:
         Detection("lost", "Emil", 12.5, other="Pippi", config=0),
         Detection("lost", "Emil", 12.5, other="Pippi", config=3),
     ]
+
+
+def _member() -> tuple[Robot, Member, Network, dict[str, Any]]:
+    """Emil of cross-door 44 following a coordinator, and his part as sent."""
+    problem, config = cross_door_44()
+    parts = [runtime_part(p) for p in deploy(config, problem.domain)]
+    running = society(parts, Registry.load(EXAMPLE_IMPL))
+    emil = next(r for r in running.robots if r.name == "Emil")
+    network = Network()
+    own = part_to_json(next(p for p in parts if p.robot == "Emil"))
+    return emil, Member(emil, network, Monitor()), network, own
+
+
+def _message(op: str, number: object, part: object = None, epoch: str = "A") -> bytes:
+    message: dict[str, object] = {"op": op, "id": number, "from": "Pippi", "epoch": epoch}
+    if part is not None:
+        message["part"] = part
+    return json.dumps(message).encode()
+
+
+def _acks(network: Network) -> list[tuple[int, str]]:
+    return [(m["id"], m["phase"]) for _, m in network.sent if m["type"] == "ack"]
+
+
+@pytest.mark.parametrize("number", ["1e999", "Infinity", "1.5", "true", '"1"', "null"])
+def test_a_message_whose_id_is_no_whole_number_is_an_error_not_a_crash(number: str) -> None:
+    """A message from another process is read, never trusted: ``1e999`` made
+    ``int()`` raise OverflowError out of the robot's loop."""
+    emil, member, network, _ = _member()
+    member.receive(b'{"op":"abort","id":' + number.encode() + b"}")
+    member.receive(b'{"op":"prepare","id":' + number.encode() + b"}")
+    assert network.sent == []
+    errors = [e for e in emil.events if getattr(e, "what", "") == "error"]
+    assert len(errors) == 2 and "cannot be read" in dict(errors[0].info)["message"]
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "why"),
+    [
+        ("freq", float("inf"), "not a frequency a functionality can run at"),
+        ("freq", 0, "not a frequency a functionality can run at"),
+        ("other", ["Pippi"], "is not a name"),
+        ("index", 1.0, "is not a channel index"),
+        ("objects", "Door1", "is not a list of names"),
+    ],
+)
+def test_a_part_that_could_fail_once_running_is_refused_at_prepare(
+    where: str, value: object, why: str
+) -> None:
+    """What passes a prepare installs and runs: an infinite frequency (a
+    period of 0, ZeroDivisionError in the loop) or an unhashable robot name
+    (TypeError at commit) was answered ``ready``."""
+    _, member, network, own = _member()
+    call = own["calls"][0]
+    if where == "freq":
+        call[5] = value
+    elif where == "objects":
+        call[2] = value
+    elif where == "index":
+        call[3] = [[value]]
+    else:
+        own["channels"].append(["global", "F1", "F2", ["x"], value])
+    member.receive(_message("prepare", 1, own))
+    ((number, phase),) = _acks(network)
+    assert (number, phase) == (1, "refused") and why in network.sent[-1][1]["reason"]
+    member.receive(_message("commit", 1))
+    assert member.current == 0 and _acks(network)[-1] == (1, "refused")
+
+
+def test_a_part_whose_implementation_cannot_take_its_arguments_is_refused_at_prepare() -> None:
+    """Prepare checks what install checks: an implementation of the wrong
+    arity answered ``ready`` and then ended the robot's process at commit."""
+    base = Registry.load(EXAMPLE_IMPL)
+
+    def no_arguments() -> None:
+        return None
+
+    broken = Registry(
+        replace(base.lookup(n), function=no_arguments) if n == "measure-door" else base.lookup(n)
+        for n in base.names()
+    )
+    emil, member, network, own = _member()
+    emil.registry = broken  # as if its implementations were changed since it started
+    member.receive(_message("prepare", 1, own))
+    reason = network.sent[-1][1]["reason"]
+    assert _acks(network) == [(1, "refused")] and "measure-door(Emil, Door1) calls it" in reason
+
+
+def test_a_coordinator_started_again_is_followed_from_its_first_id() -> None:
+    """A coordinator that starts again numbers its configurations from 0: its
+    messages carry another epoch, and the robot follows them (before, a
+    commit of id 0 after id 1 was dropped without an answer for good)."""
+    _, member, network, own = _member()
+    member.receive(_message("prepare", 1, own, epoch="A"))
+    member.receive(_message("commit", 1, epoch="A"))
+    assert member.current == 1 and _acks(network) == [(1, "ready"), (1, "installed")]
+    member.receive(_message("prepare", 1, own, epoch="A"))  # an old switch: ignored
+    assert len(_acks(network)) == 2
+    member.receive(_message("commit", 0, own, epoch="B"))  # the new one re-synchronises
+    assert member.current == 0 and _acks(network)[-1] == (0, "installed")
+    assert network.sent[-1][1]["epoch"] == "B"
+    member.receive(_message("prepare", 1, own, epoch="B"))
+    member.receive(_message("abort", 1, epoch="A"))  # from the coordinator before: ignored
+    assert 1 in member.pending
+    member.receive(_message("finish", 1, epoch="A"))  # the task is done, whoever says so
+    assert member.finished == "achieved"

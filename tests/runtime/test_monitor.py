@@ -6,6 +6,10 @@ its time is stepped explicitly, so holds and probes are exact.
 
 from __future__ import annotations
 
+import json
+
+import pytest
+
 from cfgplan.runtime import (
     CallSpec,
     ChannelSpec,
@@ -162,3 +166,27 @@ def test_robots_lost_and_seen_and_detections_travel_as_json() -> None:
     assert (lost.kind, lost.other, seen.kind, seen.other) == ("lost", "Pippi", "seen", "Pippi")
     for d in (lost, Detection("facts", "Emil", 1.0, added=(("in", "Pippi", "Room2"),))):
         assert Detection.read(d.message()) == d
+
+
+@pytest.mark.parametrize(
+    "field",
+    [
+        {"config": "x"},
+        {"config": True},
+        {"t": "soon"},
+        {"t": float("inf")},
+        {"kind": "exploded"},
+        {"instance": "compass"},
+        {"instance": ["compass", 1]},
+        {"added": [["robot", ["Pippi"]]]},
+        {"detail": 3},
+    ],
+)
+def test_a_detection_from_the_network_is_read_field_by_field(field: dict[str, object]) -> None:
+    """A report is acted on later (after a switch, from the backlog): one with
+    a field of the wrong type is refused where it is read, not met there
+    (``"config": "x"`` raised TypeError out of the coordinator's loop)."""
+    good = json.loads(Detection("failure", "Pippi", 2.0, instance=("compass", "Pippi")).message())
+    assert Detection.read(json.dumps(good).encode()).instance == ("compass", "Pippi")
+    with pytest.raises(ValueError):
+        Detection.read(json.dumps({**good, **field}).encode())
