@@ -15,7 +15,10 @@ from cfgplan.planner.report import Condition, Report
 
 def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
     """Lines for the user: the goal, then each dead end with its place in the domain."""
-    lines = [f"no admissible configuration for {goal}:"]
+    if report.undecided:  # the search was stopped: nothing is proved
+        lines = [f"no configuration of {goal} found before the search was stopped:"]
+    else:
+        lines = [f"no admissible configuration for {goal}:"]
     shown = 0
     for dead in report.dead.values():
         where = f" ({dead.span})" if dead.span is not None else ""
@@ -33,9 +36,15 @@ def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
     hidden = len(report.dead) - shown
     if hidden > 0:
         lines.append(f"  ... and {hidden} more dead ends (--verbose lists them all)")
-    if len(lines) == 1:
+    if report.undecided:
+        lines.append(
+            "  one may exist: the dead ends above are only those met so far"
+            if len(lines) > 1
+            else "  one may exist (a longer --time-limit may find it)"
+        )
+    elif len(lines) == 1:
         lines.append("  the goal's method has no version")
-    if report.unfinished:
+    if report.unfinished and not report.undecided:
         lines.append("  (the search for dead ends ran out of time: there may be more)")
     return lines
 

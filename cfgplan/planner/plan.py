@@ -147,6 +147,8 @@ class Run:
             guess = self._dive(deadline)
             if guess is not None:
                 yield guess
+            else:  # nothing found, nothing proved
+                self.report.unfinished = self.report.undecided = True
             return
         if not listed and self.stats.pruned and self.stats.complete:
             self._explain(started, deadline)

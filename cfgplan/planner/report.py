@@ -59,6 +59,9 @@ class Report:
     dead: dict[tuple[str, Condition], DeadEnd] = field(default_factory=dict)
     rejected: list[DeadEnd] = field(default_factory=list)
     unfinished: bool = False  # the search that collected them was stopped
+    undecided: bool = False
+    """The search itself was stopped before it found a configuration or
+    proved there is none: the dead ends are only those met so far."""
 
     def note(self, dead: DeadEnd) -> None:
         self.dead.setdefault((dead.where, dead.condition), dead)

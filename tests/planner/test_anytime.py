@@ -10,9 +10,13 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from benchmarks.families import wall
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import plan
+from cfgplan.planner.explain import explain, explanation
+from cfgplan.planner.plan import Run
 from cfgplan.planner.report import StopReason
 from cfgplan.problem import load
 
@@ -34,6 +38,25 @@ def test_time_limit_returns_a_configuration_marked_not_proven(tmp_path: Path) ->
     assert search.stopped is StopReason.TIME_LIMIT
     assert len(configs) == 1 and not configs[0].proven
     assert problems(configs[0], p.domain, p.state) == []
+
+
+def test_stopped_with_nothing_found_says_nothing_is_proved(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Stopped before the first expansion ended, and the dive found nothing
+    in its grace (a goal with thousands of bindings, 80 robots triangulating
+    one): the report said the goal's method had no version, with
+    ``complete: true``. Nothing is proved: it says so."""
+    p = load(*big(tmp_path))
+    monkeypatch.setattr(Run, "_dive", lambda self, deadline: None)
+    configs, search = plan(p.task, p.goal_call, limit=1, time_limit=0)
+    assert configs == [] and search.stopped is StopReason.TIME_LIMIT
+    lines = explain(search.report, "do-build-wall")
+    assert lines == [
+        "no configuration of do-build-wall found before the search was stopped:",
+        "  one may exist (a longer --time-limit may find it)",
+    ]
+    assert explanation(search.report)["complete"] is False
 
 
 def test_configurations_found_before_the_limit_are_proven() -> None:
