@@ -237,17 +237,9 @@ class Coordinator:
         texts = " and ".join(resource.text for resource in resources)
         decision = self.reconfigurator.failed(resources[0], f"{texts} failed", resources[1:])
         withdrawn = [atom_text(f) for f in decision.withdrawn]
-        for each, resource in found:
-            self._note(
-                "failure",
-                each,
-                resource=resource.text,
-                kind=resource.kind,
-                how=each.how or each.kind,
-                detail=each.detail,
-                withdrawn=withdrawn,
-            )
-            withdrawn = []
+        for index, (each, resource) in enumerate(found):
+            taken = withdrawn if index == 0 else []
+            self._note_resource("failure", each, resource, detail=each.detail, withdrawn=taken)
         self._apply(decision, found[0][0])
 
     def _recovery(self, detection: Detection) -> None:
@@ -259,13 +251,7 @@ class Coordinator:
             resource.kind == "functionality" and resource.instance not in situation.failed
         ):
             return  # it was never out
-        self._note(
-            "recovery",
-            detection,
-            resource=resource.text,
-            kind=resource.kind,
-            how=detection.how or detection.kind,
-        )
+        self._note_resource("recovery", detection, resource)
         self._apply(
             self.reconfigurator.recovered(resource, f"{resource.text} recovered"), detection
         )
@@ -320,6 +306,19 @@ class Coordinator:
                 what=what,
                 info=(("detected_by", detection.robot), *info.items()),
             )
+        )
+
+    def _note_resource(
+        self, what: str, detection: Detection, resource: Resource, **more: object
+    ) -> None:
+        """A ``failure`` or ``recovery`` of ``resource``, as ``detection`` saw it."""
+        self._note(
+            what,
+            detection,
+            resource=resource.text,
+            kind=resource.kind,
+            how=detection.how or detection.kind,
+            **more,
         )
 
     def _apply(self, decision: Decision, detection: Detection) -> None:

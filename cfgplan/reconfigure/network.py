@@ -50,10 +50,11 @@ from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
-from cfgplan.runtime.member import Member, message_id, send
+from cfgplan.runtime.member import Member, send
 from cfgplan.runtime.monitor import HOLD, Detection, Monitor
 from cfgplan.runtime.part import Part, part_to_json
 from cfgplan.runtime.society import Society
+from cfgplan.runtime.wire import whole
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
 __all__ = [
@@ -84,6 +85,7 @@ class _Switch:
     phase: str  # "prepare" | "commit"
     waiting: set[str]
     deadline: float
+    resent: set[str] = field(default_factory=set)  # refused the commit: sent the part itself
 
 
 @dataclass
@@ -107,7 +109,6 @@ class NetworkDeployer:
     refused: list[tuple[str, str]] = field(default_factory=list)
     """Robots that could not install a configuration the others did, with why
     (:meth:`acked`): taken as lost by the coordinator (:class:`NetworkAdaptive`)."""
-    _resent: set[str] = field(default_factory=set)  # sent their part again in this commit
 
     @property
     def me(self) -> str:
@@ -159,7 +160,6 @@ class NetworkDeployer:
             self.member.install(number, own)
         self.parts = {**self.parts, **switch.everyone}
         self.current = number
-        self._resent.clear()
         if not others:
             self._finish()
 
@@ -174,30 +174,20 @@ class NetworkDeployer:
         if switch is None or number != switch.decision.id or robot not in switch.waiting:
             return
         self._wait.pop(robot, None)  # it answers again
-        if phase == "refused" and switch.phase == "commit":
-            # The others install (this robot did too): no abort. It lost
-            # what it prepared (started again since?): it is sent the part
-            # itself, once; refused again, it is taken as lost.
-            if robot in self._resent:
-                switch.waiting.discard(robot)
-                self.refused.append((robot, reason))
-            else:
-                self._resent.add(robot)
-                self._to(
-                    robot,
-                    {
-                        "op": "commit",
-                        "id": number,
-                        "from": self.me,
-                        "part": part_to_json(switch.parts[robot]),
-                    },
-                )
+        if phase == "refused":
+            if switch.phase == "prepare":
+                self._abort([robot], f"refused: {reason}")
                 return
-        elif phase == "refused":
-            self._abort([robot], f"refused: {reason}")
-            return
-        expected = "ready" if switch.phase == "prepare" else "installed"
-        if phase != expected and phase != "refused":
+            # Committed: the others install (this robot did too), nothing is
+            # rolled back. It lost what it prepared (started again since?):
+            # it is sent the part itself, once; refused again, it is lost.
+            if robot not in switch.resent:
+                switch.resent.add(robot)
+                part = part_to_json(switch.parts[robot])
+                self._to(robot, {"op": "commit", "id": number, "from": self.me, "part": part})
+                return
+            self.refused.append((robot, reason))
+        elif phase != ("ready" if switch.phase == "prepare" else "installed"):
             return
         switch.waiting.discard(robot)
         if not switch.waiting:
@@ -309,7 +299,7 @@ class NetworkAdaptive:
                     return  # an answer to the coordinator before this one
                 self.deployer.acked(
                     str(message["robot"]),
-                    message_id(message["id"]),
+                    whole(message["id"], "a configuration id"),
                     str(message["phase"]),
                     str(message.get("reason", "")),
                 )

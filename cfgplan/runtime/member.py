@@ -52,8 +52,9 @@ from cfgplan.runtime.install import install, runnable
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.part import Part, part_from_json
+from cfgplan.runtime.wire import whole
 
-__all__ = ["Member", "Membership", "Network", "message_id", "send"]
+__all__ = ["Member", "Membership", "Network", "send"]
 
 
 class Network(Protocol):
@@ -68,14 +69,6 @@ class Network(Protocol):
 
 def send(network: Network, key: str, message: dict[str, object]) -> None:
     network.publish(key, json.dumps(message, separators=(",", ":")).encode())
-
-
-def message_id(value: object) -> int:
-    """A configuration id as the protocol sends it, a whole JSON number
-    (``ValueError`` for anything else: ``1e999`` is not one)."""
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ValueError(f"{value!r} is not a configuration id")
-    return value
 
 
 class Member:
@@ -106,7 +99,7 @@ class Member:
         """One message from the coordinator (on the robot's thread, between cycles)."""
         try:
             message = json.loads(payload)
-            op, number = message["op"], message_id(message["id"])
+            op, number = message["op"], whole(message["id"], "a configuration id")
             epoch = message.get("epoch", "")
             if not isinstance(op, str) or not isinstance(epoch, str):
                 raise ValueError("op and epoch are strings")
@@ -131,7 +124,7 @@ class Member:
 
     def refusal(self, part: Part) -> str | None:
         """Why this robot cannot run ``part`` (:func:`~cfgplan.runtime.install.runnable`),
-        or None: what it answers a prepare with."""
+        or None: the check a prepare makes, for the coordinator's own part."""
         try:
             runnable(self.robot, part)
         except (ValueError, RunError) as exc:
@@ -140,9 +133,7 @@ class Member:
 
     def _part(self, data: object) -> Part:
         part = part_from_json(data)
-        refusal = self.refusal(part)
-        if refusal is not None:
-            raise ValueError(refusal)
+        runnable(self.robot, part)
         return part
 
     def _prepare(self, number: int, data: object) -> None:

@@ -47,6 +47,7 @@ from cfgplan.notation import atom_text
 from cfgplan.runtime.events import Adaptation, Call, Event, Presence, Staleness
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.faults import term_text
+from cfgplan.runtime.wire import is_number, names, whole
 from cfgplan.runtime.wrapper import Wrapper
 
 __all__ = ["HOLD", "HOLD_MAX", "PROBE", "Detection", "Monitor", "Prober"]
@@ -104,16 +105,15 @@ class Detection:
                 raise ValueError(f"{name} of a detection is a string")
         for name in ("t", "limit"):
             value = data.get(name, 0.0)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ValueError(f"{name} of a detection is a number")
-            if not math.isfinite(value):
-                raise ValueError(f"{name} of a detection is finite")
-        config = data.get("config", -1)
-        if isinstance(config, bool) or not isinstance(config, int):
-            raise ValueError("config of a detection is a configuration id")
-        data["instance"] = _term(data.get("instance", []))
-        data["added"] = tuple(_term(f) for f in _listed(data.get("added", [])))
-        data["removed"] = tuple(_term(f) for f in _listed(data.get("removed", [])))
+            if not is_number(value) or not math.isfinite(value):
+                raise ValueError(f"{name} of a detection is a finite number")
+        whole(data.get("config", -1), "a configuration id")
+        data["instance"] = names(data.get("instance", []))
+        for name in ("added", "removed"):
+            facts = data.get(name, [])
+            if not isinstance(facts, list):
+                raise ValueError(f"{name} of a detection is a list of facts")
+            data[name] = tuple(names(f) for f in facts)
         try:
             return cls(**data)
         except TypeError as exc:
@@ -131,20 +131,6 @@ class Detection:
             shown += [f"-{atom_text(f)}" for f in self.removed]
             return f"state update ({self.how}): {' '.join(shown)}"
         return f"{self.kind} {self.label} on {self.other or self.robot}"
-
-
-def _listed(value: object) -> list[object]:
-    if not isinstance(value, list):
-        raise ValueError(f"{value!r} is not a list")
-    return value
-
-
-def _term(value: object) -> Term:
-    """A functionality instance or fact as a detection's JSON writes it."""
-    items = _listed(value)
-    if not all(isinstance(x, str) for x in items):
-        raise ValueError(f"{value!r} is not a list of names")
-    return tuple(str(x) for x in items)
 
 
 @dataclass

@@ -14,6 +14,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from cfgplan.runtime.wire import is_number, name, names, whole
+
 __all__ = ["CallSpec", "ChannelSpec", "Part", "part_from_json", "part_to_json"]
 
 
@@ -79,23 +81,23 @@ def part_from_json(data: Any) -> Part:
     try:
         channels = tuple(
             ChannelSpec(
-                _kind(kind), _text(source), _text(target), _texts(d),
-                None if other is None else _text(other),
+                _kind(kind), name(source), name(target), names(d),
+                None if other is None else name(other),
             )
             for kind, source, target, d, other in data["channels"]
         )
         calls = tuple(
             CallSpec(
-                _text(label),
-                _text(name),
-                _texts(objects),
-                tuple(tuple(_index(i) for i in x) for x in inputs),
-                tuple(tuple(_index(i) for i in x) for x in outputs),
+                name(label),
+                name(call),
+                names(objects),
+                tuple(tuple(whole(i, "a channel index") for i in x) for x in inputs),
+                tuple(tuple(whole(i, "a channel index") for i in x) for x in outputs),
                 None if freq is None else _freq(freq),
             )
-            for label, name, objects, inputs, outputs, freq in data["calls"]
+            for label, call, objects, inputs, outputs, freq in data["calls"]
         )
-        robot = _text(data["robot"])
+        robot = name(data["robot"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"not a part of a configuration: {exc}") from None
     for c in channels:
@@ -107,32 +109,16 @@ def part_from_json(data: Any) -> Part:
     return Part(robot, channels, calls)
 
 
-def _text(value: Any) -> str:
-    if not isinstance(value, str):
-        raise ValueError(f"{value!r} is not a name")
-    return value
-
-
-def _texts(values: Any) -> tuple[str, ...]:
-    if not isinstance(values, list):
-        raise ValueError(f"{values!r} is not a list of names")
-    return tuple(_text(v) for v in values)
-
-
 def _kind(value: Any) -> Literal["local", "global"]:
-    if value == "local" or value == "global":
-        return "local" if value == "local" else "global"
+    if value == "local":
+        return "local"
+    if value == "global":
+        return "global"
     raise ValueError(f"{value!r} is not a kind of channel")
 
 
-def _index(value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ValueError(f"{value!r} is not a channel index")
-    return value
-
-
 def _freq(value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    if not is_number(value):
         raise ValueError(f"{value!r} is not a frequency")
     if not math.isfinite(value) or value <= 0:
         raise ValueError(f"{value!r} Hz is not a frequency a functionality can run at")

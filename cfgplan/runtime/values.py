@@ -26,6 +26,7 @@ import json
 from typing import NamedTuple
 
 from cfgplan.runtime.errors import RunError, printable
+from cfgplan.runtime.wire import is_number, is_whole
 
 __all__ = [
     "MAX_DEPTH",
@@ -137,13 +138,11 @@ def open_envelope(payload: bytes) -> Envelope:
     if not isinstance(data, dict) or "value" not in data:
         raise RunError("a message that is not a cfgplan envelope (no value)")
     sender, seq, t, period = (data.get(k) for k in ("from", "seq", "t", "period"))
-    if not isinstance(sender, str) or not isinstance(seq, int) or isinstance(seq, bool):
+    if not isinstance(sender, str) or not is_whole(seq):
         raise RunError("a message whose envelope lacks its sender or sequence number")
-    if not isinstance(t, int | float) or isinstance(t, bool):
+    if not is_number(t):
         raise RunError("a message whose envelope lacks its time")
-    if period is not None and (
-        not isinstance(period, int | float) or isinstance(period, bool) or not period > 0
-    ):
+    if period is not None and (not is_number(period) or not period > 0):
         raise RunError(f"a message whose period is not a positive number: {period!r}")
     return Envelope(sender, seq, float(t), None if period is None else float(period), data["value"])
 
