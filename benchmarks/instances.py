@@ -2,7 +2,7 @@
 
 The thesis's three experiments; the ``wall`` and ``relay`` families the search
 was first tuned on; and the structures it was not (issue 11): ``ecology``,
-``media-tight``, ``fusion``, ``chain`` and ``delegation``
+``media-tight``, ``fusion``, ``chain``, ``delegation`` and ``gateway``
 (:mod:`benchmarks.families`). Small ones are also run by the naive baseline.
 """
 
@@ -60,6 +60,10 @@ INSTANCES = [
     _big("chain D=100", "chain", 100),
     Instance("delegation N=4", "delegation", (4,)),
     Instance("delegation N=6", "delegation", (6,), baseline=False),
+    Instance("gateway N=4 D=4", "gateway", (4, 4)),
+    _big("gateway N=8 D=8", "gateway", 8, 8),
+    _big("gateway N=8 D=5", "gateway", 8, 5),
+    _big("gateway N=20 D=20", "gateway", 20, 20),
     Instance("deliveries S=2 R=3", "deliveries", (2, 3), False, False, sequence=True),
     Instance("deliveries S=5 R=3", "deliveries", (5, 3), False, False, sequence=True),
     Instance("deliveries S=10 R=3", "deliveries", (10, 3), False, False, sequence=True),

@@ -5,9 +5,10 @@ for ``python -m benchmarks.run`` and the tests:
 
 - ``wall(K, N, L)``, ``relay(D, W, V)``: the shapes the search was first tuned on;
 - ``ecology(N, R, C)``, ``media_tight(N, R, C)``, ``fusion(M, V, P, H)``,
-  ``chain(D)``, ``delegation(N)``: structures it was not (issue 11): covering
-  with shared robots and devices, tight media, weighted covering with
-  ``:cost``, long plateaus of equal cost, recursion;
+  ``chain(D)``, ``delegation(N)``, ``gateway(N, D)``: structures it was not
+  (issue 11): covering with shared robots and devices, tight media, weighted
+  covering with ``:cost``, long plateaus of equal cost, recursion, media that
+  let each camera serve one robot;
 - ``deliveries(S, R)``: a sequence of S configurations (issue 14).
 """
 
@@ -15,6 +16,7 @@ from benchmarks.families.chain import chain
 from benchmarks.families.delegation import delegation
 from benchmarks.families.ecology import ecology, media_tight
 from benchmarks.families.fusion import fusion
+from benchmarks.families.gateway import gateway
 from benchmarks.families.relay import relay
 from benchmarks.families.steps import deliveries
 from benchmarks.families.wall import wall
@@ -25,6 +27,7 @@ __all__ = [
     "deliveries",
     "ecology",
     "fusion",
+    "gateway",
     "media_tight",
     "relay",
     "wall",

@@ -65,9 +65,12 @@ def assign(
     for i, d in enumerate(demands):
         if d is not None:
             pairs.setdefault((d.sender, d.receiver), []).append(i)
+    links_of: dict[tuple[str, str], list[int]] = {}
+    for j, m in enumerate(media):
+        links_of.setdefault((m.sender, m.receiver), []).append(j)
     chosen: dict[int, int] = {}
     for (sender, receiver), channels in pairs.items():
-        links = [j for j, m in enumerate(media) if (m.sender, m.receiver) == (sender, receiver)]
+        links = links_of.get((sender, receiver))
         if not links:
             return MediaResult(None, f"no medium from {sender} to {receiver} for a global channel")
         sizes = {i: demands[i].bandwidth for i in channels}  # type: ignore[union-attr]

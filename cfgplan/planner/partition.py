@@ -26,6 +26,10 @@ whole convoy. Here, instead, every cost that can be shared is *divided*
   channels that end up as one channel are charged ``w`` at most, together:
   each of them counts all the others among its S.
 
+Where the media let a functionality instance, robot or device serve only
+so many of the expansions that bring it (each sends a view of its own over
+one link), S is that many at most (:mod:`cfgplan.planner.capacity`).
+
 Then the cost of each pending item is a plain minimum over its expansions,
 leaving out those whose own global channels the media cannot carry on top
 of the node's (:mod:`cfgplan.planner.room`), computed bottom-up over ground
@@ -43,6 +47,7 @@ from __future__ import annotations
 from collections.abc import Container
 from dataclasses import dataclass, field
 
+from cfgplan.planner.capacity import Capacity
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
@@ -98,7 +103,9 @@ class Partition:
     _stacks: dict[tuple[Ground, ...], Counts | None] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        self.room = Room(self.grounder.task, self.number)
+        task = self.grounder.task
+        self.room = Room(task, self.number)
+        self.capacity = Capacity(task, self.room, self.number, self._instances, self.order)
 
     def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
         """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
@@ -242,7 +249,8 @@ class Partition:
         if self._cyclic:
             return 0.0, None
         task = self.grounder.task
-        pending = self._pending(tuple(item.call for item in node.stack))
+        calls = tuple(item.call for item in node.stack)
+        pending = self._pending(calls)
         if pending is None:
             return 0.0, None
         totals = dict(pending)
@@ -252,6 +260,7 @@ class Partition:
             for key in waiting.counted:
                 totals[key] = get(key, 0) + 1
         load = self.room.load(node.channels)
+        self.capacity.lower(totals, calls, load)
         prices = Prices(task, node, certain, totals, present, self.number, load)
         total = sum(prices.channel(waiting) for waiting in future)
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)

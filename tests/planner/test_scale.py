@@ -20,7 +20,16 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.families import chain, delegation, ecology, fusion, media_tight, relay, wall
+from benchmarks.families import (
+    chain,
+    delegation,
+    ecology,
+    fusion,
+    gateway,
+    media_tight,
+    relay,
+    wall,
+)
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import enumerate as windows
 from cfgplan.planner import plan
@@ -73,8 +82,19 @@ def branch_and_bound(problem: Problem) -> float | None:
         fusion(5, 3, 4, 3),
         chain(12),
         wall(3, 6, 3),
+        gateway(5),  # the media cap on sharing (capacity.py) makes the root's bound exact
+        gateway(6, 4, 60),  # ... and only a lower bound: two views a camera, two own cameras
     ],
-    ids=["ecology-10", "media-tight-5", "media-tight-7", "fusion-5", "chain-12", "wall-3-6-3"],
+    ids=[
+        "ecology-10",
+        "media-tight-5",
+        "media-tight-7",
+        "fusion-5",
+        "chain-12",
+        "wall-3-6-3",
+        "gateway-5",
+        "gateway-6-4-60",
+    ],
 )
 def test_the_cheapest_agrees_with_branch_and_bound(texts: tuple[str, str]) -> None:
     problem = problem_of(texts)
