@@ -102,11 +102,19 @@ def install(robot: Robot, part: Part) -> Installed:
     runnable(robot, part)
     partners = robot.partners
     old_channels = {_identity(c): c for c in robot.channels}
+    wanted = {_spec_identity(spec) for spec in part.channels}
+    # The ends that go are detached first: a new channel may have the key of
+    # one that goes (its other end moved to another robot).
+    gone = {identity: c for identity, c in old_channels.items() if identity not in wanted}
+    staying = {identity: c for identity, c in old_channels.items() if identity in wanted}
+    for channel in gone.values():
+        if channel.remote:
+            robot.transport.detach(robot.name, channel.key)
     channels: list[Channel] = []
     started_channels: list[str] = []
     robot.channels = []
     for spec in part.channels:
-        found = old_channels.pop(_spec_identity(spec), None)
+        found = staying.pop(_spec_identity(spec), None)
         if found is None:
             found = (
                 robot.local_channel(spec.source, spec.target, spec.data)
@@ -115,9 +123,6 @@ def install(robot: Robot, part: Part) -> Installed:
             )
             started_channels.append(found.id)
         channels.append(found)
-    for gone in old_channels.values():
-        if gone.remote:
-            robot.transport.detach(robot.name, gone.key)
     robot.channels = channels
 
     old_wrappers = {(w.label, w.name, w.objects): w for w in robot.wrappers}
@@ -150,7 +155,7 @@ def install(robot: Robot, part: Part) -> Installed:
         stopped=tuple(str(w) for w in old_wrappers.values()),
         started=tuple(started),
         kept_channels=tuple(c.id for c in channels if c.id not in started_channels),
-        stopped_channels=tuple(c.id for c in old_channels.values()),
+        stopped_channels=tuple(c.id for c in gone.values()),
         started_channels=tuple(started_channels),
         problems=tuple(problems),
     )

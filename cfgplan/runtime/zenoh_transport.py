@@ -168,7 +168,11 @@ class ZenohTransport:
             self._session = z.open(config)
         except z.ZError as exc:
             raise RunError(f"cannot open the Zenoh session: {_reason(exc)}") from None
-        self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
+        try:
+            self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
+        except z.ZError as exc:
+            self._session.close()
+            raise RunError(f"cannot declare {robot} alive: {_reason(exc)}") from None
         self._subscribers: list[Any] = []
         self._channels: Any = None  # the subscriber of cfgplan/<society>/<robot>/ch/**
         self._receivers: dict[str, Receiver] = {}
@@ -192,6 +196,8 @@ class ZenohTransport:
         if robot != self.robot:
             raise RunError(f"this Zenoh session carries {self.robot}'s channels, not {robot}'s")
         where = channel_key(self.society, robot, key)
+        if where in self._receivers:
+            raise RunError(f"channel {key} is created twice on {robot}")
         self._receivers[where] = receiver
         if self._channels is None:  # one subscriber for every channel into this robot
             every = channels_pattern(self.society, robot)

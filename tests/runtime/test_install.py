@@ -17,6 +17,7 @@ from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime import Implementation, Part, Registry, Society, build, install, society
 from cfgplan.runtime.install import crash
+from cfgplan.runtime.part import ChannelSpec
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL
 
 STEP2 = (DOMAINS / "cross-door/domain.lisp", DOMAINS / "cross-door/state-6.2.2-step2.lisp")
@@ -126,3 +127,24 @@ def test_a_crash_calls_no_stop_hook() -> None:
     emil = build(before["Emil"], _registry(stopped))
     crash(emil)
     assert stopped == [] and emil.wrappers == [] and all(w.stopped for w in emil.retired)
+
+
+def test_a_global_channel_whose_other_end_moved_still_receives() -> None:
+    """The same labels and data, the sender now on another robot (a new
+    configuration numbers its functionalities afresh): a new channel with the
+    old one's key. The old end is detached before the new one is attached,
+    so the new one receives (the local transport refused it as made twice,
+    and Zenoh's replaced the receiver, then dropped it with the old end)."""
+    def part(other: str) -> Part:
+        return Part("Pippi", (ChannelSpec("global", "F1", "F2", ("x", "Pippi"), other),), ())
+
+    running = society(
+        [part("Emil"), Part("Emil", (), ()), Part("Ida", (), ())], Registry.load(EXAMPLE_IMPL)
+    )
+    pippi, transport = running.robot("Pippi"), running.transport
+    assert pippi is not None and transport is not None
+    done = install(pippi, part("Ida"))
+    assert done.stopped_channels == done.started_channels == ("F1->F2 (x Pippi)",)
+    assert [c.other for c in pippi.channels] == ["Ida"]
+    transport.send(pippi.channels[0].key, "Pippi", b"{}")
+    assert transport.undelivered == 0

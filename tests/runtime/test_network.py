@@ -19,7 +19,15 @@ from typer.testing import CliRunner
 
 import cfgplan.cli.emit  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
-from cfgplan.runtime import ChannelKey, Registry, Robot, Society, assemble, load_module
+from cfgplan.runtime import (
+    ChannelKey,
+    Registry,
+    Robot,
+    RunError,
+    Society,
+    assemble,
+    load_module,
+)
 from cfgplan.runtime.keys import channel_key
 from cfgplan.runtime.zenoh_transport import ZenohOptions, ZenohTransport
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL
@@ -337,3 +345,22 @@ def test_the_zenoh_key_layout_is_what_travels(tmp_path: Path) -> None:
         listener.close()
     assert got[0] == {"payload": '{"value": 1}'}
     assert isinstance(zenoh.KeyExpr(where), zenoh.KeyExpr)
+
+
+def test_a_channel_attached_twice_is_refused_as_on_one_machine(tmp_path: Path) -> None:
+    """Zenoh's transport refuses a second receiver for one channel, as the
+    local transport does (it replaced the first silently); after a detach
+    the channel can be attached again."""
+    config = str(hermetic_config(tmp_path))
+    key = ChannelKey("F7", "F3", ("pos", "Pippi", "Door1"))
+    pippi = ZenohTransport(
+        "Pippi", ZenohOptions(society="twice", listen=(endpoint(free_port()),), config_file=config)
+    )
+    try:
+        pippi.attach("Pippi", key, lambda payload: None)
+        with pytest.raises(RunError, match=r"channel F7->F3 \(pos Pippi Door1\) is created twice"):
+            pippi.attach("Pippi", key, lambda payload: None)
+        pippi.detach("Pippi", key)
+        pippi.attach("Pippi", key, lambda payload: None)
+    finally:
+        pippi.close()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import socket
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -70,3 +71,28 @@ def test_a_session_that_cannot_open_is_a_clear_error(tmp_path: Path) -> None:
         busy = endpoint(taken.getsockname()[1])
         with pytest.raises(RunError, match="cannot open the Zenoh session: "):
             ZenohTransport("Emil", ZenohOptions(listen=(busy,), config_file=hermetic))
+
+
+def test_a_session_whose_token_is_refused_is_closed(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Zenoh refusing the robot's liveliness token is a clear error, and the
+    session already opened is closed (it stayed open, holding its ports)."""
+    import zenoh
+
+    closed: list[bool] = []
+
+    class Liveliness:
+        def declare_token(self, key: str) -> None:
+            raise zenoh.ZError(f"refused {key}")
+
+    class Session:
+        def liveliness(self) -> Liveliness:
+            return Liveliness()
+
+        def close(self) -> None:
+            closed.append(True)
+
+    fake = SimpleNamespace(ZError=zenoh.ZError, Config=zenoh.Config, open=lambda _: Session())
+    monkeypatch.setattr("cfgplan.runtime.zenoh_transport._zenoh", lambda: fake)
+    with pytest.raises(RunError, match="cannot declare Emil alive: refused"):
+        ZenohTransport("Emil", ZenohOptions(listen=("tcp/127.0.0.1:7447",)))
+    assert closed == [True]
