@@ -9,7 +9,9 @@ for ``python -m benchmarks.run`` and the tests:
   (issue 11): covering with shared robots and devices, tight media, weighted
   covering with ``:cost``, long plateaus of equal cost, recursion, media that
   let each camera serve one robot;
-- ``deliveries(S, R)``: a sequence of S configurations (issue 14).
+- ``deliveries(S, R)``: a sequence of S configurations (issue 14);
+- :mod:`benchmarks.families.weak`: structures the search is still weak on
+  (README, "weak spots"), not in the benchmark table.
 """
 
 from benchmarks.families.chain import chain

@@ -1,0 +1,29 @@
+"""The structures the search is still weak on (benchmarks/families/weak.py,
+README "weak spots") are slow at size, never wrong: at sizes the depth-first
+oracle can list, the ten cheapest derivations, best first with both bounds on
+every node, are the oracle's first ten."""
+
+from __future__ import annotations
+
+import pytest
+
+from benchmarks.families import weak
+from cfgplan.configuration.cost import Weights
+from tests.planner.generated import load_text, run
+from tests.planner.oracle import depth_first
+from tests.planner.test_properties import bounds_from_the_first_node
+
+
+@pytest.mark.parametrize(
+    "texts",
+    [weak.overlap(4), weak.overlap(5, 4), weak.mutual(4), weak.triangulate(7), weak.pairs(8)],
+    ids=["overlap-4", "overlap-5-4", "mutual-4", "triangulate-7", "pairs-8"],
+)
+def test_the_ten_cheapest_are_the_oracles(texts: tuple[str, str]) -> None:
+    problem = load_text(*texts)
+    oracle = depth_first(problem, Weights())
+    assert len(oracle) >= 10  # enough to rank
+    with bounds_from_the_first_node():
+        found = run(problem, limit=10, distinct=False)
+    assert [(c.cost, c.identity()) for c in found] == oracle[:10]
+    assert [(c.cost, c.identity()) for c in run(problem, limit=10, distinct=False)] == oracle[:10]
