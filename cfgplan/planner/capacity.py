@@ -44,6 +44,9 @@ from cfgplan.planner.task import Ground, Task
 if TYPE_CHECKING:
     from cfgplan.planner.partition import Instance, Option
 
+UNLIMITED = 1 << 40
+"""More carriers than any count of occurrences: what is not capped."""
+
 STACKS = 64
 """Stacks whose capped keys are kept, then forgotten all at once (as the
 partitioned bound keeps their counts)."""
@@ -105,7 +108,10 @@ class Capacity:
         """How many carriers of ``limit`` a completion of a node with ``load`` uses at most."""
         loaded = sum(1 for _, groups in limit.groups if any(g in load for g in groups))
         room = self.room.total.get(limit.pair, 0.0) - load.get(-1 - limit.pair, 0.0)
-        return loaded + max(int(room / limit.bandwidth + 1e-9), 0)
+        fit = room / limit.bandwidth
+        if not fit < UNLIMITED:  # a bandwidth of 1e-300, a capacity of 1e999: no cap
+            return UNLIMITED
+        return loaded + max(int(fit + 1e-9), 0)
 
     # -- what is capped at a stack of pending items -----------------------------
     def _capped(self, calls: tuple[Ground, ...]) -> tuple[Capped, ...]:

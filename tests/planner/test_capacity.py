@@ -116,6 +116,24 @@ def test_a_robot_watched_twice_is_not_capped() -> None:
     assert run(problem, limit=1, distinct=False)
 
 
+def test_a_bandwidth_too_small_to_count_caps_nothing() -> None:
+    """A view of 1e-300 over a link of 1e9 fits more times than a float can
+    count: nothing is capped (it ended the planner with an OverflowError)."""
+    tiny = "0." + "0" * 299 + "1"
+    domain = f"""(make-functionality :name '(cam ?c) :out '((img ?c)))
+(make-functionality :name '(crop ?c ?r) :in '((img ?c)) :out '((view ?c ?r)))
+(make-functionality :name '(watch ?h ?c ?r) :in '((view ?c ?r)))
+(make-config-method :name '(see ?r ?h) :precond '((camera ?c))
+  :channels '(((local ?c) ?i ?k (img ?c)) ((global ?c ?h) ?k ?w (view ?c ?r) {tiny}))
+  :body '((?i (cam ?c)) (?k (crop ?c ?r)) (?w (watch ?h ?c ?r))))
+(make-config-method :name '(both) :body '((?a (see R1 H)) (?b (see R2 H))))"""
+    state = "(state (robot H) (device C) (camera C) (medium wire C H 1000000000)) (goal (both))"
+    problem = load_text(domain, state)
+    with bounds_from_the_first_node():
+        found = run(problem, limit=1, distinct=False)
+    assert [f.name for f in found[0].functionalities].count("cam") == 1  # one camera for both
+
+
 @st.composite
 def crowded(draw: st.DrawFn) -> Generated:
     """Robots that take a view from a camera (a device or a robot) through a
