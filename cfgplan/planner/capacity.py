@@ -29,6 +29,15 @@ of their own to P: those whose group the node already loads, plus at most
 ``room / b`` more (``room``: what P's media carry beyond the node's load,
 ``b``: the least a carrier adds). The pending items that are the
 functionality itself (or run on the agent) occur besides.
+
+What the argument rests on: the load of a pair counts each group once, at
+its largest bandwidth, so what matters is that the carriers' groups are
+distinct (a carrier's channel merging with one that is not a carrier's
+does no harm); a global channel keeps its two robots, a bandwidth written
+in a method is never lowered (a merge keeps the larger, one left unset is
+filled from ``:out``) (:mod:`cfgplan.planner.room`); and every instance
+below the pending items exists when :meth:`Capacity.lower` runs (the
+partitioned bound counts them first), so no carrier is missed.
 """
 
 from __future__ import annotations
