@@ -66,7 +66,6 @@ class Limit:
     """The carriers of one key on one pair: the least bandwidth one adds, and
     the groups each carrier instance may add (by instance number)."""
 
-    key: int
     pair: int
     bandwidth: float
     groups: tuple[tuple[int, frozenset[int]], ...]
@@ -191,16 +190,19 @@ class Capacity:
                         carriers[key].append((-1, option))  # brought twice: never capped
         self._limits = {}
         for key, found in carriers.items():
-            limits = _limits(key, found)
+            limits = _limits(found)
             if limits:
                 self._limits[key] = limits
         self._carriers = frozenset(
-            instance for limits in self._limits.values() for instance, _ in limits[0].groups
+            instance
+            for limits in self._limits.values()
+            for limit in limits
+            for instance, _ in limit.groups
         )
 
 
-def _limits(key: int, carriers: list[tuple[int, Option]]) -> tuple[Limit, ...]:
-    """The limits of ``key`` brought by ``carriers`` (instance number, option)."""
+def _limits(carriers: list[tuple[int, Option]]) -> tuple[Limit, ...]:
+    """The limits of a key brought by ``carriers`` (instance number, option)."""
     if any(instance < 0 for instance, _ in carriers) or len({i for i, _ in carriers}) < 2:
         return ()
     pairs = set.intersection(
@@ -214,15 +216,9 @@ def _limits(key: int, carriers: list[tuple[int, Option]]) -> tuple[Limit, ...]:
             on_pair = [need for need in option.needs if need.pair == pair]
             least = min(least, max(need.bandwidth for need in on_pair))
             groups.setdefault(instance, set()).update(need.group for need in on_pair)
-        seen: set[int] = set()
-        apart = True
-        for own in groups.values():
-            if own & seen:
-                apart = False
-                break
-            seen |= own
-        if apart:
+        apart = sum(map(len, groups.values())) == len(set().union(*groups.values()))
+        if apart:  # no group is needed by two carrier instances
             limits.append(
-                Limit(key, pair, least, tuple((i, frozenset(g)) for i, g in sorted(groups.items())))
+                Limit(pair, least, tuple((i, frozenset(g)) for i, g in sorted(groups.items())))
             )
     return tuple(limits)
