@@ -7,9 +7,9 @@ first, in the thesis's order (4.5), keeping only the path, and collects the
 admissible configurations whose cost falls in a window ``[low, high)``;
 nodes whose bound reaches ``high`` are cut. At the end of a pass the window
 is sorted by cost, then depth-first order (6.3.2) — exactly the order the
-best-first search gives — and listed; when costs are whole, the cheapest
-cost of a window is listed as it is walked (depth-first order is then the
-listing order).
+best-first search gives — and listed; when costs have a unit
+(:mod:`cfgplan.planner.levels`), the cheapest cost of a window is listed as
+it is walked (depth-first order is then the listing order).
 A configuration has one cost, so it falls in one window: distinct
 configurations stay distinct across windows.
 
@@ -128,7 +128,7 @@ class Windows:
         except _TooBig:
             # The cheapest lie deep: look for them first, pruned by the bounds.
             grower.heuristic, grower.refine = bounds
-            window = Window(low, low + 1 if grower.integral else low + 1e-9)
+            window = Window(low, low + grower.levels.step)
             yield from self._walk(start, window)
             grower.heuristic, grower.refine = self.feasible, None
         while window.beyond is not None:  # something was cut: the costs above
@@ -143,13 +143,14 @@ class Windows:
     ) -> Iterator[Configuration]:
         """One depth-first pass over the derivations costing from ``window.low``
         up to ``window.high`` (which may come down), listing them in order.
-        When costs are whole, the cheapest is listed as it is walked
+        When costs have a unit, the cheapest is listed as it is walked
         (depth-first order is then the listing order). Raises
         :class:`_TooBig` on the node after ``budget`` if none of them was met
         yet; the nodes, expansions and prunings of a walk given up stay
         counted."""
         grower, stats = self.grower, self.stats
-        streamed = window.low + 1 if grower.integral else window.low
+        levels = grower.levels
+        streamed = window.low + (0.0 if levels.unit is None else levels.step)
         listed: set[bytes] = set()
         held: set[bytes] = set()
         found: list[Found] = []

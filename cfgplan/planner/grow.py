@@ -11,7 +11,6 @@ already listed (distinct mode) and the result models.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from enum import Enum
@@ -99,7 +98,7 @@ class Grower:
     models: Models = field(default_factory=Models)
 
     def __post_init__(self) -> None:
-        self.integral = self.grounder.task.integral
+        self.levels = self.grounder.task.levels
         self.settled = 0  # nodes priced so far
         self.tried = 0  # refinements by the stronger bound so far
         self.raised = 0  # those that raised a priority (or pruned)
@@ -139,8 +138,7 @@ class Grower:
                     self.stats.pruned += 1
                     continue
                 if price is not None:
-                    # Less a hair: the sums are floats, and a bound must not pass a cost.
-                    lifted = self.priority(node, split.rest + price - 1e-9)
+                    lifted = self.priority(node, split.rest + price)
                     if lifted > priority:
                         self.lifted += 1
                         priority = lifted
@@ -156,7 +154,7 @@ class Grower:
             current = todo.pop()
             stack = current.stack
             if not stack or task.is_method(stack[0].call):
-                priority = current.cost
+                priority = self.cost(current)
                 if stack:
                     rest = self.heuristic(current)
                     if rest is None:
@@ -175,12 +173,16 @@ class Grower:
             todo.extend(reversed(placed))
 
     def priority(self, node: Partial, rest: float) -> float:
-        """``cost + rest``, rounded up when no configuration costs a fraction
-        (less a hair, for the float sums of shared costs)."""
-        priority = node.cost + rest
-        if self.integral:
-            priority = math.ceil(priority - 1e-6)
-        return priority
+        """``cost + rest`` at its level as a lower bound, never above the level
+        of a completion's cost (:meth:`cfgplan.planner.levels.Levels.bound`:
+        rounded up to a multiple of the unit of costs, less a hair for the
+        float sums of shared costs)."""
+        return self.levels.bound(node.cost + rest)
+
+    def cost(self, node: Partial) -> float:
+        """A complete node's cost as configurations are ranked and reported
+        (:meth:`cfgplan.planner.levels.Levels.cost`)."""
+        return self.levels.cost(node.cost)
 
     def refined(
         self, node: Partial, priority: float, beaten: float | None = None

@@ -176,7 +176,7 @@ class BestFirst:
         priced: list[tuple[float, Partial]] = []
         for node in nodes:
             if node.done:
-                priced.append((node.cost, node))
+                priced.append((grower.cost(node), node))
                 continue
             rest = grower.heuristic(node)
             if rest is None:

@@ -34,12 +34,14 @@ import math
 import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import cast
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.grow import Grower
+from cfgplan.planner.levels import Levels
 from cfgplan.planner.plan import Run, partitioned, parts
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
@@ -236,7 +238,9 @@ class SequenceSearch:
                 cost += self.switch * switching(self.configuration(prefix), config)
             rest = self.remaining(len(whole), self.state_after(whole)[0])
             if rest < math.inf:
-                heapq.heappush(queue, _Entry(cost + rest, whole, False, whole, cost))
+                done, levels = len(whole) == len(self.goals), self._levels
+                price = levels.cost(cost) if done else levels.bound(cost + rest)
+                heapq.heappush(queue, _Entry(price, whole, False, whole, cost))
             self._offer(queue, prefix, j + 1, entry.cost)
 
     def _offer(self, queue: list[_Entry], prefix: tuple[int, ...], j: int, cost: float) -> None:
@@ -245,7 +249,8 @@ class SequenceSearch:
         config = self.ranked(len(prefix), facts).get(j)
         if config is None:
             return
-        heapq.heappush(queue, _Entry(cost + config.cost, (*prefix, j), True, prefix, cost))
+        price = self._levels.bound(cost + config.cost)
+        heapq.heappush(queue, _Entry(price, (*prefix, j), True, prefix, cost))
 
     def _deepest(self) -> tuple[int, ...]:
         """The cheapest prefix among those that get furthest, found cheapest
@@ -275,7 +280,14 @@ class SequenceSearch:
         for i in range(1, len(prefix) + 1):
             changes = self.state_after(prefix[:i])[1]
             steps.append(Step(self.goals[i - 1], self.configuration(prefix[:i]), changes))
-        return PlannedSequence(tuple(steps), total)
+        return PlannedSequence(tuple(steps), self._levels.cost(total))
+
+    @cached_property
+    def _levels(self) -> Levels:
+        """How totals are ranked: as the steps' costs are, the switch weight
+        counted in (:mod:`cfgplan.planner.levels`; a sum of floats in another
+        order may differ in the last bit)."""
+        return self.task.levels.also(self.switch)
 
     def blocked(self) -> tuple[int, Task, Report] | None:
         """When no sequence exists (the search ran to its end): the step (0-based)

@@ -38,6 +38,7 @@ from cfgplan.ir.model import (
     is_variable,
 )
 from cfgplan.notation import sexpr_text
+from cfgplan.planner.levels import Levels, unit_of
 
 Ground = tuple[str, ...]
 """A ground atom or call as a tuple: ``("in", "Pippi", "Room1")``."""
@@ -178,14 +179,16 @@ class Task:
         return frozenset(found)
 
     @cached_property
-    def integral(self) -> bool:
-        """Every configuration costs a whole number: the weights and every
-        ``:cost`` are whole, and reliability adds nothing. Then a lower bound
-        on a cost may be rounded up."""
+    def levels(self) -> Levels:
+        """How its costs are ranked (:mod:`cfgplan.planner.levels`): by the
+        unit the weights and every ``:cost`` are multiples of, unless
+        reliability adds logarithms to them."""
         w = self.weights
-        whole = [w.robot, w.device, w.global_, w.local, w.functionality]
-        whole += [f.cost for f in self.functionalities.values() if f.cost is not None]
-        return not w.reliability and all(float(x).is_integer() for x in whole)
+        if w.reliability:
+            return Levels(None)
+        values = [w.robot, w.device, w.global_, w.local, w.functionality]
+        values += [f.cost for f in self.functionalities.values() if f.cost is not None]
+        return Levels(unit_of(values))
 
     @cached_property
     def uncertain(self) -> bool:

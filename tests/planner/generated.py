@@ -16,8 +16,10 @@ gets wrong most easily: a channel from a method instance to itself (re-wired
 at both ends into a cycle), a functionality whose output uses a variable its
 own precondition binds (a localizer in a doorway: one binding per room), a
 method ``:in`` that feeds two body items (fan-out), one channel written twice
-with two bandwidths, and one call twice in a body. Most are solvable, some
-are not.
+with two bandwidths, and one call twice in a body. Beyond the thesis, they
+hold ``(any ?r ?h)`` channels, devices, and decimal weights and ``:cost``
+(whose float sums tie only to the digits costs are ranked by). Most are
+solvable, some are not.
 """
 
 from __future__ import annotations
@@ -82,7 +84,7 @@ def _functionality(
     outputs: Sequence[str] = (),
     precond: Sequence[str] = (),
     postcond: Sequence[str] = (),
-    cost: int | None = None,
+    cost: float | None = None,
 ) -> str:
     parts = [f"(make-functionality :name '{name}"]
     if precond:
@@ -129,6 +131,9 @@ def _some(draw: st.DrawFn, options: list[str], most: int = 2) -> list[str]:
     return [o for o in options if o in chosen]
 
 
+FRACTIONS = [0.1, 0.2, 0.3, 0.7, 1.1, 2.5, 3]
+
+
 @st.composite
 def generated(draw: st.DrawFn) -> Generated:
     robots = [f"R{i}" for i in range(1, draw(st.integers(2, 4)) + 1)]
@@ -147,6 +152,7 @@ def generated(draw: st.DrawFn) -> Generated:
     for k in sensors:
         facts += [f"has{k}({r})" for r in robots if draw(st.integers(0, 4)) > 0]
     facts += [f"broken({r})" for r in robots if draw(st.integers(0, 4)) == 0]
+    facts += [f"device({r})" for r in robots if draw(st.integers(0, 5)) == 0]  # weighted apart
     if draw(st.booleans()):  # media: between every two robots, or a few links
         pairs = [(a, b) for a in robots for b in robots if a != b]
         if draw(st.booleans()):
@@ -169,7 +175,7 @@ def generated(draw: st.DrawFn) -> Generated:
                     "battery": ["(battery ?r ?b)", "(eval (> ?b 20))"],
                 }[guard],
                 postcond=["(watched ?room)"] if guard == "room" else [],
-                cost=draw(st.sampled_from([None, None, None, 0, 2])),
+                cost=draw(st.sampled_from([None, None, None, 0, 2, 0.3])),
             )
         )
         forms.append(_functionality(f"(filt{k} ?r)", inputs=[f"(d{k} ?r)"], outputs=[f"(d{k} ?r)"]))
@@ -199,7 +205,7 @@ def generated(draw: st.DrawFn) -> Generated:
                             ]
                         )
                     ),
-                    cost=draw(st.sampled_from([None, None, None, 1, 3])),
+                    cost=draw(st.sampled_from([None, None, None, 1, 3, 0.7])),
                 )
             )
             if draw(st.booleans()):  # a method around it, fed through :in ports
@@ -326,6 +332,8 @@ def generated(draw: st.DrawFn) -> Generated:
                     channels.append(f"((local ?h) ?f{i} ?f0 (d{k} ?h))")
                 elif draw(st.integers(0, 7)) == 0:  # a slip: only right when ?h is ?r
                     channels.append(f"((local ?h) ?f{i} ?f0 (d{k} ?r))")
+                elif draw(st.integers(0, 3)) == 0:  # local when ?h is ?r, else global
+                    channels.append(f"((any ?r ?h) ?f{i} ?f0 (d{k} ?r){_bandwidth(draw)})")
                 else:
                     channels.append(f"((global ?r ?h) ?f{i} ?f0 (d{k} ?r){_bandwidth(draw)})")
             versions.append(
@@ -417,6 +425,15 @@ def generated(draw: st.DrawFn) -> Generated:
                 global_=st.integers(0, 3),
                 local=st.integers(0, 2),
                 functionality=st.integers(0, 2),
+                device=st.integers(0, 10),
+            ),
+            st.builds(  # decimal weights: float sums of equal costs may differ in the last bit
+                Weights,
+                robot=st.sampled_from(FRACTIONS),
+                global_=st.sampled_from(FRACTIONS),
+                local=st.sampled_from(FRACTIONS),
+                functionality=st.sampled_from(FRACTIONS),
+                device=st.sampled_from(FRACTIONS),
             ),
         )
     )

@@ -4,7 +4,10 @@ Written from the thesis, not from the planner, for the differential property
 tests: every derivation of the goal, in depth-first order (method versions in
 domain order, bindings in state order), each with its cost, then stably
 sorted by cost, as the planner claims to return them. Channels are checked,
-merged and costed once the stack is empty.
+merged and costed once the stack is empty. Beyond the thesis, as the planner:
+``(any A B)`` channels (local on one robot, global between two), devices
+weighted as devices, and fractional costs ranked to the digits the planner
+ranks them (:func:`cfgplan.planner.levels.level`).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from cfgplan.configuration.matching import satisfying
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Atom, Functionality, Method, Negation
 from cfgplan.notation import atom_text
+from cfgplan.planner.levels import level
 from cfgplan.problem import Problem
 
 Ground = tuple[str, ...]
@@ -88,6 +92,10 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
     domain, state = problem.domain, problem.state
     facts = list(dict.fromkeys((a.predicate, *a.args) for a in state.facts))  # a set (4.4)
     found: list[tuple[float, Identity]] = []
+    devices = {f[1] for f in facts if f[0] == "device" and len(f) == 2}
+    whole = [weights.robot, weights.device, weights.global_, weights.local, weights.functionality]
+    whole += [f.cost for f in domain.functionalities if f.cost is not None]
+    integral = all(float(x).is_integer() for x in whole)  # exact; else ranked levelled
 
     def finish(node: _Node) -> None:
         where = {label: key for label, key, _, _ in node.placed}
@@ -136,7 +144,8 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
             ]
             if not assign(demands, state.media).ok:
                 return
-        cost = weights.robot * len({key[1] for key in where.values()})
+        agents = {key[1] for key in where.values()}
+        cost = sum(weights.device if a in devices else weights.robot for a in agents)
         cost += sum(weights.global_ if c.kind == "global" else weights.local for c in channels)
         cost += sum(
             f.cost if f.cost is not None else weights.functionality for _, _, f, _ in node.placed
@@ -148,7 +157,7 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
             ),
             frozenset(node.effects),
         )
-        found.append((cost, identity))
+        found.append((cost if integral else level(cost), identity))
 
     def visit(node: _Node) -> None:
         if not node.stack:
@@ -213,10 +222,12 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
             data = _subst(spec.data, env)
             if any(t.startswith("?") for t in (*robots, *data[1:])):
                 return None
+            kind = spec.kind
+            if kind == "any":  # local on one robot, global between two
+                one = robots[0] == robots[1]
+                kind, robots = ("local", robots[:1]) if one else ("global", robots)
             block.append(
-                _Wire(
-                    spec.kind, robots, fresh[spec.source], fresh[spec.target], data, spec.bandwidth
-                )
+                _Wire(kind, robots, fresh[spec.source], fresh[spec.target], data, spec.bandwidth)
             )
         wires: list[_Wire] = []
         for c in node.channels:

@@ -1,0 +1,122 @@
+"""How costs are ranked: the levels a cost and a lower bound are compared at.
+
+A cost is a float sum (thesis 3.5), and two configurations of one cost
+summed in another order (``0.1 + 0.2`` against ``0.2 + 0.1`` and the like)
+may differ in the last bit. Ranked by the floats, the one that happens to be
+a bit less would come first, not the first in the thesis's depth-first order
+(6.3.2); and an exact bound may come out a bit above the cost it bounds.
+So costs and bounds are ranked at *levels*:
+
+- when every weight and ``:cost`` is a short decimal (the usual case), every
+  cost is a whole multiple of their greatest common divisor, the *unit* (1
+  for the thesis's weights, 0.1 for weights such as 1.1 and 3.3): a cost
+  ranks as the multiple it is, and a bound rounds up to the next multiple
+  (less a hair for the float error of its sum);
+- otherwise (reliability adds logarithms, or a value has more than six
+  decimals) a cost ranks as its value to :data:`SIGNIFICANT` significant
+  digits, and a bound as the level of its value less :data:`MARGIN`.
+
+A bound's level is never above the level of a cost it bounds, and costs that
+are equal in decimals rank equal. Whole costs below 2**53 are exact floats
+and keep their value.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from fractions import Fraction
+
+SIGNIFICANT = 11
+"""Digits to which costs with no unit are ranked (:func:`level`)."""
+
+MARGIN = 2e-12
+"""What a bound on costs with no unit is lowered by, relative to its size,
+before :func:`level`: more than the float error of the sums of a bound and of
+a cost (about 1e-13 of them), much less than half a digit of
+:data:`SIGNIFICANT` (5e-12 of them at least)."""
+
+DECIMALS = 6
+"""Decimals a weight or ``:cost`` may have for costs to have a unit."""
+
+HAIR = 1e-6, 1e-9
+"""What a bound is lowered by before it is rounded up to a multiple of the
+unit: this many units, plus this much of itself (the float error of a sum
+of thousands of shared costs grows with its size)."""
+
+
+def level(cost: float) -> float:
+    """A cost with no unit as it is ranked: to :data:`SIGNIFICANT` digits."""
+    return float(f"{cost:.{SIGNIFICANT}g}")
+
+
+def below(bound: float) -> float:
+    """The level of a lower bound on costs with no unit: never above the level
+    of a cost it bounds, though the float sums of both err (:data:`MARGIN`)."""
+    return level(bound - MARGIN * abs(bound))
+
+
+def unit_of(values: Iterable[float]) -> Fraction | None:
+    """The greatest common divisor of ``values`` read as the decimals they
+    are written in (a float's shortest form: 0.1 is 1/10); 1 when all are 0;
+    None when one has more than :data:`DECIMALS` decimals."""
+    unit = Fraction(0)
+    for value in values:
+        exact = Fraction(repr(float(value)))
+        if exact.denominator > 10**DECIMALS:
+            return None
+        unit = _gcd(unit, exact)
+    return unit or Fraction(1)
+
+
+def _gcd(a: Fraction, b: Fraction) -> Fraction:
+    return Fraction(
+        math.gcd(a.numerator * b.denominator, b.numerator * a.denominator),
+        a.denominator * b.denominator,
+    )
+
+
+@dataclass(frozen=True)
+class Levels:
+    """Costs and bounds as configurations (or sequences) are ranked by them."""
+
+    unit: Fraction | None
+    """Every cost is a whole multiple of it; None: costs have no unit."""
+
+    @property
+    def whole(self) -> bool:
+        """Every cost is a whole number."""
+        return self.unit is not None and self.unit.denominator == 1
+
+    @property
+    def step(self) -> float:
+        """Less than the gap between two levels of cost near one another:
+        half a unit (levels of no unit: a billionth)."""
+        return 1e-9 if self.unit is None else self.unit.numerator / self.unit.denominator / 2
+
+    def also(self, value: float) -> Levels:
+        """The levels of sums that may add ``value`` (a weight) to these costs."""
+        if self.unit is None:
+            return self
+        more = unit_of([value])
+        return Levels(None if more is None else _gcd(self.unit, more) or Fraction(1))
+
+    def cost(self, cost: float) -> float:
+        """A cost's level: the multiple of the unit it is, or its value to
+        :data:`SIGNIFICANT` digits."""
+        if self.unit is None:
+            return level(cost)
+        if self.unit == 1:
+            return float(round(cost))
+        n, d = self.unit.numerator, self.unit.denominator
+        return round(cost * d / n) * n / d
+
+    def bound(self, bound: float) -> float:
+        """A lower bound's level: never above the level of a cost it bounds."""
+        if self.unit is None:
+            return below(bound)
+        n, d = self.unit.numerator, self.unit.denominator
+        units = bound * d / n
+        whole = math.ceil(units - HAIR[0] - HAIR[1] * abs(units))
+        return float(whole) if self.unit == 1 else whole * n / d
