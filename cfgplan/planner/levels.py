@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 SIGNIFICANT = 11
@@ -83,21 +83,26 @@ class Levels:
 
     unit: Fraction | None
     """Every cost is a whole multiple of it; None: costs have no unit."""
+    _n: int = field(init=False, repr=False, compare=False)
+    _d: int = field(init=False, repr=False, compare=False)
+    _one: bool = field(init=False, repr=False, compare=False)
 
-    @property
-    def whole(self) -> bool:
-        """Every cost is a whole number."""
-        return self.unit is not None and self.unit.denominator == 1
+    def __post_init__(self) -> None:
+        # The unit as integers n / d, and whether it is 1: used per node priced.
+        n, d = (0, 1) if self.unit is None else (self.unit.numerator, self.unit.denominator)
+        object.__setattr__(self, "_n", n)
+        object.__setattr__(self, "_d", d)
+        object.__setattr__(self, "_one", n == d == 1)
 
     @property
     def step(self) -> float:
         """Less than the gap between two levels of cost near one another:
         half a unit (levels of no unit: a billionth)."""
-        return 1e-9 if self.unit is None else self.unit.numerator / self.unit.denominator / 2
+        return 1e-9 if self.unit is None else self._n / self._d / 2
 
     def also(self, value: float) -> Levels:
         """The levels of sums that may add ``value`` (a weight) to these costs."""
-        if self.unit is None:
+        if self.unit is None or value == 0:
             return self
         more = unit_of([value])
         return Levels(None if more is None else _gcd(self.unit, more) or Fraction(1))
@@ -105,18 +110,19 @@ class Levels:
     def cost(self, cost: float) -> float:
         """A cost's level: the multiple of the unit it is, or its value to
         :data:`SIGNIFICANT` digits."""
+        if self._one:
+            return float(round(cost))
         if self.unit is None:
             return level(cost)
-        if self.unit == 1:
-            return float(round(cost))
-        n, d = self.unit.numerator, self.unit.denominator
+        n, d = self._n, self._d
         return round(cost * d / n) * n / d
 
     def bound(self, bound: float) -> float:
         """A lower bound's level: never above the level of a cost it bounds."""
+        if self._one:
+            return float(math.ceil(bound - HAIR[0] - HAIR[1] * abs(bound)))
         if self.unit is None:
             return below(bound)
-        n, d = self.unit.numerator, self.unit.denominator
+        n, d = self._n, self._d
         units = bound * d / n
-        whole = math.ceil(units - HAIR[0] - HAIR[1] * abs(units))
-        return float(whole) if self.unit == 1 else whole * n / d
+        return math.ceil(units - HAIR[0] - HAIR[1] * abs(units)) * n / d

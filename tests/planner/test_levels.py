@@ -37,6 +37,14 @@ def test_floats_of_one_decimal_rank_alike() -> None:
     assert Levels(Fraction(1)).bound(863.2) == 864.0
 
 
+def test_a_switch_weight_joins_the_unit() -> None:
+    assert Levels(Fraction(2)).also(0) == Levels(Fraction(2))  # no switch: costs as they were
+    assert Levels(Fraction(2)).also(3) == Levels(Fraction(1))
+    assert Levels(Fraction(1)).also(0.5) == Levels(Fraction(1, 2))
+    assert Levels(Fraction(1)).also(1 / 3) == Levels(None)
+    assert Levels(None).also(1) == Levels(None)
+
+
 def test_half_a_unit_separates_levels() -> None:
     assert Levels(Fraction(1)).step == 0.5
     assert Levels(Fraction(1, 10)).step == 0.05
