@@ -46,6 +46,7 @@ class Ahead:
         self._wake.set()
 
     def close(self) -> None:
+        """End the thread: at once when idle, else after the search it is in."""
         self._closed = True
         self._wake.set()
 

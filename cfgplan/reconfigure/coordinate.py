@@ -205,6 +205,13 @@ class Coordinator:
         if self.ahead is None:
             self.reconfigurator.prepare()
 
+    def close(self) -> None:
+        """The run is over: the fallbacks' thread ends (after the search it
+        may be in, at most :data:`~cfgplan.reconfigure.ahead.AHEAD_LIMIT`
+        seconds, not waited for)."""
+        if self.ahead is not None:
+            self.ahead.close()
+
     # -- kinds --------------------------------------------------------------
 
     def _resource(self, detection: Detection) -> Resource | None:

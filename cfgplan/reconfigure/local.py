@@ -120,6 +120,9 @@ class Adaptive:
     def reconfigures(self) -> bool:
         return True
 
+    def close(self) -> None:
+        self.coordinator.close()
+
 
 def adapt(
     society: Society,

@@ -316,6 +316,9 @@ class NetworkAdaptive:
     def stopped(self) -> bool:
         return self.coordinator.stopped
 
+    def close(self) -> None:
+        self.coordinator.close()
+
 
 def coordinate(
     society: Society,

@@ -123,3 +123,6 @@ class Scripted:
 
     def between(self, cycle: int, elapsed: float) -> None:
         """Nothing: no reconfiguration."""
+
+    def close(self) -> None:
+        """Nothing runs beside the loop."""

@@ -84,6 +84,9 @@ class Hooks(Protocol):
     def reconfigures(self) -> bool:
         """Resource failures are handled (by switching), not failures of the run."""
 
+    def close(self) -> None:
+        """The run is over: stop what ran beside it (the fallbacks' thread)."""
+
 
 @dataclass(frozen=True)
 class RunOptions:
@@ -285,6 +288,8 @@ def execute(
     except KeyboardInterrupt:
         reason = "interrupted"
     finally:
+        if hooks is not None:
+            hooks.close()
         society.close(why[0] if why else reason)
         if trace is not None:
             trace.close()

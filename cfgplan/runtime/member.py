@@ -234,6 +234,9 @@ class Membership:
     def between(self, cycle: int, elapsed: float) -> None:
         self.member.report()
 
+    def close(self) -> None:
+        """Nothing runs beside the loop."""
+
     @property
     def finished(self) -> str | None:
         return self.member.finished

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import textwrap
+import threading
 from pathlib import Path
 
 import pytest
@@ -273,3 +274,20 @@ def test_a_bad_injection_is_a_usage_error(bad: str, tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["run", *STEP2, "--impl", str(EXAMPLE_IMPL), "--inject", bad])
     assert result.exit_code == 2
     assert "--inject" in result.output and "Traceback" not in result.output
+
+
+def test_the_fallbacks_thread_ends_with_the_run(tmp_path: Path) -> None:
+    """Fallbacks are computed ahead on a thread of their own (5.5); when the
+    run is over it ends (a program that runs societies one after another
+    kept one idle thread, and its tasks, per run)."""
+    before = set(threading.enumerate())
+    code, output, _ = _run(
+        [*STEP2, "--impl", str(EXAMPLE_IMPL), "--rate", "0", "--cycles", "30"],
+        tmp_path / "T",
+        "fail compass(Emil) at cycle 20",
+    )
+    assert code == 0, output
+    started = [t for t in threading.enumerate() if t not in before and "fallbacks" in t.name]
+    for thread in started:
+        thread.join(timeout=20)  # at most the search it is in
+    assert not [t for t in started if t.is_alive()]
