@@ -154,13 +154,14 @@ class Grower:
             current = todo.pop()
             stack = current.stack
             if not stack or task.is_method(stack[0].call):
-                priority = self.cost(current)
                 if stack:
                     rest = self.heuristic(current)
                     if rest is None:
                         self.stats.pruned += 1
                         continue
                     priority = self.priority(current, rest)
+                else:
+                    priority = self.cost(current)
                 self.settled += 1
                 yield priority, current
                 continue
