@@ -125,6 +125,10 @@ class Reconfigurator:
     _tasks: OrderedDict[Situation, Task] = field(default_factory=OrderedDict)
     _fallbacks: Prepared = field(default_factory=lambda: Prepared(TASKS_KEPT))
     _pending: list[Resource] = field(default_factory=list)
+    _played: Configuration | None = None
+    """The configuration whose task was accomplished last (6.2.2): should the
+    switch to the next step not be deployed, the society runs it again, and
+    it serves no goal any longer."""
     lock: threading.Lock = field(default_factory=threading.Lock)
     """Guards the fallbacks, which :mod:`~cfgplan.reconfigure.ahead` computes on a thread."""
 
@@ -233,7 +237,9 @@ class Reconfigurator:
         withdrawn = tuple(
             f for f in self.situation.withdrawn(self.task) if f not in before.withdrawn(self.task)
         )
-        if self.running is None or not self.situation.breaks(self.running):
+        if self.running is None or (
+            not self.situation.breaks(self.running) and self.running is not self._played
+        ):
             # Not used (and nothing else of it out: after an aborted switch,
             # the configuration rolled back to may rely on a failure).
             return self._stay(cause, withdrawn)
@@ -268,7 +274,7 @@ class Reconfigurator:
     def achieved(self) -> Decision:
         """The action's task is accomplished: P becomes true, the configuration
         is played out (6.2.2)."""
-        config = self.running
+        config = self._played = self.running
         add: list[Ground] = []
         remove: list[Ground] = []
         for text in () if config is None else config.postconditions:
@@ -296,7 +302,9 @@ class Reconfigurator:
         return self._to(config, "", time.perf_counter() - started, (), (), cause)
 
     def rollback(self, previous: Configuration | None) -> None:
-        """A switch could not be deployed: the society still runs ``previous``."""
+        """A switch could not be deployed: the society still runs ``previous``
+        (should it be the step just accomplished, the next failure, recovery
+        or update switches to the current step whatever it breaks)."""
         self.running = previous
         self._queue_fallbacks()
 
@@ -334,7 +342,11 @@ class Reconfigurator:
             if best is None:
                 return self._stay(cause)
             return self._to(best, "search", seconds, (), (), cause)
-        valid = (still_valid or self._derivable(running)) and not self.situation.breaks(running)
+        valid = (
+            running is not self._played
+            and (still_valid or self._derivable(running))
+            and not self.situation.breaks(running)
+        )
         if not valid:
             return self._to(best, "search", seconds, why, (), cause)
         if best is None or best.identity() == running.identity():

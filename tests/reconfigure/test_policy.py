@@ -221,3 +221,36 @@ def test_after_a_rollback_a_failure_of_something_unused_still_leaves_it() -> Non
     after = r.failed(LASER)
     assert after.action in ("switch", "stop")
     assert after.config is None or not r.situation.breaks(after.config)
+
+
+SEQUENCE = (
+    DOMAINS / "cross-door/domain-steps.lisp",
+    DOMAINS / "cross-door/state-6.2.2-sequence.lisp",
+)
+
+
+def test_a_step_rolled_back_to_after_it_was_accomplished_serves_no_goal() -> None:
+    """6.2.2 as a sequence: Pippi has crossed, the switch to Emil's crossing
+    could not be deployed, so the society runs Pippi's crossing again. A
+    failure of a part only Emil's crossing uses does not break it, yet it
+    must not stay: its task is accomplished. It switches to the next step's
+    best without that part, or stops when the next step has none."""
+    problem = load(*SEQUENCE, None, None)  # type: ignore[arg-type]
+    first, second = problem.goal_calls
+    configs, _ = plan(problem.task, first)
+    helped = ("measure-robot-orient-compass", "Pippi", "Emil")  # Pippi's compass for Emil
+    door = ("measure-door", "Pippi", "Door1")  # Pippi's camera sees the door for Emil
+    decisions = []
+    for part in (helped, door):
+        r = Reconfigurator(problem.task, problem.domain, first, configs[0], goals=(second,))
+        step = r.achieved()
+        assert step.action == "switch" and step.previous is configs[0]
+        r.rollback(step.previous)  # not deployed: Pippi's crossing runs again
+        assert part not in {(f.name, *f.args) for f in configs[0].functionalities}
+        decisions.append(r.failed(Resource("functionality", instance=part, text=str(part))))
+    switched, stopped = decisions
+    assert switched.action == "switch" and switched.config is not None
+    running = {(f.name, *f.args) for f in switched.config.functionalities}
+    assert ("cross-door", "Emil", "Door1") in running and helped not in running
+    assert switched.config.cost == 47
+    assert stopped.action == "stop" and stopped.config is None
