@@ -27,6 +27,7 @@ are remembered (distinct mode) as 128-bit digests of their label-free form.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -128,7 +129,7 @@ class Windows:
         except _TooBig:
             # The cheapest lie deep: look for them first, pruned by the bounds.
             grower.heuristic, grower.refine = bounds
-            window = Window(low, low + grower.levels.step)
+            window = Window(low, grower.levels.above(low))
             yield from self._walk(start, window)
             grower.heuristic, grower.refine = self.feasible, None
         while window.beyond is not None:  # something was cut: the costs above
@@ -150,7 +151,7 @@ class Windows:
         counted."""
         grower, stats = self.grower, self.stats
         levels = grower.levels
-        streamed = window.low + (0.0 if levels.unit is None else levels.step)
+        streamed = window.low if levels.unit is None else levels.above(window.low)
         listed: set[bytes] = set()
         held: set[bytes] = set()
         found: list[Found] = []
@@ -235,6 +236,6 @@ def _halve(found: list[Found]) -> tuple[list[Found], float]:
     """Keep the cheaper half of a window (whole cost levels): the new upper edge."""
     costs = sorted({f.cost for f in found})
     if len(costs) == 1:
-        return found, costs[0] + 1e-9  # one cost level: it cannot be split
+        return found, math.nextafter(costs[0], math.inf)  # one cost level: it cannot be split
     high = costs[len(costs) // 2]
     return [f for f in found if f.cost < high], high

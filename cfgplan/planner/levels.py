@@ -40,6 +40,12 @@ a cost (about 1e-13 of them), much less than half a digit of
 DECIMALS = 6
 """Decimals a weight or ``:cost`` may have for costs to have a unit."""
 
+RANGE = 1e8
+"""How many units the largest weight or ``:cost`` may be for costs to have
+a unit: a cost of ten thousand parts is then at most 1e12 units, which a
+float sum holds to a tenth of a unit (1e6 and 1e-6 have no unit: their
+costs rank to :data:`SIGNIFICANT` digits)."""
+
 HAIR = 1e-6, 1e-9
 """What a bound is lowered by before it is rounded up to a multiple of the
 unit: this many units, plus this much of itself (the float error of a sum
@@ -60,14 +66,17 @@ def below(bound: float) -> float:
 def unit_of(values: Iterable[float]) -> Fraction | None:
     """The greatest common divisor of ``values`` read as the decimals they
     are written in (a float's shortest form: 0.1 is 1/10); 1 when all are 0;
-    None when one has more than :data:`DECIMALS` decimals."""
-    unit = Fraction(0)
+    None when one has more than :data:`DECIMALS` decimals, or the largest is
+    more than :data:`RANGE` units."""
+    unit, largest = Fraction(0), Fraction(0)
     for value in values:
         exact = Fraction(repr(float(value)))
         if exact.denominator > 10**DECIMALS:
             return None
-        unit = _gcd(unit, exact)
-    return unit or Fraction(1)
+        unit, largest = _gcd(unit, exact), max(largest, exact)
+    if not unit:
+        return Fraction(1)
+    return unit if largest <= RANGE * unit else None
 
 
 def _gcd(a: Fraction, b: Fraction) -> Fraction:
@@ -94,11 +103,12 @@ class Levels:
         object.__setattr__(self, "_d", d)
         object.__setattr__(self, "_one", n == d == 1)
 
-    @property
-    def step(self) -> float:
-        """Less than the gap between two levels of cost near one another:
-        half a unit (levels of no unit: a billionth)."""
-        return 1e-9 if self.unit is None else self._n / self._d / 2
+    def above(self, level: float) -> float:
+        """An edge above ``level`` below every higher level: half a unit up,
+        or the next float (levels of no unit are distinct floats)."""
+        if self.unit is None:
+            return math.nextafter(level, math.inf)
+        return level + self._n / self._d / 2
 
     def also(self, value: float) -> Levels:
         """The levels of sums that may add ``value`` (a weight) to these costs."""

@@ -24,6 +24,8 @@ def test_the_unit_is_the_greatest_common_divisor_of_the_decimals() -> None:
     assert unit_of([0, 0]) == 1  # every cost is 0
     assert unit_of([1 / 3]) is None  # no short decimal: 0.3333333333333333
     assert unit_of([1e-7]) is None  # more than six decimals
+    assert unit_of([1e6, 1e-6]) is None  # 1e12 units: a float sum of them errs by units
+    assert unit_of([1e8, 1]) == 1
 
 
 def test_floats_of_one_decimal_rank_alike() -> None:
@@ -45,10 +47,11 @@ def test_a_switch_weight_joins_the_unit() -> None:
     assert Levels(None).also(1) == Levels(None)
 
 
-def test_half_a_unit_separates_levels() -> None:
-    assert Levels(Fraction(1)).step == 0.5
-    assert Levels(Fraction(1, 10)).step == 0.05
-    assert Levels(None).step == 1e-9
+def test_an_edge_above_a_level_is_below_the_next() -> None:
+    assert Levels(Fraction(1)).above(864.0) == 864.5
+    assert Levels(Fraction(1, 10)).above(919.7) == 919.75
+    big = 3e9 + 0.5  # 1e-9 above it is no other float
+    assert big < Levels(None).above(big) < level(big + 1e-6)
 
 
 @PROPERTY
