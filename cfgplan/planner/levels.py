@@ -17,8 +17,11 @@ So costs and bounds are ranked at *levels*:
   digits, and a bound as the level of its value less :data:`MARGIN`.
 
 A bound's level is never above the level of a cost it bounds, and costs that
-are equal in decimals rank equal. Whole costs below 2**53 are exact floats
-and keep their value.
+are equal in decimals rank equal where there is a unit. Without one, two
+equal costs whose float sums fall either side of an eleventh digit's
+rounding edge rank a digit apart (rare: sums err by about 1e-15 of
+themselves, a digit is 1e-11). Whole costs below 2**53 are exact floats and
+keep their value.
 """
 
 from __future__ import annotations
@@ -41,10 +44,11 @@ DECIMALS = 6
 """Decimals a weight or ``:cost`` may have for costs to have a unit."""
 
 RANGE = 1e8
-"""How many units the largest weight or ``:cost`` may be for costs to have
-a unit: a cost of ten thousand parts is then at most 1e12 units, which a
-float sum holds to a tenth of a unit (1e6 and 1e-6 have no unit: their
-costs rank to :data:`SIGNIFICANT` digits)."""
+"""How many units the largest weight or ``:cost`` may be for fractional
+costs to have a unit: a cost of ten thousand parts is then at most 1e12
+units, which a float sum holds to a tenth of a unit (1e6 and 1e-6 have no
+unit: their costs rank to :data:`SIGNIFICANT` digits). Whole values always
+have one: their float sums are exact below 2**53."""
 
 HAIR = 1e-6, 1e-9
 """What a bound is lowered by before it is rounded up to a multiple of the
@@ -66,8 +70,8 @@ def below(bound: float) -> float:
 def unit_of(values: Iterable[float]) -> Fraction | None:
     """The greatest common divisor of ``values`` read as the decimals they
     are written in (a float's shortest form: 0.1 is 1/10); 1 when all are 0;
-    None when one has more than :data:`DECIMALS` decimals, or the largest is
-    more than :data:`RANGE` units."""
+    None when one has more than :data:`DECIMALS` decimals, or the unit is a
+    fraction and the largest is more than :data:`RANGE` units."""
     unit, largest = Fraction(0), Fraction(0)
     for value in values:
         exact = Fraction(repr(float(value)))
@@ -76,7 +80,7 @@ def unit_of(values: Iterable[float]) -> Fraction | None:
         unit, largest = _gcd(unit, exact), max(largest, exact)
     if not unit:
         return Fraction(1)
-    return unit if largest <= RANGE * unit else None
+    return unit if unit.denominator == 1 or largest <= RANGE * unit else None
 
 
 def _gcd(a: Fraction, b: Fraction) -> Fraction:

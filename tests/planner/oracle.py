@@ -6,8 +6,9 @@ domain order, bindings in state order), each with its cost, then stably
 sorted by cost, as the planner claims to return them. Channels are checked,
 merged and costed once the stack is empty. Beyond the thesis, as the planner:
 ``(any A B)`` channels (local on one robot, global between two), devices
-weighted as devices, and fractional costs ranked to the digits the planner
-ranks them (:func:`cfgplan.planner.levels.level`).
+weighted as devices, and costs ranked at the levels the planner ranks them
+(:mod:`cfgplan.planner.levels`; no reliability: it has no ``reliability``
+weight).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from cfgplan.configuration.matching import satisfying
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Atom, Functionality, Method, Negation
 from cfgplan.notation import atom_text
-from cfgplan.planner.levels import level
+from cfgplan.planner.levels import Levels, unit_of
 from cfgplan.problem import Problem
 
 Ground = tuple[str, ...]
@@ -93,9 +94,9 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
     facts = list(dict.fromkeys((a.predicate, *a.args) for a in state.facts))  # a set (4.4)
     found: list[tuple[float, Identity]] = []
     devices = {f[1] for f in facts if f[0] == "device" and len(f) == 2}
-    whole = [weights.robot, weights.device, weights.global_, weights.local, weights.functionality]
-    whole += [f.cost for f in domain.functionalities if f.cost is not None]
-    integral = all(float(x).is_integer() for x in whole)  # exact; else ranked levelled
+    values = [weights.robot, weights.device, weights.global_, weights.local, weights.functionality]
+    values += [f.cost for f in domain.functionalities if f.cost is not None]
+    levels = Levels(unit_of(values))  # costs ranked as the planner ranks them
 
     def finish(node: _Node) -> None:
         where = {label: key for label, key, _, _ in node.placed}
@@ -157,7 +158,7 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
             ),
             frozenset(node.effects),
         )
-        found.append((cost if integral else level(cost), identity))
+        found.append((levels.cost(cost), identity))
 
     def visit(node: _Node) -> None:
         if not node.stack:

@@ -26,6 +26,7 @@ def test_the_unit_is_the_greatest_common_divisor_of_the_decimals() -> None:
     assert unit_of([1e-7]) is None  # more than six decimals
     assert unit_of([1e6, 1e-6]) is None  # 1e12 units: a float sum of them errs by units
     assert unit_of([1e8, 1]) == 1
+    assert unit_of([1e15, 1]) == 1  # whole: float sums exact below 2**53
 
 
 def test_floats_of_one_decimal_rank_alike() -> None:
@@ -51,7 +52,7 @@ def test_an_edge_above_a_level_is_below_the_next() -> None:
     assert Levels(Fraction(1)).above(864.0) == 864.5
     assert Levels(Fraction(1, 10)).above(919.7) == 919.75
     big = 3e9 + 0.5  # 1e-9 above it is no other float
-    assert big < Levels(None).above(big) < level(big + 1e-6)
+    assert big < Levels(None).above(big) < level(big + 0.1)  # the next level: 3000000000.6
 
 
 @PROPERTY
