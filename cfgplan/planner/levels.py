@@ -12,9 +12,11 @@ So costs and bounds are ranked at *levels*:
   for the thesis's weights, 0.1 for weights such as 1.1 and 3.3): a cost
   ranks as the multiple it is, and a bound rounds up to the next multiple
   (less a hair for the float error of its sum);
-- otherwise (reliability adds logarithms, or a value has more than six
-  decimals) a cost ranks as its value to :data:`SIGNIFICANT` significant
-  digits, and a bound as the level of its value less :data:`MARGIN`.
+- otherwise (reliability adds logarithms, a value has more than six
+  decimals, or a fractional unit is too fine for the largest value,
+  :data:`RANGE`) a cost ranks as its value to :data:`SIGNIFICANT`
+  significant digits, and a bound as the level of its value less
+  :data:`MARGIN`.
 
 A bound's level is never above the level of a cost it bounds, and costs that
 are equal in decimals rank equal where there is a unit. Without one, two
