@@ -116,13 +116,6 @@ class Levels:
             return math.nextafter(level, math.inf)
         return level + self._n / self._d / 2
 
-    def also(self, value: float) -> Levels:
-        """The levels of sums that may add ``value`` (a weight) to these costs."""
-        if self.unit is None or value == 0:
-            return self
-        more = unit_of([value])
-        return Levels(None if more is None else _gcd(self.unit, more) or Fraction(1))
-
     def cost(self, cost: float) -> float:
         """A cost's level: the multiple of the unit it is, or its value to
         :data:`SIGNIFICANT` digits."""

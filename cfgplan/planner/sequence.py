@@ -287,7 +287,7 @@ class SequenceSearch:
         """How totals are ranked: as the steps' costs are, the switch weight
         counted in (:mod:`cfgplan.planner.levels`; a sum of floats in another
         order may differ in the last bit)."""
-        return self.task.levels.also(self.switch)
+        return self.task.levels_with(self.switch)
 
     def blocked(self) -> tuple[int, Task, Report] | None:
         """When no sequence exists (the search ran to its end): the step (0-based)

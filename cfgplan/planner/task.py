@@ -183,10 +183,15 @@ class Task:
         """How its costs are ranked (:mod:`cfgplan.planner.levels`): by the
         unit the weights and every ``:cost`` are multiples of, unless
         reliability adds logarithms to them."""
+        return self.levels_with()
+
+    def levels_with(self, *more: float) -> Levels:
+        """:attr:`levels` of sums that may also add ``more`` (a sequence's
+        switch weight)."""
         w = self.weights
         if w.reliability:
             return Levels(None)
-        values = [w.robot, w.device, w.global_, w.local, w.functionality]
+        values = [w.robot, w.device, w.global_, w.local, w.functionality, *more]
         values += [f.cost for f in self.functionalities.values() if f.cost is not None]
         return Levels(unit_of(values))
 

@@ -10,9 +10,14 @@ from fractions import Fraction
 from hypothesis import given
 from hypothesis import strategies as st
 
+from cfgplan.configuration.cost import Weights
 from cfgplan.planner.levels import Levels, level, unit_of
-from tests.planner.generated import PROPERTY
+from tests.planner.generated import PROPERTY, load_text
 
+SWITCHED = """\
+(make-functionality :name '(f ?r) :precond '((robot ?r)) :out '((d ?r)) :cost 4000000)
+(make-config-method :name '(job ?r) :precond '((robot ?r)) :body '((?a (f ?r))))
+"""
 DECIMALS = [0.1, 0.2, 0.3, 0.7, 1.1, 2.5, 3.3, 10.7, 0.05, 12.25]
 
 
@@ -41,11 +46,14 @@ def test_floats_of_one_decimal_rank_alike() -> None:
 
 
 def test_a_switch_weight_joins_the_unit() -> None:
-    assert Levels(Fraction(2)).also(0) == Levels(Fraction(2))  # no switch: costs as they were
-    assert Levels(Fraction(2)).also(3) == Levels(Fraction(1))
-    assert Levels(Fraction(1)).also(0.5) == Levels(Fraction(1, 2))
-    assert Levels(Fraction(1)).also(1 / 3) == Levels(None)
-    assert Levels(None).also(1) == Levels(None)
+    even = Weights(robot=10, global_=4, local=2, functionality=2, device=10)
+    task = load_text(SWITCHED, "(state (robot X))\n\n(goal (job X))\n", even).task
+    assert task.levels == Levels(Fraction(2))
+    assert task.levels_with(0) == Levels(Fraction(2))  # no switch: costs as they were
+    assert task.levels_with(3) == Levels(Fraction(1))
+    assert task.levels_with(0.5) == Levels(Fraction(1, 2))
+    assert task.levels_with(1 / 3) == Levels(None)
+    assert task.levels_with(1e-6) == Levels(None)  # 4e6 is 4e12 of it: past the range
 
 
 def test_an_edge_above_a_level_is_below_the_next() -> None:
