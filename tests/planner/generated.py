@@ -2,7 +2,8 @@
 
 Each example is a generated domain and state, written as text in the thesis's
 syntax and read, checked and compiled as :func:`cfgplan.problem.load` does
-(:func:`solve`; a test confirms it gives what ``load`` gives on files), so a
+(:func:`tests.planner.problems.solve`; a test confirms it gives what ``load``
+gives on files), so a
 failing example shrinks to a reproducer that can be pasted into files and run
 with ``cfgplan plan``.
 
@@ -17,46 +18,23 @@ at both ends into a cycle), a functionality whose output uses a variable its
 own precondition binds (a localizer in a doorway: one binding per room), a
 method ``:in`` that feeds two body items (fan-out), one channel written twice
 with two bandwidths, and one call twice in a body. Beyond the thesis, they
-hold ``(any ?r ?h)`` channels, devices, and decimal weights and ``:cost``
-(whose float sums tie only to the digits costs are ranked by). Most are
-solvable, some are not.
+hold ``(any ?r ?h)`` channels, devices, decimal weights and ``:cost``
+(whose float sums tie only to the digits costs are ranked by), and
+reliabilities of functionalities and media (7.2), which a ``reliability``
+weight turns into costs; ``generated(uncertain=True)`` always has media, most
+of them less than fully reliable, and that weight. Most are solvable, some
+are not.
 """
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import cache
-from pathlib import Path
 
-from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
-from cfgplan.check import check
 from cfgplan.configuration.cost import Weights
-from cfgplan.configuration.model import Configuration
-from cfgplan.diagnostics import CfgplanError
-from cfgplan.ir.model import Domain
-from cfgplan.planner import plan
-from cfgplan.planner.task import compile_task
-from cfgplan.problem import Problem, load
-from cfgplan.syntax.reader import SourceFile, parse, state_from
-
-
-@dataclass(frozen=True)
-class Generated:
-    """A domain and a state as source text, with the weights to plan with."""
-
-    domain: str
-    state: str
-    weights: Weights
-
-    def __str__(self) -> str:
-        return (
-            f";; weights: {self.weights}\n;; domain.lisp\n{self.domain}\n"
-            f";; state.lisp\n{self.state}"
-        )
+from tests.planner.problems import Generated
 
 
 @dataclass(frozen=True)
@@ -85,6 +63,7 @@ def _functionality(
     precond: Sequence[str] = (),
     postcond: Sequence[str] = (),
     cost: float | None = None,
+    reliability: float | None = None,
 ) -> str:
     parts = [f"(make-functionality :name '{name}"]
     if precond:
@@ -97,6 +76,8 @@ def _functionality(
         parts.append(f"  :postcond '{_list(postcond)}")
     if cost is not None:
         parts.append(f"  :cost {cost}")
+    if reliability is not None:
+        parts.append(f"  :reliability {reliability}")
     return "\n".join(parts) + ")"
 
 
@@ -135,7 +116,7 @@ FRACTIONS = [0.1, 0.2, 0.3, 0.7, 1.1, 2.5, 3]
 
 
 @st.composite
-def generated(draw: st.DrawFn) -> Generated:
+def generated(draw: st.DrawFn, uncertain: bool = False) -> Generated:
     robots = [f"R{i}" for i in range(1, draw(st.integers(2, 4)) + 1)]
     sensors = list(range(1, draw(st.integers(1, 3)) + 1))
     needs = list(range(1, draw(st.integers(1, 2)) + 1))
@@ -153,13 +134,15 @@ def generated(draw: st.DrawFn) -> Generated:
         facts += [f"has{k}({r})" for r in robots if draw(st.integers(0, 4)) > 0]
     facts += [f"broken({r})" for r in robots if draw(st.integers(0, 4)) == 0]
     facts += [f"device({r})" for r in robots if draw(st.integers(0, 5)) == 0]  # weighted apart
-    if draw(st.booleans()):  # media: between every two robots, or a few links
+    if uncertain or draw(st.booleans()):  # media: between every two robots, or a few links
         pairs = [(a, b) for a in robots for b in robots if a != b]
         if draw(st.booleans()):
             pairs = draw(st.lists(st.sampled_from(pairs), max_size=6))
         for a, b in pairs:
             capacity = draw(st.sampled_from([0, 10, 30, 100, 100]))
-            facts.append(f"medium(link, {a}, {b}, {capacity})")
+            unsaid = [""] if uncertain else ["", ""]
+            reliability = draw(st.sampled_from([*unsaid, ", 0.9", ", 0.5"]))  # 7.2
+            facts.append(f"medium(link, {a}, {b}, {capacity}{reliability})")
 
     # Sensing resources and filters.
     for k in sensors:
@@ -176,6 +159,7 @@ def generated(draw: st.DrawFn) -> Generated:
                 }[guard],
                 postcond=["(watched ?room)"] if guard == "room" else [],
                 cost=draw(st.sampled_from([None, None, None, 0, 2, 0.3])),
+                reliability=draw(st.sampled_from([None, None, 0.8, 0.95])),
             )
         )
         forms.append(_functionality(f"(filt{k} ?r)", inputs=[f"(d{k} ?r)"], outputs=[f"(d{k} ?r)"]))
@@ -416,8 +400,13 @@ def generated(draw: st.DrawFn) -> Generated:
             )
         )
 
+    reliable = st.builds(  # reliability adds logarithms: costs without a unit
+        Weights, robot=st.integers(0, 10), reliability=st.sampled_from([1, 10, 0.3])
+    )
     weights = draw(
-        st.one_of(
+        reliable
+        if uncertain
+        else st.one_of(
             st.just(Weights()),
             st.builds(
                 Weights,
@@ -435,56 +424,8 @@ def generated(draw: st.DrawFn) -> Generated:
                 functionality=st.sampled_from(FRACTIONS),
                 device=st.sampled_from(FRACTIONS),
             ),
+            reliable,
         )
     )
     state = f"(state {', '.join(facts)})\n\n(goal (do-task R1))\n"
     return Generated("\n".join(forms) + "\n", state, weights)
-
-
-def load_generated(example: Generated) -> Problem:
-    """Write the example to files and read them with :func:`cfgplan.problem.load`."""
-    with tempfile.TemporaryDirectory() as tmp:
-        domain, state = Path(tmp) / "domain.lisp", Path(tmp) / "state.lisp"
-        domain.write_text(example.domain, encoding="utf-8")
-        state.write_text(example.state, encoding="utf-8")
-        return load(domain, state, None, example.weights)
-
-
-@cache
-def _form(text: str) -> SourceFile:
-    return parse(text, "domain.lisp")
-
-
-def solve(example: Generated) -> Problem:
-    """What :func:`load_generated` returns, faster: the generated domains share
-    most of their forms, so each form is parsed once (parsing dominates the
-    run time of these tests). Then checked and compiled as load() does."""
-    forms = [_form("(make-" + f) for f in ("\n" + example.domain).split("\n(make-")[1:]]
-    domain = Domain(
-        functionalities=tuple(f for form in forms for f in form.functionalities),
-        methods=tuple(m for form in forms for m in form.methods),
-    )
-    state = state_from(parse(example.state, "state.lisp"))
-    assert state.goal is not None
-    diagnostics = check(domain, state, state.goal)
-    if any(d.is_error for d in diagnostics):
-        raise CfgplanError(diagnostics)
-    task = compile_task(domain, state, example.weights)
-    return Problem(domain, state, state.goal, task)
-
-
-def run(problem: Problem, *, limit: int | None = None, distinct: bool) -> list[Configuration]:
-    configs, _ = plan(problem.task, problem.goal_call, limit=limit, distinct=distinct)
-    return configs
-
-
-PROPERTY = settings(
-    derandomize=True,
-    max_examples=100,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
-
-
-def load_text(domain: str, state: str, weights: Weights | None = None) -> Problem:
-    return load_generated(Generated(domain, state, weights or Weights()))

@@ -6,13 +6,15 @@ domain order, bindings in state order), each with its cost, then stably
 sorted by cost, as the planner claims to return them. Channels are checked,
 merged and costed once the stack is empty. Beyond the thesis, as the planner:
 ``(any A B)`` channels (local on one robot, global between two), devices
-weighted as devices, and costs ranked at the levels the planner ranks them
-(:mod:`cfgplan.planner.levels`; no reliability: it has no ``reliability``
-weight).
+weighted as devices, costs ranked at the levels the planner ranks them
+(:mod:`cfgplan.planner.levels`), and with a ``reliability`` weight W, W·(−ln p)
+for each functionality's reliability p and for each global channel between two
+robots, p the most reliable medium between them (7.2).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -96,7 +98,15 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
     devices = {f[1] for f in facts if f[0] == "device" and len(f) == 2}
     values = [weights.robot, weights.device, weights.global_, weights.local, weights.functionality]
     values += [f.cost for f in domain.functionalities if f.cost is not None]
-    levels = Levels(unit_of(values))  # costs ranked as the planner ranks them
+    # Costs ranked as the planner ranks them: logarithms have no unit.
+    levels = Levels(None if weights.reliability else unit_of(values))
+    links: dict[tuple[str, str], float] = {}  # the most reliable medium of each link
+    for m in state.media:
+        p = 1.0 if m.reliability is None else m.reliability
+        links[m.sender, m.receiver] = max(p, links.get((m.sender, m.receiver), 0.0))
+
+    def unreliable(p: float) -> float:
+        return weights.reliability * -math.log(p) if weights.reliability else 0.0
 
     def finish(node: _Node) -> None:
         where = {label: key for label, key, _, _ in node.placed}
@@ -149,7 +159,14 @@ def depth_first(problem: Problem, weights: Weights) -> list[tuple[float, Identit
         cost = sum(weights.device if a in devices else weights.robot for a in agents)
         cost += sum(weights.global_ if c.kind == "global" else weights.local for c in channels)
         cost += sum(
-            f.cost if f.cost is not None else weights.functionality for _, _, f, _ in node.placed
+            (f.cost if f.cost is not None else weights.functionality)
+            + unreliable(1.0 if f.reliability is None else f.reliability)
+            for _, _, f, _ in node.placed
+        )
+        cost += sum(
+            unreliable(links.get((where[c.source][1], where[c.target][1]), 1.0))
+            for c in channels
+            if c.kind == "global" and where[c.source][1] != where[c.target][1]
         )
         identity: Identity = (
             frozenset(where.values()),

@@ -16,7 +16,8 @@ from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.plan import combined
 from cfgplan.planner.successors import successors
-from tests.planner.generated import PROPERTY, Generated, generated, load_text, solve
+from tests.planner.generated import generated
+from tests.planner.problems import PROPERTY, Generated, load_text, solve
 
 NODES = 25  # nodes checked per example
 

@@ -20,8 +20,8 @@ from cfgplan.planner.prices import Counts
 from cfgplan.planner.room import Load
 from cfgplan.planner.task import Ground
 from cfgplan.problem import Problem
-from tests.planner.generated import PROPERTY, Generated, load_text, run, solve
 from tests.planner.oracle import depth_first
+from tests.planner.problems import PROPERTY, Generated, load_text, run, solve
 from tests.planner.test_properties import bounds_from_the_first_node
 
 

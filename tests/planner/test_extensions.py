@@ -19,7 +19,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
-from tests.planner.generated import load_text
+from tests.planner.problems import load_text
 
 DOCKING = Path(__file__).resolve().parents[2] / "domains" / "docking"
 

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.planner.levels import Levels, level, unit_of
-from tests.planner.generated import PROPERTY, load_text
+from tests.planner.problems import PROPERTY, load_text
 
 SWITCHED = """\
 (make-functionality :name '(f ?r) :precond '((robot ?r)) :out '((d ?r)) :cost 4000000)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from cfgplan.planner.match import bindings, candidates, why_not
 from cfgplan.planner.task import Task
-from tests.planner.generated import load_text
+from tests.planner.problems import load_text
 
 DOMAIN = """\
 (make-functionality :name '(use ?r) :in '((img ?r)))

@@ -16,7 +16,7 @@ from cfgplan.planner.partial import (
 )
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Task
-from tests.planner.generated import load_text
+from tests.planner.problems import load_text
 
 DOMAIN = """\
 (make-functionality :name '(cam ?r) :out '((img ?r)))

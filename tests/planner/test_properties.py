@@ -43,8 +43,9 @@ from cfgplan.planner import grow, plan
 from cfgplan.planner.plan import Run, parts
 from cfgplan.planner.report import Condition
 from cfgplan.planner.room import Load, Need, Room
-from tests.planner.generated import PROPERTY, Generated, generated, load_generated, run, solve
+from tests.planner.generated import generated
 from tests.planner.oracle import depth_first
+from tests.planner.problems import PROPERTY, Generated, load_generated, run, solve
 
 
 @PROPERTY
@@ -114,6 +115,23 @@ def test_same_derivations_as_depth_first(example: Generated) -> None:
     problem = solve(example)
     derivations = run(problem, distinct=False)
     assert [(c.cost, c.identity()) for c in derivations] == depth_first(problem, example.weights)
+
+
+@PROPERTY
+@given(generated(uncertain=True), st.integers(1, 6))
+def test_reliability_ranks_as_depth_first(example: Generated, k: int) -> None:
+    """With ``--weights reliability=W`` (7.2) the cost adds W·(−ln p) for each
+    functionality and each global channel between two robots (p of the most
+    reliable medium): costs with no unit, ranked to 11 significant digits
+    (:mod:`cfgplan.planner.levels`). All derivations, and the first ``k``
+    with both bounds on every node, are the depth-first planner's."""
+    problem = solve(example)
+    oracle = depth_first(problem, example.weights)
+    derivations = run(problem, distinct=False)
+    assert [(c.cost, c.identity()) for c in derivations] == oracle
+    with bounds_from_the_first_node():
+        first = run(problem, limit=k, distinct=False)
+    assert [(c.cost, c.identity()) for c in first] == oracle[:k]
 
 
 @contextmanager

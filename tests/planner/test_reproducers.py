@@ -8,8 +8,8 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.planner.report import Condition
-from tests.planner.generated import load_text, run
 from tests.planner.oracle import depth_first
+from tests.planner.problems import load_text, run
 
 REUSED_SENSOR = """\
 (make-functionality :name '(sens ?r) :out '((d ?r)))

@@ -21,7 +21,7 @@ from cfgplan.planner.partition import Partition
 from cfgplan.planner.room import Room
 from cfgplan.planner.successors import successors
 from cfgplan.problem import Problem
-from tests.planner.generated import PROPERTY, load_text
+from tests.planner.problems import PROPERTY, load_text
 from tests.planner.test_bound import least_completion
 from tests.planner.test_scale import branch_and_bound, problem_of
 

@@ -18,7 +18,8 @@ from cfgplan.planner import plan
 from cfgplan.planner.levels import level
 from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.problem import Problem, load
-from tests.planner.generated import PROPERTY, Generated, generated, load_text, solve
+from tests.planner.generated import generated
+from tests.planner.problems import PROPERTY, Generated, load_text, solve
 
 ROOT = Path(__file__).resolve().parents[2]
 STEPS = ROOT / "domains/cross-door/domain-steps.lisp"

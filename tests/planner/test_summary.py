@@ -11,7 +11,7 @@ import sys
 from benchmarks.fuzz_inputs import chain
 from cfgplan.planner import plan
 from cfgplan.planner.summary import Summaries
-from tests.planner.generated import load_text
+from tests.planner.problems import load_text
 
 TWO_VERSIONS = """\
 (make-functionality :name '(sense ?r) :out '((d ?r)))

@@ -9,8 +9,8 @@ import pytest
 
 from benchmarks.families import weak
 from cfgplan.configuration.cost import Weights
-from tests.planner.generated import load_text, run
 from tests.planner.oracle import depth_first
+from tests.planner.problems import load_text, run
 from tests.planner.test_properties import bounds_from_the_first_node
 
 
