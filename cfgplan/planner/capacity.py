@@ -46,7 +46,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from cfgplan.planner.prices import Counts
+from cfgplan.planner.prices import Counts, add, most
 from cfgplan.planner.room import Load, Room
 from cfgplan.planner.task import Ground, Task
 
@@ -108,9 +108,9 @@ class Capacity:
             now = totals.get(capped.key)
             if now is None or now <= 1:
                 continue
-            most = min(self._most(limit, load) for limit in capped.limits) + capped.direct
-            if most < now:
-                totals[capped.key] = max(most, 1)
+            allowed = min(self._most(limit, load) for limit in capped.limits) + capped.direct
+            if allowed < now:
+                totals[capped.key] = max(allowed, 1)
 
     def _most(self, limit: Limit, load: Load) -> int:
         """How many carriers of ``limit`` a completion of a node with ``load`` uses at most."""
@@ -157,21 +157,17 @@ class Capacity:
     def _occurrences(self, call: Ground) -> Counts:
         """Most occurrences of each carrier instance in one derivation of ``call``."""
         for instance in self.order(call):
-            if instance.key in self._occurs:
-                continue
-            most: Counts = {}
-            for option in instance.options:
-                total: Counts = {}
-                for child, key in zip(option.children, option.child_keys, strict=True):
-                    if key in self._carriers:
-                        total[key] = total.get(key, 0) + 1
-                    for below, n in self._occurs.get(self.instances[child].key, {}).items():
-                        total[below] = total.get(below, 0) + n
-                for key, n in total.items():
-                    if n > most.get(key, 0):
-                        most[key] = n
-            self._occurs[instance.key] = most
+            if instance.key not in self._occurs:
+                self._occurs[instance.key] = most(map(self._option_occurrences, instance.options))
         return self._occurs[self.instances[call].key]
+
+    def _option_occurrences(self, option: Option) -> Counts:
+        total: Counts = {}
+        for child, key in zip(option.children, option.child_keys, strict=True):
+            if key in self._carriers:
+                total[key] = total.get(key, 0) + 1
+            add(total, self._occurs.get(self.instances[child].key, {}))
+        return total
 
     # -- the limits, from the ground instances made so far ------------------------
     def _make(self) -> None:

@@ -51,7 +51,7 @@ from cfgplan.planner.capacity import Capacity
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
-from cfgplan.planner.prices import Counts, Prices, Wire, wire_keys
+from cfgplan.planner.prices import Counts, Prices, Wire, add, most, wire_keys
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.room import Need, Room
 from cfgplan.planner.split import Split, split_at
@@ -198,21 +198,18 @@ class Partition:
     def _count(self, instance: Instance) -> Counts:
         if instance.functionality:
             return {instance.key: 1}
-        most: Counts = {}
-        for option in instance.options:
-            total: Counts = {}
-            for child in option.children:
-                for key, n in self._counts[child].items():
-                    total[key] = total.get(key, 0) + n
-            for own in option.channels:
-                for key in own.counted:
-                    total[key] = total.get(key, 0) + 1
-            for key in option.agent_keys:
+        return most(self._option_count(option) for option in instance.options)
+
+    def _option_count(self, option: Option) -> Counts:
+        total: Counts = {}
+        for child in option.children:
+            add(total, self._counts[child])
+        for own in option.channels:
+            for key in own.counted:
                 total[key] = total.get(key, 0) + 1
-            for key, n in total.items():
-                if n > most.get(key, 0):
-                    most[key] = n
-        return most
+        for key in option.agent_keys:
+            total[key] = total.get(key, 0) + 1
+        return total
 
     def _option(self, expansion: Expansion, choice: int) -> Option:
         task = self.grounder.task

@@ -5,7 +5,7 @@ prices of one node (:class:`Prices`)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 from cfgplan.planner.partial import Partial
@@ -27,6 +27,24 @@ Counts = dict[int, int]
 """Most occurrences of each key in one derivation, keys by their numbers
 (:attr:`cfgplan.planner.partition.Partition.number`: small integers hash
 faster than nested tuples)."""
+
+
+def add(total: Counts, counts: Counts) -> None:
+    """Add ``counts`` to ``total`` (the occurrences of two parts of one derivation)."""
+    get = total.get
+    for key, n in counts.items():
+        total[key] = get(key, 0) + n
+
+
+def most(options: Iterable[Counts]) -> Counts:
+    """The most occurrences of each key in any one of ``options`` (a method's
+    expansions, each its occurrences: one derivation takes one expansion)."""
+    found: Counts = {}
+    for total in options:
+        for key, n in total.items():
+            if n > found.get(key, 0):
+                found[key] = n
+    return found
 
 
 @dataclass(frozen=True, slots=True)
