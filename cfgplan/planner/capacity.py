@@ -162,6 +162,7 @@ class Capacity:
         return self._occurs[self.instances[call].key]
 
     def _option_occurrences(self, option: Option) -> Counts:
+        """The carrier occurrences in a derivation through ``option``."""
         total: Counts = {}
         for child, key in zip(option.children, option.child_keys, strict=True):
             if key in self._carriers:

@@ -201,6 +201,7 @@ class Partition:
         return most(self._option_count(option) for option in instance.options)
 
     def _option_count(self, option: Option) -> Counts:
+        """The occurrences in a derivation through ``option``, its children's most."""
         total: Counts = {}
         for child in option.children:
             add(total, self._counts[child])

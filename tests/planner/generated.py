@@ -3,9 +3,8 @@
 Each example is a generated domain and state, written as text in the thesis's
 syntax and read, checked and compiled as :func:`cfgplan.problem.load` does
 (:func:`tests.planner.problems.solve`; a test confirms it gives what ``load``
-gives on files), so a
-failing example shrinks to a reproducer that can be pasted into files and run
-with ``cfgplan plan``.
+gives on files), so a failing example shrinks to a reproducer that can be
+pasted into files and run with ``cfgplan plan``.
 
 The domains have the thesis's shape: sensing functionalities (no inputs),
 processing functionalities with one or two inputs, one action functionality
