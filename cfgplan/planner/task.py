@@ -1,8 +1,9 @@
 """The planning task: a domain and a state compiled into plain, fast structures.
 
 Like pyperplan's task model, this is what search works on: tuples and dicts,
-no pydantic on the hot path. Built once by :func:`compile_task` and frozen:
-the search, the grounding memo and the bound keep their own caches
+no pydantic on the hot path. Built once from the IR
+(:func:`cfgplan.planner.compile.compile_task`) and frozen: the search, the
+grounding memo and the bound keep their own caches
 (:mod:`cfgplan.planner.ground`, :mod:`cfgplan.planner.bound`), never here.
 
 The world state is a *set* of facts (4.4): a fact written twice is one fact,
@@ -23,21 +24,10 @@ from typing import Any
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import (
-    Atom,
-    Condition,
-    Domain,
-    Effect,
-    Eval,
-    Functionality,
     Medium,
-    Method,
-    Negation,
     SExpr,
     Span,
-    State,
-    is_variable,
 )
-from cfgplan.notation import sexpr_text
 from cfgplan.planner.levels import Levels, unit_of
 
 Ground = tuple[str, ...]
@@ -245,127 +235,6 @@ class Task:
         return self.weights.device if agent in self.devices else self.weights.robot
 
 
-def _links(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
-    links: dict[tuple[str, str], float] = {}
-    for m in media:
-        p = m.reliability if m.reliability is not None else 1.0
-        key = (m.sender, m.receiver)
-        links[key] = max(p, links.get(key, 0.0))
-    return links
-
-
-def pattern(atom: Atom) -> Pattern:
-    return (atom.predicate, *atom.args)
-
-
-def _tests(conditions: Sequence[Condition], bound: set[str]) -> tuple[Test, ...]:
-    """Order preconditions so every ``not`` and ``eval`` runs once its variables
-    are bound by the name or an earlier atom (atoms keep their order): an
-    ``eval`` written before the atom that binds its variable is postponed."""
-    known = set(bound)
-    ordered: list[Test] = []
-    waiting: list[tuple[set[str], Test]] = []
-
-    def release() -> None:
-        for need, test in list(waiting):
-            if need <= known:
-                ordered.append(test)
-                waiting.remove((need, test))
-
-    for cond in conditions:
-        if isinstance(cond, Atom):
-            ordered.append(Test(TestKind.ATOM, pattern(cond), span=cond.span, text=str(cond)))
-            known.update(cond.variables())
-            release()
-        elif isinstance(cond, Negation):
-            test = Test(TestKind.NOT, pattern(cond.atom), span=cond.span, text=str(cond))
-            waiting.append((set(cond.atom.variables()), test))
-            release()
-        elif isinstance(cond, Eval):
-            test = Test(TestKind.EVAL, expr=cond.expr, span=cond.span, text=sexpr_text(cond.expr))
-            waiting.append((set(cond.variables()), test))
-            release()
-    ordered.extend(test for _, test in waiting)
-    return tuple(ordered)
-
-
-def _effects(effects: Sequence[Effect]) -> tuple[EffectSpec, ...]:
-    out: list[EffectSpec] = []
-    for eff in effects:
-        if isinstance(eff, Negation):
-            out.append(EffectSpec(False, pattern(eff.atom)))
-        else:
-            out.append(EffectSpec(True, pattern(eff)))
-    return tuple(out)
-
-
-def _functionality(f: Functionality) -> FunctionalitySchema:
-    params = f.name.args
-    return FunctionalitySchema(
-        name=f.name.predicate,
-        params=params,
-        inputs=tuple(pattern(a) for a in f.inputs),
-        outputs=tuple(pattern(a) for a in f.outputs),
-        tests=_tests(f.precond, {p for p in params if is_variable(p)}),
-        effects=_effects(f.postcond),
-        cost=f.cost,
-        freq=f.freq,
-        reliability=f.reliability,
-        span=f.span,
-    )
-
-
-def _method(m: Method, version: int) -> MethodSchema:
-    params = m.name.args
-    return MethodSchema(
-        name=m.name.predicate,
-        version=version,
-        params=params,
-        tests=_tests(m.precond, {p for p in params if is_variable(p)}),
-        effects=_effects(m.postcond),
-        inputs=tuple(PortSchema(p.label, pattern(p.data), p.bandwidth) for p in m.inputs),
-        outputs=tuple(PortSchema(p.label, pattern(p.data), p.bandwidth) for p in m.outputs),
-        channels=tuple(
-            ChannelSchema(c.kind, c.robots, c.source, c.target, pattern(c.data), c.bandwidth)
-            for c in m.channels
-        ),
-        body=tuple((b.label, pattern(b.call)) for b in m.body),
-        span=m.span,
-    )
-
-
-def compile_task(
-    domain: Domain,
-    state: State,
-    weights: Weights | None = None,
-    reliability: Mapping[Ground, float] | None = None,
-) -> Task:
-    """Compile a checked domain and a state into a :class:`Task`; ``reliability``
-    replaces the reliability of some functionality instances."""
-    functionalities: dict[Signature, FunctionalitySchema] = {}
-    for f in domain.functionalities:
-        functionalities.setdefault(f.name.signature, _functionality(f))
-    methods: dict[Signature, list[MethodSchema]] = {}
-    for m in domain.methods:
-        versions = methods.setdefault(m.name.signature, [])
-        versions.append(_method(m, len(versions) + 1))
-    facts = tuple(dict.fromkeys(pattern(a) for a in state.facts))  # a set, in state order
-    by_pred, by_arg = index_facts(facts)
-    return Task(
-        functionalities=MappingProxyType(functionalities),
-        methods=MappingProxyType({k: tuple(v) for k, v in methods.items()}),
-        facts=facts,
-        facts_by_predicate=by_pred,
-        facts_by_argument=by_arg,
-        media=state.media,
-        weights=weights or Weights(),
-        devices=_devices(facts),
-        reliability=MappingProxyType(dict(reliability or {})),
-        links=MappingProxyType(_links(state.media)),
-        state_names=frozenset(t for fact in facts for t in fact),
-    )
-
-
 def index_facts(
     facts: Sequence[Ground],
 ) -> tuple[
@@ -385,7 +254,8 @@ def index_facts(
     )
 
 
-def _devices(facts: Sequence[Ground]) -> frozenset[str]:
+def devices_of(facts: Sequence[Ground]) -> frozenset[str]:
+    """The agents ``facts`` declare ``(device X)``: weighted as devices (3.5)."""
     return frozenset(f[1] for f in facts if f[0] == "device" and len(f) == 2)
 
 
@@ -401,6 +271,6 @@ def with_facts(task: Task, facts: Sequence[Ground]) -> Task:
         facts=unique,
         facts_by_predicate=by_pred,
         facts_by_argument=by_arg,
-        devices=_devices(unique),
+        devices=devices_of(unique),
         state_names=frozenset(t for fact in unique for t in fact),
     )

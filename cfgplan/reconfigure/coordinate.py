@@ -9,13 +9,8 @@ trace events on its robot (``failure``, ``recovery``, ``facts``, ``switch``,
 
 * ``failure`` / ``recovery`` of a functionality instance, and robots
   ``lost`` / ``seen``, go straight to the reconfigurator;
-* a **stale** input suspects its sender. The suspicion must *settle*: it is
-  acted on only if no ``fresh`` withdraws it within the staleness limit of
-  that channel (so a new configuration's first cycles, when data is not yet
-  flowing, are not mistaken for a failure), and only against the most
-  upstream suspects: a functionality whose own inputs come, directly or
-  not, from another suspect is starved, not failed (staleness flows
-  downstream);
+* a **stale** input suspects its sender, and is acted on once the
+  suspicion settles (:mod:`~cfgplan.reconfigure.suspect`);
 * the **latency** of a switch runs from the detection's time to the moment
   the new configuration is installed on every robot.
 
@@ -34,13 +29,15 @@ from typing import Protocol
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text, call_text
 from cfgplan.reconfigure.ahead import Ahead
+from cfgplan.reconfigure.decision import Decision
 from cfgplan.reconfigure.fallbacks import Resource
-from cfgplan.reconfigure.policy import Decision, Reconfigurator
+from cfgplan.reconfigure.policy import Reconfigurator
+from cfgplan.reconfigure.suspect import Suspicions
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.monitor import Detection
 from cfgplan.runtime.part import Part
 
-__all__ = ["Coordinator", "Deployer", "Done", "upstream"]
+__all__ = ["Coordinator", "Deployer", "Done"]
 
 Done = Callable[[], None]
 """Called by a :class:`Deployer` once every robot runs the new configuration."""
@@ -65,28 +62,6 @@ def cost(value: float | None) -> int | float | None:
     return int(value) if float(value).is_integer() else round(value, 4)
 
 
-def upstream(config: Configuration, label: str) -> set[str]:
-    """Labels whose data reaches ``label`` through the configuration's channels."""
-    feeds: dict[str, set[str]] = {}
-    for c in config.channels:
-        feeds.setdefault(c.target, set()).add(c.source)
-    seen: set[str] = set()
-    todo = list(feeds.get(label, ()))
-    while todo:
-        current = todo.pop()
-        if current not in seen:
-            seen.add(current)
-            todo.extend(feeds.get(current, ()))
-    return seen
-
-
-@dataclass
-class _Suspicion:
-    since: float  # monotonic
-    limit: float
-    detection: Detection
-
-
 @dataclass
 class Coordinator:
     """Turns detections into switches (module docstring)."""
@@ -102,12 +77,15 @@ class Coordinator:
     """Why the run should end (``achieved``), once it should."""
     stopped: bool = False
     """No admissible configuration: the society runs nothing."""
-    _suspects: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
+    _suspects: Suspicions = field(init=False, repr=False)  # stale inputs (suspect.py)
     _backlog: list[Detection] = field(default_factory=list)
     _deploying: bool = False
     _achieved: Configuration | None = None  # the configuration whose task was accomplished
     _installed_at: float = 0.0  # when the running configuration was deployed (time.time())
     _installed: int = -1  # its id; -1: the first, deployed before the coordinator started
+
+    def __post_init__(self) -> None:
+        self._suspects = Suspicions(self.clock)
 
     # -- input --------------------------------------------------------------
 
@@ -127,7 +105,7 @@ class Coordinator:
     def _take(self, detection: Detection) -> None:
         kind = detection.kind
         if kind in ("stale", "fresh"):
-            self._suspect(detection)
+            self._suspects.note(detection)
         elif kind in ("failure", "lost"):
             self._failure(detection)
         elif kind in ("recovery", "seen"):
@@ -263,44 +241,12 @@ class Coordinator:
             self.reconfigurator.recovered(resource, f"{resource.text} recovered"), detection
         )
 
-    def _suspect(self, detection: Detection) -> None:
-        key = (detection.robot, detection.label, detection.detail)
-        if detection.kind == "fresh":
-            self._suspects.pop(key, None)
-        else:
-            self._suspects[key] = _Suspicion(self.clock(), detection.limit, detection)
-
     def _settled(self) -> bool:
-        """Blame the most upstream suspects that stayed stale past their limit."""
-        running = self.reconfigurator.running
-        if running is None or not self._suspects:
-            self._suspects.clear()
+        """Blame the most upstream suspect that stayed stale past its limit."""
+        blamed = self._suspects.settled(self.reconfigurator.running)
+        if blamed is None:
             return False
-        labels = {f.label: f for f in running.functionalities}
-        now = self.clock()
-        for key in [k for k, s in self._suspects.items() if s.detection.label not in labels]:
-            del self._suspects[key]  # a channel of an earlier configuration
-        ripe = {s.detection.label: s for s in self._suspects.values() if now - s.since >= s.limit}
-        suspected = {s.detection.label for s in self._suspects.values()}
-        roots = [label for label in ripe if not (upstream(running, label) & suspected)]
-        if not roots:
-            return False
-        label = sorted(roots)[0]
-        suspicion = ripe[label]
-        for key in [k for k in self._suspects if k[1] == label]:
-            del self._suspects[key]
-        blamed = labels[label]
-        self._failure(
-            Detection(
-                "failure",
-                suspicion.detection.robot,
-                suspicion.detection.t,
-                instance=blamed.key,
-                label=label,
-                how="stale",
-                detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
-            )
-        )
+        self._failure(blamed)
         return True
 
     # -- output -------------------------------------------------------------

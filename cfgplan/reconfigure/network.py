@@ -46,7 +46,8 @@ from cfgplan.ir.model import Domain
 from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
-from cfgplan.reconfigure.policy import Decision, Hysteresis, Reconfigurator
+from cfgplan.reconfigure.decision import Decision, Hysteresis
+from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key

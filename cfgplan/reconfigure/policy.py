@@ -59,47 +59,13 @@ from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
 from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.planner.task import Ground, Task
+from cfgplan.reconfigure.decision import Decision, Hysteresis
 from cfgplan.reconfigure.fallbacks import Prepared, Resource, fallback, resources
 from cfgplan.reconfigure.situation import Situation, derive
-from cfgplan.reconfigure.switch import Change, change, highest_label, relabel
+from cfgplan.reconfigure.switch import change, highest_label, relabel
 from cfgplan.runtime.part import Part
 
-__all__ = ["Decision", "Hysteresis", "Reconfigurator"]
-
-
-@dataclass(frozen=True)
-class Hysteresis:
-    """When a better configuration is worth a switch, and how failures weigh.
-
-    A running configuration that is still admissible is left for a cheaper one
-    only when the cost falls by at least ``max(minimum, margin × cost)``
-    (defaults: 1, and 10 %); with the thesis's weights carry-a-bar's return
-    from 45 to 33 (12) is worth it, a gain of one channel is not. Recoveries
-    themselves are held back on the robots (:mod:`cfgplan.runtime.monitor`).
-    """
-
-    margin: float = 0.1
-    minimum: float = 1.0
-    decay: float = 0.5
-
-    def worth(self, current: float, better: float) -> bool:
-        return current - better >= max(self.minimum, self.margin * current) - 1e-9
-
-
-@dataclass(frozen=True)
-class Decision:
-    """What the society runs after a change: ``config`` (``None``: nothing)."""
-
-    action: Literal["switch", "stop", "stay"]
-    id: int  # the configuration's id after the decision (0: the first one)
-    config: Configuration | None
-    previous: Configuration | None
-    change: Change | None = None
-    source: Literal["fallback", "search", ""] = ""
-    plan_seconds: float = 0.0
-    why: tuple[str, ...] = ()
-    withdrawn: tuple[Ground, ...] = ()
-    cause: str = ""
+__all__ = ["Reconfigurator"]
 
 
 TASKS_KEPT = 8

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.problem import Problem
+from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.local import adapt, coordinator_of
 from cfgplan.reconfigure.network import coordinate
-from cfgplan.reconfigure.policy import Hysteresis
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks

@@ -21,7 +21,7 @@ import math
 from typing import Any
 
 from cfgplan.notation import call_text
-from cfgplan.reconfigure.coordinate import upstream
+from cfgplan.reconfigure.suspect import upstream
 from cfgplan.sim.blocks import alignment
 from cfgplan.sim.onboard import notes
 from cfgplan.sim.record import detail

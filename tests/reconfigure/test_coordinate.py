@@ -11,8 +11,10 @@ import time
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan
 from cfgplan.problem import load
-from cfgplan.reconfigure.coordinate import Coordinator, Done, upstream
-from cfgplan.reconfigure.policy import Decision, Reconfigurator
+from cfgplan.reconfigure.coordinate import Coordinator, Done
+from cfgplan.reconfigure.decision import Decision
+from cfgplan.reconfigure.policy import Reconfigurator
+from cfgplan.reconfigure.suspect import upstream
 from cfgplan.runtime.events import Adaptation, Event
 from cfgplan.runtime.monitor import Detection
 from cfgplan.runtime.part import Part

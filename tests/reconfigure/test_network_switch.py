@@ -12,9 +12,10 @@ from types import SimpleNamespace
 from cfgplan.planner import plan
 from cfgplan.problem import load
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
+from cfgplan.reconfigure.decision import Decision
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.network import SWITCH_TIMEOUT, NetworkAdaptive, NetworkDeployer
-from cfgplan.reconfigure.policy import Decision, Reconfigurator
+from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Event
 from cfgplan.runtime.monitor import Detection, Monitor
 from cfgplan.runtime.part import part_to_json

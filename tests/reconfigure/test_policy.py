@@ -5,8 +5,9 @@ from __future__ import annotations
 from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
+from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.fallbacks import Resource
-from cfgplan.reconfigure.policy import TASKS_KEPT, Hysteresis, Reconfigurator
+from cfgplan.reconfigure.policy import TASKS_KEPT, Reconfigurator
 from cfgplan.reconfigure.situation import Situation
 from tests.backends.support import DOMAINS
 

@@ -1,0 +1,94 @@
+"""Stale inputs as suspicions of their senders, acted on once settled (5.5).
+
+A **stale** input suspects the functionality that feeds it. The suspicion
+must *settle*: it is acted on only if no ``fresh`` withdraws it within the
+staleness limit of that channel (so a new configuration's first cycles, when
+data is not yet flowing, are not mistaken for a failure), and only against
+the most upstream suspects: a functionality whose own inputs come, directly
+or not, from another suspect is starved, not failed (staleness flows
+downstream). :class:`Suspicions` keeps them for the
+:class:`~cfgplan.reconfigure.coordinate.Coordinator`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.runtime.monitor import Detection
+
+__all__ = ["Suspicions", "upstream"]
+
+
+def upstream(config: Configuration, label: str) -> set[str]:
+    """Labels whose data reaches ``label`` through the configuration's channels."""
+    feeds: dict[str, set[str]] = {}
+    for c in config.channels:
+        feeds.setdefault(c.target, set()).add(c.source)
+    seen: set[str] = set()
+    todo = list(feeds.get(label, ()))
+    while todo:
+        current = todo.pop()
+        if current not in seen:
+            seen.add(current)
+            todo.extend(feeds.get(current, ()))
+    return seen
+
+
+@dataclass
+class _Suspicion:
+    since: float  # monotonic
+    limit: float
+    detection: Detection
+
+
+@dataclass
+class Suspicions:
+    """The open suspicions, by (robot, label, channel detail)."""
+
+    clock: Callable[[], float] = time.monotonic
+    _open: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
+
+    def note(self, detection: Detection) -> None:
+        """A ``stale`` detection opens (or renews) a suspicion; ``fresh`` withdraws it."""
+        key = (detection.robot, detection.label, detection.detail)
+        if detection.kind == "fresh":
+            self._open.pop(key, None)
+        else:
+            self._open[key] = _Suspicion(self.clock(), detection.limit, detection)
+
+    def clear(self) -> None:
+        """Forget them all (a switch is being deployed)."""
+        self._open.clear()
+
+    def settled(self, running: Configuration | None) -> Detection | None:
+        """The ``failure`` to act on: the most upstream suspect of ``running``
+        that stayed stale past its limit (the first by label), whose
+        suspicions are then closed; None while none has settled."""
+        if running is None or not self._open:
+            self._open.clear()
+            return None
+        labels = {f.label: f for f in running.functionalities}
+        now = self.clock()
+        for key in [k for k, s in self._open.items() if s.detection.label not in labels]:
+            del self._open[key]  # a channel of an earlier configuration
+        ripe = {s.detection.label: s for s in self._open.values() if now - s.since >= s.limit}
+        suspected = {s.detection.label for s in self._open.values()}
+        roots = [label for label in ripe if not (upstream(running, label) & suspected)]
+        if not roots:
+            return None
+        label = sorted(roots)[0]
+        suspicion = ripe[label]
+        for key in [k for k in self._open if k[1] == label]:
+            del self._open[key]
+        return Detection(
+            "failure",
+            suspicion.detection.robot,
+            suspicion.detection.t,
+            instance=labels[label].key,
+            label=label,
+            how="stale",
+            detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
+        )
