@@ -16,6 +16,7 @@ from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.ir.model import Span, is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
+from cfgplan.planner.join import join, positions
 from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
 from cfgplan.planner.unify import Bindings, substitute, unify
 
@@ -73,16 +74,27 @@ def _walk(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[tuple[
 
 
 def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bindings]:
-    """Every extension of ``env`` satisfying ``tests``, depth-first, facts in
-    state order. Distinct facts give distinct bindings (every variable of an
-    atom is bound by it), so no binding is repeated."""
+    """Every extension of ``env`` satisfying ``tests``, in the order of a
+    depth-first match of the tests as written, facts in state order. Distinct
+    facts give distinct bindings (every variable of an atom is bound by it),
+    so no binding is repeated. The atoms are matched in the order
+    :func:`~cfgplan.planner.join.join` picks; if that is not the written one,
+    the bindings are sorted back by the state positions of the facts the
+    written atoms match."""
     if not tests:
         yield env
         return
     done = len(tests)
-    for index, current in _walk(task, tests, env):
-        if index == done:
-            yield current
+    plan = join(task, tests, frozenset(env))
+    if not plan.reordered:
+        for index, current in _walk(task, tests, env):
+            if index == done:
+                yield current
+        return
+    found = [current for index, current in _walk(task, plan.tests, env) if index == done]
+    position = positions(task)
+    found.sort(key=lambda b: tuple(position[substitute(atom, b)] for atom in plan.atoms))
+    yield from found
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,122 @@
+"""The order a schema's preconditions are matched in (thesis 4.5, step 2b).
+
+Written order can be a poor join: ``(robot ?a) (robot ?b) (robot ?c) (in ?a
+?x) (in ?b ?x) (in ?c ?x) (in ?t ?x)`` with ``?t`` known enumerates every
+triple of robots before the rooms filter them. :func:`join` matches instead,
+among the atoms left, the one expected to match the fewest facts given what
+is bound so far (the facts of its predicate, narrowed by a constant, divided
+by the distinct values of each bound argument), written order among equals;
+each ``not`` and ``eval`` runs as soon as its variables are bound.
+
+The order of the bindings stays the thesis's (6.3.2): that of the written
+order, facts in state order, i.e. by the state positions of the facts the
+atoms, as written, match. :func:`cfgplan.planner.match.bindings` sorts them
+back by that key (:attr:`Join.atoms`) when the join was reordered.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from cfgplan.ir.model import SExpr, is_variable
+from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
+
+
+@dataclass(frozen=True, slots=True)
+class Join:
+    """The tests in the order they are matched; ``atoms``, the atoms in written
+    order, give the bindings' sort key when ``reordered``."""
+
+    tests: tuple[Test, ...]
+    atoms: tuple[Pattern, ...]
+    reordered: bool
+
+
+def join(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
+    """The matching order of ``tests`` when ``bound`` are bound at the start
+    (made once per task, tests and bound variables)."""
+    joins: dict[tuple[int, frozenset[str]], tuple[tuple[Test, ...], Join]]
+    joins = task.memo.setdefault("joins", {})
+    found = joins.get((id(tests), bound))
+    if found is not None and found[0] is tests:
+        return found[1]
+    made = _plan(task, tests, bound)
+    joins[(id(tests), bound)] = (tests, made)  # the tests kept: their id stays theirs
+    return made
+
+
+def positions(task: Task) -> Mapping[Ground, int]:
+    """Each fact's position in the state (the bindings' sort key)."""
+    found: dict[Ground, int] | None = task.memo.get("positions")
+    if found is None:
+        found = task.memo["positions"] = {fact: i for i, fact in enumerate(task.facts)}
+    return found
+
+
+def _plan(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
+    atoms = [t for t in tests if t.kind is TestKind.ATOM]
+    filters = [(set(_variables(t)), t) for t in tests if t.kind is not TestKind.ATOM]
+    known = set(bound)
+    ordered: list[Test] = []
+
+    def release() -> None:
+        for need, test in list(filters):
+            if need <= known:
+                ordered.append(test)
+                filters.remove((need, test))
+
+    release()
+    left = list(atoms)
+    while left:
+        best = min(left, key=lambda atom: _estimate(task, atom.pattern, known))
+        left.remove(best)
+        ordered.append(best)
+        known.update(_variables(best))
+        release()
+    ordered.extend(test for _, test in filters)  # never bound: last, as written
+    picked = [t for t in ordered if t.kind is TestKind.ATOM]
+    reordered = any(a is not b for a, b in zip(picked, atoms, strict=True))
+    if not reordered:
+        return Join(tests, (), False)
+    return Join(tuple(ordered), tuple(a.pattern for a in atoms), True)
+
+
+def _estimate(task: Task, p: Pattern, known: set[str]) -> float:
+    """How many facts ``p`` may match once ``known`` are bound."""
+    arity = len(p) - 1
+    count = float(len(task.facts_by_predicate.get((p[0], arity), ())))
+    distinct = _distinct(task)
+    for position, term in enumerate(p[1:], 1):
+        if not is_variable(term):
+            count = min(count, len(task.facts_by_argument.get((p[0], arity, position, term), ())))
+        elif term in known:
+            count /= distinct.get((p[0], arity, position), 1)
+    return count
+
+
+def _distinct(task: Task) -> Mapping[tuple[str, int, int], int]:
+    """How many distinct values each argument of each predicate takes in the state."""
+    found: dict[tuple[str, int, int], int] | None = task.memo.get("distinct")
+    if found is None:
+        found = {}
+        for predicate, arity, position, _ in task.facts_by_argument:
+            key = (predicate, arity, position)
+            found[key] = found.get(key, 0) + 1
+        task.memo["distinct"] = found
+    return found
+
+
+def _variables(test: Test) -> list[str]:
+    """The variables a test mentions."""
+    if test.kind is not TestKind.EVAL:
+        return [t for t in test.pattern[1:] if is_variable(t)]
+    found: list[str] = []
+    stack: list[SExpr] = [test.expr]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, list):
+            stack.extend(item)
+        elif isinstance(item, str) and is_variable(item):
+            found.append(item)
+    return found
