@@ -34,6 +34,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Key, Partial
 from cfgplan.planner.summary import ChannelId, Summaries, Summary, least
 from cfgplan.planner.task import Ground, Task
@@ -44,10 +45,13 @@ class Bound:
     """The bound for one task; :meth:`estimate` on each node."""
 
     task: Task
+    grounder: Grounder | None = None
+    """The search's grounding memo, whose bindings the summaries share."""
     summaries: Summaries = field(init=False)
 
     def __post_init__(self) -> None:
-        self.summaries = Summaries(self.task)
+        binder = None if self.grounder is None else self.grounder.method_bindings
+        self.summaries = Summaries(self.task, binder)
 
     def feasible(self, node: Partial) -> float | None:
         """0 when every pending item may still complete, else None (no

@@ -47,7 +47,7 @@ def parts(task: Task) -> tuple[Grounder, Bound, Partition]:
     found: tuple[Grounder, Bound, Partition] | None = task.memo.get("parts")
     if found is None:
         grounder = Grounder(task)
-        found = task.memo["parts"] = (grounder, Bound(task), Partition(grounder))
+        found = task.memo["parts"] = (grounder, Bound(task, grounder), Partition(grounder))
     return found
 
 

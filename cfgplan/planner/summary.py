@@ -13,7 +13,7 @@ stack.
 
 from __future__ import annotations
 
-from collections.abc import Generator, Iterable, Set
+from collections.abc import Callable, Generator, Iterable, Set
 from dataclasses import dataclass, field
 
 from cfgplan.planner import clock
@@ -71,6 +71,9 @@ too: the search prunes the recursion on its own path, but another version
 may still complete, and the bound must not cut a node that has a completion.
 """
 
+Binder = Callable[[MethodSchema, Ground], Iterable[Bindings]]
+"""Every binding of a method version's preconditions for a call, in order."""
+
 Summarising = Generator[Ground, Summary, Summary]
 """A summary being made: it yields each call whose summary it needs, is sent
 that summary, and returns its own."""
@@ -82,6 +85,10 @@ class Summaries:
     signature can reach, memoised."""
 
     task: Task
+    binder: Binder | None = None
+    """The bindings of a method version for a call, when a grounding memo
+    has them (:meth:`cfgplan.planner.ground.Grounder.method_bindings`): the
+    search matches each ground instance once, not once more here."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
     _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(
         default_factory=dict
@@ -128,10 +135,14 @@ class Summaries:
             return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost)
         expansions: list[Expanded] = []
         for method in self.task.versions(call):
-            env0 = bind_name(method.params, call[1:])
-            if env0 is None:
-                continue
-            for env in bindings(self.task, method.tests, env0):
+            if self.binder is not None:
+                envs: Iterable[Bindings] = self.binder(method, call)
+            else:
+                env0 = bind_name(method.params, call[1:])
+                if env0 is None:
+                    continue
+                envs = bindings(self.task, method.tests, env0)
+            for env in envs:
                 expansion = yield from self._expansion(method, env)
                 if expansion is not None:
                     expansions.append(expansion)

@@ -10,6 +10,7 @@ import sys
 
 from benchmarks.fuzz_inputs import chain
 from cfgplan.planner import plan
+from cfgplan.planner.ground import Grounder
 from cfgplan.planner.summary import Summaries
 from tests.planner.problems import load_text
 
@@ -57,3 +58,18 @@ def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
     assert Summaries(problem.task).summary(("m0", "A")).minimum == 1.0
     (config,), _ = plan(problem.task, problem.goal_call)
     assert config.cost == 10 + 2 + 1
+
+
+def test_the_grounding_memo_s_bindings_give_the_same_summaries() -> None:
+    """The search's summaries read the bindings the grounding memo made
+    (:attr:`Summaries.binder`); matched again here, they must be the same,
+    with two helpers (three expansions of ``(get A)``) and with none."""
+    for state, helpers in (("(robot A) (robot B) (helper B) (helper C)", 2), ("(robot A)", 0)):
+        problem = load_text(TWO_VERSIONS, f"(state {state}) (goal (go A))")
+        grounder = Grounder(problem.task)
+        shared = Summaries(problem.task, grounder.method_bindings)
+        own = Summaries(problem.task)
+        for call in [("go", "A"), ("get", "A"), ("get", "B"), ("act", "A")]:
+            assert shared.summary(call) == own.summary(call)
+        with_helper = problem.task.versions(("get", "A"))[1]
+        assert len(grounder.method_bindings(with_helper, ("get", "A"))) == helpers
