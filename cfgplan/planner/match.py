@@ -97,6 +97,14 @@ def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bin
     yield from found
 
 
+def exists(task: Task, tests: tuple[Test, ...], env: Bindings) -> bool:
+    """Whether some extension of ``env`` satisfies ``tests``: the first
+    binding the join finds, none sorted."""
+    done = len(tests)
+    plan = join(task, tests, frozenset(env))
+    return any(index == done for index, _ in _walk(task, plan.tests, env))
+
+
 @dataclass(frozen=True)
 class Failure:
     """The first precondition that no binding got past."""

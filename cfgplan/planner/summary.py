@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.planner import clock
 from cfgplan.planner.ground import channel_kind
-from cfgplan.planner.match import bindings
+from cfgplan.planner.match import bindings, exists
 from cfgplan.planner.partial import Key
 from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
 from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
@@ -126,7 +126,7 @@ class Summaries:
         schema = self.task.functionality(call)
         if schema is not None:
             env = bind_name(schema.params, call[1:])
-            if env is None or next(iter(bindings(self.task, schema.tests, env)), None) is None:
+            if env is None or not exists(self.task, schema.tests, env):
                 return INFEASIBLE
             # Outputs that use a variable its preconditions bind stay open
             # (not ground), so they name no certain producer: weaker, still a bound.

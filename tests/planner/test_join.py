@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cfgplan.planner.join import join
-from cfgplan.planner.match import _walk, bindings
+from cfgplan.planner.match import _walk, bindings, exists
 from cfgplan.planner.task import Task
 from cfgplan.planner.task import TestKind as Kind
 from cfgplan.planner.unify import Bindings
@@ -86,4 +86,7 @@ def test_bindings_are_those_of_the_written_order(
     facts += facts[:repeats]  # a fact written twice is one fact
     t = task(facts)
     env = {"?t": "R0"}
-    assert list(bindings(t, t.methods[("locate", 1)][0].tests, env)) == as_written(t, env)
+    tests = t.methods[("locate", 1)][0].tests
+    found = list(bindings(t, tests, env))
+    assert found == as_written(t, env)
+    assert exists(t, tests, env) == bool(found)
