@@ -152,12 +152,12 @@ def compile_task(
         weights=weights or Weights(),
         devices=devices_of(facts),
         reliability=MappingProxyType(dict(reliability or {})),
-        links=MappingProxyType(_links(state.media)),
+        links=MappingProxyType(links_of(state.media)),
         state_names=frozenset(t for fact in facts for t in fact),
     )
 
 
-def _links(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
+def links_of(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
     """(sender, receiver) -> the most reliable medium's reliability (7.2)."""
     links: dict[tuple[str, str], float] = {}
     for m in media:

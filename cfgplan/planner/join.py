@@ -34,8 +34,11 @@ class Join:
 
 
 def join(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
-    """The matching order of ``tests`` when ``bound`` are bound at the start
-    (made once per task, tests and bound variables)."""
+    """The matching order of ``tests`` when ``bound`` are bound at the start,
+    made once per tests and bound variables. A task in another state
+    (:func:`~cfgplan.planner.task.with_facts`) keeps the orders made for
+    the one it comes from: an order changes how fast bindings are found,
+    never which, nor in what order they are given."""
     joins: dict[tuple[int, frozenset[str]], tuple[tuple[Test, ...], Join]]
     joins = task.memo.setdefault("joins", {})
     found = joins.get((id(tests), bound))
@@ -56,6 +59,8 @@ def positions(task: Task) -> Mapping[Ground, int]:
 
 def _plan(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
     atoms = [t for t in tests if t.kind is TestKind.ATOM]
+    if len(atoms) < 2:
+        return Join(tests, (), False)  # compiled tests run each filter once it can
     filters = [(set(_variables(t)), t) for t in tests if t.kind is not TestKind.ATOM]
     known = set(bound)
     ordered: list[Test] = []

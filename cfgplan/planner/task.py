@@ -266,7 +266,7 @@ def with_facts(task: Task, facts: Sequence[Ground]) -> Task:
     running society's changed state, are planned from it."""
     unique = tuple(dict.fromkeys(facts))
     by_pred, by_arg = index_facts(unique)
-    return dataclasses.replace(
+    derived = dataclasses.replace(
         task,
         facts=unique,
         facts_by_predicate=by_pred,
@@ -274,3 +274,6 @@ def with_facts(task: Task, facts: Sequence[Ground]) -> Task:
         devices=devices_of(unique),
         state_names=frozenset(t for fact in unique for t in fact),
     )
+    if "joins" in task.memo:  # matching orders (planner/join.py): valid in any state
+        derived.memo["joins"] = task.memo["joins"]
+    return derived

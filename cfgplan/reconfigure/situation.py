@@ -29,12 +29,12 @@ caches, which are kept per task) are reused when a situation comes back.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from types import MappingProxyType
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.ir.model import Medium
+from cfgplan.planner.compile import links_of
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task, Test, TestKind, index_facts
 from cfgplan.reconfigure.withdraw import withdrawn_by_failure, withdrawn_by_loss
 
@@ -135,14 +135,6 @@ class Situation:
         return tuple(dict.fromkeys([*kept, *self.asserted]))
 
 
-def _links(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
-    links: dict[tuple[str, str], float] = {}
-    for m in media:
-        p = m.reliability if m.reliability is not None else 1.0
-        links[(m.sender, m.receiver)] = max(p, links.get((m.sender, m.receiver), 0.0))
-    return links
-
-
 def _guarded(schema: FunctionalitySchema, failed: bool, lost: bool) -> FunctionalitySchema:
     """``schema`` with the guards it needs: out of service when an instance of
     it failed, lost when a robot was (the others are not slowed down)."""
@@ -187,6 +179,6 @@ def derive(base: Task, situation: Situation) -> Task:
         media=media,
         devices=frozenset(f[1] for f in facts if f[0] == "device" and len(f) == 2),
         reliability=MappingProxyType(reliability),
-        links=MappingProxyType(_links(media)),
+        links=MappingProxyType(links_of(media)),
         state_names=frozenset(t for f in facts for t in f),
     )
