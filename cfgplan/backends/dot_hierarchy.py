@@ -28,7 +28,7 @@ from cfgplan.backends.dot import call, dot_text, html_text, new_graph, term
 from cfgplan.diagnostics import error
 from cfgplan.ir.model import SExpr, is_variable
 from cfgplan.notation import sexpr_text
-from cfgplan.planner.task import MethodSchema, Task, Test, TestKind
+from cfgplan.planner.task import MethodSchema, Task, TestKind
 
 METHOD = {"fillcolor": "gray80"}
 FUNCTIONALITY = {"fillcolor": "white"}
@@ -143,22 +143,8 @@ def _variables(method: MethodSchema) -> list[str]:
     for _, pattern in method.body:
         found.update(dict.fromkeys(a for a in pattern[1:] if is_variable(a)))
     for test in method.tests:
-        found.update(dict.fromkeys(a for a in _test_terms(test) if is_variable(a)))
+        found.update(dict.fromkeys(test.variables()))
     return list(found)
-
-
-def _test_terms(test: Test) -> list[str]:
-    if test.kind is not TestKind.EVAL:
-        return list(test.pattern[1:])
-    terms: list[str] = []
-    stack: list[SExpr] = [test.expr]
-    while stack:
-        item = stack.pop()
-        if isinstance(item, list):
-            stack.extend(reversed(item))
-        elif isinstance(item, str):
-            terms.append(item)
-    return terms
 
 
 def version_label(method: MethodSchema, env: dict[str, str]) -> str:

@@ -103,18 +103,23 @@ class Eval(Node):
     expr: SExpr
 
     def variables(self) -> list[Term]:
-        found: list[Term] = []
-        stack: list[SExpr] = [self.expr]
-        while stack:
-            item = stack.pop()
-            if isinstance(item, list):
-                stack.extend(reversed(item))
-            elif isinstance(item, str) and is_variable(item) and item not in found:
-                found.append(item)
-        return found
+        return expr_variables(self.expr)
 
     def __str__(self) -> str:
         return f"(eval {sexpr_text(self.expr)})"
+
+
+def expr_variables(expr: SExpr) -> list[Term]:
+    """The variables of an s-expression, each once, in order of appearance."""
+    found: list[Term] = []
+    stack: list[SExpr] = [expr]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, list):
+            stack.extend(reversed(item))
+        elif isinstance(item, str) and is_variable(item) and item not in found:
+            found.append(item)
+    return found
 
 
 Condition = Atom | Negation | Eval

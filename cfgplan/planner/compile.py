@@ -20,7 +20,6 @@ from cfgplan.ir.model import (
     Effect,
     Eval,
     Functionality,
-    Medium,
     Method,
     Negation,
     State,
@@ -41,6 +40,7 @@ from cfgplan.planner.task import (
     TestKind,
     devices_of,
     index_facts,
+    links_of,
 )
 
 
@@ -155,13 +155,3 @@ def compile_task(
         links=MappingProxyType(links_of(state.media)),
         state_names=frozenset(t for fact in facts for t in fact),
     )
-
-
-def links_of(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
-    """(sender, receiver) -> the most reliable medium's reliability (7.2)."""
-    links: dict[tuple[str, str], float] = {}
-    for m in media:
-        p = m.reliability if m.reliability is not None else 1.0
-        key = (m.sender, m.receiver)
-        links[key] = max(p, links.get(key, 0.0))
-    return links

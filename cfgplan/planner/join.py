@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from cfgplan.ir.model import SExpr, is_variable
+from cfgplan.ir.model import is_variable
 from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
 
 
@@ -61,7 +61,7 @@ def _plan(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
     atoms = [t for t in tests if t.kind is TestKind.ATOM]
     if len(atoms) < 2:
         return Join(tests, (), False)  # compiled tests run each filter once it can
-    filters = [(set(_variables(t)), t) for t in tests if t.kind is not TestKind.ATOM]
+    filters = [(set(t.variables()), t) for t in tests if t.kind is not TestKind.ATOM]
     known = set(bound)
     ordered: list[Test] = []
 
@@ -77,7 +77,7 @@ def _plan(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
         best = min(left, key=lambda atom: _estimate(task, atom.pattern, known))
         left.remove(best)
         ordered.append(best)
-        known.update(_variables(best))
+        known.update(best.variables())
         release()
     ordered.extend(test for _, test in filters)  # never bound: last, as written
     picked = [t for t in ordered if t.kind is TestKind.ATOM]
@@ -109,19 +109,4 @@ def _distinct(task: Task) -> Mapping[tuple[str, int, int], int]:
             key = (predicate, arity, position)
             found[key] = found.get(key, 0) + 1
         task.memo["distinct"] = found
-    return found
-
-
-def _variables(test: Test) -> list[str]:
-    """The variables a test mentions."""
-    if test.kind is not TestKind.EVAL:
-        return [t for t in test.pattern[1:] if is_variable(t)]
-    found: list[str] = []
-    stack: list[SExpr] = [test.expr]
-    while stack:
-        item = stack.pop()
-        if isinstance(item, list):
-            stack.extend(item)
-        elif isinstance(item, str) and is_variable(item):
-            found.append(item)
     return found

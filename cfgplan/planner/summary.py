@@ -17,8 +17,8 @@ from collections.abc import Callable, Generator, Iterable, Set
 from dataclasses import dataclass, field
 
 from cfgplan.planner import clock
-from cfgplan.planner.ground import channel_kind
-from cfgplan.planner.match import bindings, exists
+from cfgplan.planner.ground import Grounder, channel_kind
+from cfgplan.planner.match import exists
 from cfgplan.planner.partial import Key
 from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
 from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
@@ -86,13 +86,16 @@ class Summaries:
 
     task: Task
     binder: Binder | None = None
-    """The bindings of a method version for a call, when a grounding memo
-    has them (:meth:`cfgplan.planner.ground.Grounder.method_bindings`): the
-    search matches each ground instance once, not once more here."""
+    """The bindings of a method version for a call: the search's grounding
+    memo's (:meth:`cfgplan.planner.ground.Grounder.method_bindings`), so that
+    each ground instance is matched once; None: a memo of its own."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
     _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(
         default_factory=dict
     )
+
+    def __post_init__(self) -> None:
+        self._bind = self.binder or Grounder(self.task).method_bindings
 
     def summary(self, call: Ground) -> Summary:
         """What every feasible expansion of ``call`` contains (memoised)."""
@@ -135,14 +138,7 @@ class Summaries:
             return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost)
         expansions: list[Expanded] = []
         for method in self.task.versions(call):
-            if self.binder is not None:
-                envs: Iterable[Bindings] = self.binder(method, call)
-            else:
-                env0 = bind_name(method.params, call[1:])
-                if env0 is None:
-                    continue
-                envs = bindings(self.task, method.tests, env0)
-            for env in envs:
+            for env in self._bind(method, call):
                 expansion = yield from self._expansion(method, env)
                 if expansion is not None:
                     expansions.append(expansion)

@@ -23,11 +23,7 @@ from types import MappingProxyType
 from typing import Any
 
 from cfgplan.configuration.cost import Weights
-from cfgplan.ir.model import (
-    Medium,
-    SExpr,
-    Span,
-)
+from cfgplan.ir.model import Medium, SExpr, Span, expr_variables, is_variable
 from cfgplan.planner.levels import Levels, unit_of
 
 Ground = tuple[str, ...]
@@ -59,6 +55,12 @@ class Test:
     expr: SExpr = ""
     span: Span | None = None
     text: str = ""
+
+    def variables(self) -> list[str]:
+        """The variables it mentions, in order of appearance."""
+        if self.kind is TestKind.EVAL:
+            return expr_variables(self.expr)
+        return [t for t in self.pattern[1:] if is_variable(t)]
 
 
 @dataclass(frozen=True, slots=True)
@@ -257,6 +259,16 @@ def index_facts(
 def devices_of(facts: Sequence[Ground]) -> frozenset[str]:
     """The agents ``facts`` declare ``(device X)``: weighted as devices (3.5)."""
     return frozenset(f[1] for f in facts if f[0] == "device" and len(f) == 2)
+
+
+def links_of(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
+    """(sender, receiver) -> the most reliable medium's reliability (7.2)."""
+    links: dict[tuple[str, str], float] = {}
+    for m in media:
+        p = m.reliability if m.reliability is not None else 1.0
+        key = (m.sender, m.receiver)
+        links[key] = max(p, links.get(key, 0.0))
+    return links
 
 
 def with_facts(task: Task, facts: Sequence[Ground]) -> Task:

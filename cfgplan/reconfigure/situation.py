@@ -34,8 +34,16 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner.compile import links_of
-from cfgplan.planner.task import FunctionalitySchema, Ground, Task, Test, TestKind, index_facts
+from cfgplan.planner.task import (
+    FunctionalitySchema,
+    Ground,
+    Task,
+    Test,
+    TestKind,
+    devices_of,
+    index_facts,
+    links_of,
+)
 from cfgplan.reconfigure.withdraw import withdrawn_by_failure, withdrawn_by_loss
 
 __all__ = ["LOST", "OUT_OF_SERVICE", "Situation", "derive"]
@@ -177,7 +185,7 @@ def derive(base: Task, situation: Situation) -> Task:
         facts_by_predicate=by_pred,
         facts_by_argument=by_arg,
         media=media,
-        devices=frozenset(f[1] for f in facts if f[0] == "device" and len(f) == 2),
+        devices=devices_of(facts),
         reliability=MappingProxyType(reliability),
         links=MappingProxyType(links_of(media)),
         state_names=frozenset(t for f in facts for t in f),

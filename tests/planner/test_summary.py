@@ -62,7 +62,7 @@ def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
 
 def test_the_grounding_memo_s_bindings_give_the_same_summaries() -> None:
     """The search's summaries read the bindings the grounding memo made
-    (:attr:`Summaries.binder`); matched again here, they must be the same,
+    (:attr:`Summaries.binder`); with a memo of their own, they must be the same,
     with two helpers (three expansions of ``(get A)``) and with none."""
     for state, helpers in (("(robot A) (robot B) (helper B) (helper C)", 2), ("(robot A)", 0)):
         problem = load_text(TWO_VERSIONS, f"(state {state}) (goal (go A))")
