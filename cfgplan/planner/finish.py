@@ -9,6 +9,7 @@ state declares media, communication (4.6). :func:`finish` returns the
 
 from __future__ import annotations
 
+from collections.abc import Container
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -38,10 +39,11 @@ def _label(n: int) -> str:
     return f"F{n}"
 
 
-def _information(node: Partial) -> DeadEnd | None:
-    """Every input of every functionality has a channel carrying its descriptor,
-    from a functionality that produces it; a sender runs at least as often as
-    its receiver when both declare ``:freq``."""
+def _information(node: Partial, given: Container[int] = ()) -> DeadEnd | None:
+    """Every input of every functionality (but those labelled in ``given``)
+    has a channel carrying its descriptor, from a functionality that produces
+    it; a sender runs at least as often as its receiver when both declare
+    ``:freq``."""
     located = node.located
     fed: set[tuple[int, tuple[str, ...]]] = set()
     for ch in node.channels:
@@ -67,6 +69,8 @@ def _information(node: Partial) -> DeadEnd | None:
             )
         fed.add((ch.target, ch.data))
     for p in node.placed:
+        if p.label in given:
+            continue
         for need in p.inputs:
             if (p.label, need) not in fed:
                 return DeadEnd(
@@ -250,11 +254,15 @@ def _reliability(node: Finished, robot: dict[int, str], task: Task) -> float:
     return reliability
 
 
-def admissible(node: Partial, task: Task) -> tuple[Assignment, ...] | DeadEnd:
+def admissible(
+    node: Partial, task: Task, given: Container[int] = ()
+) -> tuple[Assignment, ...] | DeadEnd:
     """Step 4's checks left for a finished node — information, cycles and,
     when the state declares media, communication: the media assignment
-    (empty without media), or the condition it breaks."""
-    for dead in (_information(node), _cycle(node)):
+    (empty without media), or the condition it breaks. The functionalities
+    labelled in ``given`` may have inputs fed from elsewhere (an independent
+    part's search, :mod:`cfgplan.planner.combine`)."""
+    for dead in (_information(node, given), _cycle(node)):
         if dead is not None:
             return dead
     if not task.media:

@@ -92,6 +92,9 @@ class Grower:
     split: Splitter | None = None
     """:attr:`refine` taken apart at the top item: when given, a refined node's
     children are priced from its split (:mod:`cfgplan.planner.split`)."""
+    given: frozenset[int] = frozenset()
+    """Functionalities (labels) whose inputs may be fed from outside the
+    search: the forced steps' ones in an independent part's search."""
     stats: Stats = field(default_factory=Stats)
     report: Report = field(default_factory=Report)
     seen: set[bytes] = field(default_factory=set)  # fingerprints listed (distinct)
@@ -248,7 +251,7 @@ class Grower:
     def admissible(self, node: Partial) -> tuple[Assignment, ...] | None:
         """Step 4's checks: the media assignment of a complete node, or None
         (rejection reported)."""
-        result = admissible(node, self.grounder.task)
+        result = admissible(node, self.grounder.task, self.given)
         if isinstance(result, DeadEnd):
             self.stats.rejected += 1
             self.report.reject(result)

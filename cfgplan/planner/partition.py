@@ -161,10 +161,17 @@ class Partition:
     def order(self, call: Ground) -> tuple[Instance, ...]:
         """Every instance below ``call`` (itself last), children before
         parents: the order :meth:`_least` evaluates them in, made once."""
+        found = self.reach(call)
+        assert found is not None  # counts() found no recursion below the pending items
+        return found
+
+    def reach(self, call: Ground) -> tuple[Instance, ...] | None:
+        """:meth:`order`, or None when an instance recurs below itself."""
         found = self._orders.get(call)
         if found is None:
             below = self._below(call, ())
-            assert below is not None  # counts() found no recursion below the pending items
+            if below is None:
+                return None
             found = self._orders[call] = tuple(map(self.instance, below))
         return found
 

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.bound import Bound
+from cfgplan.planner.combine import Combined
+from cfgplan.planner.components import Parts, divide, unroll
 from cfgplan.planner.dive import dive
 from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
@@ -49,6 +51,23 @@ def parts(task: Task) -> tuple[Grounder, Bound, Partition]:
         grounder = Grounder(task)
         found = task.memo["parts"] = (grounder, Bound(task, grounder), Partition(grounder))
     return found
+
+
+def divided(task: Task, goal: Ground) -> Parts | None:
+    """The goal's independent parts (:mod:`cfgplan.planner.components`), made
+    once per task and goal; None when there are not two, or when costs have
+    no unit (:mod:`cfgplan.planner.levels`: then sums of parts may not rank
+    as whole configurations do)."""
+    made: dict[Ground, Parts | None] = task.memo.setdefault("components", {})
+    if goal not in made:
+        found = None
+        if task.levels.unit is not None:
+            grounder, _, partition = parts(task)
+            unrolled = unroll(grounder, goal)
+            if unrolled is not None:
+                found = divide(grounder, partition, *unrolled)
+        made[goal] = found if found is not None and len(found.parts) > 1 else None
+    return made[goal]
 
 
 def combined(bound: Bound, partition: Partition) -> Heuristic:
@@ -104,17 +123,40 @@ class Run:
     progress: Progress | None = None
     started: float | None = None
     """When the time limit started counting (perf_counter; default: now)."""
-    strategy: BestFirst | Windows = field(init=False)
+    components: bool = True
+    """Search the goal's independent parts apart when it has some
+    (:mod:`cfgplan.planner.combine`; the ``limit`` cheapest only)."""
+    strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
+        grower = self._grower()
+        if self.limit is None:
+            bound = parts(self.task)[1]
+            grower.split = None
+            self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
+        else:
+            self.strategy = BestFirst(grower, self.goal, self.progress)
+
+    def _divide(self) -> None:
+        """Search the goal's independent parts apart, if it has some (found
+        under the time limit: should it pass, the search stops at once)."""
+        if not self.components or not isinstance(self.strategy, BestFirst):
+            return
+        try:
+            found = divided(self.task, self.goal)
+        except clock.OutOfTime:
+            return
+        if found is not None:
+            grower = self.strategy.grower
+            self.strategy = Combined(grower, self.goal, found, self._grower, self.progress)
+
+    def _grower(self) -> Grower:
+        """A grower with the task's bounds, its children priced from splits."""
         grounder, bound, partition = parts(self.task)
         refine = partitioned(bound, partition)
         grower = Grower(grounder, bound.estimate, refine, self.distinct, bound.feasible)
-        if self.limit is None:
-            self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
-        else:
-            grower.split = splitting(bound, partition)
-            self.strategy = BestFirst(grower, self.goal, self.progress)
+        grower.split = splitting(bound, partition)
+        return grower
 
     @property
     def stats(self) -> Stats:
@@ -134,6 +176,7 @@ class Run:
         listed = 0
         try:
             with clock.limit(deadline):
+                self._divide()
                 for config in self.strategy:
                     listed += 1
                     yield config

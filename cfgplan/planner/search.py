@@ -51,7 +51,11 @@ class BestFirst:
     grower: Grower
     goal: Ground
     progress: Progress | None = None
+    origin: Partial | None = None
+    """Where to search from (default: the goal alone on the stack)."""
     stopped: StopReason | None = None
+    last: Partial | None = None
+    """The complete node of the configuration listed last."""
     _heap: list[tuple[float, tuple[int, ...], bool, Partial]] = field(default_factory=list)
     _closed: dict[bytes, tuple[int, ...]] = field(default_factory=dict)
     """The canonical forms of the partial nodes expanded (distinct), each with
@@ -86,7 +90,7 @@ class BestFirst:
 
     def _search(self, start: float) -> Iterator[Configuration]:
         grower = self.grower
-        self._queue(grower.settle(root(self.goal)))
+        self._queue(grower.settle(root(self.goal) if self.origin is None else self.origin))
         next_tick = 1.0
         while self._heap:
             clock.check()
@@ -119,6 +123,7 @@ class BestFirst:
             if node.done:
                 config = grower.complete(node, total)
                 if config is not None:
+                    self.last = node
                     self.stats.seconds = time.perf_counter() - start
                     yield config
                 continue

@@ -69,14 +69,14 @@ def test_pricing_children_from_splits_changes_no_ranked_list(
 ) -> None:
     """The 20 cheapest, costs, identities and derivation numbers, with the
     children priced from their parents' splits and without: the same, with
-    fewer refinements."""
+    fewer refinements (the plain search, not the parts')."""
     problem = problem_of(texts)
-    with_splits = Run(problem.task, problem.goal_call, limit=20)
+    with_splits = Run(problem.task, problem.goal_call, limit=20, components=False)
     configs = list(with_splits)
     module = sys.modules["cfgplan.planner.plan"]  # the package exports the function plan
     monkeypatch.setattr(module, "splitting", lambda bound, partition: None)
     problem = problem_of(texts)  # a new task: its bounds are made anew
-    without = Run(problem.task, problem.goal_call, limit=20)
+    without = Run(problem.task, problem.goal_call, limit=20, components=False)
     assert [(c.cost, c.identity(), c.derivation) for c in configs] == [
         (c.cost, c.identity(), c.derivation) for c in without
     ]

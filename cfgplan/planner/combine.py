@@ -1,0 +1,202 @@
+"""Configurations of independent parts, listed cheapest first (issue 11).
+
+When the choices of a goal fall into independent parts
+(:mod:`cfgplan.planner.components`), each part is searched on its own, best
+first (:class:`cfgplan.planner.search.BestFirst` from the part's start), and
+the configurations of the goal are the combinations of one configuration per
+part: the cost of the forced steps plus what each part adds. They are listed
+as the k cheapest sums are (a heap of combinations; taking one offers each
+part's next configuration in its place), each part's list grown only as far
+as the heap needs it.
+
+At equal cost the thesis lists derivations in their depth-first order: the
+first choice item (by address) where two combinations differ decides, by
+the choices made below it. So a combination's place is its cost, then the
+choices below every choice item in address order; a part's own search lists
+its configurations in that same order, so a successor never comes before the
+combination it was offered by, and the heap lists in the thesis's order.
+
+Each combination listed is derived again from the goal in the thesis's
+order (:func:`cfgplan.planner.components.replay`): labels, channel order and
+cost are exactly the plain search's, and the check of 4.5 step 4 rejects
+a combination with a cycle through the forced functionalities. Should a
+derivation break off, or cost other than its parts' sum, or a part meet a
+derivation it listed already (the plain search would number the
+configurations after it differently), the plain search takes over and lists
+what remains after those already listed.
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner import clock
+from cfgplan.planner.components import Address, Parts, replay, segments
+from cfgplan.planner.grow import Grower, Stats
+from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.search import BestFirst, Progress
+from cfgplan.planner.task import Ground
+
+
+@dataclass(frozen=True, slots=True)
+class _Entry:
+    """One configuration of a part: what it adds to the forced steps' cost,
+    and the choices below each of the part's items."""
+
+    added: float
+    choices: dict[Address, tuple[int, ...]]
+
+
+_Offer = tuple[float, tuple[tuple[int, ...], ...], tuple[int, ...]]
+"""A combination's place — cost, then the choices below each choice item in
+address order — and which configuration of each part it takes."""
+
+
+class _Irregular(Exception):
+    """The parts turned out not to combine as assumed: hand over."""
+
+
+@dataclass
+class Combined:
+    """An iterator over configurations, best first, part by part."""
+
+    grower: Grower
+    """The plain search's: for the greedy dive and for handing over."""
+    goal: Ground
+    parts: Parts
+    make: Callable[[], Grower]
+    """A fresh grower for each part's search."""
+    progress: Progress | None = None
+    stopped: StopReason | None = None
+    stats: Stats = field(default_factory=Stats)
+    handed_over: bool = False
+    """Whether the plain search lists the rest (the parts did not combine)."""
+    _searches: list[BestFirst] = field(default_factory=list)
+    _streams: list[Iterator[Configuration]] = field(default_factory=list)
+    _lists: list[list[_Entry]] = field(default_factory=list)
+    """Each part's configurations found so far, in its search's order."""
+    _start: float = 0.0
+
+    def __post_init__(self) -> None:
+        # Every choice item's address, and its part, in the thesis's order.
+        parts = self.parts
+        self._order = sorted(
+            (parts.address[item.label], p) for p, items in enumerate(parts.parts) for item in items
+        )
+
+    @property
+    def report(self) -> Report:
+        return self.grower.report
+
+    def __iter__(self) -> Iterator[Configuration]:
+        start = self._start = time.perf_counter()
+        listed = 0
+        try:
+            try:
+                for config in self._combine():
+                    listed += 1
+                    yield config
+            except _Irregular:
+                yield from self._hand_over(listed)
+        except clock.OutOfTime:
+            self.stats.complete = False
+            self.stopped = StopReason.TIME_LIMIT
+        self.stats.seconds = time.perf_counter() - start
+
+    def _combine(self) -> Iterator[Configuration]:
+        parts = self.parts
+        for p in range(len(parts.parts)):
+            grower = self.make()
+            grower.given = frozenset(parts.node.located)
+            search = BestFirst(grower, self.goal, self._progress, origin=parts.start(p))
+            self._searches.append(search)
+            self._streams.append(iter(search))
+            self._lists.append([])
+        first = self._offer((0,) * len(parts.parts))
+        if first is None:  # some part has no configuration: let the plain search say why
+            raise _Irregular
+        heap = [first]
+        offered = {first[2]}
+        while heap:
+            total, _, at = heapq.heappop(heap)
+            for p in range(len(at)):
+                then = (*at[:p], at[p] + 1, *at[p + 1:])
+                if then not in offered:
+                    offered.add(then)
+                    offer = self._offer(then)
+                    if offer is not None:
+                        heapq.heappush(heap, offer)
+            choices: dict[Address, tuple[int, ...]] = {}
+            for p, i in enumerate(at):
+                choices.update(self._lists[p][i].choices)
+            node = replay(self.grower.grounder, self.goal, choices)
+            if node is None or self.grower.cost(node) != total:
+                raise _Irregular
+            config = self.grower.finish(node, total, self.stats.derivations + 1)
+            if config is None:  # a cycle through the forced steps (4.5 step 4)
+                self.stats.rejected += 1
+                continue
+            self.stats.derivations += 1
+            yield config
+
+    def _offer(self, at: tuple[int, ...]) -> _Offer | None:
+        """The combination of the ``at[p]``-th configuration of each part p,
+        with its place in the listing; None when a part has no more."""
+        chosen = []
+        raw = self.parts.node.cost
+        for p, i in enumerate(at):
+            got = self._entry(p, i)
+            if got is None:
+                return None
+            chosen.append(got)
+            raw += got.added
+        key = tuple(chosen[p].choices[a] for a, p in self._order)
+        return self.grower.levels.cost(raw), key, at
+
+    def _entry(self, p: int, i: int) -> _Entry | None:
+        """Part p's ``i``-th configuration (searched as far as needed), or None."""
+        found = self._lists[p]
+        while len(found) <= i:
+            search = self._searches[p]
+            config = next(self._streams[p], None)
+            self._count()
+            if search.stopped is not None:
+                self.stopped = search.stopped
+                raise clock.OutOfTime
+            if search.stats.duplicates:
+                raise _Irregular
+            if config is None:
+                return None
+            assert search.last is not None
+            parts = self.parts
+            made = segments(self.grower.grounder, parts.start(p), search.last.path, parts.owners(p))
+            if made is None:
+                raise _Irregular
+            found.append(_Entry(search.last.cost - parts.node.cost, made))
+        return found[i]
+
+    def _progress(self, stats: Stats, elapsed: float) -> None:
+        """A part's search reports progress: report this search's."""
+        if self.progress is not None:
+            self._count()
+            self.progress(self.stats, time.perf_counter() - self._start)
+
+    def _count(self) -> None:
+        """The parts' statistics, summed into this search's."""
+        for name in ("nodes", "expansions", "pruned"):
+            setattr(self.stats, name, sum(getattr(s.stats, name) for s in self._searches))
+
+    def _hand_over(self, listed: int) -> Iterator[Configuration]:
+        """The plain search, skipping the ``listed`` configurations already listed."""
+        plain = BestFirst(self.grower, self.goal, self.progress)
+        self.stats, self.handed_over = plain.stats, True
+        for config in plain:
+            if listed:
+                listed -= 1
+            else:
+                yield config
+        self.stopped = plain.stopped
