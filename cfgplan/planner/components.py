@@ -30,7 +30,7 @@ diving again through everything below the choice it changes. Here instead:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Mapping
+from collections.abc import Callable, Container, Hashable, Mapping
 from dataclasses import dataclass, replace
 
 from cfgplan.planner import clock
@@ -163,11 +163,25 @@ def divide(
             claim(i, ("ch", ch.source, ch.target))
             if pairs and ch.kind == "global" and len(ch.robots) == 2:
                 claim(i, ("<>", partition.number(("<>", ch.robots[0], ch.robots[1]))))
+    if not _fed(node, holder):
+        return None
     groups: dict[int, list[Item]] = {}
     for i, item in enumerate(items):
         groups.setdefault(find(i), []).append(item)
     return Parts(node, {item.label: address[item.label] for item in items},
                  tuple(tuple(group) for group in groups.values()))
+
+
+def _fed(node: Partial, claimed: Container[Hashable]) -> bool:
+    """Whether every input of every forced functionality has a channel that
+    may feed it: one in C already, or one a choice item's derivation may add
+    by reusing it. If not, no completion is admissible, and the plain search
+    says why (rather than the parts being combined in vain)."""
+    fed = {(ch.target, ch.data) for ch in node.channels}
+    return all(
+        ("f", p.call) in claimed or all((p.label, need) in fed for need in p.inputs)
+        for p in node.placed
+    )
 
 
 def segments(

@@ -117,6 +117,17 @@ def test_a_cycle_through_forced_functionalities_is_rejected_in_the_whole() -> No
     assert run.stats.rejected == 1
 
 
+def test_a_forced_functionality_nothing_may_feed_leaves_it_to_the_plain_search() -> None:
+    """Without the channel from get-b to t, t's input is fed by nothing any
+    part may add: no combination is admissible, and the plain search, not the
+    parts, finds that out (and says why)."""
+    unfed = CYCLE.format(twin="").replace(" ((local ?r) ?b ?t (z ?r))", "")
+    problem = problem_of((unfed, STATE))
+    assert divided(problem.task, problem.goal_call) is None
+    run = Run(problem.task, problem.goal_call, 10)
+    assert list(run) == [] and isinstance(run.strategy, BestFirst)
+
+
 def test_a_part_meeting_a_configuration_twice_hands_over_to_the_plain_search() -> None:
     """get-b's first version twice: its part meets a configuration again,
     which the plain search would count among the derivations (numbering the
