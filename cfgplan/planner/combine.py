@@ -123,6 +123,10 @@ class Combined:
         offered = {first[2]}
         while heap:
             total, _, at = heapq.heappop(heap)
+            config = self._derived(at, total)
+            if config is not None:
+                yield config
+            # Its successors only now: -k 1 searches no part for a second one.
             for p in range(len(at)):
                 then = (*at[:p], at[p] + 1, *at[p + 1:])
                 if then not in offered:
@@ -130,18 +134,23 @@ class Combined:
                     offer = self._offer(then)
                     if offer is not None:
                         heapq.heappush(heap, offer)
-            choices: dict[Address, tuple[int, ...]] = {}
-            for p, i in enumerate(at):
-                choices.update(self._lists[p][i].choices)
-            node = replay(self.grower.grounder, self.goal, choices)
-            if node is None or self.grower.cost(node) != total:
-                raise _Irregular
-            config = self.grower.finish(node, total, self.stats.derivations + 1)
-            if config is None:  # a cycle through the forced steps (4.5 step 4)
-                self.stats.rejected += 1
-                continue
-            self.stats.derivations += 1
-            yield config
+
+    def _derived(self, at: tuple[int, ...], total: float) -> Configuration | None:
+        """The combination ``at`` derived again from the goal in the thesis's
+        order: its configuration, or None when step 4 rejects it (a cycle
+        through the forced functionalities)."""
+        choices: dict[Address, tuple[int, ...]] = {}
+        for p, i in enumerate(at):
+            choices.update(self._lists[p][i].choices)
+        node = replay(self.grower.grounder, self.goal, choices)
+        if node is None or self.grower.cost(node) != total:
+            raise _Irregular
+        config = self.grower.finish(node, total, self.stats.derivations + 1)
+        if config is None:
+            self.stats.rejected += 1
+            return None
+        self.stats.derivations += 1
+        return config
 
     def _offer(self, at: tuple[int, ...]) -> _Offer | None:
         """The combination of the ``at[p]``-th configuration of each part p,
