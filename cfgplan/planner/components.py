@@ -243,21 +243,20 @@ def _derive(
     while node.stack:
         item = node.stack[0]
         mine = owner[item.label]
-        live = _live(grounder, node)
+        found: Partial | None = None
         if mine is None:
-            if len(live) != 1:
-                return None
-            child = live[0]
-        elif live and len(live[0].path) > len(node.path):
-            want = take(mine)
-            found = next((c for c in live if c.path[-1] == want), None)
-            if found is None:
-                return None
-            child = found
-        elif live:
-            child = live[0]
-        else:
+            live = _live(grounder, node)
+            found = live[0] if len(live) == 1 else None
+        else:  # the children made only up to the one chosen
+            children = (c for c in successors(grounder, node) if isinstance(c, Partial))
+            found = next(children, None)
+            if found is not None and len(found.path) > len(node.path):
+                want = take(mine)
+                while found is not None and found.path[-1] != want:
+                    found = next(children, None)
+        if found is None:
             return None
+        child = found
         first = node.next_label
         for label in range(first, child.next_label):
             owner[label] = adopt(item.label, mine, label, label - first)
