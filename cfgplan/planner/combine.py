@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
-from cfgplan.planner.components import Address, Parts, replay, segments
+from cfgplan.planner.components import Address, Parts, Trail, replay, segments
 from cfgplan.planner.grow import Grower, Stats
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst, Progress
@@ -80,6 +80,8 @@ class Combined:
     _lists: list[list[_Entry]] = field(default_factory=list)
     """Each part's configurations found so far, in its search's order."""
     _start: float = 0.0
+    _trail: Trail = field(default_factory=Trail)
+    """The last replay's choices, for the next to resume from."""
 
     def __post_init__(self) -> None:
         # Every choice item's address, and its part, in the thesis's order.
@@ -142,7 +144,7 @@ class Combined:
         choices: dict[Address, tuple[int, ...]] = {}
         for p, i in enumerate(at):
             choices.update(self._lists[p][i].choices)
-        node = replay(self.grower.grounder, self.goal, choices)
+        node = replay(self.grower.grounder, self.goal, choices, self._trail)
         if node is None or self.grower.cost(node) != total:
             raise _Irregular
         config = self.grower.finish(node, total, self.stats.derivations + 1)

@@ -31,7 +31,7 @@ diving again through everything below the choice it changes. Here instead:
 from __future__ import annotations
 
 from collections.abc import Callable, Container, Hashable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from cfgplan.planner import clock
 from cfgplan.planner.ground import Grounder
@@ -208,15 +208,52 @@ def segments(
     return {a: tuple(c) for a, c in made.items()}
 
 
-def replay(grounder: Grounder, goal: Ground, choices: Choices) -> Partial | None:
+@dataclass
+class Trail:
+    """Where a replay made each choice, for the next replay to resume from
+    the last choice both make alike (replays of one listing share long
+    beginnings: the thesis's order puts the parts' cheapest first)."""
+
+    choices: Choices = field(default_factory=dict)
+    marks: list[tuple[Partial, Address, int]] = field(default_factory=list)
+    """Before each choice: the node, the choice item, the choice's index."""
+    address: dict[int, Address] = field(default_factory=lambda: {1: ()})
+    owner: dict[int, Address | None] = field(default_factory=dict)
+    """By label: an item's address and its choice item (entries of labels
+    not yet made again are stale but never read: labels are made in order)."""
+
+
+def replay(
+    grounder: Grounder, goal: Ground, choices: Choices, trail: Trail | None = None
+) -> Partial | None:
     """The goal derived in the thesis's order, each choice item (by address)
     making ``choices``, the forced steps their one: the complete node, or
-    None when that derivation breaks off (the parts were not independent)."""
-    address: dict[int, Address] = {1: ()}
+    None when that derivation breaks off (the parts were not independent).
+    With a ``trail`` of the last replay, from its last choice made alike."""
+    trail = Trail() if trail is None else trail
+    marks, before = trail.marks, trail.choices
     taken: dict[Address, int] = dict.fromkeys(choices, 0)
+    resume = len(marks) - 1  # all alike (never: two listings differ): its last
+    for k, (_, mine, at) in enumerate(marks):
+        made, old = choices[mine], before[mine]
+        if at >= len(made) or at >= len(old) or made[at] != old[at]:
+            resume = k
+            break
+        taken[mine] = at + 1
+    if resume < 0:
+        node = root(goal)
+        trail.owner = {1: () if () in choices else None}
+    else:
+        node, mine, at = marks[resume]
+        taken[mine] = at
+        del marks[resume:]
+    trail.choices = choices
+    address = trail.address
+    current = [node]
 
     def take(mine: Address) -> int | None:
         made, at = choices[mine], taken[mine]
+        marks.append((current[0], mine, at))
         taken[mine] = at + 1
         return made[at] if at < len(made) else None
 
@@ -224,8 +261,7 @@ def replay(grounder: Grounder, goal: Ground, choices: Choices) -> Partial | None
         where = address[new] = (*address[parent], index)
         return mine if mine is not None else (where if where in choices else None)
 
-    owner: dict[int, Address | None] = {1: () if () in choices else None}
-    return _derive(grounder, root(goal), owner, take, adopt)
+    return _derive(grounder, node, trail.owner, take, adopt, current)
 
 
 def _derive(
@@ -234,26 +270,26 @@ def _derive(
     owner: dict[int, Address | None],
     take: Callable[[Address], int | None],
     adopt: Callable[[int, Address | None, int, int], Address | None],
+    current: list[Partial] | None = None,
 ) -> Partial | None:
     """``node`` derived to its end: an item under no choice item (``owner``
-    None) takes its one child; under one, where 4.5 branches, the child
-    ``take(owner)`` names. An item a step creates gets the owner
+    None) takes its one child (forced: :func:`unroll`); under one, where
+    4.5 branches, the child ``take(owner)`` names. An item a step creates gets the owner
     ``adopt(parent label, parent's owner, new label, body position)``.
     None when a step has not the child it should."""
     while node.stack:
+        if current is not None:
+            current[0] = node  # the node a choice is made at, for a Trail
         item = node.stack[0]
         mine = owner[item.label]
-        found: Partial | None = None
-        if mine is None:
-            live = _live(grounder, node)
-            found = live[0] if len(live) == 1 else None
-        else:  # the children made only up to the one chosen
-            children = (c for c in successors(grounder, node) if isinstance(c, Partial))
-            found = next(children, None)
-            if found is not None and len(found.path) > len(node.path):
-                want = take(mine)
-                while found is not None and found.path[-1] != want:
-                    found = next(children, None)
+        # The children are made only up to the one taken: a forced step's
+        # first (its only one, as unroll() found), a choice item's chosen one.
+        children = (c for c in successors(grounder, node) if isinstance(c, Partial))
+        found = next(children, None)
+        if mine is not None and found is not None and len(found.path) > len(node.path):
+            want = take(mine)
+            while found is not None and found.path[-1] != want:
+                found = next(children, None)
         if found is None:
             return None
         child = found
