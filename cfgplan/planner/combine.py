@@ -17,8 +17,9 @@ its configurations in that same order, so a successor never comes before the
 combination it was offered by, and the heap lists in the thesis's order.
 
 Each combination listed is derived again from the goal in the thesis's
-order (:func:`cfgplan.planner.components.replay`): labels, channel order and
-cost are exactly the plain search's, and the check of 4.5 step 4 rejects
+order (:func:`cfgplan.planner.components.replay`, resumed from the last
+derivation at the first choice the two make differently): labels, channel
+order and cost are exactly the plain search's, and the check of 4.5 step 4 rejects
 a combination with a cycle through the forced functionalities. Should a
 derivation break off, or cost other than its parts' sum, or a part meet a
 derivation it listed already (the plain search would number the

@@ -3,9 +3,11 @@
 A :class:`Run` puts the parts together: the grounding memo and the bounds of
 the task (kept per task, so that planning the same task again, e.g. ``-k 1``
 then ``--all``, grounds and summarises once), the strategy — best-first
-search for the ``limit`` cheapest (:mod:`cfgplan.planner.search`), windows
-of depth-first walks to list them all in bounded memory
-(:mod:`cfgplan.planner.enumerate`) — the time limit, the greedy dive when a
+search for the ``limit`` cheapest (:mod:`cfgplan.planner.search`), or, when
+the goal's choices fall into independent parts, each part searched so and
+the parts combined (:mod:`cfgplan.planner.combine`), windows of depth-first
+walks to list them all in bounded memory (:mod:`cfgplan.planner.enumerate`)
+— the time limit, the greedy dive when a
 search is stopped before it has proven anything, and, when nothing is
 admissible, a search without the bounds to say why. Configurations come out
 of a run as they are proven, so a caller may print them at once;
