@@ -38,6 +38,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.components import Address, Parts, Trail, replay, segments
 from cfgplan.planner.grow import Grower, Stats
+from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.task import Ground
@@ -78,6 +79,8 @@ class Combined:
     """Whether the plain search lists the rest (the parts did not combine)."""
     _searches: list[BestFirst] = field(default_factory=list)
     _streams: list[Iterator[Configuration]] = field(default_factory=list)
+    _starts: list[tuple[Partial, dict[int, Address]]] = field(default_factory=list)
+    """Each part's start node and its choice items' addresses by label."""
     _lists: list[list[_Entry]] = field(default_factory=list)
     """Each part's configurations found so far, in its search's order."""
     _start: float = 0.0
@@ -115,7 +118,8 @@ class Combined:
         for p in range(len(parts.parts)):
             grower = self.make()
             grower.given = frozenset(parts.node.located)
-            search = BestFirst(grower, self.goal, self._progress, origin=parts.start(p))
+            self._starts.append((parts.start(p), parts.owners(p)))
+            search = BestFirst(grower, self.goal, self._progress, origin=self._starts[p][0])
             self._searches.append(search)
             self._streams.append(iter(search))
             self._lists.append([])
@@ -184,11 +188,11 @@ class Combined:
             if config is None:
                 return None
             assert search.last is not None
-            parts = self.parts
-            made = segments(self.grower.grounder, parts.start(p), search.last.path, parts.owners(p))
+            start, owners = self._starts[p]
+            made = segments(self.grower.grounder, start, search.last.path, owners)
             if made is None:
                 raise _Irregular
-            found.append(_Entry(search.last.cost - parts.node.cost, made))
+            found.append(_Entry(search.last.cost - start.cost, made))
         return found[i]
 
     def _progress(self, stats: Stats, elapsed: float) -> None:

@@ -68,7 +68,7 @@ class Parts:
         mine = {item.label for item in items}
         ends = mine | node.located.keys()
         channels = tuple(ch for ch in node.channels if ch.source in ends and ch.target in ends)
-        return replace(node, stack=items, channels=channels, path=())
+        return replace(node, stack=items, channels=channels)
 
     def owners(self, part: int) -> dict[int, Address]:
         """Label -> address of the part's choice items."""
@@ -137,11 +137,10 @@ def divide(
         if a != b:
             parent[max(a, b)] = min(a, b)
 
-    task = grounder.task
-    pairs = bool(task.media)
-    index = {item.label: i for i, item in enumerate(items)}
     if len(items) < 2:
         return None
+    room = partition.room
+    index = {item.label: i for i, item in enumerate(items)}
     for i, item in enumerate(items):
         clock.check()
         below = partition.reach(item.call)
@@ -159,10 +158,11 @@ def divide(
                     claim(i, ("<>", need.pair))
     for ch in node.channels:
         ends = [index[e] for e in (ch.source, ch.target) if e in index]
+        pair = room.pair(ch.kind, ch.robots) if room.active else None
         for i in ends:
             claim(i, ("ch", ch.source, ch.target))
-            if pairs and ch.kind == "global" and len(ch.robots) == 2:
-                claim(i, ("<>", partition.number(("<>", ch.robots[0], ch.robots[1]))))
+            if pair is not None:
+                claim(i, ("<>", pair))
     if not _fed(node, holder):
         return None
     groups: dict[int, list[Item]] = {}

@@ -68,10 +68,17 @@ class Room:
         """Without media every channel fits (4.6 applies only when declared)."""
         return bool(self.task.media)
 
-    def _group(self, kind: str, robots: Sequence[str], data: object) -> tuple[int, int] | None:
+    def pair(self, kind: str, robots: Sequence[str]) -> int | None:
+        """The number of the robot pair a channel of ``kind`` declared
+        between ``robots`` loads; None when it needs no medium."""
         if kind != "global" or len(robots) != 2 or robots[0] == robots[1]:
             return None
-        pair = self.number(("<>", robots[0], robots[1]))
+        return self.number(("<>", robots[0], robots[1]))
+
+    def _group(self, kind: str, robots: Sequence[str], data: object) -> tuple[int, int] | None:
+        pair = self.pair(kind, robots)
+        if pair is None:
+            return None
         return self.number(("<>", robots[0], robots[1], kind, data)), pair
 
     def needs(self, specs: Sequence[ChannelSpec]) -> tuple[Need, ...]:
