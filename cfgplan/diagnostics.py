@@ -17,9 +17,10 @@ import re
 import unicodedata
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-from cfgplan.ir.model import Span
+if TYPE_CHECKING:  # only named in annotations: pydantic is not loaded for a message
+    from cfgplan.ir.model import Span
 
 Severity = Literal["error", "warning", "note"]
 
@@ -62,6 +63,37 @@ class CfgplanError(Exception):
 def error(message: str, span: Span | None = None, hint: str | None = None) -> CfgplanError:
     """Build a :class:`CfgplanError` holding a single error diagnostic."""
     return CfgplanError([Diagnostic("error", message, span, hint)])
+
+
+# -- did you mean ----------------------------------------------------------------
+
+NEAR = 0.75
+"""How alike two spellings must be (difflib's ratio) to be a likely slip."""
+
+
+def near_names(name: str, known: Iterable[str]) -> tuple[list[str], bool]:
+    """The ``known`` names ``name`` is likely a slip for, and whether they
+    differ from it only in case (symbols are case-sensitive): those first;
+    else at most two close in spelling (``detect-robt``, ``detect-robot``),
+    the closest first. The one rule behind every "did you mean" of cfgplan."""
+    names = sorted(set(known) - {name})
+    same = [n for n in names if n.lower() == name.lower()]
+    if same:
+        return same, True
+    import difflib  # only when a name is missing
+
+    return difflib.get_close_matches(name, names, n=2, cutoff=NEAR), False
+
+
+def did_you_mean(name: str, known: Iterable[str]) -> str | None:
+    """``did you mean detect-robot?`` (``symbols are case-sensitive: did you
+    mean camera?``) when ``name`` is likely a slip for a known name
+    (:func:`near_names`); None when it is not."""
+    close, case = near_names(name, known)
+    if not close:
+        return None
+    prefix = "symbols are case-sensitive: " if case else ""
+    return f"{prefix}did you mean {' or '.join(close)}?"
 
 
 # -- terminal safety -------------------------------------------------------------

@@ -13,7 +13,15 @@ from pathlib import Path
 
 import pytest
 
-from cfgplan.diagnostics import WINDOW, Diagnostic, printable, quote_line, render
+from cfgplan.diagnostics import (
+    WINDOW,
+    Diagnostic,
+    did_you_mean,
+    near_names,
+    printable,
+    quote_line,
+    render,
+)
 from cfgplan.ir.model import Span
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -124,3 +132,26 @@ def test_names_with_escape_sequences_are_escaped_in_tables_and_summaries(tmp_pat
         out = done.stdout.decode("utf-8")
         assert _raw_controls(out) == [], out
         assert "\\x1b[31mEvil\\x07\\x1b[2J" in out
+
+
+# -- did you mean (issue 32: one rule for the checker and the planner) ------------
+
+
+def test_did_you_mean_prefers_a_slip_in_case() -> None:
+    known = ["camera", "Camera2", "kamera"]
+    assert near_names("Camera", known) == (["camera"], True)
+    assert did_you_mean("Camera", known) == "symbols are case-sensitive: did you mean camera?"
+
+
+def test_did_you_mean_names_at_most_two_close_spellings_closest_first() -> None:
+    known = ["detect-robot", "detect-door", "detect-robots", "measure-door"]
+    close, case = near_names("detect-robt", known)
+    assert (close, case) == (["detect-robot", "detect-robots"], False)
+    assert did_you_mean("detect-robt", known) == "did you mean detect-robot or detect-robots?"
+    assert did_you_mean("Livng", ["Living", "Kitchen"]) == "did you mean Living?"
+
+
+def test_did_you_mean_stays_silent_when_nothing_is_close() -> None:
+    assert did_you_mean("lens", ["camera", "laser"]) is None
+    assert did_you_mean("camera", ["camera"]) is None  # the name itself is no slip
+    assert near_names("x", []) == ([], False)

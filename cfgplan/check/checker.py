@@ -215,7 +215,7 @@ class _Checker(Findings):
             f"{item.label} calls {call}, but no functionality or method "
             f"{sig_text(call.signature)} is defined",
             call.span,
-            self.case_hint(call.predicate),
+            self.did_you_mean(call.predicate),
         )
 
     def _offers(self, call: Atom, side: Side) -> list[tuple[Atom, Atom]] | None:

@@ -4,9 +4,9 @@ goal (:mod:`cfgplan.check.state`)."""
 
 from __future__ import annotations
 
-from cfgplan.check.messages import by_position, case_hint
+from cfgplan.check.messages import by_position
 from cfgplan.check.unify import Signature
-from cfgplan.diagnostics import Diagnostic, Severity
+from cfgplan.diagnostics import Diagnostic, Severity, did_you_mean
 from cfgplan.ir.model import Domain, Functionality, Method, Span
 
 
@@ -35,9 +35,10 @@ class Findings:
         spans += [m.span for m in self.domain.methods]
         return by_position(self.found, [s.file for s in spans if s is not None])
 
-    def case_hint(self, name: str, methods_only: bool = False) -> str | None:
-        """A hint when ``name`` differs only in case from a defined name."""
+    def did_you_mean(self, name: str, methods_only: bool = False) -> str | None:
+        """A hint when ``name`` is likely a slip for a defined name (in case
+        or spelling: :func:`cfgplan.diagnostics.did_you_mean`)."""
         names = [sig[0] for sig in self.versions]
         if not methods_only:
             names += [sig[0] for sig in self.funcs]
-        return case_hint(name, names)
+        return did_you_mean(name, names)

@@ -40,14 +40,6 @@ def where(span: Span | None, here: Span | None) -> str:
     return str(span)
 
 
-def case_hint(name: str, names: Iterable[str]) -> str | None:
-    """``did you mean camera?`` when ``name`` differs from a defined name only in case."""
-    close = sorted({n for n in names if n.lower() == name.lower() and n != name})
-    if close:
-        return f"symbols are case-sensitive: did you mean {' or '.join(close)}?"
-    return None
-
-
 def by_position(found: Sequence[Diagnostic], files: Sequence[str] = ()) -> list[Diagnostic]:
     """Diagnostics by file (``files`` first, then in order of first report), line and
     column; stable, and those without a span last."""

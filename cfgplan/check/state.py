@@ -5,11 +5,9 @@ no method."""
 
 from __future__ import annotations
 
-import difflib
-from collections.abc import Iterable
-
 from cfgplan.check.findings import Findings
 from cfgplan.check.messages import alternatives, sig_text
+from cfgplan.diagnostics import did_you_mean
 from cfgplan.ir.model import Atom, Domain, Goal, Negation, State
 
 
@@ -37,7 +35,7 @@ def check_state(findings: Findings, state: State) -> None:
     for pred, fact in stated.items():
         if pred in tested or pred in PLANNER_FACTS:
             continue
-        hint = _did_you_mean(pred, tested)
+        hint = did_you_mean(pred, tested)
         if hint is not None:
             findings.report(
                 "warning",
@@ -71,7 +69,7 @@ def check_goal(findings: Findings, goal: Goal) -> None:
         )
         return
     arities = [s[1] for s in findings.versions if s[0] == call.predicate]
-    hint = _did_you_mean(call.predicate, {s[0] for s in findings.versions})
+    hint = did_you_mean(call.predicate, {s[0] for s in findings.versions})
     if arities:
         hint = f"({call.predicate} ...) takes {alternatives(arities)}, found {call.arity}"
     findings.report(
@@ -85,16 +83,3 @@ def check_goal(findings: Findings, goal: Goal) -> None:
 PLANNER_FACTS = frozenset({"device"})
 """Fact predicates the planner itself reads (:mod:`cfgplan.configuration.cost`):
 used even when no precondition tests them."""
-
-
-def _did_you_mean(name: str, known: Iterable[str]) -> str | None:
-    """A hint naming the known names ``name`` may be a slip for: differing
-    only in case, or close in spelling; None when none is."""
-    names = sorted(set(known) - {name})
-    same = [n for n in names if n.lower() == name.lower()]
-    if same:
-        return f"symbols are case-sensitive: did you mean {' or '.join(same)}?"
-    close = difflib.get_close_matches(name, names, n=2, cutoff=0.75)
-    if close:
-        return f"did you mean {' or '.join(close)}?"
-    return None

@@ -2,7 +2,7 @@
 
 ``table`` for people (rich), ``lisp`` the thesis's configuration
 descriptions, ``json`` one document and ``jsonl`` one configuration a line
-then a summary line (the schema: README, "Output formats"). Every format
+then a summary line (the schema: :mod:`cfgplan.configuration.schema`). Every format
 numbers the configurations by rank from ``first`` (``--rank N`` shows the
 N-th alone). Names from the input are shown with control characters escaped.
 """
@@ -13,9 +13,6 @@ import io
 import json
 import shutil
 
-from rich.console import Console
-from rich.table import Table
-
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import channel_text, to_dict, to_text
 from cfgplan.configuration.model import Configuration
@@ -24,9 +21,20 @@ from cfgplan.notation import call_text
 from cfgplan.planner import Run
 from cfgplan.problem import Problem
 
-__all__ = ["lisp", "stats", "streamed", "summary", "table"]
+__all__ = ["jsonl", "lisp", "more_note", "stats", "streamed", "summary", "table"]
 
 NO_MEDIA = "the state declares no media: communication admissibility not checked"
+
+
+def more_note(listed: int) -> str:
+    """What the table says when ``-k`` cut the list: ``-k N`` plans one
+    configuration more than it lists, so that one more is known to exist,
+    never how many (counting them would mean searching to the end)."""
+    wider = listed + 10
+    return (
+        "note: at least one more configuration exists: "
+        f"-k {wider} lists up to {wider}, --all lists them all\n"
+    )
 
 
 def stats(search: Run, more: bool = False) -> dict[str, object]:
@@ -48,6 +56,9 @@ def table(
 ) -> str:
     """The table for people: names with control characters escaped (a name
     holding ESC cannot drive the terminal)."""
+    from rich.console import Console  # loaded for tables only (issue 32: start-up)
+    from rich.table import Table
+
     shown = Table(title=printable(f"Configurations for {call_text(problem.goal_call)}"))
     shown.add_column("rank", justify="right")
     shown.add_column("cost", justify="right")
@@ -80,8 +91,7 @@ def table(
     width = shutil.get_terminal_size((200, 24)).columns if details else 100
     Console(file=buffer, width=width, force_terminal=False, color_system=None).print(shown)
     if more:
-        wider = len(configs) + 10
-        buffer.write(f"note: more configurations exist: --all lists them all, -k {wider} more\n")
+        buffer.write(more_note(len(configs)))
     if not problem.state.media:
         buffer.write(f"note: {NO_MEDIA}\n")
     if any(not c.proven for c in configs):
@@ -89,18 +99,27 @@ def table(
     return buffer.getvalue()
 
 
-def streamed(problem: Problem, config: Configuration, rank: int, format_: str) -> str:
-    """One configuration as ``--format jsonl`` or ``lisp`` prints it, alone."""
+def streamed(
+    problem: Problem, config: Configuration, rank: int, format_: str, first: int = 1
+) -> str:
+    """One configuration as ``--format jsonl`` or ``lisp`` prints it, alone;
+    the first one shown (rank ``first``) under the LISP header. Printed as
+    soon as it is proven or all at once, the bytes are the same."""
     if format_ == "jsonl":
         line = to_dict(config, rank, problem.state.media)
         return json.dumps(line, ensure_ascii=False) + "\n"
-    head = ""
-    if rank == 1:
-        head = f";; cfgplan: configurations for {call_text(problem.goal_call)}\n"
-        if not problem.state.media:
-            head += f";; {NO_MEDIA}\n"
+    head = _lisp_head(problem) if rank == first else ""
     shown = f";; rank {rank}" + ("" if config.proven else ", not proven optimal")
     return head + shown + "\n" + to_text(config, problem.state.media) + "\n"
+
+
+def _lisp_head(problem: Problem) -> str:
+    """The header of ``--format lisp``: it names no count, which is not known
+    while the configurations are printed as they are proven."""
+    head = f";; cfgplan: configurations for {call_text(problem.goal_call)}\n"
+    if not problem.state.media:
+        head += f";; {NO_MEDIA}\n"
+    return head
 
 
 def summary(
@@ -123,10 +142,19 @@ def summary(
 
 
 def lisp(problem: Problem, configs: list[Configuration], first: int = 1) -> str:
-    parts = [f";; cfgplan: {len(configs)} configuration(s) for {call_text(problem.goal_call)}"]
-    if not problem.state.media:
-        parts.append(f";; {NO_MEDIA}")
-    for rank, c in enumerate(configs, first):
-        parts.append(f";; rank {rank}" + ("" if c.proven else ", not proven optimal"))
-        parts.append(to_text(c, problem.state.media))
-    return "\n".join(parts) + "\n"
+    """The thesis's configuration descriptions (4.6), ranked from ``first``:
+    byte for byte what :func:`streamed` prints one at a time."""
+    if not configs:
+        return _lisp_head(problem)
+    shown = enumerate(configs, first)
+    return "".join(streamed(problem, c, rank, "lisp", first) for rank, c in shown)
+
+
+def jsonl(
+    problem: Problem, configs: list[Configuration], search: Run, more: bool, first: int = 1
+) -> str:
+    """One configuration a line, ranked from ``first``, then the summary line:
+    byte for byte what :func:`streamed` and :func:`summary` print."""
+    shown = enumerate(configs, first)
+    lines = "".join(streamed(problem, c, rank, "jsonl") for rank, c in shown)
+    return lines + summary(problem, configs, search, more)

@@ -10,7 +10,10 @@ wording of the libraries underneath.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Annotated, Any, NoReturn
 
@@ -39,10 +42,12 @@ __all__ = [
     "choose",
     "completing",
     "count_of",
+    "errors_as_json",
     "load_problem",
     "no_rank",
     "number_of",
     "parsed",
+    "print_errors",
 ]
 
 
@@ -161,17 +166,48 @@ def load_problem(
     return problem
 
 
+_AS_JSON: ContextVar[bool] = ContextVar("errors_as_json", default=False)
+"""Whether the command prints its errors on stdout as JSON (:func:`errors_as_json`)."""
+
+
+def print_errors(diagnostics: Sequence[Diagnostic]) -> None:
+    """Errors refusing the input, as the command prints them on stdout: one
+    JSON :class:`~cfgplan.cli.errors.ErrorDocument` under
+    :func:`errors_as_json`, else nothing (stderr has them, always)."""
+    if _AS_JSON.get() and any(d.is_error for d in diagnostics):
+        from cfgplan.cli.errors import ErrorDocument, dump  # pydantic: on this path only
+
+        sys.stdout.write(dump(ErrorDocument.of(diagnostics)))
+
+
+@contextmanager
+def errors_as_json(format_: str) -> Iterator[None]:
+    """With ``--format json`` or ``jsonl``, an input error refusing the
+    command (a :class:`CfgplanError`: unreadable file, parse or check error,
+    bad goal, an output it may not overwrite) is also printed on stdout as
+    JSON, so that a tool reads it; :func:`~cfgplan.cli.app.main` still
+    prints it on stderr and exits 1."""
+    token = _AS_JSON.set(format_ in ("json", "jsonl"))
+    try:
+        yield
+    except CfgplanError as exc:
+        print_errors(exc.diagnostics)
+        raise
+    finally:
+        _AS_JSON.reset(token)
+
+
 def no_rank(what: str, found: int, rank: int, kind: str = "configuration") -> NoReturn:
     """``--rank`` past the last one: the same words in every command; exit 3."""
-    report(
-        [
-            Diagnostic(
-                "error",
-                f"{what} has {found} {kind}{'' if found == 1 else 's'}, none of rank {rank}",
-                hint=f"--rank 1 to {found}",
-            )
-        ]
-    )
+    refusal = [
+        Diagnostic(
+            "error",
+            f"{what} has {found} {kind}{'' if found == 1 else 's'}, none of rank {rank}",
+            hint=f"--rank 1 to {found}",
+        )
+    ]
+    report(refusal)
+    print_errors(refusal)
     raise typer.Exit(EXIT_NONE)
 
 

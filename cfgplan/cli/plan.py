@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 
@@ -26,6 +26,7 @@ from cfgplan.cli.options import (
     choice_of,
     completing,
     count_of,
+    errors_as_json,
     load_problem,
     no_rank,
     number_of,
@@ -38,8 +39,9 @@ from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
 from cfgplan.planner.explain import explain, explanation
 from cfgplan.problem import Problem
-from cfgplan.reconfigure.fallbacks import Fallback
-from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
+
+if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (issue 32: start-up)
+    from cfgplan.reconfigure.fallbacks import Fallback
 
 FORMATS = ("table", "lisp", "json", "jsonl")
 K = 10
@@ -55,8 +57,7 @@ def _plan(
     limit: int | None,
     distinct: bool,
     time_limit: float | None,
-    stream: bool,
-    format_: str,
+    asked: _Asked,
 ) -> tuple[Run, list[Configuration], bool]:
     """Plan (streaming what is proven when asked to); with ``-k N`` one more is
     planned, to say whether more exist: the run, the configurations, and that."""
@@ -73,8 +74,8 @@ def _plan(
         if limit is not None and len(configs) == limit:
             return search, configs, True
         configs.append(config)
-        if stream:  # printed as soon as it is proven
-            sys.stdout.write(formats.streamed(problem, config, len(configs), format_))
+        if asked.stream:  # printed as soon as it is proven
+            sys.stdout.write(formats.streamed(problem, config, len(configs), asked.format))
             sys.stdout.flush()
     return search, configs, False
 
@@ -107,6 +108,14 @@ class _Asked:
     output: Path | None
     force: bool
 
+    @property
+    def stream(self) -> bool:
+        """Print each configuration as soon as it is proven: a listing (not
+        ``--rank``, which shows one only once those before it are found) in
+        jsonl or lisp, on stdout. The one place this is decided: what
+        :func:`_plan` printed, :func:`_print` does not print again."""
+        return self.listing and self.output is None and self.format in ("jsonl", "lisp")
+
 
 def _print(
     problem: Problem,
@@ -116,20 +125,20 @@ def _print(
     backups: list[Fallback] | None,
     asked: _Asked,
 ) -> None:
-    """The configurations (and fallbacks) in the format asked for."""
-    first, stream = asked.first, asked.output is None and asked.format in ("jsonl", "lisp")
+    """The configurations (and fallbacks) in the format asked for: on stdout,
+    the same bytes as in the ``-o`` file (what was streamed is not repeated)."""
+    first = asked.first
     if asked.format == "jsonl":
         summary = formats.summary(problem, configs, search, more)
-        if stream:
-            sys.stdout.write(summary)
+        if asked.stream:
+            sys.stdout.write(summary)  # every line before it went out as it was found
             return
-        shown = enumerate(configs, first)
-        text = "".join(formats.streamed(problem, c, i, "jsonl") for i, c in shown) + summary
+        text = formats.jsonl(problem, configs, search, more, first)
     elif asked.format == "json":
         extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
         stats = formats.stats(search, more)
         text = to_json(problem.goal_call, configs, problem.state.media, stats, extra, first)
-    elif stream:
+    elif asked.stream:
         if backups is not None:
             sys.stdout.write(fallback_lisp(configs[0], backups, first))
         return  # every description went out as it was found
@@ -144,9 +153,7 @@ def _print(
     write_output(text, asked.output, asked.force)
 
 
-@app.command(
-    short_help="Plan ranked admissible configurations (4.5), or sequences of them."
-)
+@app.command(short_help="Plan ranked admissible configurations (4.5), or sequences of them.")
 def plan(
     domain: DomainArg,
     state: StateArg,
@@ -238,40 +245,41 @@ def plan(
     sequences of them for several goals in order.
 
     Exit codes: 0 found, 1 invalid input, 2 usage, 3 no admissible configuration
-    (or none of the --rank asked for).
+    (or none of the --rank asked for). With --format json or jsonl, an input
+    error is also printed on stdout, as one JSON object.
     """
     if rank is not None and (k is not None or all_):
         usage_error("shows one configuration; -k and --all list several: give one", "--rank")
-    if output is not None:
-        check_target(output, force)  # before planning, which may take long
-    problem = load_problem(domain, state, goal, weights, sequence=True)
-    limit = rank if rank is not None else (None if all_ else (k or K))
-    if len(problem.goals) > 1:
-        options = SequenceOptions(limit, switch, time_limit, verbose, details, rank)
-        write_output(plan_sequences(problem, options, format_), output, force)
-        return
-    stream = rank is None and output is None and format_ in ("jsonl", "lisp")
-    search, configs, more = _plan(problem, limit, not derivations, time_limit, stream, format_)
-    if verbose:
-        _verbose(search)
-    if search.stopped:
-        found = f"{len(configs)} configuration(s)" if configs else "nothing"
-        say(f"cfgplan: search stopped ({search.stopped.value}); reporting {found} found so far")
-    if not configs:
-        _nothing(problem, search, format_, output, force)
-    if rank is not None:
-        if len(configs) < rank:
-            no_rank(call_text(problem.goal_call), len(configs), rank)
-        configs = configs[rank - 1 :]
-    backups = _fallbacks(problem, configs[0], time_limit) if fallbacks else None
-    asked = _Asked(format_, details, rank or 1, rank is None, output, force)
-    _print(problem, configs, search, more, backups, asked)
+    with errors_as_json(format_):  # input errors on stdout too, as JSON
+        if output is not None:
+            check_target(output, force)  # before planning, which may take long
+        problem = load_problem(domain, state, goal, weights, sequence=True)
+        limit = rank if rank is not None else (None if all_ else (k or K))
+        if len(problem.goals) > 1:
+            options = SequenceOptions(limit, switch, time_limit, verbose, details, rank)
+            write_output(plan_sequences(problem, options, format_), output, force)
+            return
+        asked = _Asked(format_, details, rank or 1, rank is None, output, force)
+        search, configs, more = _plan(problem, limit, not derivations, time_limit, asked)
+        if verbose:
+            _verbose(search)
+        if search.stopped:
+            found = f"{len(configs)} configuration(s)" if configs else "nothing"
+            say(f"cfgplan: search stopped ({search.stopped.value}); reporting {found} found so far")
+        if not configs:
+            _nothing(problem, search, format_, output, force)
+        if rank is not None:
+            if len(configs) < rank:
+                no_rank(call_text(problem.goal_call), len(configs), rank)
+            configs = configs[rank - 1 :]
+        backups = _fallbacks(problem, configs[0], time_limit) if fallbacks else None
+        _print(problem, configs, search, more, backups, asked)
 
 
-def _fallbacks(
-    problem: Problem, config: Configuration, time_limit: float | None
-) -> list[Fallback]:
+def _fallbacks(problem: Problem, config: Configuration, time_limit: float | None) -> list[Fallback]:
     """The fallbacks of ``config``; ``--time-limit`` bounds each one's search."""
+    from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
+
     return fallbacks_of(problem.task, problem.goal_call, config, time_limit=time_limit)
 
 

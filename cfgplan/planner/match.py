@@ -13,6 +13,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from cfgplan.check.evaluate import EvalFailure, holds
+from cfgplan.diagnostics import did_you_mean
 from cfgplan.ir.model import Span, is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
@@ -113,11 +114,15 @@ class Failure:
     span: Span | None
     bindings: tuple[tuple[str, str], ...]
     detail: str = ""
+    hint: str = ""
+    """A likely slip: a fact that differs from the condition by one near
+    spelling (:func:`_near_miss`)."""
 
     def describe(self) -> str:
         shown = [f"{k} = {v}" for k, v in self.bindings]
         where = f" with {', '.join(shown)}" if shown else ""
-        return f"{self.detail or 'no fact matches'} {self.condition}{where}"
+        hint = f": {self.hint}" if self.hint else ""
+        return f"{self.detail or 'no fact matches'} {self.condition}{where}{hint}"
 
 
 _DETAIL = {
@@ -145,18 +150,44 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
         # An atom is shown with the name's variables filled in, the others listed.
         condition = atom_text(substitute(test.pattern, named))
         shown = tuple((k, v) for k, v in current.items() if k not in params and _mentions(test, k))
-    detail = _DETAIL[test.kind]
+    detail, near = _DETAIL[test.kind], ""
     if test.kind is TestKind.ATOM:
         hint = _case_hint(task, test.pattern, current)
         if hint:
             detail = f"no fact matches ({hint})"
-    return Failure(condition, test.span, shown, detail)
+        else:
+            near = _near_miss(task, test.pattern, current)
+    return Failure(condition, test.span, shown, detail, near)
 
 
 def _mentions(test: Test, var: str) -> bool:
     if test.kind is not TestKind.EVAL:
         return var in test.pattern
     return var in test.text.replace("(", " ").replace(")", " ").split()
+
+
+def _near_miss(task: Task, p: Pattern, env: Bindings) -> str:
+    """``did you mean Living? the state has (in Vacu Living)``: the first fact
+    (in state order) that would match the condition but for one constant the
+    state names nowhere (``Livng``: a slip; ``Room2``, a room of the state, is
+    a real other place), a likely slip for the fact's by the rule of
+    :func:`cfgplan.diagnostics.did_you_mean`; '' when there is none. Made
+    once per failed call (the grounder keeps it): a condition whose
+    constants the state all names, the common case, costs one look-up each."""
+    ground = substitute(p, env)
+    unknown = [
+        i for i, t in enumerate(ground[1:], 1) if not is_variable(t) and t not in task.state_names
+    ]
+    if len(unknown) != 1:
+        return ""
+    (i,) = unknown
+    for fact in task.facts_by_predicate.get((ground[0], len(ground) - 1), ()):
+        if unify((*ground[:i], fact[i], *ground[i + 1 :]), fact, env) is None:
+            continue  # differs elsewhere too
+        hint = did_you_mean(ground[i], [fact[i]])
+        if hint is not None:
+            return f"{hint} the state has {atom_text(fact)}"
+    return ""
 
 
 def _case_hint(task: Task, p: Pattern, env: Bindings) -> str:

@@ -54,12 +54,34 @@ def test_clean_tiny_domain_has_no_diagnostics() -> None:
 
 
 def test_body_calls_undefined_name() -> None:
-    text = BASE + GOOD.replace("(?f1 (camera ?r))", "(?f1 (kamera ?r))")
+    text = BASE + GOOD.replace("(?f1 (camera ?r))", "(?f1 (lens ?r))")
     d = only(run(text))
-    assert "(kamera ...) with 1 argument is defined" in d.message
-    assert "?f1 calls (kamera ?r)" in d.message
-    assert loc(d) == at(text, "(kamera ?r)") == "8:16"
-    assert d.hint is None
+    assert "(lens ...) with 1 argument is defined" in d.message
+    assert "?f1 calls (lens ?r)" in d.message
+    assert loc(d) == at(text, "(lens ?r)") == "8:16"
+    assert d.hint is None  # close to no defined name
+
+
+def test_body_call_misspelt_gets_did_you_mean() -> None:
+    """Issue 32: a misspelt call in a method body names the functionality or
+    method it is close to, as a misspelt goal does (one rule:
+    :func:`cfgplan.diagnostics.did_you_mean`); before, only a slip in case did."""
+    detect = (
+        "(make-functionality :name '(detect-robot ?r ?o) :in '((image ?r)) :out '((pos ?r ?o)))\n"
+    )
+    method = """\
+(make-config-method :name '(find ?r ?o)
+  :precond '((camera ?r))
+  :channels '(((local ?r) ?c ?d (image ?r)))
+  :body '((?c (camera ?r)) (?d (detect-robt ?r ?o))))
+"""
+    text = BASE + detect + method
+    d = only(run(text))
+    assert "?d calls (detect-robt ?r ?o), but no functionality or method" in d.message
+    assert d.hint == "did you mean detect-robot?"
+    assert loc(d) == at(text, "(detect-robt")
+    kamera = only(run(BASE + GOOD.replace("(?f1 (camera ?r))", "(?f1 (kamera ?r))")))
+    assert kamera.hint == "did you mean camera?"
 
 
 def test_body_call_differing_in_case_gets_hint() -> None:

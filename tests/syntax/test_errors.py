@@ -124,7 +124,7 @@ def test_missing_close_before_a_keyword_names_the_open_list() -> None:
 def test_a_form_at_column_1_inside_a_closed_one_is_not_blamed() -> None:
     """A list written at column 1 inside a form that is closed later is no
     missing ')': a later error is reported as itself."""
-    text = "(state (robot Pippi)\n(robot Emil))\n(goal \"do\")\n"
+    text = '(state (robot Pippi)\n(robot Emil))\n(goal "do")\n'
     d = reader_error(text)
     assert_rendered(d, text, 3, 7, "unexpected character '\"'")
 
@@ -167,7 +167,7 @@ def test_a_syntax_error_anywhere_comes_before_a_wrong_form() -> None:
     had read the whole file first: a later syntax error before an earlier
     wrong form; of two wrong forms, the first."""
     wrong = "(state (robot ?r))\n"
-    text = wrong + "(state (robot Emil) \"x\")\n"
+    text = wrong + '(state (robot Emil) "x")\n'
     assert_rendered(reader_error(text), text, 2, 21, "unexpected character '\"'")
     text = wrong + "(state Pippi)\n"
     assert_rendered(reader_error(text), text, 1, 8, "a fact holds no variables")

@@ -1,0 +1,103 @@
+"""``cfgplan plan``: stdout holds exactly what ``-o FILE`` holds, in every
+format and for every choice of ``-k``, ``--rank`` and ``--all`` (issue 32),
+and the table never claims more configurations than are known to exist.
+
+In process (typer's runner): the streaming of jsonl and lisp to stdout is
+what differs from the ``-o`` path, and it writes to ``sys.stdout``, which
+the runner captures.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+import cfgplan.cli.plan  # noqa: F401  (registers the command)
+from cfgplan.cli.app import app
+from tests.cli.conftest import ROOT
+
+CROSS = [str(ROOT / "domains/cross-door" / f) for f in ("domain.lisp", "state-6.2.2-step1.lisp")]
+CARRY = [str(ROOT / "domains/carry-bar" / f) for f in ("domain.lisp", "state-6.3.2.lisp")]
+SEQUENCE = [
+    str(ROOT / "domains/cross-door" / f) for f in ("domain-steps.lisp", "state-6.2.2-sequence.lisp")
+]
+
+FORMATS = ("table", "lisp", "json", "jsonl")
+CHOICES: tuple[list[str], ...] = (
+    [],
+    ["-k", "1"],
+    ["-k", "2"],
+    ["--all"],
+    ["--rank", "1"],
+    ["--rank", "2"],
+    ["--rank", "4"],
+)
+PROBLEMS = {"cross-door": CROSS, "carry-bar": CARRY, "sequence": SEQUENCE}
+CASES = [
+    pytest.param(problem, choice, id=f"{name} {' '.join(choice)}")
+    for name, problem in PROBLEMS.items()
+    for choice in CHOICES
+]
+# The fallbacks follow the configurations (streamed or not); each costs a search.
+CASES += [
+    pytest.param(CROSS, ["--fallbacks", *choice], id=f"cross-door --fallbacks {' '.join(choice)}")
+    for choice in (["-k", "1"], ["--rank", "2"])
+]
+
+
+def _plan(args: list[str]) -> tuple[int, str]:
+    result = CliRunner().invoke(app, ["plan", *args])
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.output
+    return result.exit_code, result.stdout
+
+
+@pytest.mark.parametrize("format_", FORMATS)
+@pytest.mark.parametrize(("problem", "choice"), CASES)
+def test_stdout_is_what_the_output_file_holds(
+    problem: list[str], format_: str, choice: list[str], tmp_path: Path
+) -> None:
+    """Before issue 32, ``--format jsonl --rank 2`` printed only the summary
+    line and ``--format lisp --rank 1`` nothing (``_print`` took them for
+    streamed), and the streamed lisp header differed from the file's."""
+    args = [*problem, "--format", format_, *choice]
+    code, stdout = _plan(args)
+    target = tmp_path / "out"
+    written, beside = _plan([*args, "-o", str(target)])
+    assert code == written
+    if code == 3:  # cross-door has 2 configurations (the sequence 2), none of rank 4
+        assert problem != CARRY and choice[-2:] == ["--rank", "4"]
+        assert not target.exists()
+        assert stdout == beside  # the JSON formats' error object, or nothing
+        assert (stdout != "") == (format_ in ("json", "jsonl"))
+        return
+    assert code == 0
+    assert beside == ""
+    assert stdout == target.read_text(encoding="utf-8")
+    assert stdout  # never empty: each configuration shown is printed
+
+
+@pytest.mark.parametrize("format_", ["jsonl", "lisp"])
+def test_rank_prints_that_configuration(format_: str) -> None:
+    """The issue's own commands: the configuration of rank 2 (cost 47) is on stdout."""
+    code, stdout = _plan([*CROSS, "--format", format_, "--rank", "2"])
+    assert code == 0
+    if format_ == "jsonl":
+        line, summary = stdout.splitlines()
+        assert '"rank": 2, "cost": 47' in line and '"count": 1' in summary
+    else:
+        assert ";; rank 2\n" in stdout and "Cost: 47" in stdout and "rank 1" not in stdout
+
+
+def test_the_table_claims_no_count_it_does_not_know() -> None:
+    """Cross-door 6.2.2 step 1 has exactly 2 configurations: ``-k 1`` knows
+    that one more exists (it plans one more than it lists), not how many.
+    Before issue 32 it said ``-k 11 more``, as if eleven more existed."""
+    _, cut = _plan([*CROSS, "--details", "-k", "1"])
+    assert "note: at least one more configuration exists: " in cut
+    assert "-k 11 more" not in cut
+    _, whole = _plan([*CROSS, "--details", "-k", "2"])
+    assert "more configuration" not in whole
+    _, ranked = _plan([*CROSS, "--rank", "1"])  # one shown by choice: no note
+    assert "more configuration" not in ranked
