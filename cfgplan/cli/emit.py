@@ -1,8 +1,9 @@
 """``cfgplan emit DOMAIN STATE``: per-robot executable code for a configuration (thesis 5.1-5.3).
 
 The configuration of the given rank is sorted, divided per robot and
-translated: one file per robot (``emil.lisp`` with the LET/LAMBDA form of 5.3,
-or ``emil.py`` for :mod:`cfgplan.runtime`; plus ``run_all.py`` for Python)
+translated: one file per robot (by default ``emil.py`` for
+:mod:`cfgplan.runtime`, plus ``run_all.py``; with ``--lang lisp``
+``emil.lisp``, the LET/LAMBDA form of 5.3)
 and the whole configuration description in ``configuration.txt``, which ends
 with the robot -> file table. A robot's file name is made safe by
 :mod:`cfgplan.safe_names` (``../../x`` cannot leave the folder). The files are
@@ -102,10 +103,11 @@ def emit(
             metavar="lisp|python",
             parser=choice_of(LANGS, "a language"),
             autocompletion=completing(LANGS),
-            help="Target language: the thesis's LET/LAMBDA form, or Python (default lisp).",
+            help="Target language: Python, runnable with cfgplan.runtime (default), or "
+            "the thesis's LET/LAMBDA form (lisp).",
             show_default=False,
         ),
-    ] = "lisp",
+    ] = "python",
     force: Annotated[
         bool, typer.Option("--force", help="Replace an earlier emission in DIR.")
     ] = False,

@@ -6,9 +6,13 @@ joined by the in-process transport), or with ``--robot NAME`` that robot's
 part alone, its global channels over Zenoh to the other robots' programs
 (``cfgplan run --robot`` or the emitted ``emil.py``, on this host or others).
 The options are those of the emitted programs (:mod:`cfgplan.runtime.main`);
-printed: what each action functionality received (``--verbose``: every
-call), robots seen and lost, stale inputs, failures, then per functionality
-how often it ran.
+the console (:mod:`cfgplan.runtime.console`) shows a compact status (in
+place on a terminal, a plain line every 100 cycles otherwise), every loss,
+stale input, failure and switch with its cause, what an action receives when
+it starts to (``--verbose``: every call, each cycle), then per functionality
+how often it ran. ``--cycles N`` counts the cycles of the goal's robot
+(:func:`~cfgplan.reconfigure.local.coordinator_of`), whatever robots a
+switch brings in.
 """
 
 from __future__ import annotations
@@ -185,9 +189,7 @@ def run(
         force=force,
         verbose=verbose,
     )
-    settings = Settings(
-        tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin
-    )
+    settings = Settings(tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin)
     opened: Transport | None = None
     written: TraceFile | None = None
     try:
@@ -219,6 +221,8 @@ def run(
         )
         names = ", ".join(r.name for r in running.robots)
         lasting = how_long(options.cycles, options.duration)
+        from cfgplan.reconfigure.local import coordinator_of
+
         code = execute(
             running,
             options,
@@ -226,6 +230,7 @@ def run(
             trace=written,
             hooks=adapting,
             heading=f"{title(problem, config, rank)}: {names}; {lasting}",
+            lead=coordinator_of(problem.goal_call, config),  # --cycles: the goal robot's
         )
     except RunError as exc:
         if opened is not None:

@@ -5,7 +5,7 @@ A :class:`Coordinator` takes the monitor's :class:`~cfgplan.runtime.monitor.Dete
 asks the :class:`~cfgplan.reconfigure.policy.Reconfigurator` what to run, has
 a :class:`Deployer` install it on every robot, and records what happened as
 trace events on its robot (``failure``, ``recovery``, ``facts``, ``switch``,
-``no-configuration``, ``achieved``, ``abort``; schema in the README):
+``no-configuration``, ``achieved``, ``abort``; schema in :mod:`cfgplan.runtime.schema`):
 
 * ``failure`` / ``recovery`` of a functionality instance, and robots
   ``lost`` / ``seen``, go straight to the reconfigurator;
@@ -90,7 +90,10 @@ class Coordinator:
     # -- input --------------------------------------------------------------
 
     def handle(self, detection: Detection) -> None:
-        """Take one detection (queued while a switch is being deployed)."""
+        """Take one detection (queued while a switch is being deployed); none
+        once the task is accomplished (robots leave then: no loss)."""
+        if self.finished is not None:
+            return
         if self._deploying:
             self._backlog.append(detection)
             return

@@ -65,9 +65,7 @@ class InProcessDeployer:
         """Robot ``name``, joining the society (and the monitor) if it is new."""
         found = self.society.robot(name)
         if found is None:
-            found = Robot(
-                name, self.registry, self.society.transport, clock=self.society.clock
-            )
+            found = Robot(name, self.registry, self.society.transport, clock=self.society.clock)
             found.configure(lambda r: lambda: None)
             self.society.add(found)
             self.monitor.watch(found)

@@ -30,7 +30,10 @@ long after each silence in a row (at most :data:`RETRY_MOST`).
 
 A robot that appears (started late, or back after a crash) gets the running
 configuration's part at once (a commit carrying the part). When the task is
-accomplished every robot is told to **finish**.
+accomplished every robot is told to **finish**; each says so and answers
+``finished``, and the coordinator leaves once all have answered (at most
+:data:`SWITCH_TIMEOUT` seconds later): a robot that left after finishing is
+not lost to anyone (:meth:`~cfgplan.runtime.Robot.release`).
 """
 
 from __future__ import annotations
@@ -43,11 +46,13 @@ from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Domain
+from cfgplan.notation import call_text
 from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.decision import Decision, Hysteresis
 from cfgplan.reconfigure.policy import Reconfigurator
+from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
@@ -110,6 +115,8 @@ class NetworkDeployer:
     refused: list[tuple[str, str]] = field(default_factory=list)
     """Robots that could not install a configuration the others did, with why
     (:meth:`acked`): taken as lost by the coordinator (:class:`NetworkAdaptive`)."""
+    ending: tuple[set[str], float] | None = None
+    """After :meth:`finish`: the robots yet to answer it, and until when (clock)."""
 
     @property
     def me(self) -> str:
@@ -126,7 +133,13 @@ class NetworkDeployer:
         targets = {r: p for r, p in parts.items() if r == self.me or r in alive}
         others = sorted(r for r in targets if r != self.me)
         self.switch = _Switch(
-            decision, targets, parts, done, failed, "prepare", set(others),
+            decision,
+            targets,
+            parts,
+            done,
+            failed,
+            "prepare",
+            set(others),
             self.clock() + self.timeout,
         )
         own = targets.get(self.me)
@@ -170,7 +183,12 @@ class NetworkDeployer:
         switch.done()
 
     def acked(self, robot: str, number: int, phase: str, reason: str) -> None:
-        """An answer from ``robot`` to step ``phase`` of switch ``number``."""
+        """An answer from ``robot`` to step ``phase`` of switch ``number``
+        (``finished``: to :meth:`finish`)."""
+        if phase == "finished":
+            if self.ending is not None:
+                self.ending[0].discard(robot)
+            return
         switch = self.switch
         if switch is None or number != switch.decision.id or robot not in switch.waiting:
             return
@@ -244,11 +262,24 @@ class NetworkDeployer:
                 {"op": "commit", "id": self.current, "from": self.me, "part": part_to_json(part)},
             )
 
-    def finish(self) -> None:
-        """The task is accomplished: every robot ends its run."""
-        for robot in sorted(set(self.parts) | self.transport.alive):
-            if robot != self.me:
-                self._to(robot, {"op": "finish", "id": self.current, "from": self.me})
+    def finish(self, goal: str) -> None:
+        """The task (``goal``) is accomplished: every robot ends its run; those
+        alive are awaited (:meth:`ended`), and none is lost from now on."""
+        self.member.robot.release()
+        alive = set(self.transport.alive) - {self.me}
+        for robot in sorted((set(self.parts) | alive) - {self.me}):
+            self._to(robot, {"op": "finish", "id": self.current, "from": self.me, "goal": goal})
+        self.ending = (alive, self.clock() + self.timeout)
+
+    def ended(self) -> list[str] | None:
+        """After :meth:`finish`: ``None`` while robots are still awaited, else
+        those that did not answer in time (sorted; empty: every one did)."""
+        if self.ending is None:
+            return None
+        waiting, deadline = self.ending
+        if waiting and self.clock() < deadline:
+            return None
+        return sorted(waiting)
 
 
 @dataclass
@@ -259,7 +290,7 @@ class NetworkAdaptive:
     deployer: NetworkDeployer
     monitor: Monitor
     injector: Injector
-    _told: bool = False
+    _silent: list[str] | None = None  # once the finish is over: who did not answer it
     _present: set[str] = field(default_factory=set)  # robots seen (each re-synchronised once)
     reconfigures: bool = True
 
@@ -279,9 +310,16 @@ class NetworkAdaptive:
             detail = f"could not install what the others did: {reason}"
             self.take(Detection("lost", me, time.time(), other=robot, how="refused", detail=detail))
         self.coordinator.tick()
-        if self.coordinator.finished and not self._told:
-            self._told = True
-            self.deployer.finish()
+        if self.coordinator.finished and self.deployer.ending is None:
+            self.deployer.finish(call_text(self.coordinator.reconfigurator.goal))
+        if self.deployer.ending is not None and self._silent is None:
+            self._silent = self.deployer.ended()
+            if self._silent is not None:  # every robot answered, or the wait is over
+                goal = call_text(self.coordinator.reconfigurator.goal)
+                info = (("id", self.deployer.current), ("goal", goal), ("silent", self._silent))
+                self.deployer.member.robot.record(
+                    Adaptation(robot=me, t=time.time(), what="finish", info=info)
+                )
 
     def take(self, detection: Detection) -> None:
         if detection.kind == "seen" and detection.other not in self._present:
@@ -311,7 +349,8 @@ class NetworkAdaptive:
 
     @property
     def finished(self) -> str | None:
-        return self.coordinator.finished
+        """Why the run ends, once every robot was told and answered (or the wait is over)."""
+        return self.coordinator.finished if self._silent is not None else None
 
     @property
     def stopped(self) -> bool:

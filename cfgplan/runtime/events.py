@@ -2,8 +2,8 @@
 
 Every event has the robot it happened on, the robot's cycle and ``t``, the
 time in seconds since the epoch, and turns into one JSON object with
-:meth:`Event.record` — a line of ``--trace FILE`` (the schema is in the
-README). Events reach whoever subscribed to the robot
+:meth:`Event.record` — a line of ``--trace FILE`` (the schema is
+:mod:`cfgplan.runtime.schema`). Events reach whoever subscribed to the robot
 (:meth:`cfgplan.runtime.Robot.subscribe`) as they happen: the console
 printer, the trace file and, later, a monitor (5.5).
 

@@ -101,6 +101,8 @@ class Robot:
         """Scripted faults in effect, by functionality instance (5.5)."""
         self.before: list[Callable[[Robot], None]] = []
         """Called before each cycle (fault injection, probes): see :meth:`step`."""
+        self.released = False
+        """The run is over: robots that leave are not lost (:meth:`release`)."""
         self._idle_next = 0.0  # with no functionality, the cycle still ticks at the rate
         self._cycle: Cycle | None = None
 
@@ -204,6 +206,11 @@ class Robot:
         if self.started_at is not None:
             self.transport.watch(self.name, self.partners, self._presence)
 
+    def release(self) -> None:
+        """The society's run is over (its task accomplished): the others leave
+        as they finish, which is no loss, so no robot is reported lost from now on."""
+        self.released = True
+
     def due(self, now: float) -> bool:
         if not self.alive:
             return False
@@ -285,6 +292,8 @@ class Robot:
         )
 
     def _presence(self, other: str, alive: bool) -> None:
+        if self.released:
+            return
         self._record(Presence(robot=self.name, t=time.time(), other=other, alive=alive))
 
 

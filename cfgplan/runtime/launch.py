@@ -4,10 +4,12 @@ Shared by ``cfgplan run`` and the programs ``cfgplan emit --lang python``
 writes, so both behave the same. :func:`execute` runs the loop of
 :meth:`~cfgplan.runtime.executor.Society.run` and:
 
-* prints, as they happen, what each action received (with ``verbose``, every
-  call), robots seen and lost, inputs going stale and fresh; on stderr, each
-  functionality's failures (the first few of each, then only counted) and
-  values whose ``__repr__`` fails, blaming the implementation;
+* shows what matters as it happens (:mod:`cfgplan.runtime.console`): a
+  compact status, losses, stale inputs, failures and switches with their
+  cause, what each action receives when it starts (with ``verbose``, every
+  call); on stderr, each functionality's failures (the first few of each,
+  then only counted) and values whose ``__repr__`` fails, blaming the
+  implementation (or ``[injected]``, a scripted fault);
 * writes every event to the ``--trace`` file, if any;
 * stops cleanly on Ctrl-C or SIGTERM (a second Ctrl-C interrupts at once),
   records the stop, closes the transport and prints the summary.
@@ -24,8 +26,6 @@ the trace or the console could not be written (the run goes on without them);
 
 from __future__ import annotations
 
-import contextlib
-import os
 import signal
 import sys
 import threading
@@ -35,11 +35,10 @@ from dataclasses import dataclass
 from types import FrameType
 from typing import Protocol, TextIO
 
-from cfgplan.notation import call_text
-from cfgplan.runtime.events import Call, Event, Lifecycle
+from cfgplan.runtime.console import FAULTS_SHOWN, STATUS_EVERY, WAIT_NOTICE, Printer
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.society import Society
-from cfgplan.runtime.trace import describe, notice, summary
+from cfgplan.runtime.trace import summary, undelivered
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 
 __all__ = [
@@ -51,13 +50,6 @@ __all__ = [
     "RunOptions",
     "execute",
 ]
-
-FAULTS_SHOWN = 3
-WAIT_NOTICE = 10
-"""Calls in a row a functionality waits for data before the console says so
-(1 s at the default rate): a robot whose partner has not started does not
-look hung."""
-"""Failures printed per functionality; later ones are only counted."""
 
 EXIT_NONE = 3
 """Exit status of a run that ends with no admissible configuration (as ``cfgplan plan``)."""
@@ -100,110 +92,8 @@ class RunOptions:
     trace: str | None = None
     force: bool = False
     verbose: bool = False
-
-
-class Printer:
-    """The console side of a run: a listener of every robot."""
-
-    def __init__(
-        self, verbose: bool, source: str, out: TextIO, err: TextIO, handled: bool = False
-    ) -> None:
-        self.verbose = verbose
-        self.handled = handled  # resource failures are handled by reconfiguration
-        self.source = source
-        self.out = out
-        self.err = err
-        self.failed = False
-        self.lost: str | None = None  # why the console could not be written to
-        self._faults: dict[str, int] = {}
-        self._warned: set[tuple[str, str]] = set()
-        self._dead: set[int] = set()
-        self._waits: dict[tuple[str, str], int] = {}  # calls in a row each one waited
-
-    def say(self, text: str, stream: TextIO | None = None) -> None:
-        """A line on ``stream`` (default: ``out``); a stream that cannot be
-        written to (closed pipe, full disk) is given up, not fatal."""
-        stream = self.out if stream is None else stream
-        if id(stream) in self._dead:
-            return
-        try:
-            print(text, file=stream, flush=True)
-        except (OSError, ValueError) as exc:
-            self._dead.add(id(stream))
-            what = "standard output" if stream is self.out else "standard error"
-            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-            self.lost = self.lost or f"cannot write to {what}: {reason}"
-            _silence(stream)
-
-    def __call__(self, event: Event) -> None:
-        if isinstance(event, Call):
-            self._call(event)
-            return
-        if isinstance(event, Lifecycle) and event.what == "error":
-            self.say(f"cfgplan: {notice(event)}", self.err)
-            return
-        line = notice(event)
-        if line is not None:
-            self.say(line)
-
-    def _call(self, event: Call) -> None:
-        if not self.verbose:
-            self._waiting(event)
-        if event.status in ("error", "timeout"):
-            self.failed = self.failed or not (self.handled and event.failure)
-            self._fault(event)
-            return
-        if not (self.verbose or (event.action and event.status == "ran")):
-            return
-        problems: list[str] = []
-        self.say(describe(event, problems))
-        for problem in problems:
-            if (event.label, problem) not in self._warned:
-                self._warned.add((event.label, problem))
-                self.say(
-                    f"cfgplan: warning: {event.label} {event.name} on {event.robot}: {problem} "
-                    f"(implementations: {self.source})",
-                    self.err,
-                )
-
-    def _waiting(self, event: Call) -> None:
-        """Say when a functionality has waited :data:`WAIT_NOTICE` calls in a
-        row for data, and for what; and when it runs again."""
-        key = (event.robot, event.label)
-        if event.status == "waiting":
-            waited = self._waits.get(key, 0) + 1
-            self._waits[key] = waited
-            if waited == WAIT_NOTICE:
-                self.say(f"{describe(event)} ({waited} calls in a row so far)")
-            return
-        waited = self._waits.pop(key, 0)
-        if waited >= WAIT_NOTICE and event.status == "ran":
-            shown = call_text((event.name, *event.args))
-            self.say(f"cycle {event.cycle}: {event.robot} {event.label} {shown} runs again")
-
-    def _fault(self, event: Call) -> None:
-        key = f"{event.robot} {event.label}"
-        seen = self._faults.get(key, 0) + 1
-        self._faults[key] = seen
-        if seen <= FAULTS_SHOWN:
-            self.say(f"cfgplan: {describe(event)} [{self.source}]", self.err)
-        if seen == FAULTS_SHOWN:
-            self.say(
-                f"cfgplan: further failures of {event.label} {event.name} on {event.robot} "
-                "are only counted (summary; --trace has each)",
-                self.err,
-            )
-
-
-def _silence(stream: TextIO) -> None:
-    """Point a standard stream that failed at the null device, so that the
-    interpreter's own flush at exit does not fail on it again."""
-    if stream not in (sys.stdout, sys.stderr):
-        return
-    with contextlib.suppress(OSError, ValueError):
-        null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(null, stream.fileno())
-        os.close(null)
+    status_every: int = STATUS_EVERY
+    """Without a terminal, the status line every this many cycles of the lead robot (0: never)."""
 
 
 @contextmanager
@@ -238,9 +128,12 @@ def execute(
     trace: TraceFile | None = None,
     hooks: Hooks | None = None,
     heading: str | None = None,
+    lead: str | None = None,
 ) -> int:
     """Run ``society`` as ``options`` say; print ``heading`` first (who runs,
-    how long) and the summary last; the exit status.
+    how long) and the summary last; the exit status. ``options.cycles``
+    counts the cycles of robot ``lead`` (the goal's robot), if given
+    (:meth:`~cfgplan.runtime.society.Society.run`).
 
     Opens ``options.trace`` unless a ``trace`` is given; closes the
     transports whatever happens. A :class:`~cfgplan.runtime.errors.RunError`
@@ -255,7 +148,9 @@ def execute(
         society.close("not started")
         raise
     handled = hooks is not None and hooks.reconfigures
-    printer = Printer(options.verbose, source, out, err, handled=handled)
+    printer = Printer(
+        options.verbose, source, out, err, handled=handled, status_every=options.status_every
+    )
     if heading is not None:
         printer.say(heading)
     if trace is not None:
@@ -272,7 +167,15 @@ def execute(
             why.append(hooks.finished)
             stop.set()
 
+    leader = None if lead is None else society.robot(lead)
+
+    def after_cycle() -> None:
+        if trace is not None:
+            trace.flush()
+        printer.cycle(society.cycles if leader is None else leader.cycles)
+
     try:
+        printer.start(society)
         with _stopping(stop, why):
             reason = society.run(
                 options.cycles,
@@ -281,9 +184,10 @@ def execute(
                 budget=options.budget,
                 stale_periods=options.stale_periods,
                 stop=stop,
-                after_cycle=trace.flush if trace is not None else None,
+                after_cycle=after_cycle,
                 before=None if hooks is None else hooks.before,
                 between=None if hooks is None else between,
+                lead=lead,
             )
     except KeyboardInterrupt:
         reason = "interrupted"
@@ -291,17 +195,14 @@ def execute(
         if hooks is not None:
             hooks.close()
         society.close(why[0] if why else reason)
+        printer.stop()
         if trace is not None:
             trace.close()
     for line in summary(society.every_wrapper):
         printer.say(line)
     transport = society.transport
     if transport is not None and transport.undelivered:
-        printer.say(
-            f"note: {transport.undelivered} value(s) sent to robots not in this process were "
-            "dropped (the in-process transport joins only robots run together)",
-            err,
-        )
+        printer.say(undelivered(transport.undelivered), err)
     problems = [p for p in (trace.failed if trace else None, printer.lost) if p]
     for problem in problems:
         printer.say(f"cfgplan: error: {problem}", err)

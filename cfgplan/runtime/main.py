@@ -80,9 +80,7 @@ def _add(parser: argparse.ArgumentParser, option: Option[Any], **extra: Any) -> 
     parser.add_argument(option.flag, **kwargs)
 
 
-TRANSPORT_HELP = (
-    "zenoh (default): reach the other robots' programs; inprocess: this robot alone."
-)
+TRANSPORT_HELP = "zenoh (default): reach the other robots' programs; inprocess: this robot alone."
 
 
 def parser_of(description: str, network: bool) -> argparse.ArgumentParser:

@@ -23,7 +23,11 @@ detections go there too as ``{"type": "report", "robot": R, "detection":
 ``config``: a report is placed by that, not by the robots' clocks). A
 commit may carry the part itself (``"part"``): the coordinator so
 re-synchronises a robot that appears (started late, or back after a crash).
-``{"op": "finish"}`` ends the run when the action's task is accomplished.
+``{"op": "finish", "goal": G}`` ends the run when the action's task is
+accomplished: the robot records a ``finish`` event (the console says the task
+is accomplished), answers ``finished``, and ends its run; the coordinator
+leaves once every robot has answered (or after a time limit), so that no robot
+takes the others' leaving for a loss (:meth:`~cfgplan.runtime.Robot.release`).
 Messages are idempotent: a repeated prepare or commit is answered again,
 an old id is ignored. Every message carries the coordinator's ``epoch``,
 drawn when it starts: a coordinator started again numbers its
@@ -120,7 +124,22 @@ class Member:
         elif op == "abort":
             self.pending.pop(number, None)
         elif op == "finish":
+            self._finish(number, message, epoch)
+
+    def _finish(self, number: int, message: dict[str, object], epoch: str) -> None:
+        """The coordinator says the task is accomplished: say so, answer, end the run."""
+        if self.finished is None:
             self.finished = "achieved"
+            self.robot.release()
+            info: list[tuple[str, object]] = [("id", number)]
+            for name in ("from", "goal"):
+                value = message.get(name)
+                if isinstance(value, str) and value:
+                    info.append((name, value))
+            self.robot.record(
+                Adaptation(robot=self.robot.name, t=time.time(), what="finish", info=tuple(info))
+            )
+        self._ack(number, "finished", epoch=epoch)  # whoever said it
 
     def refusal(self, part: Part) -> str | None:
         """Why this robot cannot run ``part`` (:func:`~cfgplan.runtime.install.runnable`),
@@ -184,13 +203,13 @@ class Member:
             )
         )
 
-    def _ack(self, number: int, phase: str, reason: str = "") -> None:
+    def _ack(self, number: int, phase: str, reason: str = "", epoch: str | None = None) -> None:
         message: dict[str, object] = {
             "type": "ack",
             "robot": self.robot.name,
             "id": number,
             "phase": phase,
-            "epoch": self.epoch,
+            "epoch": self.epoch if epoch is None else epoch,
         }
         if reason:
             message["reason"] = reason

@@ -110,7 +110,14 @@ RATE = Option(
     "functionality in every cycle, no pause).",
     number(0),
 )
-CYCLES = Option("--cycles", "N", 0, "Stop after N cycles (default 0: no limit).", whole(0))
+CYCLES = Option(
+    "--cycles",
+    "N",
+    0,
+    "Stop after N cycles (cfgplan run: of the goal's robot, whatever switches happen; "
+    "default 0: no limit).",
+    whole(0),
+)
 DURATION: Option[float | None] = Option(
     "--duration", "S", None, "Stop after S seconds (default: no limit).", number(0, above=True)
 )
@@ -133,7 +140,13 @@ TRACE: Option[str | None] = Option(
     "--trace", "FILE", None, "Write every event to FILE as JSON lines."
 )
 FORCE = Option("--force", None, False, "Overwrite the --trace FILE if it exists.")
-VERBOSE = Option("--verbose", None, False, "Print every call, not only what actions received.")
+VERBOSE = Option(
+    "--verbose",
+    None,
+    False,
+    "Print every call of every functionality, each cycle (default: a compact status, what "
+    "an action receives when it starts to, and every loss, stale input, failure and switch).",
+)
 INJECT: Option[list[str]] = Option(
     "--inject",
     "FAULT",

@@ -81,7 +81,10 @@ def part_from_json(data: Any) -> Part:
     try:
         channels = tuple(
             ChannelSpec(
-                _kind(kind), name(source), name(target), names(d),
+                _kind(kind),
+                name(source),
+                name(target),
+                names(d),
                 None if other is None else name(other),
             )
             for kind, source, target, d, other in data["channels"]

@@ -94,7 +94,7 @@ class Implementation:
                 f"as {instance} calls it, with {passed}: {problem}",
                 hint="an implementation takes the functionality's object arguments (those "
                 "after the robot), then one value per :in descriptor; its precondition and "
-                'stop take the object arguments alone (README, "Writing implementations")',
+                "stop take the object arguments alone (docs/how-to/write-implementations.md)",
                 file=file,
                 line=line,
                 column=None if line is None else 1,

@@ -135,13 +135,20 @@ class Society:
         after_cycle: Callable[[], None] | None = None,
         before: Hook | None = None,
         between: Hook | None = None,
+        lead: str | None = None,
     ) -> str:
         """Run until ``cycles`` cycles (0: no limit) or ``duration`` seconds
         have passed, or ``stop`` is set; ``rate`` per second (0: no pause).
         ``before`` is called before each cycle, ``between`` after each pass of
         the loop (every robot that was due has run its cycle: the moment a
         switch may be installed, never half-way through a cycle).
-        Returns why it stopped: ``cycles``, ``duration`` or ``stopped``."""
+        Returns why it stopped: ``cycles``, ``duration`` or ``stopped``.
+
+        ``cycles`` counts the cycles of robot ``lead`` (the goal's robot,
+        ``cfgplan run``), whatever robots join: a robot that joins a running
+        society keeps a beat of its own, so passes of the loop outnumber the
+        lead's cycles. While ``lead`` is not running (``None``, not in the
+        society, killed) every pass in which a robot ran counts."""
         clock = self.clock
         begin = clock()
         self._settings = (begin, rate, budget, stale_periods)
@@ -159,12 +166,15 @@ class Society:
             if before is not None and any(r.due(now) for r in self.robots):
                 before(self.cycles + 1, now - begin)
             ran = False
+            leader = None if lead is None else self.robot(lead)
+            lead_cycles = 0 if leader is None else leader.cycles
             for robot in list(self.robots):
                 if robot.due(now):
                     robot.step(now)
                     ran = True
             if ran:
-                done += 1
+                if leader is None or not leader.alive or leader.cycles > lead_cycles:
+                    done += 1
                 self.cycles += 1
                 if after_cycle is not None:
                     after_cycle()

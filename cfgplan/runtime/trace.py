@@ -1,5 +1,15 @@
 """What a running configuration did, as lines of text (``cfgplan run``, emitted code).
 
+Every word the console of a run prints is here (the printer,
+:mod:`cfgplan.runtime.console`, only chooses which events to show, and
+where): a call (:func:`describe`), any other event worth telling
+(:func:`notice`: losses, stale inputs, failures and switches with their
+cause), a functionality's failures on stderr (:func:`fault`, tagged with the
+implementation's file, or ``[injected]`` for a scripted fault), the compact
+status (:func:`status_parts`) and the summary (:func:`summary`). Nothing
+here depends on timing (durations stay in the trace), so that a run's plain
+console is the same from one run to the next.
+
 Values are shown compactly and deterministically: floats with three
 decimals, tuples, lists and dicts element by element, anything else by its
 ``repr`` — cut to a readable length, control characters escaped. A value
@@ -17,7 +27,21 @@ from cfgplan.runtime.events import Adaptation, Call, Data, Event, Lifecycle, Pre
 from cfgplan.runtime.values import safe_repr
 from cfgplan.runtime.wrapper import Stats, Wrapper
 
-__all__ = ["call_text", "describe", "notice", "show", "show_checked", "summary"]
+__all__ = [
+    "call_text",
+    "describe",
+    "fault",
+    "further_faults",
+    "notice",
+    "runs_again",
+    "show",
+    "show_checked",
+    "status_parts",
+    "summary",
+    "undelivered",
+    "value_warning",
+    "waits",
+]
 
 DEPTH = 12  # containers shown this deep, then "..."
 WIDTH = 400  # characters of one value, then "…"
@@ -98,24 +122,28 @@ def describe(event: Call, problems: list[str] | None = None) -> str:
     ``problems`` collects what was wrong with a value shown (a failing ``__repr__``).
     """
     found: list[str] = [] if problems is None else problems
-    head = _head(event)
+    return f"{_head(event)} {_did(event, found)}".rstrip()
+
+
+def _did(event: Call, found: list[str]) -> str:
+    """What a call did, after its head: ``received ...``, ``waits for ...``."""
     if event.status == "waiting":
-        return f"{head} waits for " + ", ".join(call_text(d) for d in event.waiting)
+        return "waits for " + ", ".join(call_text(d) for d in event.waiting)
     if event.status == "stale":
-        return f"{head} does not run: stale " + ", ".join(call_text(d) for d in event.stale)
+        return "does not run: stale " + ", ".join(call_text(d) for d in event.stale)
     if event.status == "precondition":
-        return f"{head} does not run: precondition false"
+        return "does not run: precondition false"
     if event.status == "busy":
-        return f"{head} does not run: its last call is still running"
+        return "does not run: its last call is still running"
     if event.status in ("error", "timeout"):
-        return f"{head} failed: {event.error}"
+        return f"failed: {event.error}"
     if event.action:
-        return f"{head} received {_pairs(event.inputs, found)}".rstrip()
+        return f"received {_pairs(event.inputs, found)}"
     parts = []
     if event.inputs:
         parts.append(f"read {_pairs(event.inputs, found)}")
     parts.append(f"wrote {_pairs(event.outputs, found)}")
-    return f"{head} " + "; ".join(parts)
+    return "; ".join(parts)
 
 
 def notice(event: Event) -> str | None:
@@ -127,8 +155,7 @@ def notice(event: Event) -> str | None:
         if event.state == "stale":
             return (
                 f"{head} {event.label}: input {call_text(event.channel.data)} from "
-                f"{event.source_robot} is stale (no new data for {event.age:.2f} s, "
-                f"over {event.limit:g} s)"
+                f"{event.source_robot} is stale (no new data for over {event.limit:g} s)"
             )
         return f"{head} {event.label}: input {call_text(event.channel.data)} is fresh again"
     if isinstance(event, Lifecycle) and event.what == "error":
@@ -150,14 +177,28 @@ def _switch(event: Adaptation) -> str:
     f = event.field
     stopped, started = f("stopped"), f("started")
     assert isinstance(stopped, dict) and isinstance(started, dict)
-    latency = f("latency")
-    ms = latency * 1000 if isinstance(latency, int | float) else 0.0
     return (
-        f"switch {f('id')}: cost {_number(f('from_cost'))} -> {_number(f('to_cost'))} "
-        f"({f('source')}, planned in {_number(f('plan_ms'))} ms, running after {ms:.1f} ms); "
+        f"switch {f('id')} ({f('cause')}): cost {_number(f('from_cost'))} -> "
+        f"{_number(f('to_cost'))} ({f('source')}); "
         f"stopped {_names(stopped['functionalities'])}; "
         f"started {_names(started['functionalities'])}"
     )
+
+
+def _finish(event: Adaptation) -> str:
+    """The end of a run across processes: a robot told by the coordinator, or
+    the coordinator once every robot was told."""
+    goal, sender, silent = event.field("goal"), event.field("from"), event.field("silent")
+    if sender is not None:
+        what = (
+            f"the task is accomplished ({goal}, says {sender})"
+            if goal
+            else (f"the task is accomplished (says {sender})")
+        )
+        return f"{what}: the run ends"
+    if isinstance(silent, list) and silent:
+        return f"the run ends; no answer to the end of the run from {_names(silent)}"
+    return "every robot knows the task is accomplished: the run ends"
 
 
 def adaptation(event: Adaptation) -> str | None:
@@ -173,7 +214,12 @@ def adaptation(event: Adaptation) -> str | None:
             if isinstance(withdrawn, list) and withdrawn
             else ""
         )
-        return f"{head}: failure of {f('resource')} ({f('how')}, seen by {f('detected_by')}){gone}"
+        detail = f("detail")
+        cause = f": {detail}" if detail and f("how") != "injected" else ""  # said before
+        return (
+            f"{head}: failure of {f('resource')} ({f('how')}, seen by {f('detected_by')})"
+            f"{cause}{gone}"
+        )
     if event.what == "recovery":
         return f"{head}: {f('resource')} works again ({f('how')})"
     if event.what == "facts":
@@ -189,11 +235,79 @@ def adaptation(event: Adaptation) -> str | None:
         if isinstance(why, list):
             lines += [f"  {line}" for line in why]
         return "\n".join(lines)
+    if event.what == "finish":
+        return f"{head}: {_finish(event)}"
     if event.what == "achieved":
         return (
             f"{head}: {f('functionality')} accomplished its task: the configuration is played out"
         )
     return None
+
+
+def fault(event: Call, source: str) -> str:
+    """A functionality's failure (stderr), tagged with what is to blame: the
+    implementations' file, or ``injected`` for a scripted fault (``--inject``)."""
+    return f"cfgplan: {describe(event)} [{'injected' if event.failure == 'injected' else source}]"
+
+
+def further_faults(event: Call) -> str:
+    return (
+        f"cfgplan: further failures of {event.label} {event.name} on {event.robot} "
+        "are only counted (summary; --trace has each)"
+    )
+
+
+def value_warning(event: Call, problem: str, source: str) -> str:
+    """A value whose ``__repr__`` fails, blaming the implementation (stderr)."""
+    return (
+        f"cfgplan: warning: {event.label} {event.name} on {event.robot}: {problem} "
+        f"(implementations: {source})"
+    )
+
+
+def waits(event: Call, calls: int) -> str:
+    """A functionality has waited ``calls`` calls in a row for its data."""
+    return f"{describe(event)} ({calls} calls in a row so far)"
+
+
+def runs_again(event: Call) -> str:
+    return f"{_head(event)} runs again"
+
+
+def undelivered(count: int) -> str:
+    return (
+        f"note: {count} value(s) sent to robots not in this process were dropped "
+        "(the in-process transport joins only robots run together)"
+    )
+
+
+def status_parts(
+    cycles: dict[str, int],
+    actions: Iterable[tuple[Call, int]],
+    counts: dict[str, int],
+    cost: object = None,
+) -> list[str]:
+    """The compact status of a run, piece by piece: each robot's cycles;
+    switches (and the cost now), failures, stale inputs and robots lost, when
+    any; each action, how often it ran and what it last received (or why not)."""
+    parts = ["cycles " + ", ".join(f"{robot} {n}" for robot, n in cycles.items())]
+    switches = counts.get("switch", 0)
+    if switches:
+        now = f", now cost {_number(cost)}" if cost is not None else ""
+        parts.append(f"{switches} switch{'es' if switches > 1 else ''}{now}")
+    for key, one, many in (
+        ("failure", "failure", "failures"),
+        ("stale", "stale input", "stale inputs"),
+        ("lost", "robot lost", "robots lost"),
+    ):
+        n = counts.get(key, 0)
+        if n:
+            parts.append(f"{n} {one if n == 1 else many}")
+    for last, ran in actions:  # last: the longest
+        shown = call_text((last.name, *last.args))
+        now = "last " if last.status == "ran" else "now "
+        parts.append(f"{shown} ran {ran} times, {now}{_did(last, [])}".rstrip())
+    return parts
 
 
 def summary(wrappers: Iterable[Wrapper]) -> list[str]:

@@ -1,4 +1,5 @@
-"""``--trace FILE``: the full record of a run, one JSON object per line (schema: README).
+"""``--trace FILE``: the full record of a run, one JSON object per line
+(schema: :mod:`cfgplan.runtime.schema`).
 
 The file is created new: an existing file is overwritten only with
 ``--force``; a symbolic link whose target does not exist is never written

@@ -224,9 +224,7 @@ class Wrapper:
                 failure=result.failure if isinstance(result, Failed) else "",
             )
         if action and result is ACHIEVED:
-            return self._event(
-                "ran", inputs=read, action=action, duration=duration, achieved=True
-            )
+            return self._event("ran", inputs=read, action=action, duration=duration, achieved=True)
         out_data = [_data(chs, "output", k) for k, chs in enumerate(outputs)]
         try:
             produced = self._split(result, len(outputs))

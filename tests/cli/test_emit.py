@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 from typer.testing import CliRunner
@@ -11,9 +13,11 @@ import cfgplan.cli.emit  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.emission import RECORD
-from tests.backends.support import CROSS, DOMAINS, GOLDEN, UPDATE
+from tests.backends.support import CROSS, DOMAINS, GOLDEN, ROOT, UPDATE
 
 ARGS = [str(DOMAINS / CROSS[0]), str(DOMAINS / CROSS[1])]
+LISP = ["emit", *ARGS, "--lang", "lisp"]
+"""Where a test needs LISP files (the default is Python)."""
 
 
 def test_emit_lisp_writes_one_file_per_robot_and_the_description(tmp_path: Path) -> None:
@@ -58,7 +62,7 @@ def test_emit_never_overwrites_a_file_it_did_not_write(tmp_path: Path) -> None:
     and named; nothing at all is written."""
     (tmp_path / "emil.lisp").write_text("mine\n")
     for force in ([], ["--force"]):
-        result = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path), *force])
+        result = CliRunner().invoke(app, [*LISP, "-o", str(tmp_path), *force])
         assert result.exit_code == 1
         assert isinstance(result.exception, CfgplanError)
         assert "emil.lisp" in str(result.exception)
@@ -68,7 +72,7 @@ def test_emit_never_overwrites_a_file_it_did_not_write(tmp_path: Path) -> None:
 
 
 def test_emit_refuses_an_earlier_emission_without_force(tmp_path: Path) -> None:
-    first = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)])
+    first = CliRunner().invoke(app, [*LISP, "-o", str(tmp_path)])
     assert first.exit_code == 0, first.output
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     again = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path)])
@@ -85,7 +89,7 @@ def test_emit_refuses_an_earlier_emission_without_force(tmp_path: Path) -> None:
 def test_emit_force_replaces_the_earlier_emission_whole(tmp_path: Path) -> None:
     """Issue 10: LISP then Python into one folder with --force: no .lisp robot
     file of the earlier emission remains; the user's own notes stay."""
-    assert CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)]).exit_code == 0
+    assert CliRunner().invoke(app, [*LISP, "-o", str(tmp_path)]).exit_code == 0
     (tmp_path / "notes.txt").write_text("my notes\n")
     result = CliRunner().invoke(
         app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path), "--force"]
@@ -100,7 +104,7 @@ def test_emit_force_replaces_the_earlier_emission_whole(tmp_path: Path) -> None:
 
 def test_emit_force_keeps_an_emitted_file_the_user_changed(tmp_path: Path) -> None:
     """An emitted file edited since is the user's now: --force refuses to remove it."""
-    assert CliRunner().invoke(app, ["emit", *ARGS, "-o", str(tmp_path)]).exit_code == 0
+    assert CliRunner().invoke(app, [*LISP, "-o", str(tmp_path)]).exit_code == 0
     edited = tmp_path / "emil.lisp"
     edited.write_text(edited.read_text() + ";; my change\n")
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
@@ -135,3 +139,30 @@ def test_emit_a_rank_that_does_not_exist_exits_3(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["emit", *ARGS, "--rank", "3", "-o", str(tmp_path)])
     assert result.exit_code == 3
     assert list(tmp_path.iterdir()) == []
+
+
+def test_emit_without_lang_writes_runnable_python(tmp_path: Path) -> None:
+    """Issue 32: without --lang, emit wrote LISP, which nothing here runs; now
+    it writes the Python of ``--lang python`` (byte for byte), and
+    ``run_all.py`` runs the configuration."""
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["emit", *ARGS, "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in out.iterdir()) == [
+        RECORD,
+        "configuration.txt",
+        "emil.py",
+        "pippi.py",
+        "run_all.py",
+    ]
+    assert (out / "configuration.txt").read_text().endswith(";;   Emil -> emil.py\n")
+    if not UPDATE:
+        for name in ("pippi.py", "emil.py", "run_all.py"):
+            assert (out / name).read_text() == (GOLDEN / "cross-door-44" / name).read_text()
+    impl = ROOT / "examples" / "cross-door" / "impl.py"
+    command = [sys.executable, str(out / "run_all.py"), "--impl", str(impl), "--rate", "0"]
+    ran = subprocess.run(
+        [*command, "--cycles", "3"], capture_output=True, text=True, cwd=ROOT, timeout=60
+    )
+    assert ran.returncode == 0, ran.stderr
+    assert "cross-door(Pippi, Door1): ran in 2 of 3 cycles" in ran.stdout

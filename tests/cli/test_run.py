@@ -29,7 +29,7 @@ def test_run_prints_what_cross_door_received() -> None:
         == "Configuration rank 1, cost 44, for do-cross-door(Pippi, Door1): Pippi, Emil; 3 cycle(s)"
     )
     received = [line for line in lines if " received " in line]
-    assert [line.split(":")[0] for line in received] == ["cycle 2", "cycle 3"]
+    assert [line.split(":")[0] for line in received] == ["cycle 2"]  # when it starts to
     assert received[0].startswith(
         f"cycle 2: Pippi {label} cross-door(Pippi, Door1) received pos(Pippi, Door1) = ["
     )
@@ -150,3 +150,36 @@ def test_an_implementation_of_the_wrong_arity_is_refused_before_the_run(tmp_path
         assert "measure-door cannot be called as F9: measure-door(Emil, Door1) calls it, " in first
         assert "with 1 object argument then 1 input (in :in order): too many" in first
         assert "received" not in out.stdout  # nothing ran
+
+
+THREE = """(state robot(Pippi), robot(Emil), robot(Rasmus), door(Door1),
+       camera(Pippi), camera(Emil), camera(Rasmus), compass(Pippi), compass(Emil),
+       compass(Rasmus), in(Pippi, Room1), in(Emil, Room1), in(Rasmus, Room1),
+       in(Door1, Room1), open(Door1), connects(Door1, Room1, Room2))
+(goal (do-cross-door Pippi Door1))
+"""
+"""Cross-door with a third robot: Emil helps (44); lost, Rasmus takes over (44)."""
+
+
+def test_cycles_count_the_goal_robot_after_a_robot_joins(tmp_path: Path) -> None:
+    """Issue 32: with a rate, ``--cycles 40`` stopped after 40 passes of the loop,
+    and a robot that joins on a switch (Rasmus, on a beat of his own) made
+    passes outnumber Pippi's cycles (25 of 40). Now Pippi runs 40 cycles."""
+    state = tmp_path / "three.lisp"
+    state.write_text(THREE, encoding="utf-8")
+    impl = tmp_path / "impl.py"
+    extra = '\nWORLD["Rasmus"] = (0.5, -2.2, 0.3)\n'
+    impl.write_text(EXAMPLE_IMPL.read_text(encoding="utf-8") + extra, encoding="utf-8")
+    trace = tmp_path / "run.jsonl"
+    args = [str(DOMAINS / CROSS[0]), str(state), "--impl", str(impl), "--rate", "50"]
+    args += ["--cycles", "40", "--inject", "kill Emil at cycle 10", "--trace", str(trace)]
+    result = CliRunner().invoke(app, ["run", *args])
+    assert result.exit_code == 0, result.output
+    events = [json.loads(x) for x in trace.read_text().splitlines()]
+    started = [e["started"] for e in events if e["event"] == "switch"]
+    assert len(started) == 1 and "F15: transform-info(Rasmus, Pippi, Door1)" in str(started)
+    rasmus = {e["cycle"] for e in events if e["event"] == "call" and e["robot"] == "Rasmus"}
+    assert rasmus, "Rasmus joined and ran"
+    pippi = [e for e in events if e["event"] == "call" and e["functionality"] == "compass"]
+    assert [e["cycle"] for e in pippi if e["robot"] == "Pippi"] == list(range(1, 41))
+    assert "Pippi F10 compass(Pippi): ran in 40 of 40 cycles" in result.output

@@ -113,9 +113,10 @@ def test_the_compass_of_step_3_fails_and_the_camera_configuration_takes_over(
         for r in trace
         if r["event"] == "call" and r["functionality"] == "compass" and int(r["cycle"]) > 20
     ]  # type: ignore[call-overload]
-    assert "switch 1: cost 44 -> 47 (fallback" in output
+    assert "switch 1 (compass(Emil) failed): cost 44 -> 47 (fallback)" in output
 
 
+@pytest.mark.slow
 def test_carry_bar_switches_to_45_when_the_laser_fails_and_back_once(tmp_path: Path) -> None:
     """6.3.2: laser fails -> 45 (Fig. 6.8 bottom). It comes back, fails again
     while on probation and comes back for good: one switch back, after the hold."""

@@ -13,6 +13,8 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
+import pytest
+
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL
 from tests.runtime.netutil import (
     Processes,
@@ -54,6 +56,7 @@ def _kinds(trace: list[Record], *kinds: str) -> list[Record]:
     return [r for r in trace if r["event"] in kinds]
 
 
+@pytest.mark.slow
 def test_the_society_switches_together_and_stops_safely_without_its_helper(
     tmp_path: Path,
 ) -> None:
@@ -113,6 +116,7 @@ def test_the_society_switches_together_and_stops_safely_without_its_helper(
     assert "Traceback" not in log and "no admissible configuration (Pippi failed)" in log
 
 
+@pytest.mark.slow
 def test_a_robot_that_cannot_run_its_part_aborts_the_switch_for_everyone(
     tmp_path: Path,
 ) -> None:

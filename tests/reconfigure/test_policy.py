@@ -171,7 +171,7 @@ def test_it_keeps_the_derived_tasks_of_the_last_few_situations_only() -> None:
     step); each derived task keeps its grounding and bounds once planned on, so
     only the :data:`TASKS_KEPT` most recently used are kept."""
     _, r = _start(STEP2)
-    situations = [r.situation.with_reliability(("compass", "Emil"), 0.5 ** n) for n in range(20)]
+    situations = [r.situation.with_reliability(("compass", "Emil"), 0.5**n) for n in range(20)]
     tasks = [r.derived(s) for s in situations]
     assert len({id(t) for t in tasks}) == 20
     assert r.derived(situations[-1]) is tasks[-1]  # among the last used: kept

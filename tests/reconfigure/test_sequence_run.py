@@ -17,16 +17,28 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 RUN = [
-    sys.executable, "-m", "cfgplan", "run", "domains/cross-door/domain-steps.lisp",
-    "domains/cross-door/state-6.2.2-sequence.lisp", "--impl", "examples/cross-door/steps.py",
-    "--rate", "0", "--cycles", "400",
+    sys.executable,
+    "-m",
+    "cfgplan",
+    "run",
+    "domains/cross-door/domain-steps.lisp",
+    "domains/cross-door/state-6.2.2-sequence.lisp",
+    "--impl",
+    "examples/cross-door/steps.py",
+    "--rate",
+    "0",
+    "--cycles",
+    "400",
 ]
 
 
 def events(tmp_path: Path, *extra: str) -> list[dict[str, object]]:
     trace = tmp_path / "trace.jsonl"
     out = subprocess.run(
-        [*RUN, "--trace", str(trace), *extra], capture_output=True, text=True, cwd=ROOT,
+        [*RUN, "--trace", str(trace), *extra],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
         timeout=300,
     )
     assert out.returncode == 0, out.stderr

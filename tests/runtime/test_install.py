@@ -135,6 +135,7 @@ def test_a_global_channel_whose_other_end_moved_still_receives() -> None:
     old one's key. The old end is detached before the new one is attached,
     so the new one receives (the local transport refused it as made twice,
     and Zenoh's replaced the receiver, then dropped it with the old end)."""
+
     def part(other: str) -> Part:
         return Part("Pippi", (ChannelSpec("global", "F1", "F2", ("x", "Pippi"), other),), ())
 

@@ -11,7 +11,7 @@ import pytest
 
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
-from cfgplan.runtime import Registry, society
+from cfgplan.runtime import Adaptation, Registry, society
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.member import Member
 from cfgplan.runtime.monitor import Detection, Monitor
@@ -159,3 +159,20 @@ def test_a_coordinator_started_again_is_followed_from_its_first_id() -> None:
     assert 1 in member.pending
     member.receive(_message("finish", 1, epoch="A"))  # the task is done, whoever says so
     assert member.finished == "achieved"
+
+
+def test_told_to_finish_a_robot_says_so_answers_and_takes_no_one_for_lost() -> None:
+    """Issue 32: a robot told the task is accomplished records ``finish`` (the
+    console's "the task is accomplished" line), answers ``finished`` so that
+    the coordinator may leave, and the coordinator leaving is no loss."""
+    emil, member, network, _ = _member()
+    finish = {"op": "finish", "id": 2, "from": "Pippi", "epoch": "A", "goal": "g(Emil)"}
+    member.receive(json.dumps(finish).encode())
+    member.receive(json.dumps(finish).encode())  # said again: answered again, noted once
+    assert member.finished == "achieved"
+    assert _acks(network) == [(2, "finished"), (2, "finished")]
+    assert {m["epoch"] for _, m in network.sent} == {"A"}
+    noted = [e for e in emil.events if isinstance(e, Adaptation) and e.what == "finish"]
+    assert [dict(e.info) for e in noted] == [{"id": 2, "from": "Pippi", "goal": "g(Emil)"}]
+    emil._presence("Pippi", False)  # the coordinator leaves, as the transport reports it
+    assert not [e for e in emil.events if e.kind == "robot-lost"]

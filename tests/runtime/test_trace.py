@@ -55,7 +55,7 @@ def test_a_failing_repr_is_shown_as_a_placeholder_and_blamed() -> None:
 
 def test_the_printer_blames_the_implementation_once_naming_file_and_functionality() -> None:
     out, err = io.StringIO(), io.StringIO()
-    printer = Printer(verbose=False, source="impl.py", out=out, err=err)
+    printer = Printer(verbose=True, source="impl.py", out=out, err=err)
     event = _call(status="ran", action=True, inputs=((("pos", "Pippi", "Door1"), Bad()),))
     printer(event)
     printer(event)

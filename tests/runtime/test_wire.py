@@ -21,7 +21,11 @@ def test_only_a_whole_json_number_is_whole(text: str) -> None:
 
 def test_a_number_is_any_json_number_but_true() -> None:
     assert [is_number(json.loads(t)) for t in ("2", "2.5", "1e999", "true", '"2"')] == [
-        True, True, True, False, False,
+        True,
+        True,
+        True,
+        False,
+        False,
     ]
 
 

@@ -1,0 +1,323 @@
+"""The lines of ``cfgplan run --trace FILE``, as models: one JSON object per event.
+
+The events themselves are :mod:`cfgplan.runtime.events` (their
+:meth:`~cfgplan.runtime.events.Event.record` writes the line); these pydantic
+models describe the lines for the documentation (their JSON Schema is the
+reference page "Trace events") and for the tests, which validate the trace of a
+real run, reconfiguration included, against them: every model forbids keys it
+does not name, so neither can drift from the other. The runtime never imports
+this module (a robot runs without pydantic).
+
+Calls are the wrapper calls of 5.2.1, ``send``/``receive`` the global channels
+of 5.2.2, staleness is judged by the sender's period (3.2), and the
+reconfiguration events are monitoring and reconfiguration (5.5, 7.2).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, JsonValue, TypeAdapter
+
+from cfgplan.runtime.faults import Action
+
+__all__ = [
+    "TRACE_EVENT",
+    "Abort",
+    "Achieved",
+    "CallEvent",
+    "Facts",
+    "Failure",
+    "Finish",
+    "Inject",
+    "InstallEvent",
+    "Message",
+    "NoConfiguration",
+    "Presence",
+    "Receive",
+    "Recovery",
+    "Send",
+    "Staleness",
+    "Start",
+    "Stop",
+    "SwitchEvent",
+    "TraceEvent",
+]
+
+Data = list[str]
+"""A data descriptor, e.g. ``["pos", "Pippi", "Door1"]``."""
+
+Number = int | float
+
+
+class Closed(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, populate_by_name=True)
+
+
+class Base(Closed):
+    """What every line has."""
+
+    robot: str = Field(description="The robot it happened on.")
+    t: float = Field(description="Seconds since the epoch (simulated time in a simulation).")
+    cycle: int = Field(description="The robot's cycle.")
+
+
+class Value(Closed):
+    """A value read or written on a channel (not JSON: `{"$type", "$repr"}`)."""
+
+    data: Data
+    value: JsonValue = Field(description="`null` for an output not written.")
+
+
+class CallEvent(Base):
+    """A call of a wrapper (5.2.1) and its outcome."""
+
+    event: Literal["call"]
+    label: str
+    functionality: str
+    args: list[str]
+    status: Literal["ran", "waiting", "precondition", "stale", "error", "timeout", "busy"]
+    inputs: list[Value]
+    outputs: list[Value]
+    waiting: list[Data] | None = Field(default=None, description="Inputs without fresh data.")
+    stale: list[Data] | None = Field(default=None, description="Inputs whose data is too old.")
+    error: str | None = Field(default=None, description="What failed.")
+    duration: float | None = Field(default=None, description="Seconds the function took.")
+    failure: Literal["reported", "injected"] | None = Field(
+        default=None,
+        description="When its resource failed: raised by the implementation, or a scripted fault.",
+    )
+    achieved: Literal[True] | None = Field(
+        default=None, description="An action said its task is accomplished."
+    )
+
+
+class Send(Base):
+    """A message sent on a global channel (5.2.2)."""
+
+    event: Literal["send"]
+    channel: str = Field(description='e.g. `"F7->F3 (pos Pippi Door1)"`.')
+    data: Data
+    seq: int
+    to: str = Field(description="The other robot.")
+    value: JsonValue
+
+
+class Receive(Base):
+    """A message received on a global channel (5.2.2)."""
+
+    event: Literal["receive"]
+    channel: str
+    data: Data
+    seq: int
+    from_: str = Field(alias="from", description="The other robot.")
+    value: JsonValue
+    sent: float | None = Field(default=None, description="The sender's `t`.")
+
+
+class Staleness(Base):
+    """An input not refreshed for too long, or fresh again (3.2)."""
+
+    event: Literal["stale", "fresh"]
+    label: str = Field(description="The receiving functionality.")
+    channel: str
+    data: Data
+    from_: str = Field(alias="from", description="The sending robot.")
+    age: float = Field(description="Seconds since the last refresh.")
+    period: float = Field(description="The sender's period.")
+    limit: float
+
+
+class Presence(Base):
+    """Another robot appeared or was lost."""
+
+    event: Literal["robot-seen", "robot-lost"]
+    other: str
+
+
+class Start(Base):
+    """The robot started."""
+
+    event: Literal["start"]
+    transport: str
+    partners: list[str] = Field(description="The robots it exchanges data with.")
+    rate: float
+
+
+class Stop(Base):
+    """The robot stopped."""
+
+    event: Literal["stop"]
+    reason: str = Field(
+        description="`cycles`, `duration`, `terminated` (SIGTERM), `interrupted` (Ctrl-C), "
+        "`stopped` (from a program), `achieved` (the task is done), `killed` (a scripted kill)."
+    )
+
+
+class Message(Base):
+    """A message that could not be read."""
+
+    event: Literal["error"]
+    message: str
+
+
+class Inject(Base):
+    """A scripted fault took effect (``--inject``)."""
+
+    event: Literal["inject"]
+    spec: str = Field(description="The fault as written, e.g. `fail compass(Emil) at cycle 20`.")
+    action: Action
+    target: list[str] = Field(
+        description="A functionality instance (`[compass, Emil]`), a robot (`[Emil]`) or a fact."
+    )
+
+
+ResourceKind = Literal["functionality", "robot", "medium"]
+
+
+class Failure(Base):
+    """A resource failed (5.5)."""
+
+    event: Literal["failure"]
+    detected_by: str = Field(description="The robot that saw it.")
+    resource: str = Field(description="`compass(Emil)` or a robot.")
+    kind: ResourceKind
+    how: str = Field(description="`reported`, `injected`, `stale`, `lost`, `refused` or `silent`.")
+    detail: str
+    withdrawn: list[str] = Field(
+        description="The facts taken from the state (robots lost together: all on the first)."
+    )
+
+
+class Recovery(Base):
+    """A resource works again."""
+
+    event: Literal["recovery"]
+    detected_by: str
+    resource: str
+    kind: ResourceKind
+    how: str = Field(description="`probe`, `injected`, `seen` or `retry`.")
+
+
+class Facts(Base):
+    """The state changed."""
+
+    event: Literal["facts"]
+    detected_by: str
+    added: list[str]
+    removed: list[str]
+    how: str = Field(description="e.g. `operator`.")
+
+
+class Achieved(Base):
+    """An action said its task is accomplished."""
+
+    event: Literal["achieved"]
+    detected_by: str
+    label: str
+    functionality: str
+
+
+class Finish(Base):
+    """The run ends across processes, the task accomplished: on a member robot,
+    the coordinator told it (``from``); on the coordinator, every robot was told
+    and answered, or did not in time (``silent``)."""
+
+    event: Literal["finish"]
+    id: int
+    from_: str | None = Field(default=None, alias="from", description="The coordinator.")
+    goal: str | None = Field(default=None, description="The goal accomplished.")
+    silent: list[str] | None = Field(
+        default=None, description="On the coordinator: robots that did not answer the finish."
+    )
+
+
+class Part(Closed):
+    """Functionality instances (``F3: cross-door(Emil, Door1)``) and channels
+    (``F7->F3 pos(Emil, Door1)``)."""
+
+    functionalities: list[str]
+    channels: list[str]
+
+
+class SwitchEvent(Base):
+    """The society switched configurations (5.5, 7.2)."""
+
+    event: Literal["switch"]
+    id: int
+    cause: str
+    from_cost: Number | None
+    to_cost: Number
+    source: Literal["fallback", "search"]
+    plan_ms: float | None = Field(
+        default=None, description="Milliseconds of planning (left out in a simulation's trace)."
+    )
+    latency: float | None = Field(
+        default=None,
+        description="Seconds from the detection to the new configuration installed everywhere "
+        "(left out in a simulation's trace: it measures the host's clock).",
+    )
+    kept: Part
+    stopped: Part
+    started: Part
+
+
+class NoConfiguration(Base):
+    """Nothing admissible is left: the action is stopped safely."""
+
+    event: Literal["no-configuration"]
+    id: int
+    cause: str
+    from_cost: Number | None
+    stopped: list[str] = Field(description="The functionalities stopped.")
+    why: list[str] = Field(description="The planner's explanation, line by line.")
+    latency: float | None = Field(default=None, description="Left out in a simulation's trace.")
+
+
+class Abort(Base):
+    """A switch abandoned: robots refused or stayed silent."""
+
+    event: Literal["abort"]
+    id: int
+    robots: list[str]
+    reason: str
+
+
+class InstallEvent(Base):
+    """This robot installed its part of configuration ``id``."""
+
+    event: Literal["install"]
+    id: int
+    kept: list[str]
+    stopped: list[str]
+    started: list[str]
+    kept_channels: int = Field(description="A count.")
+    stopped_channels: list[str]
+    started_channels: list[str]
+
+
+TraceEvent = Annotated[
+    CallEvent
+    | Send
+    | Receive
+    | Staleness
+    | Presence
+    | Start
+    | Stop
+    | Message
+    | Inject
+    | Failure
+    | Recovery
+    | Facts
+    | Achieved
+    | Finish
+    | SwitchEvent
+    | NoConfiguration
+    | Abort
+    | InstallEvent,
+    Field(discriminator="event"),
+]
+"""One line of the trace, told apart by ``"event"``."""
+
+TRACE_EVENT: TypeAdapter[TraceEvent] = TypeAdapter(TraceEvent)
+"""Validates a line (``TRACE_EVENT.validate_json(line)``) and gives the schema."""
