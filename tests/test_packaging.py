@@ -169,3 +169,34 @@ print(json.dumps({
     assert grammar.is_file()
     assert found["grammar_text"] == (ROOT / "grammar" / "cfgplan.lark").read_text("utf-8")
     assert (found["functionalities"], found["methods"]) == (9, 7)
+
+
+def test_the_version_is_read_from_one_place() -> None:
+    """``cfgplan --version`` prints :data:`cfgplan.__version__` without reading
+    the package metadata (slow to import); the metadata is built from it, so
+    the two agree (a stale install, made before the version changed, does not)."""
+    import cfgplan
+
+    assert metadata.version("cfgplan") == cfgplan.__version__
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))
+    assert "version" not in pyproject["project"]
+    assert "version" in pyproject["project"]["dynamic"]
+    dynamic = pyproject["tool"]["setuptools"]["dynamic"]["version"]
+    assert dynamic == {"attr": "cfgplan.__version__"}
+
+
+def test_the_installed_wheel_says_its_version(
+    wheel: Path, venv_python: Path, tmp_path: Path
+) -> None:
+    """The wheel's metadata carries cfgplan.__version__, and the installed
+    package answers --version and --help (the help text pre-rendered from the
+    typer app is shipped)."""
+    import cfgplan
+
+    meta = next(n for n in zipfile.ZipFile(wheel).namelist() if n.endswith(".dist-info/METADATA"))
+    headers = zipfile.ZipFile(wheel).read(meta).decode("utf-8").splitlines()
+    assert f"Version: {cfgplan.__version__}" in headers
+    version = _run([str(venv_python), "-m", "cfgplan", "--version"], cwd=tmp_path, env=_clean_env())
+    assert version == f"cfgplan {cfgplan.__version__}\n"
+    shown = _run([str(venv_python), "-m", "cfgplan", "--help"], cwd=tmp_path, env=_clean_env())
+    assert shown.startswith("Usage: cfgplan [OPTIONS] COMMAND [ARGS]...")

@@ -1,4 +1,4 @@
-"""Importing this module registers every command on :data:`cfgplan.cli.app.app`."""
+"""Importing this module registers every command on the typer app, :data:`cfgplan.cli.root.app`."""
 
 from cfgplan.cli import check, emit, plan, render, run, simulate
 

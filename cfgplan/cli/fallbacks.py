@@ -10,14 +10,14 @@ as comment lines in the ``lisp`` format, and as ``"fallbacks"`` in JSON
 from __future__ import annotations
 
 import io
-
-from rich.console import Console
-from rich.table import Table
+from typing import TYPE_CHECKING
 
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text
-from cfgplan.reconfigure.fallbacks import Fallback
+
+if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (issue 32: start-up)
+    from cfgplan.reconfigure.fallbacks import Fallback
 
 __all__ = ["fallback_lisp", "fallback_table"]
 
@@ -41,6 +41,9 @@ def _single_points(found: list[Fallback]) -> str:
 
 def fallback_table(config: Configuration, found: list[Fallback], rank: int = 1) -> str:
     """The report on ``config`` (of ``rank``) as a table, then the single points of failure."""
+    from rich.console import Console  # loaded for tables only (issue 32: start-up)
+    from rich.table import Table
+
     title = f"Fallbacks of rank {rank} (cost {fmt(config.cost)}): if one resource fails"
     table = Table(title=title)
     table.add_column("resource", overflow="fold")

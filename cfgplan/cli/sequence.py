@@ -5,7 +5,7 @@ table lists sequences with their steps; ``--format lisp`` prints each step's
 configuration description (4.4) under a step header, then the state changes
 it makes; JSON holds ``{"sequences": [{"rank", "total_cost", "steps":
 [{"goal", "state_changes", "configuration"}]}], "communication_checked",
-"stats"}`` (README, "Sequences of configurations"); ``jsonl`` one sequence a line.
+"stats"}`` (:mod:`cfgplan.configuration.schema`); ``jsonl`` one sequence a line.
 """
 
 from __future__ import annotations
@@ -14,11 +14,9 @@ import io
 import json
 from dataclasses import dataclass
 from itertools import islice
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from cfgplan.cli.app import EXIT_NONE, say
 from cfgplan.cli.options import no_rank
@@ -27,8 +25,10 @@ from cfgplan.configuration.describe import to_dict, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import call_text
 from cfgplan.planner.explain import explain
-from cfgplan.planner.sequence import PlannedSequence, SequenceSearch
 from cfgplan.problem import Problem
+
+if TYPE_CHECKING:  # loaded by the two functions that search (issue 32: start-up)
+    from cfgplan.planner.sequence import PlannedSequence, SequenceSearch
 
 
 @dataclass(frozen=True)
@@ -43,6 +43,8 @@ class SequenceOptions:
 
 def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> str:
     """Plan, report on stderr, and return the text to print (exit 3 when none)."""
+    from cfgplan.planner.sequence import SequenceSearch
+
     search = SequenceSearch(problem.goal_calls, problem.task, options.switch, options.time_limit)
     found = list(islice(search, options.limit) if options.limit is not None else search)
     if search.stopped is not None:
@@ -76,6 +78,8 @@ def _goals(problem: Problem) -> str:
 def first_step(problem: Problem, rank: int) -> Configuration:
     """The first step's configuration of the sequence of ``rank`` (1: the
     cheapest): what ``cfgplan run`` starts with; exit 3 when there are fewer."""
+    from cfgplan.planner.sequence import SequenceSearch
+
     search = SequenceSearch(problem.goal_calls, problem.task)
     found = list(islice(search, rank))
     if not found:
@@ -94,8 +98,10 @@ def _impossible(problem: Problem, search: SequenceSearch) -> None:
         return
     step, _, report = blocked
     goal = call_text(problem.goal_calls[step])
-    where = "in the initial state" if step == 0 else (
-        "in any state the steps before it reach; in the state the cheapest of them leaves"
+    where = (
+        "in the initial state"
+        if step == 0
+        else ("in any state the steps before it reach; in the state the cheapest of them leaves")
     )
     say(f"no admissible sequence: step {step + 1}, {goal}, has no configuration {where}:")
     say("\n".join(explain(report, goal)))
@@ -147,6 +153,9 @@ def _lisp(problem: Problem, found: list[PlannedSequence], first: int) -> str:
 
 
 def _table(problem: Problem, found: list[PlannedSequence], details: bool, first: int) -> str:
+    from rich.console import Console  # loaded for tables only (issue 32: start-up)
+    from rich.table import Table
+
     table = Table(title=f"Sequences for {_goals(problem)}")
     table.add_column("rank", justify="right")
     table.add_column("total", justify="right")

@@ -1,12 +1,17 @@
 """A robot needs cfgplan installed, but ``import cfgplan.runtime`` must stay light:
 no planner, IR, pydantic, lark, backends, CLI or Zenoh (its time is measured by
-``python -m benchmarks.imports``)."""
+``python -m benchmarks.imports``); nor may ``cfgplan --version`` and the top-level
+help load any of it (issue 32; ``python -m benchmarks.startup`` measures them)."""
 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 from tests.backends.support import ROOT
 
@@ -63,3 +68,58 @@ def test_an_emitted_robot_program_runs_without_the_planner(tmp_path: object) -> 
 
 def test_the_check_can_fail() -> None:
     assert _heavy(_modules("import cfgplan.backends.part")) != []
+
+
+FAST = ("cfgplan.cli", "cfgplan.cli.app", "cfgplan.cli.help_text")
+"""What the fast path of the command line loads of :data:`HEAVY`: none of it is heavy."""
+
+
+def _loaded_by(args: list[str], tmp_path: Path) -> list[str]:
+    """The modules the command line ``cfgplan ARGS`` has imported when it exits
+    (as the console script runs it, whatever it prints)."""
+    found = tmp_path / "modules.json"
+    code = (
+        "import atexit, json, pathlib, sys\n"
+        f"found = pathlib.Path({str(found)!r})\n"
+        "atexit.register(lambda: found.write_text(json.dumps(sorted(sys.modules))))\n"
+        "from cfgplan.cli.app import main\n"
+        "main()\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "COLUMNS": "80"},
+    )
+    assert out.returncode in (0, 2), out.stderr
+    modules: list[str] = json.loads(found.read_text("utf-8"))
+    return modules
+
+
+@pytest.mark.parametrize("args", [["--version"], ["--help"], ["-h"], []])
+def test_version_and_help_load_no_library(args: list[str], tmp_path: Path) -> None:
+    """``cfgplan --version`` and the top-level help answer at once (issue 32):
+    no typer, click, rich, pydantic or Lark, none of cfgplan's stages."""
+    loaded = _loaded_by(args, tmp_path)
+    assert "cfgplan.cli.app" in loaded
+    assert [m for m in _heavy(loaded) if m not in FAST] == []
+    assert "importlib.metadata" not in loaded  # the version is cfgplan.__version__
+
+
+def test_the_fast_path_check_can_fail(tmp_path: Path) -> None:
+    """A command that is not the top-level help loads the typer app."""
+    loaded = _loaded_by(["plan", "-h"], tmp_path)
+    assert {"typer", "cfgplan.cli.root", "cfgplan.cli.plan"} <= set(loaded)
+
+
+def test_a_json_plan_loads_no_table_library(tmp_path: Path) -> None:
+    """rich draws tables: ``plan --format json`` (what a tool reads) does without it,
+    nor does planning load the reconfiguration (only ``--fallbacks`` needs it)."""
+    args = ["plan", "domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp"]
+    loaded = _loaded_by([*args, "--format", "json"], tmp_path)
+    assert "cfgplan.planner" in loaded
+    unwanted = ("rich", "cfgplan.reconfigure")
+    assert [m for m in loaded if any(m == u or m.startswith(u + ".") for u in unwanted)] == []
+    assert "rich" in _loaded_by(args, tmp_path)  # the table

@@ -1,0 +1,102 @@
+"""The fast path of ``cfgplan --version`` and the top-level help (issue 32):
+answered without typer, from a text pre-rendered from the typer app, which
+must stay what typer prints (what each loads: tests/runtime/test_imports.py)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from cfgplan import __version__
+from cfgplan.cli import help_text
+from cfgplan.cli.root import HELP_WIDTH, render_help
+from tests.cli.conftest import ROOT, Run
+
+TYPER = (
+    "import sys\nfrom cfgplan.cli.app import _run, register\n"
+    "register(sys.argv[1:])\nsys.exit(_run())"
+)
+"""The slow path: the typer app answers the command line, whatever it is."""
+
+
+def _typer(args: list[str], columns: str) -> tuple[int, str, str]:
+    """What typer itself prints for ``args`` on a terminal ``columns`` wide."""
+    env = {**os.environ, "COLUMNS": columns}
+    out = subprocess.run(
+        [sys.executable, "-c", TYPER, *args],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    return out.returncode, out.stdout, out.stderr
+
+
+def test_the_help_text_is_typers_rendering() -> None:
+    """Fails when a command, an option or a summary changes without the text
+    being generated again: ``python -m cfgplan.cli.root``."""
+    assert help_text.WIDTH == HELP_WIDTH
+    assert render_help(HELP_WIDTH) == help_text.HELP
+
+
+@pytest.mark.parametrize(
+    ("args", "status", "stream"), [(["--help"], 0, 1), (["-h"], 0, 1), ([], 2, 2)]
+)
+def test_the_fast_help_is_what_typer_prints(
+    cfgplan: Run, args: list[str], status: int, stream: int
+) -> None:
+    for columns in ("80", "200"):  # click renders at most 80 columns wide
+        out = cfgplan(*args, env={"COLUMNS": columns})
+        assert (out.returncode, out.stdout, out.stderr) == _typer(args, columns)
+        assert out.returncode == status
+        assert (out.stdout, out.stderr)[stream - 1] == help_text.HELP
+
+
+def test_a_narrow_terminal_gets_typers_own_help(cfgplan: Run) -> None:
+    """The pre-rendered text is 80 columns wide: on a narrower terminal typer
+    renders the help (the text differs, so this is not the fast path)."""
+    out = cfgplan("--help", env={"COLUMNS": "60"})
+    assert out.returncode == 0
+    assert out.stdout == render_help(60) != help_text.HELP
+
+
+def test_the_fast_version_is_typers(cfgplan: Run) -> None:
+    out = cfgplan("--version")
+    assert (out.returncode, out.stdout, out.stderr) == (0, f"cfgplan {__version__}\n", "")
+    assert _typer(["--version"], "80") == (out.returncode, out.stdout, out.stderr)
+    assert cfgplan("--version", "--help").stdout == out.stdout  # typer answers that one
+
+
+def _gc_after(code: str) -> list[object]:
+    out = subprocess.run(
+        [sys.executable, "-c", f"import gc, json\nfrom cfgplan.cli import app\n{code}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    found: list[object] = json.loads(out.stdout)
+    return found
+
+
+def test_what_a_command_loads_is_frozen_once() -> None:
+    """The modules a command loads are frozen out of the garbage collector's
+    work (:func:`cfgplan.cli.app._load`), once a process; the collector is left
+    as it was found, on or off."""
+    on, frozen = _gc_after(
+        "app._load(['plan'])\nprint(json.dumps([gc.isenabled(), gc.get_freeze_count()]))"
+    )
+    assert on is True and isinstance(frozen, int) and frozen > 10_000
+    again = _gc_after(
+        "app._load(['plan'])\nfirst = gc.get_freeze_count()\nx = [[] for _ in range(1000)]\n"
+        "app._load(['check'])\nprint(json.dumps([first, gc.get_freeze_count()]))"
+    )
+    assert again[0] == again[1]  # the second command line froze nothing more
+    off = _gc_after("gc.disable()\napp._load(['plan'])\nprint(json.dumps([gc.isenabled()]))")
+    assert off == [False]
