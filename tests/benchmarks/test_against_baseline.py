@@ -26,7 +26,7 @@ FAMILIES = [
     ("wall", (1, 2, 1)),
     ("wall", (2, 3, 2)),
     ("wall", (2, 4, 3)),
-    ("wall", (3, 4, 2)),
+    pytest.param("wall", (3, 4, 2), marks=pytest.mark.slow),
     ("relay", (2, 3, 2)),
     ("relay", (3, 3, 3)),
 ]

@@ -19,6 +19,7 @@ from benchmarks.fuzz_inputs import Case, chain
 CROSS = Path(__file__).resolve().parents[2] / "domains" / "cross-door"
 
 
+@pytest.mark.slow
 def test_a_small_budget_finds_nothing_outside_the_planner(tmp_path: Path) -> None:
     tally = fuzz.campaign(200, seed=0, time_limit=5.0, memory_mib=2048, save=tmp_path)
     assert sum(tally.inputs.values()) == 200

@@ -66,13 +66,13 @@ def ok(done: subprocess.CompletedProcess[str]) -> str:
     return done.stdout
 
 
-@pytest.mark.parametrize("levels", ["330", "1500"])
+@pytest.mark.parametrize("levels", ["330", pytest.param("1500", marks=pytest.mark.slow)])
 def test_check(files: dict[str, str], levels: str) -> None:
     out = ok(run("check", files[levels], files["state"]))
     assert f"{int(levels) + 1} methods" in out
 
 
-@pytest.mark.parametrize("levels", ["330", "1500"])
+@pytest.mark.parametrize("levels", ["330", pytest.param("1500", marks=pytest.mark.slow)])
 def test_render_hierarchy(files: dict[str, str], levels: str) -> None:
     output = Path(files["out"] + ".dot")
     ok(run("render", files[levels], files["state"], "--hierarchy", "-o", str(output)))

@@ -69,9 +69,23 @@ def test_configurations_found_before_the_limit_are_proven() -> None:
 def test_cli_time_limit_json(tmp_path: Path) -> None:
     d, s = big(tmp_path)
     out = subprocess.run(
-        [sys.executable, "-m", "cfgplan", "plan", str(d), str(s), "--all", "--time-limit", "0",
-         "--format", "json"],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "cfgplan",
+            "plan",
+            str(d),
+            str(s),
+            "--all",
+            "--time-limit",
+            "0",
+            "--format",
+            "json",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
@@ -86,7 +100,10 @@ def test_ctrl_c_returns_what_was_found(tmp_path: Path) -> None:
     d, s = big(tmp_path)
     proc = subprocess.Popen(
         [sys.executable, "-m", "cfgplan", "plan", str(d), str(s), "--all", "--format", "json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
     assert proc.stderr is not None

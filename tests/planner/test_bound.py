@@ -7,6 +7,7 @@ node, on generated problems.
 
 from __future__ import annotations
 
+import pytest
 from hypothesis import given
 
 from benchmarks.families import fusion
@@ -49,6 +50,7 @@ def some_nodes(grounder: Grounder, goal: tuple[str, ...]) -> list[Partial]:
     return out
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_the_bounds_never_exceed_the_cheapest_completion(example: Generated) -> None:

@@ -8,6 +8,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from unittest.mock import patch
 
+import pytest
 from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
@@ -202,6 +203,7 @@ def crowded(draw: st.DrawFn) -> Generated:
     return Generated(domain + "\n", state, Weights())
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(crowded(), st.integers(1, 6))
 def test_with_the_cap_the_cheapest_are_the_oracles(example: Generated, k: int) -> None:
@@ -214,6 +216,7 @@ def test_with_the_cap_the_cheapest_are_the_oracles(example: Generated, k: int) -
     assert [(c.cost, c.identity()) for c in found] == oracle[:k]
 
 
+@pytest.mark.slow
 def test_the_generator_exercises_the_cap() -> None:
     """The cap lowers counts in many of the examples, and they are often
     solvable: the property above is not vacuous."""

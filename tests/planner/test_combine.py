@@ -180,6 +180,7 @@ def twin(example: Generated) -> Generated:
     return Generated(example.domain + both + "\n", state, example.weights)
 
 
+@pytest.mark.quick(3)
 @PROPERTY
 @given(generated(), st.integers(1, 8))
 def test_twins_list_as_depth_first(example: Generated, k: int) -> None:
@@ -196,6 +197,7 @@ def test_twins_list_as_depth_first(example: Generated, k: int) -> None:
     assert run(problem, limit=k, distinct=True) == list(plain)
 
 
+@pytest.mark.slow
 def test_twins_are_often_parts() -> None:
     """The property above exercises the parts: many twins split."""
     split = []

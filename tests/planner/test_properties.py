@@ -33,6 +33,7 @@ from itertools import pairwise
 from random import Random
 from unittest.mock import patch
 
+import pytest
 from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
@@ -48,6 +49,7 @@ from tests.planner.oracle import depth_first
 from tests.planner.problems import PROPERTY, Generated, load_generated, run, solve
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_limit_one_is_the_first_of_all(example: Generated) -> None:
@@ -62,6 +64,7 @@ def test_limit_one_is_the_first_of_all(example: Generated) -> None:
             assert first[0] == everything[0]
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_distinct_is_derivations_without_repeats(example: Generated) -> None:
@@ -75,6 +78,7 @@ def test_distinct_is_derivations_without_repeats(example: Generated) -> None:
             seen.add(config.identity())
             expected.append(config)
     assert [(c.cost, c.identity()) for c in distinct] == [(c.cost, c.identity()) for c in expected]
+
     # Labels and channel order too. Derivation numbers differ: in distinct mode the
     # search skips partial configurations reached again, so it completes fewer.
     def unnumbered(configs: list[Configuration]) -> list[Configuration]:
@@ -83,6 +87,7 @@ def test_distinct_is_derivations_without_repeats(example: Generated) -> None:
     assert unnumbered(distinct) == unnumbered(expected)
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_ranked_by_cost_then_derivation(example: Generated) -> None:
@@ -97,6 +102,7 @@ def test_ranked_by_cost_then_derivation(example: Generated) -> None:
                 assert before.derivation < after.derivation
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_every_configuration_is_admissible(example: Generated) -> None:
@@ -107,6 +113,7 @@ def test_every_configuration_is_admissible(example: Generated) -> None:
         )
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_same_derivations_as_depth_first(example: Generated) -> None:
@@ -117,6 +124,7 @@ def test_same_derivations_as_depth_first(example: Generated) -> None:
     assert [(c.cost, c.identity()) for c in derivations] == depth_first(problem, example.weights)
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated(uncertain=True), st.integers(1, 6))
 def test_reliability_ranks_as_depth_first(example: Generated, k: int) -> None:
@@ -143,6 +151,7 @@ def bounds_from_the_first_node() -> Iterator[None]:
         yield
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated(), st.integers(1, 6))
 def test_the_bounds_change_nothing_found(example: Generated, k: int) -> None:
@@ -158,6 +167,7 @@ def test_the_bounds_change_nothing_found(example: Generated, k: int) -> None:
     assert distinct == run(problem, distinct=True)[:k]
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated(), st.integers(1, 4))
 def test_all_in_windows_lists_everything(example: Generated, held: int) -> None:
@@ -199,6 +209,7 @@ def ranked(configs: list[Configuration]) -> tuple[list[float], Counter[tuple[flo
     return [c.cost for c in configs], Counter((c.cost, c.identity()) for c in configs)
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated(), st.randoms(use_true_random=False))
 def test_fact_order_changes_no_configuration(example: Generated, order: Random) -> None:
@@ -268,6 +279,7 @@ def _coverage(example: Generated) -> Coverage:
     )
 
 
+@pytest.mark.slow
 def test_the_generator_covers_what_it_should() -> None:
     """The generated problems load as files do, and exercise what they should."""
     seen: list[Coverage] = []

@@ -78,12 +78,14 @@ def branch_and_bound(problem: Problem) -> float | None:
     [
         ecology(10, 3, 2),
         media_tight(5, 2, 1),
-        media_tight(7, 4, 4),  # the media test of room.py prunes here
+        # the media test of room.py prunes here
+        pytest.param(media_tight(7, 4, 4), marks=pytest.mark.slow),
         fusion(5, 3, 4, 3),
-        chain(12),
+        pytest.param(chain(12), marks=pytest.mark.slow),
         wall(3, 6, 3),
         gateway(5),  # the media cap on sharing (capacity.py) makes the root's bound exact
-        gateway(6, 4, 60),  # ... and only a lower bound: two views a camera, two own cameras
+        # ... and only a lower bound: two views a camera, two own cameras
+        pytest.param(gateway(6, 4, 60), marks=pytest.mark.slow),
     ],
     ids=[
         "ecology-10",
@@ -103,6 +105,7 @@ def test_the_cheapest_agrees_with_branch_and_bound(texts: tuple[str, str]) -> No
     assert best.cost == branch_and_bound(problem)
 
 
+@pytest.mark.slow
 def test_listing_in_small_windows_gives_what_best_first_gives(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -136,7 +139,11 @@ def test_windows_halved_after_the_first_walk_is_given_up_lose_nothing(
     ]
 
 
-@pytest.mark.parametrize("texts", [fusion(4, 3, 4, 3), chain(8)], ids=["fusion-4", "chain-8"])
+@pytest.mark.parametrize(
+    "texts",
+    [fusion(4, 3, 4, 3), pytest.param(chain(8), marks=pytest.mark.slow)],
+    ids=["fusion-4", "chain-8"],
+)
 def test_best_first_lists_in_the_order_of_the_windows_when_the_first_bound_is_dropped(
     texts: tuple[str, str],
 ) -> None:
@@ -174,7 +181,12 @@ CYCLES = (
 @pytest.mark.parametrize("one_pass", [0, 3, 7, 200])
 @pytest.mark.parametrize(
     "texts",
-    [wall(3, 4, 3), media_tight(4, 2, 1), relay(4, 4, 3), CYCLES],
+    [
+        pytest.param(wall(3, 4, 3), marks=pytest.mark.slow),
+        media_tight(4, 2, 1),
+        relay(4, 4, 3),
+        CYCLES,
+    ],
     ids=["wall-3-4-3", "media-tight-4", "relay-4", "cycles"],
 )
 def test_giving_up_the_first_walk_lists_the_same(
@@ -236,9 +248,22 @@ def test_the_time_limit_holds_inside_one_expansion(tmp_path: Path) -> None:
     (tmp_path / "s.lisp").write_text(f"(state {robots}) (goal (go R0))")
     start = time.monotonic()
     out = subprocess.run(
-        [sys.executable, "-m", "cfgplan", "plan", str(tmp_path / "d.lisp"),
-         str(tmp_path / "s.lisp"), "--time-limit", "1", "--format", "json"],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "cfgplan",
+            "plan",
+            str(tmp_path / "d.lisp"),
+            str(tmp_path / "s.lisp"),
+            "--time-limit",
+            "1",
+            "--format",
+            "json",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
     elapsed = time.monotonic() - start
     assert out.returncode == 3, out.stderr
@@ -248,9 +273,21 @@ def test_the_time_limit_holds_inside_one_expansion(tmp_path: Path) -> None:
 
 def test_all_streams_json_lines_in_rank_order(tmp_path: Path) -> None:
     out = subprocess.run(
-        [sys.executable, "-m", "cfgplan", "plan", "domains/build-wall/domain.lisp",
-         "domains/build-wall/state-6.4.lisp", "--all", "--format", "jsonl"],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "cfgplan",
+            "plan",
+            "domains/build-wall/domain.lisp",
+            "domains/build-wall/state-6.4.lisp",
+            "--all",
+            "--format",
+            "jsonl",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
     assert out.returncode == 0, out.stderr
     *rows, summary = (json.loads(line) for line in out.stdout.splitlines())

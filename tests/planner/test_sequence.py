@@ -8,6 +8,7 @@ import sys
 from itertools import islice, pairwise
 from pathlib import Path
 
+import pytest
 from hypothesis import example, given
 
 from cfgplan.configuration.admissible import problems
@@ -49,9 +50,22 @@ def test_golden_sequence_description() -> None:
     """The three cheapest sequences of 6.2.2 as --format lisp prints them
     (tests/golden/sequence-6.2.2.txt, checked by eye against 4.6 and Fig. 4.3)."""
     out = subprocess.run(
-        [sys.executable, "-m", "cfgplan", "plan", str(STEPS.relative_to(ROOT)),
-         str(SEQUENCE.relative_to(ROOT)), "-k", "3", "--format", "lisp"],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "cfgplan",
+            "plan",
+            str(STEPS.relative_to(ROOT)),
+            str(SEQUENCE.relative_to(ROOT)),
+            "-k",
+            "3",
+            "--format",
+            "lisp",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout == GOLDEN.read_text()
@@ -107,10 +121,15 @@ def sequence_of(example: Generated) -> Problem:
     problem = solve(example)
     goal = problem.goal.model_copy(update={"call": Atom(predicate="do-task", args=("R2",))})
     return Problem(
-        problem.domain, problem.state, problem.goal, problem.task, goals=(problem.goal, goal),
+        problem.domain,
+        problem.state,
+        problem.goal,
+        problem.task,
+        goals=(problem.goal, goal),
     )
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_one_goal_sequences_are_plans(example: Generated) -> None:
@@ -121,6 +140,7 @@ def test_one_goal_sequences_are_plans(example: Generated) -> None:
     assert [s.steps[0].configuration for s in sequences] == configs
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 def test_sequences_come_cheapest_first_and_every_step_is_admissible(example: Generated) -> None:
@@ -197,6 +217,7 @@ TIES = Generated(
 )
 
 
+@pytest.mark.quick(20)
 @PROPERTY
 @given(generated())
 @example(TIES)
@@ -217,9 +238,22 @@ def test_equal_totals_come_in_the_order_of_their_steps(example: Generated) -> No
 
 def test_json_schema_of_sequences() -> None:
     out = subprocess.run(
-        [sys.executable, "-m", "cfgplan", "plan", str(STEPS.relative_to(ROOT)),
-         str(SEQUENCE.relative_to(ROOT)), "-k", "2", "--format", "json"],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "cfgplan",
+            "plan",
+            str(STEPS.relative_to(ROOT)),
+            str(SEQUENCE.relative_to(ROOT)),
+            "-k",
+            "2",
+            "--format",
+            "json",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
@@ -233,10 +267,26 @@ def test_json_schema_of_sequences() -> None:
 
 def test_goals_given_on_the_command_line_make_a_sequence() -> None:
     out = subprocess.run(
-        [sys.executable, "-m", "cfgplan", "plan", str(STEPS.relative_to(ROOT)),
-         "domains/cross-door/state-6.2.2-step1.lisp", "--goal", "(do-cross-door Pippi Door1)",
-         "--goal", "(do-cross-door Emil Door1)", "--format", "jsonl", "-k", "1"],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "cfgplan",
+            "plan",
+            str(STEPS.relative_to(ROOT)),
+            "domains/cross-door/state-6.2.2-step1.lisp",
+            "--goal",
+            "(do-cross-door Pippi Door1)",
+            "--goal",
+            "(do-cross-door Emil Door1)",
+            "--format",
+            "jsonl",
+            "-k",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
     # step1's door is only in Room1: Emil's helper in Room2 cannot see it
     assert out.returncode == 3, out.stderr

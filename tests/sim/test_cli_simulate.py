@@ -40,6 +40,7 @@ def _scenario(tmp_path: Path, name: str, edit: tuple[str, str] | None = None) ->
     return path
 
 
+@pytest.mark.slow
 def test_outputs_and_the_same_bytes_for_the_same_seed(tmp_path: Path) -> None:
     """Fig. 6.5 and 6.6 as pictures, the configurations drawn, the summary and
     the trace: all byte for byte the same for one seed, another seed differs."""

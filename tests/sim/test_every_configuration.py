@@ -33,14 +33,14 @@ def _quiet(name: str) -> Any:
     [
         # 6.3.2: a 45 that localizes Emil with his laser (the bundled run
         # shows the sonar localization after its switch)
-        ("carry-bar", 3, 45, []),
+        pytest.param("carry-bar", 3, 45, [], marks=pytest.mark.slow),
         # the thesis's third configuration, Pippi following Emil (45)
-        (str(DATA / "carry-bar-emil-leads.toml"), 4, 45, []),
+        pytest.param(str(DATA / "carry-bar-emil-leads.toml"), 4, 45, [], marks=pytest.mark.slow),
         # 6.2.2 as a sequence starting with the camera configuration (47);
         # step 2 starts with 44 and meets the disturbance
         ("cross-door", 3, 47, [(44, 47)]),
         # 6.4: a sonar orientation of W1 that cannot be had (56), replaced
-        ("build-wall", 8, 56, [(56, 53), (53, 66)]),
+        pytest.param("build-wall", 8, 56, [(56, 53), (53, 66)], marks=pytest.mark.slow),
     ],
 )
 def test_a_configuration_of_any_rank_runs(

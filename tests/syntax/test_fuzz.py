@@ -224,18 +224,21 @@ _SHAPED_TEXT = st.lists(
 ).map("\n".join)
 
 
+@pytest.mark.quick(25)
 @FUZZ
 @given(_ALPHABET_TEXT)
 def test_alphabet_soup(text: str) -> None:
     _read_and_check(text)
 
 
+@pytest.mark.quick(25)
 @FUZZ
 @given(_FORMS_TEXT)
 def test_nested_forms(text: str) -> None:
     _read_and_check(text)
 
 
+@pytest.mark.quick(25)
 @FUZZ
 @given(_SHAPED_TEXT)
 def test_shaped_domains(text: str) -> None:
@@ -279,6 +282,7 @@ def _mutant(draw: st.DrawFn) -> tuple[Path, str]:
     return path, text
 
 
+@pytest.mark.quick(25)
 @FUZZ
 @given(_mutant())
 def test_mutated_bundled_files(case: tuple[Path, str]) -> None:

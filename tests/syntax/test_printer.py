@@ -291,6 +291,7 @@ _STATE = st.builds(
 )
 
 
+@pytest.mark.quick(20)
 @settings(max_examples=100, derandomize=True, deadline=2000)
 @given(_DOMAIN)
 def test_generated_domain_round_trip(domain: Domain) -> None:
