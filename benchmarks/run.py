@@ -2,6 +2,8 @@
 
 ``--against REV`` prints instead one table comparing this cfgplan with the one
 at git revision REV, each instance planned by both in turn by this harness.
+``--markdown FILE`` also writes the table as the documentation's benchmark
+page (:mod:`benchmarks.page`): ``--markdown docs/explanation/benchmarks.md``.
 
 Each figure is measured in a fresh subprocess (so peak memory is that run's
 own): planning time in-process and warm (the best of a few repeats after one
@@ -29,6 +31,8 @@ from typing import Any
 
 from benchmarks.instances import INSTANCES, ROOT, Instance, problem_files
 
+__all__ = ["ROOT", "checkout", "compare", "end_to_end", "machine", "main", "measure", "run_one"]
+
 CAP = 60.0
 """Seconds a run may take before it is stopped and shown as "> CAP"."""
 
@@ -47,8 +51,10 @@ def _planner(mode: str, problem: Any, instance: Instance) -> Any:
         def sequences(task: Any, goal: Any) -> tuple[list[Any], bool]:
             search = SequenceSearch(problem.goal_calls, task)
             search.time_limit = CAP
-            found = [s.steps[-1].configuration.model_copy(update={"cost": s.total})
-                     for s in islice(search, most)]
+            found = [
+                s.steps[-1].configuration.model_copy(update={"cost": s.total})
+                for s in islice(search, most)
+            ]
             return found, bool(search.stopped)
 
         return sequences
@@ -164,7 +170,12 @@ def main() -> None:
     parser.add_argument(
         "--one", nargs=3, metavar=("INDEX", "MODE", "REPEAT"), help=argparse.SUPPRESS
     )
-    parser.add_argument("--only", help="run the instances whose name contains this text")
+    parser.add_argument(
+        "--only",
+        action="append",
+        metavar="TEXT",
+        help="run the instances whose name contains this text (repeatable: any of them)",
+    )
     parser.add_argument("--no-baseline", action="store_true", help="skip the naive baseline")
     parser.add_argument("--repeat", type=int, default=5, help="timed repeats (best is kept)")
     parser.add_argument(
@@ -172,6 +183,13 @@ def main() -> None:
         metavar="REV",
         help="compare with cfgplan at this git revision, run side by side by this harness",
     )
+    parser.add_argument(
+        "--markdown",
+        type=Path,
+        metavar="FILE",
+        help="also write the table as a Markdown page (docs/explanation/benchmarks.md)",
+    )
+    parser.add_argument("--note", help="a line for the page: how loaded the machine was")
     args = parser.parse_args()
     if args.one:
         index, mode, repeat = args.one
@@ -179,10 +197,31 @@ def main() -> None:
         return
     print(f"machine: {machine()}")
     print("times: planning in-process, warm, best of repeats; memory: peak RSS of the process\n")
+    table: list[str] = []
     if args.against:
         with tempfile.TemporaryDirectory() as tmp:
-            compare(args.against, checkout(args.against, Path(tmp)), args.only, args.repeat)
-        return
+            against = checkout(args.against, Path(tmp))
+            compare(args.against, against, args.only, args.repeat, table)
+    else:
+        _table(args, table)
+    if args.markdown:
+        from benchmarks.page import write
+
+        write(args.markdown, table, machine(), sys.argv[1:], args.note)
+        print(f"\nwrote {args.markdown}")
+
+
+def _selected(instance: Instance, only: list[str] | None) -> bool:
+    return not only or any(text in instance.name for text in only)
+
+
+def _emit(line: str, table: list[str]) -> None:
+    """Print a line of the table, and keep it for the page."""
+    print(line, flush=True)
+    table.append(line)
+
+
+def _table(args: argparse.Namespace, table: list[str]) -> None:
     columns = [
         "instance",
         "configs",
@@ -197,12 +236,11 @@ def main() -> None:
         "MiB all",
         "MiB baseline",
     ]
-    print("| " + " | ".join(columns) + " |")
-    print("|" + "---|" * len(columns))
+    _emit("| " + " | ".join(columns) + " |", table)
+    _emit("|" + "---|" * len(columns), table)
     for instance in INSTANCES:
-        if args.only and args.only not in instance.name:
-            continue
-        print("| " + " | ".join(_row(instance, args)) + " |", flush=True)
+        if _selected(instance, args.only):
+            _emit("| " + " | ".join(_row(instance, args)) + " |", table)
 
 
 def _row(instance: Instance, args: argparse.Namespace) -> list[str]:
@@ -253,7 +291,7 @@ def end_to_end(instance: Instance, repeat: int = 3, against: Path | None = None)
     return best
 
 
-def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
+def compare(rev: str, against: Path, only: list[str] | None, repeat: int, table: list[str]) -> None:
     """One table: each instance planned by cfgplan at ``rev`` and by this
     cfgplan, alternately, in fresh processes; ratios are this / ``rev``."""
     modes = [("top1", "top-1"), ("top10", "top-10"), ("all", "all distinct")]
@@ -261,10 +299,10 @@ def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
     for _, name in modes:
         columns += [f"{name} ms {rev}", f"{name} ms", "ratio"]
     columns += [f"CLI top-1 ms {rev}", "CLI top-1 ms", "ratio", f"MiB {rev}", "MiB"]
-    print("| " + " | ".join(columns) + " |")
-    print("|" + "---|" * len(columns))
+    _emit("| " + " | ".join(columns) + " |", table)
+    _emit("|" + "---|" * len(columns), table)
     for instance in INSTANCES:
-        if only and only not in instance.name:
+        if not _selected(instance, only):
             continue
         row = [instance.name]
         cells: list[str] = []
@@ -290,7 +328,7 @@ def compare(rev: str, against: Path, only: str | None, repeat: int) -> None:
         ratio = f"{new_cli / old_cli:.2f}" if old_cli and new_cli is not None else "-"
         cells += [ms(old_cli), ms(new_cli), ratio]
         row += [count, *cells, *peak]
-        print("| " + " | ".join(row) + " |", flush=True)
+        _emit("| " + " | ".join(row) + " |", table)
 
 
 def _f(value: object) -> float:

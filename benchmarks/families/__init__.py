@@ -11,7 +11,7 @@ for ``python -m benchmarks.run`` and the tests:
   let each camera serve one robot;
 - ``deliveries(S, R)``: a sequence of S configurations (issue 14);
 - :mod:`benchmarks.families.weak`: structures the search is still weak on
-  (README, "weak spots"), not in the benchmark table.
+  (docs/explanation/planner.md, "Weak spots"), not in the benchmark table.
 """
 
 from benchmarks.families.chain import chain

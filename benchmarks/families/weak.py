@@ -1,4 +1,4 @@
-"""Structures the search is still weak on (README, "weak spots"), found by a
+"""Structures the search is still weak on (docs/explanation/planner.md, "Weak spots"), found by a
 helper writing domains to defeat it; each generator returns the text of a
 domain and of a state with its goal:
 

@@ -2,7 +2,7 @@
 
 A box per functionality shows its name in bold and ``label : (args)`` below,
 laid out as the figures do (``camera`` / ``F8 : (Emil)``) but with the names'
-case kept as written: names are case-sensitive (README), and the figures'
+case kept as written: names are case-sensitive (docs/reference/language.md), and the figures'
 capitals would turn ``Emil`` and ``EMIL`` into one robot. Each robot gets one
 fill colour and one cluster; global channels are bold black arrows, local
 channels thin grey ones (the captions of Fig. 4.3 and 6.11), each labelled with

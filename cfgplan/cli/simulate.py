@@ -1,7 +1,7 @@
 """``cfgplan simulate EXPERIMENT --out DIR``: a scenario run in the 2-D simulator.
 
 EXPERIMENT is ``cross-door``, ``carry-bar`` or ``build-wall`` (the thesis's
-experiments, chapter 6) or a scenario file (README, "Simulation"). The
+experiments, chapter 6) or a scenario file (docs/how-to/write-a-scenario.md). The
 configurations are planned, run on :mod:`cfgplan.runtime` in simulated time,
 monitored and reconfigured; DIR receives ``summary.json``, ``trace.jsonl``
 and the pictures. The simulator itself (:mod:`cfgplan.sim`) is imported

@@ -67,14 +67,12 @@ def to_text(config: Configuration, media: Sequence[Medium] = (), title: str = ""
 
 
 def to_dict(config: Configuration, rank: int, media: Sequence[Medium] = ()) -> dict[str, Any]:
-    """One configuration in the public JSON schema (README, "JSON output");
+    """One configuration in the public JSON schema (:mod:`cfgplan.configuration.schema`);
     with the state's ``media``, the load the configuration puts on each."""
     robot = {f.label: f.robot for f in config.functionalities}
     assigned = {a.channel: a.medium for a in config.media}
     loads = (
-        {"media_loads": [_number(load) for _, load in media_loads(config, media)]}
-        if media
-        else {}
+        {"media_loads": [_number(load) for _, load in media_loads(config, media)]} if media else {}
     )
     return {
         "rank": rank,

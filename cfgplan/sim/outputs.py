@@ -1,4 +1,4 @@
-"""What ``cfgplan simulate --out DIR`` writes (README, "Simulation").
+"""What ``cfgplan simulate --out DIR`` writes (docs/tutorials/simulate.md).
 
 * ``summary.json`` — the outcome (:func:`cfgplan.sim.report.summary`);
 * ``trace.jsonl`` — every event, one JSON line each (written as the run goes);

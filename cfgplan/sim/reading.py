@@ -56,7 +56,7 @@ def _validation(exc: ValidationError, file: str, text: str) -> list[Diagnostic]:
         shown = shown.replace(".[", "[")
         if item["type"] == "extra_forbidden":
             message = f"{shown}: unknown key"
-            hint = "see the README, section Simulation, for the keys of a scenario"
+            hint = "see docs/reference/scenario-file.md for the keys of a scenario"
         elif item["type"] == "missing" and keys and isinstance(keys[-1], int):
             base = shown.rsplit("[", 1)[0]
             message = f"{base}: too few values (expected at least {keys[-1] + 1})"

@@ -2,9 +2,9 @@
 configurations that ran and when.
 
 The :class:`Recorder` listens to every robot (a runtime listener, 5.5). Each
-event becomes one JSON line of the trace, the runtime's schema (README,
-"The trace") with simulated time: ``"t"`` is the simulation's clock, and the
-fields that measure the host's wall clock — a call's ``duration``, a
+event becomes one JSON line of the trace, the runtime's schema
+(:mod:`cfgplan.runtime.schema`) with simulated time: ``"t"`` is the
+simulation's clock, and the fields that measure the host's wall clock — a call's ``duration``, a
 switch's ``plan_ms`` and ``latency``, a message's ``sent`` — are left out,
 so that one seed gives one trace, byte for byte. Values longer than
 :data:`ELIDE` characters of JSON (a laser scan) are written as
@@ -178,4 +178,3 @@ def detail(text: str) -> str:
     """What a resource failure said, without the implementation's file and line."""
     found = _RAISED.match(text)
     return found.group("what") if found else text
-

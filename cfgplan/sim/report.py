@@ -12,7 +12,7 @@ missing: the planner's explanation when no configuration was admissible
 for and the reasons the functionalities upstream gave for having no data
 (:meth:`cfgplan.sim.onboard.Hardware.note`).
 
-:func:`summary` is ``summary.json`` (README, "Simulation").
+:func:`summary` is ``summary.json`` (docs/explanation/simulation.md).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Scenario files: a domain, a state, goals, and the world the robots act in.
 
-A scenario is a TOML file (README, "Simulation"): which domain and state to
+A scenario is a TOML file (docs/how-to/write-a-scenario.md): which domain and state to
 plan with (paths relative to the scenario file), the goals (else the state's
 ``(goal ...)`` or ``(sequence ...)``), the implementations (a module name or a
 ``.py`` file), the world (rooms and doors as in 6.2.1, magnetic

@@ -1,0 +1,128 @@
+"""The benchmark page of the documentation site, written by the benchmark suite.
+
+``python -m benchmarks.run --markdown docs/explanation/benchmarks.md`` writes
+the page: what is measured, the families, then the table of that run with the
+machine, the date, the revision and the command that made it. Nobody edits the
+page by hand; run the suite again instead.
+"""
+
+from __future__ import annotations
+
+import shlex
+import subprocess
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from benchmarks.instances import ROOT
+
+INTRO = """\
+`python -m benchmarks.run` plans each instance below and prints one table.
+Every figure comes from a fresh process: planning time in-process and warm
+(the best of several runs after an untimed one, which also fills the compiled
+task's caches; one run when a run takes over 2 s; a run is stopped at 60 s,
+shown `> 60 s`), the peak resident memory of that process, and "CLI top-1 ms":
+`cfgplan plan -k 1 --format json` from process start to exit.
+
+The **baseline** is the thesis's own strategy, run side by side in the same
+invocation: depth-first over every derivation, then sort
+(`benchmarks/naive.py`, sharing cfgplan's expansion step); "baseline / top-1"
+is its time over cfgplan's time for the cheapest configuration. A test
+(`tests/benchmarks/`) checks that both give the same ranked configurations on
+every instance small enough for the baseline.
+
+Columns: `configs` is how many distinct configurations exist (when all could
+be listed), `best` the cheapest cost, `top-1 ms` / `top-10 ms` / `all distinct
+ms` the time to plan the cheapest, the ten cheapest, and every distinct
+configuration; `MiB` the peak memory of those runs.
+
+The instances (`benchmarks/instances.py`; families in `benchmarks/families/`):
+
+- the thesis's three experiments: cross-door 6.2.2, carry-bar 6.3.2, build-wall 6.4;
+- **wall K N L**: build-a-wall generalised to K pushers among N robots of which
+  the last L carry lasers (Appendix A.3 is K=2, N=3, L=2);
+- **relay D W V**: an action fed through D levels of methods with V versions
+  each (filter locally, or relay from any of the W robots);
+- **ecology N R C**: a convoy of N robots in R rooms with C ceiling cameras
+  (devices): a covering problem with many equal-cost alternatives;
+- **media-tight N R C**: ecology plus an obstacle map per member, streamed raw or
+  built on board over media of little capacity, so the derivations cheapest on
+  functionalities are communication-inadmissible;
+- **fusion M V P H**: one robot fuses M pieces, each from V versions using one
+  or two of P sensor kinds, processed on itself or on any of H helpers;
+- **chain D**: D levels of 3 versions with equal costs (long plateaus);
+- **delegation N**: `get` on one robot may delegate to `get` on any other:
+  the derivations grow much faster than N!;
+- **gateway N D**: N robots each watch a view cropped from one of D ceiling
+  cameras and forwarded through a hub, or from a camera of their own;
+- **deliveries S R**: a sequence of S configurations for R robots.
+
+`--against REV` prints instead one table that puts cfgplan at git revision REV
+beside this one, each instance planned by both in turn.
+"""
+
+
+def revision() -> str:
+    """The git revision measured (``-dirty`` when the work tree has changes)."""
+    out = subprocess.run(
+        ["git", "describe", "--always", "--dirty", "--abbrev=10"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    return out.stdout.strip() or "unknown"
+
+
+def _without_note(command: Sequence[str]) -> list[str]:
+    """The command line without ``--note TEXT`` (the page shows the note apart)."""
+    out: list[str] = []
+    skip = False
+    for arg in command:
+        if skip:
+            skip = False
+        elif arg == "--note":
+            skip = True
+        elif not arg.startswith("--note="):
+            out.append(arg)
+    return out
+
+
+def page(
+    table: Sequence[str], machine: str, command: Sequence[str], note: str | None = None
+) -> str:
+    """The page: the introduction, then this run's facts and table."""
+    shown = shlex.join(["python", "-m", "benchmarks.run", *_without_note(command)])
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    facts = [
+        f"- machine: {machine}",
+        f"- date: {when}",
+        f"- revision: `{revision()}`",
+        "- times: planning in-process, warm, best of repeats; memory: peak RSS of the process",
+    ]
+    if note:
+        facts.append(f"- note: {note}")
+    lines = [
+        "<!-- Written by `python -m benchmarks.run --markdown ...`: do not edit by hand. -->",
+        "",
+        "# Benchmarks",
+        "",
+        INTRO,
+        "## The last run",
+        "",
+        *facts,
+        "",
+        *table,
+        "",
+        f"Made with `{shown}`; run it again to regenerate this page.",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def write(
+    path: Path,
+    table: Sequence[str],
+    machine: str,
+    command: Sequence[str],
+    note: str | None = None,
+) -> None:
+    path.write_text(page(table, machine, command, note), encoding="utf-8")
