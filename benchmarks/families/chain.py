@@ -22,11 +22,9 @@ def chain(depth: int) -> tuple[str, str]:
     for i in range(depth):
         n = i + 1
         lines += [
-            f"(make-functionality :name '(heavy{i} ?r) :in '((d{n} ?r)) :out '((d{i} ?r)) "
-            ":cost 3)",
+            f"(make-functionality :name '(heavy{i} ?r) :in '((d{n} ?r)) :out '((d{i} ?r)) :cost 3)",
             f"(make-functionality :name '(pre{i} ?r) :in '((d{n} ?r)) :out '((e{i} ?r)) :cost 1)",
-            f"(make-functionality :name '(post{i} ?r) :in '((e{i} ?r)) :out '((d{i} ?r)) "
-            ":cost 1)",
+            f"(make-functionality :name '(post{i} ?r) :in '((e{i} ?r)) :out '((d{i} ?r)) :cost 1)",
             f"(make-functionality :name '(remote{i} ?h ?r) :in '((d{n} ?r)) "
             f":out '((h{i} ?h ?r)) :cost 1)",
             f"(make-functionality :name '(back{i} ?r ?h) :in '((h{i} ?h ?r)) :out '((d{i} ?r)))",

@@ -153,8 +153,7 @@ class _Checker:
                 if inst is not None and inst.args and inst.args[0] != recorded:
                     self.report(
                         "location",
-                        f"{shown}: {role}_robot is {recorded} but {inst} runs on "
-                        f"{inst.args[0]}",
+                        f"{shown}: {role}_robot is {recorded} but {inst} runs on {inst.args[0]}",
                     )
             if ch.kind == "local":
                 where = {self._robot(ch.source, ch.source_robot)}

@@ -72,6 +72,4 @@ def canonical(node: Partial, grounder: Grounder) -> bytes:
         effects.append(number(effect) if found is None else found)
     effects.sort()
     # The lengths of the first three parts make the list say where each ends.
-    return digest(
-        [len(placed), *placed, len(channels), *channels, len(stack), *stack, *effects]
-    )
+    return digest([len(placed), *placed, len(channels), *channels, len(stack), *stack, *effects])

@@ -135,7 +135,7 @@ class Combined:
                 yield config
             # Its successors only now: -k 1 searches no part for a second one.
             for p in range(len(at)):
-                then = (*at[:p], at[p] + 1, *at[p + 1:])
+                then = (*at[:p], at[p] + 1, *at[p + 1 :])
                 if then not in offered:
                     offered.add(then)
                     offer = self._offer(then)

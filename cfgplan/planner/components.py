@@ -94,7 +94,7 @@ def unroll(grounder: Grounder, goal: Ground) -> tuple[Partial, dict[int, Address
         for index, item in enumerate(node.stack):
             if item.label in choice:
                 continue
-            rotated = replace(node, stack=(item, *node.stack[:index], *node.stack[index + 1:]))
+            rotated = replace(node, stack=(item, *node.stack[:index], *node.stack[index + 1 :]))
             live = _live(grounder, rotated)
             if not live:
                 return None
@@ -168,8 +168,11 @@ def divide(
     groups: dict[int, list[Item]] = {}
     for i, item in enumerate(items):
         groups.setdefault(find(i), []).append(item)
-    return Parts(node, {item.label: address[item.label] for item in items},
-                 tuple(tuple(group) for group in groups.values()))
+    return Parts(
+        node,
+        {item.label: address[item.label] for item in items},
+        tuple(tuple(group) for group in groups.values()),
+    )
 
 
 def _fed(node: Partial, claimed: Container[Hashable]) -> bool:

@@ -50,13 +50,17 @@ def _information(node: Partial, given: Container[int] = ()) -> DeadEnd | None:
         src = located[ch.source]
         if ch.data not in src.outputs:
             return DeadEnd(
-                call_text(src.call), f"does not produce {atom_text(ch.data)}", None,
+                call_text(src.call),
+                f"does not produce {atom_text(ch.data)}",
+                None,
                 Condition.INFORMATION,
             )
         dst = located[ch.target]
         if ch.data not in dst.inputs:
             return DeadEnd(
-                call_text(dst.call), f"does not consume {atom_text(ch.data)}", None,
+                call_text(dst.call),
+                f"does not consume {atom_text(ch.data)}",
+                None,
                 Condition.INFORMATION,
             )
         slow = src.schema.freq, dst.schema.freq
@@ -74,7 +78,9 @@ def _information(node: Partial, given: Container[int] = ()) -> DeadEnd | None:
         for need in p.inputs:
             if (p.label, need) not in fed:
                 return DeadEnd(
-                    call_text(p.call), f"input {atom_text(need)} is fed by no channel", None,
+                    call_text(p.call),
+                    f"input {atom_text(need)} is fed by no channel",
+                    None,
                     Condition.INFORMATION,
                 )
     return None
@@ -103,8 +109,9 @@ def _cycle(node: Partial) -> DeadEnd | None:
     stuck = {n for n, d in indegree.items() if d > 0}
     on_cycle = _on_cycle(succ, stuck)
     names = ", ".join(f"{_label(n)} {call_text(node.located[n].call)}" for n in on_cycle)
-    return DeadEnd("configuration", f"its channels form a cycle through {names}", None,
-                   Condition.CYCLE)
+    return DeadEnd(
+        "configuration", f"its channels form a cycle through {names}", None, Condition.CYCLE
+    )
 
 
 def _on_cycle(succ: dict[int, set[int]], stuck: set[int]) -> list[int]:
@@ -121,7 +128,7 @@ def _on_cycle(succ: dict[int, set[int]], stuck: set[int]) -> list[int]:
     while current not in walk:
         walk.append(current)
         current = pred[current]
-    cycle = walk[walk.index(current):]
+    cycle = walk[walk.index(current) :]
     cycle.reverse()  # walked backwards: now in channel order
     start = cycle.index(min(cycle))
     return cycle[start:] + cycle[:start]

@@ -139,9 +139,7 @@ class Grounder:
     """The memo of ground instances for one task."""
 
     task: Task
-    _method_bindings: dict[tuple[Ground, int], tuple[Bindings, ...]] = field(
-        default_factory=dict
-    )
+    _method_bindings: dict[tuple[Ground, int], tuple[Bindings, ...]] = field(default_factory=dict)
     _functionality_bindings: dict[Ground, tuple[Bindings, ...]] = field(default_factory=dict)
     _expansions: dict[tuple[Ground, int], tuple[Expansion | DeadEnd, ...]] = field(
         default_factory=dict

@@ -188,9 +188,7 @@ class Grower:
         (:meth:`cfgplan.planner.levels.Levels.cost`)."""
         return self.levels.cost(node.cost)
 
-    def refined(
-        self, node: Partial, priority: float, beaten: float | None = None
-    ) -> float | None:
+    def refined(self, node: Partial, priority: float, beaten: float | None = None) -> float | None:
         """The node's priority under the larger of both bounds; None: pruned.
         ``beaten``: the priority a raised node must pass for the raise to pay
         (best-first: the next node's; else any raise pays)."""

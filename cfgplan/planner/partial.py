@@ -219,14 +219,13 @@ def place_functionality(
     one binding of its preconditions (``instance``); ``choice`` is that
     binding's index when there are several."""
     inputs, outputs = instance.io
-    new = Placed(item.label, item.call, schema, item.call[1], inputs, outputs,
-                 instance.number, instance.name)
+    new = Placed(
+        item.label, item.call, schema, item.call[1], inputs, outputs, instance.number, instance.name
+    )
     effects = instance.effects
     located = dict(node.located)
     located[item.label] = new
-    touching = [
-        i for i, ch in enumerate(node.channels) if item.label in (ch.source, ch.target)
-    ]
+    touching = [i for i, ch in enumerate(node.channels) if item.label in (ch.source, ch.target)]
     settled = _settle(node.channels, located, touching, node.resolved, task)
     if isinstance(settled, DeadEnd):
         return settled
@@ -298,8 +297,9 @@ def _settle(
         )
         kept = out[j]
         if ch.bandwidth is not None and (kept.bandwidth is None or ch.bandwidth > kept.bandwidth):
-            out[j] = Channel(kept.kind, kept.robots, kept.source, kept.target, kept.data,
-                             ch.bandwidth)
+            out[j] = Channel(
+                kept.kind, kept.robots, kept.source, kept.target, kept.data, ch.bandwidth
+            )
         dropped.append(i)
     if dropped:
         out = [c for i, c in enumerate(out) if i not in dropped]

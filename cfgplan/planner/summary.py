@@ -90,9 +90,7 @@ class Summaries:
     memo's (:meth:`cfgplan.planner.ground.Grounder.method_bindings`), so that
     each ground instance is matched once; None: a memo of its own."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
-    _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(
-        default_factory=dict
-    )
+    _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self._bind = self.binder or Grounder(self.task).method_bindings
