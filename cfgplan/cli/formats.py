@@ -26,13 +26,14 @@ __all__ = ["jsonl", "lisp", "more_note", "stats", "streamed", "summary", "table"
 NO_MEDIA = "the state declares no media: communication admissibility not checked"
 
 
-def more_note(listed: int) -> str:
+def more_note(listed: int, what: str = "configuration") -> str:
     """What the table says when ``-k`` cut the list: ``-k N`` plans one
-    configuration more than it lists, so that one more is known to exist,
-    never how many (counting them would mean searching to the end)."""
+    configuration (or sequence, ``what``) more than it lists, so that one more
+    is known to exist, never how many (counting them would mean searching to
+    the end)."""
     wider = listed + 10
     return (
-        "note: at least one more configuration exists: "
+        f"note: at least one more {what} exists: "
         f"-k {wider} lists up to {wider}, --all lists them all\n"
     )
 

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from cfgplan.cli.app import EXIT_NONE, say
+from cfgplan.cli.formats import more_note
 from cfgplan.cli.options import no_rank
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_dict, to_text
@@ -46,7 +47,13 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     from cfgplan.planner.sequence import SequenceSearch
 
     search = SequenceSearch(problem.goal_calls, problem.task, options.switch, options.time_limit)
-    found = list(islice(search, options.limit) if options.limit is not None else search)
+    # -k N plans one sequence more than it lists, to say whether more exist (as for one goal)
+    ahead = options.limit is not None and options.rank is None
+    wanted = None if options.limit is None else options.limit + ahead
+    found = list(islice(search, wanted) if wanted is not None else search)
+    more = ahead and len(found) > (options.limit or 0)
+    if more:
+        found = found[: options.limit]
     if search.stopped is not None:
         say(f"cfgplan: search stopped ({search.stopped.value}); reporting {len(found)} found")
     if not found:
@@ -58,7 +65,7 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
             no_rank(_goals(problem), len(found), options.rank, "sequence")
         found = found[options.rank - 1 :]
     if format_ == "json":
-        document = _document(problem, found, search, first)
+        document = _document(problem, found, search, first, more)
         return json.dumps(document, indent=2, ensure_ascii=False) + "\n"
     if format_ == "jsonl":
         return "".join(
@@ -67,7 +74,9 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
         )
     if format_ == "lisp":
         return _lisp(problem, found, first)
-    return _table(problem, found, options.details, first)
+    return _table(problem, found, options.details, first) + (
+        more_note(len(found), "sequence") if more else ""
+    )
 
 
 def _goals(problem: Problem) -> str:
@@ -123,13 +132,14 @@ def _sequence(planned: PlannedSequence, rank: int, problem: Problem) -> dict[str
 
 
 def _document(
-    problem: Problem, found: list[PlannedSequence], search: SequenceSearch, first: int
+    problem: Problem, found: list[PlannedSequence], search: SequenceSearch, first: int, more: bool
 ) -> dict[str, Any]:
     return {
         "goals": [call_text(g) for g in problem.goal_calls],
         "sequences": [_sequence(s, rank, problem) for rank, s in enumerate(found, first)],
         "communication_checked": bool(problem.state.media),
         "stats": {
+            "more": more,
             "exhausted": search.complete,
             "stopped": search.stopped.value if search.stopped else None,
         },

@@ -238,6 +238,7 @@ class SequenceEntry(Closed):
 class SequenceStats(Closed):
     """How the sequence search went."""
 
+    more: bool = Field(description="True when `-k` cut the list and more sequences exist.")
     exhausted: bool
     stopped: StopReason | None
 

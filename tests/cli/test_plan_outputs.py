@@ -9,6 +9,7 @@ the runner captures.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -101,3 +102,21 @@ def test_the_table_claims_no_count_it_does_not_know() -> None:
     assert "more configuration" not in whole
     _, ranked = _plan([*CROSS, "--rank", "1"])  # one shown by choice: no note
     assert "more configuration" not in ranked
+
+
+def test_a_cut_list_of_sequences_says_more_exist() -> None:
+    """The 6.2.2 sequence has 4 sequences: ``-k 2`` lists 2 and, like one
+    goal, says that at least one more exists (table note, JSON ``stats.more``);
+    ``-k 4`` lists them all and says nothing; ``--rank`` shows one by choice.
+    Before, a cut list of sequences said nothing of the rest."""
+    _, cut = _plan([*SEQUENCE, "-k", "2"])
+    assert "note: at least one more sequence exists: -k 12 lists up to 12" in cut
+    _, whole = _plan([*SEQUENCE, "-k", "4"])
+    assert "more sequence" not in whole
+    _, ranked = _plan([*SEQUENCE, "--rank", "2"])
+    assert "more sequence" not in ranked
+    _, cut_json = _plan([*SEQUENCE, "-k", "2", "--format", "json"])
+    document = json.loads(cut_json)
+    assert document["stats"]["more"] is True and len(document["sequences"]) == 2
+    _, whole_json = _plan([*SEQUENCE, "-k", "4", "--format", "json"])
+    assert json.loads(whole_json)["stats"]["more"] is False
