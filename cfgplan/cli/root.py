@@ -15,7 +15,7 @@ from collections.abc import Callable
 from typing import Annotated, Any, TypeVar
 
 import typer
-from typer.core import TyperCommand
+from typer.core import TyperCommand, TyperGroup
 
 from cfgplan.cli.app import version_line
 
@@ -33,6 +33,16 @@ class Command(TyperCommand):
         return [p[1:-1] if p.startswith("{") and p.endswith("}") else p for p in pieces]
 
 
+class Group(TyperGroup):
+    """The root command: its help lists the commands by name, not in the order
+    their modules happened to be imported (a test, or a future command module
+    importing another, would reorder typer's list), so the help is the same in
+    every process and matches the pre-rendered :mod:`cfgplan.cli.help_text`."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        return sorted(self.commands)
+
+
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 
@@ -46,6 +56,7 @@ class _Typer(typer.Typer):
 
 app = _Typer(
     name="cfgplan",
+    cls=Group,
     help="Plan-based configuration of robot societies (R. Lundh, 2006).",
     no_args_is_help=True,
     add_completion=True,

@@ -44,6 +44,23 @@ def test_the_help_text_is_typers_rendering() -> None:
     assert render_help(HELP_WIDTH) == help_text.HELP
 
 
+def test_the_help_lists_the_commands_whatever_was_imported_first() -> None:
+    """The commands register on the app as their modules are imported; the
+    help lists them by name all the same (in CI, a test that imported
+    ``cfgplan.cli.render`` first put ``render`` at the top of typer's help and
+    the pre-rendered text no longer matched)."""
+    code = (
+        "import cfgplan.cli.run, cfgplan.cli.render\n"
+        "from cfgplan.cli import help_text\n"
+        "from cfgplan.cli.root import render_help\n"
+        "assert render_help() == help_text.HELP, render_help()\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=60
+    )
+    assert out.returncode == 0, out.stderr
+
+
 @pytest.mark.parametrize(
     ("args", "status", "stream"), [(["--help"], 0, 1), (["-h"], 0, 1), ([], 2, 2)]
 )
