@@ -210,7 +210,9 @@ class Presence(Event):
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Lifecycle(Event):
     """``start`` (``info``: transport, society, partners, rate), ``stop``
-    (``info``: why), or ``error`` (``info``: a message that could not be read)."""
+    (``info``: why), or ``error`` (``info``: a message that could not be read;
+    on the coordinator also a helper's failed call,
+    :class:`~cfgplan.runtime.protocol.CallError`)."""
 
     what: Literal["start", "stop", "error"]
     info: tuple[tuple[str, object], ...] = ()

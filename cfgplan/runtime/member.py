@@ -2,38 +2,42 @@
 
 The robot that owns the goal (the coordinator, which plans) switches the
 society in two phases, so that every robot switches to the same
-configuration and nobody runs half of two:
+configuration and nobody runs half of two. The messages are those of
+:mod:`cfgplan.runtime.protocol` (read and written only there):
 
-1. **prepare** ``{"op": "prepare", "id": N, "from": C, "part": ...}`` to each
-   robot of the new configuration (:func:`~cfgplan.runtime.part.part_to_json`;
-   an empty part for a robot that leaves it). The robot checks that it can run
-   its part (every implementation is there) and answers ``ready`` or
-   ``refused`` with the reason; it keeps running the old configuration.
-2. **commit** ``{"op": "commit", "id": N}`` once every robot is ready: each
-   installs its part between two of its cycles
+0. **ready**: once its subscriber for switch messages exists, a robot says
+   so (:class:`~cfgplan.runtime.protocol.Ready`), and again whenever the
+   coordinator greets it (:class:`~cfgplan.runtime.protocol.Hello`): the
+   coordinator sends it nothing of a switch before.
+1. **prepare** (:class:`~cfgplan.runtime.protocol.Prepare`, the robot's part
+   of the new configuration; an empty part for a robot that leaves it). The
+   robot checks that it can run its part (every implementation is there) and
+   answers ``ready`` or ``refused`` with the reason; it keeps running the old
+   configuration.
+2. **commit** (:class:`~cfgplan.runtime.protocol.Commit`) once every robot is
+   ready: each installs its part between two of its cycles
    (:func:`~cfgplan.runtime.install.install`, keeping what both
    configurations share) and answers ``installed``. A robot that refused or
    did not answer in time makes the coordinator send **abort** instead, and
    plan again without it.
 
-Answers go to the coordinator's key as ``{"type": "ack", "robot": R, "id":
-N, "phase": "ready" | "refused" | "installed", "reason": ...}``; a robot's
-detections go there too as ``{"type": "report", "robot": R, "detection":
-...}``, each stamped with the id of the configuration it ran (its
-``config``: a report is placed by that, not by the robots' clocks). A
-commit may carry the part itself (``"part"``): the coordinator so
-re-synchronises a robot that appears (started late, or back after a crash).
-``{"op": "finish", "goal": G}`` ends the run when the action's task is
-accomplished: the robot records a ``finish`` event (the console says the task
-is accomplished), answers ``finished``, and ends its run; the coordinator
-leaves once every robot has answered (or after a time limit), so that no robot
-takes the others' leaving for a loss (:meth:`~cfgplan.runtime.Robot.release`).
+Answers are :class:`~cfgplan.runtime.protocol.Ack` s on the coordinator's key;
+a robot's detections go there too
+(:class:`~cfgplan.runtime.protocol.Report`), each stamped with the id of the
+configuration it ran (its ``config``: a report is placed by that, not by the
+robots' clocks). A commit may carry the part itself: the coordinator so
+re-synchronises a robot that says it is ready (started late, or back after a
+crash). **finish** ends the run when the action's task is accomplished: the
+robot records a ``finish`` event (the console says the task is accomplished),
+answers ``finished``, and ends its run; the coordinator leaves once every
+robot has answered (or after a time limit), so that no robot takes the
+others' leaving for a loss (:meth:`~cfgplan.runtime.Robot.release`).
 Messages are idempotent: a repeated prepare or commit is answered again,
 an old id is ignored. Every message carries the coordinator's ``epoch``,
 drawn when it starts: a coordinator started again numbers its
 configurations afresh, and a robot that hears a new epoch on a prepare or
 commit follows it from its first id. Messages come from other processes:
-what cannot be read is recorded as an error and ignored.
+what cannot be read is recorded as an error and dropped.
 
 Channels the two configurations share carry the same data either side of a
 commit (the same instances at both ends, :mod:`~cfgplan.reconfigure.switch`),
@@ -44,19 +48,35 @@ switched.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import replace
 from typing import Any, Protocol
 
+from cfgplan.notation import call_text
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.events import Adaptation, Lifecycle
+from cfgplan.runtime.events import Adaptation, Call, Event, Lifecycle
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.install import install, runnable
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.part import Part, part_from_json
-from cfgplan.runtime.wire import whole
+from cfgplan.runtime.protocol import (
+    Abort,
+    Ack,
+    CallError,
+    Commit,
+    Finish,
+    Hello,
+    Phase,
+    Prepare,
+    ProtocolError,
+    Ready,
+    Report,
+    ToCoordinator,
+    ToRobot,
+    encode,
+    read_to_robot,
+)
 
 __all__ = ["Member", "Membership", "Network", "send"]
 
@@ -71,12 +91,17 @@ class Network(Protocol):
     def publish(self, key: str, payload: bytes) -> None: ...
 
 
-def send(network: Network, key: str, message: dict[str, object]) -> None:
-    network.publish(key, json.dumps(message, separators=(",", ":")).encode())
+def send(network: Network, key: str, message: ToRobot | ToCoordinator) -> None:
+    """Publish one message of :mod:`cfgplan.runtime.protocol` on ``key``."""
+    network.publish(key, encode(message))
 
 
 class Member:
-    """Answers the coordinator for ``robot`` and forwards its detections."""
+    """Answers the coordinator for ``robot`` and forwards its detections.
+
+    ``forward``: the robot follows a coordinator over the network (it says it
+    is ready and sends its detections); False on the coordinator itself, which
+    reads its monitor and needs no part sent."""
 
     def __init__(
         self,
@@ -89,57 +114,73 @@ class Member:
         self.robot = robot
         self.network = network
         self.monitor = monitor
-        self.forward = forward  # False on the coordinator: it reads its monitor itself
+        self.forward = forward
         self.current = 0  # the configuration id it runs
         self.epoch = ""  # the coordinator's run it follows (``epoch`` of its messages)
         self.pending: dict[int, Part] = {}
         self.finished: str | None = None
+        self._erring: set[str] = set()  # labels whose last call failed (already told)
+        self._errors: list[CallError] = []  # to send between cycles
         network.subscribe(configure_key(network.society, robot.name), self.receive)
         declare = getattr(network, "declare", None)
         if declare is not None:  # the first answer then goes out at once
             declare(coordinator_key(network.society))
+        if forward:  # the subscriber exists: the coordinator may send a part now
+            self._send(Ready(robot.name))
+            robot.subscribe(self._event)
+
+    def _event(self, event: Event) -> None:
+        """Note the first failed call of each run of them (:meth:`report` sends it)."""
+        if not isinstance(event, Call):
+            return
+        if event.status == "ran":
+            self._erring.discard(event.label)
+        # a resource's failure (``failure``) goes as a detection, with its message
+        failed = event.status in ("error", "timeout") and not event.failure
+        if failed and event.label not in self._erring:
+            self._erring.add(event.label)
+            what = f"{event.label}: {call_text(event.instance)}"
+            self._errors.append(CallError(self.robot.name, what, event.error))
 
     def receive(self, payload: bytes) -> None:
         """One message from the coordinator (on the robot's thread, between cycles)."""
         try:
-            message = json.loads(payload)
-            op, number = message["op"], whole(message["id"], "a configuration id")
-            epoch = message.get("epoch", "")
-            if not isinstance(op, str) or not isinstance(epoch, str):
-                raise ValueError("op and epoch are strings")
-        except (ValueError, KeyError, TypeError, AttributeError) as exc:
-            self._error(f"a switch message that cannot be read: {exc}")
+            message = read_to_robot(payload)
+        except ProtocolError as exc:
+            self.error(f"a switch message that cannot be read: {exc}")
             return
-        if epoch != self.epoch and op in ("prepare", "commit"):
+        if isinstance(message, Hello):
+            self._send(Ready(self.robot.name))
+            return
+        epoch = message.epoch
+        if epoch != self.epoch and isinstance(message, Prepare | Commit):
             # A coordinator started again (or another one): it numbers its
             # configurations afresh, and this robot keeps running its part
             # until that coordinator installs one.
             self.epoch, self.current, self.pending = epoch, 0, {}
-        elif epoch != self.epoch and op == "abort":
+        elif epoch != self.epoch and isinstance(message, Abort):
             return  # of a switch of a coordinator no longer followed
-        if op == "prepare":
-            self._prepare(number, message.get("part"))
-        elif op == "commit":
-            self._commit(number, message.get("part"))
-        elif op == "abort":
-            self.pending.pop(number, None)
-        elif op == "finish":
-            self._finish(number, message, epoch)
+        if isinstance(message, Prepare):
+            self._prepare(message.id, message.part)
+        elif isinstance(message, Commit):
+            self._commit(message.id, message.part)
+        elif isinstance(message, Abort):
+            self.pending.pop(message.id, None)
+        else:
+            self._finish(message)
 
-    def _finish(self, number: int, message: dict[str, object], epoch: str) -> None:
+    def _finish(self, message: Finish) -> None:
         """The coordinator says the task is accomplished: say so, answer, end the run."""
         if self.finished is None:
             self.finished = "achieved"
             self.robot.release()
-            info: list[tuple[str, object]] = [("id", number)]
-            for name in ("from", "goal"):
-                value = message.get(name)
-                if isinstance(value, str) and value:
-                    info.append((name, value))
+            info: list[tuple[str, object]] = [("id", message.id), ("from", message.sender)]
+            if message.goal:
+                info.append(("goal", message.goal))
             self.robot.record(
                 Adaptation(robot=self.robot.name, t=time.time(), what="finish", info=tuple(info))
             )
-        self._ack(number, "finished", epoch=epoch)  # whoever said it
+        self._ack(message.id, Phase.FINISHED, epoch=message.epoch)  # whoever said it
 
     def refusal(self, part: Part) -> str | None:
         """Why this robot cannot run ``part`` (:func:`~cfgplan.runtime.install.runnable`),
@@ -157,34 +198,35 @@ class Member:
 
     def _prepare(self, number: int, data: object) -> None:
         if number in self.pending:  # a repeated prepare
-            self._ack(number, "ready")
+            self._ack(number, Phase.READY)
             return
         if number <= self.current:
             return  # a switch older than the configuration it runs: ignored
         try:
             part = self._part(data)
         except (ValueError, RunError) as exc:
-            self._ack(number, "refused", str(exc))
+            self._ack(number, Phase.REFUSED, str(exc))
             return
         self.pending[number] = part
-        self._ack(number, "ready")
+        self._ack(number, Phase.READY)
 
     def _commit(self, number: int, data: object) -> None:
         if number == self.current and data is None:
-            self._ack(number, "installed")  # a repeated commit
+            self._ack(number, Phase.INSTALLED)  # a repeated commit
             return
         if number < self.current:
             return
         try:
             part = self.pending.pop(number) if data is None else self._part(data)
         except KeyError:
-            self._ack(number, "refused", f"configuration {number} was never prepared here")
+            reason = f"configuration {number} was never prepared here"
+            self._ack(number, Phase.REFUSED, reason)
             return
         except (ValueError, RunError) as exc:
-            self._ack(number, "refused", str(exc))
+            self._ack(number, Phase.REFUSED, str(exc))
             return
         self.install(number, part)
-        self._ack(number, "installed")
+        self._ack(number, Phase.INSTALLED)
 
     def install(self, number: int, part: Part) -> None:
         """Run ``part`` as configuration ``number`` from the next cycle on."""
@@ -203,32 +245,27 @@ class Member:
             )
         )
 
-    def _ack(self, number: int, phase: str, reason: str = "", epoch: str | None = None) -> None:
-        message: dict[str, object] = {
-            "type": "ack",
-            "robot": self.robot.name,
-            "id": number,
-            "phase": phase,
-            "epoch": self.epoch if epoch is None else epoch,
-        }
-        if reason:
-            message["reason"] = reason
+    def _send(self, message: ToCoordinator) -> None:
         send(self.network, coordinator_key(self.network.society), message)
 
+    def _ack(self, number: int, phase: Phase, reason: str = "", epoch: str | None = None) -> None:
+        epoch = self.epoch if epoch is None else epoch
+        self._send(Ack(self.robot.name, number, phase, epoch, reason))
+
     def report(self) -> None:
-        """Send the detections of this robot's monitor to the coordinator."""
+        """Send the coordinator the calls that failed and the detections of
+        this robot's monitor."""
+        errors, self._errors = self._errors, []
+        for error in errors:
+            self._send(error)
         if self.monitor is None or not self.forward:
             return
         for detection in self.monitor.drain():
             made_under = replace(detection, config=self.current)  # the cycle just run's
-            message = {
-                "type": "report",
-                "robot": self.robot.name,
-                "detection": json.loads(made_under.message()),
-            }
-            send(self.network, coordinator_key(self.network.society), message)
+            self._send(Report(self.robot.name, made_under))
 
-    def _error(self, message: str) -> None:
+    def error(self, message: str) -> None:
+        """Record a message that was dropped (an ``error`` event: the console says it)."""
         self.robot.record(
             Lifecycle(
                 robot=self.robot.name, t=time.time(), what="error", info=(("message", message),)

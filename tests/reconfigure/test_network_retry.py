@@ -26,6 +26,7 @@ from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Adaptation, Event
 from cfgplan.runtime.monitor import Detection, Monitor
 from cfgplan.runtime.part import Part
+from cfgplan.runtime.protocol import Ready, encode
 from tests.reconfigure.test_coordinate import STEP2, Clock
 
 
@@ -52,6 +53,10 @@ class Me:
 
     robot: _Robot = field(default_factory=_Robot)
     installed: list[int] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+
+    def error(self, message: str) -> None:
+        self.errors.append(message)
 
     def install(self, number: int, part: Part) -> None:
         self.installed.append(number)
@@ -75,6 +80,8 @@ def _society() -> tuple[NetworkAdaptive, Network, Clock, list[Event]]:
     deployer = NetworkDeployer(network, Me(), clock=clock)  # type: ignore[arg-type]
     coordinator = Coordinator(reconfigurator, events.append, "Emil", deployer, clock)
     adaptive = NetworkAdaptive(coordinator, deployer, Monitor(), Idle())  # type: ignore[arg-type]
+    for robot in sorted(network.alive - {"Emil"}):  # each says its subscriber exists
+        adaptive.receive(encode(Ready(robot)))
     return adaptive, network, clock, events
 
 
@@ -128,6 +135,7 @@ def test_a_silent_robot_still_alive_is_tried_again_and_rejoins() -> None:
 def test_each_silence_in_a_row_doubles_the_wait_and_an_answer_resets_it() -> None:
     network, clock = Network(), Clock()
     deployer = NetworkDeployer(network, Me(), clock=clock)  # type: ignore[arg-type]
+    deployer.said_ready("Pippi")
     aborted: list[list[str]] = []
     waits = []
     for number in range(1, 8):

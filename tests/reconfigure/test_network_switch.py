@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from types import SimpleNamespace
 
 from cfgplan.planner import plan
@@ -19,6 +20,7 @@ from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Event
 from cfgplan.runtime.monitor import Detection, Monitor
 from cfgplan.runtime.part import part_to_json
+from cfgplan.runtime.protocol import CallError, Phase, Ready, Report, encode
 from tests.backends.support import DOMAINS
 from tests.reconfigure.test_coordinate import Clock
 from tests.reconfigure.test_network_retry import Idle, Me, Network, _society, _wait, _what
@@ -42,6 +44,9 @@ def _wall(alive: set[str]) -> tuple[NetworkAdaptive, Network, Clock, list[Event]
     )
     coordinator = Coordinator(reconfigurator, events.append, "Pippi", deployer, clock)
     adaptive = NetworkAdaptive(coordinator, deployer, Monitor(), Idle())  # type: ignore[arg-type]
+    for robot in sorted(alive - {"Pippi"}):  # each says its subscriber exists
+        adaptive.receive(encode(Ready(robot)))
+    network.sent.clear()  # their parts, as they said so
     return adaptive, network, clock, events
 
 
@@ -58,6 +63,9 @@ def test_malformed_answers_and_reports_are_ignored_even_during_a_switch() -> Non
     bad = {"kind": "achieved", "robot": "Pippi", "t": 1.0, "label": "F1", "config": "x"}
     adaptive.receive(json.dumps({"type": "report", "robot": "Pippi", "detection": bad}).encode())
     assert adaptive.coordinator._backlog == []
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert len(errors) == 2 and "not a configuration id" in errors[0]
+    assert "config" in errors[1] and "cannot be read" in errors[1]
     for phase in ("ready", "installed"):
         ack = {"type": "ack", "robot": "Pippi", "id": number, "phase": phase}
         adaptive.receive(json.dumps({**ack, "epoch": "another coordinator's"}).encode())
@@ -66,6 +74,7 @@ def test_malformed_answers_and_reports_are_ignored_even_during_a_switch() -> Non
     running = adaptive.coordinator.reconfigurator.running
     assert adaptive.deployer.switch is None and running is not None and running.cost == 47
     assert ("switch", "") in _what(events)
+    assert len(errors) == 2  # another coordinator's answers are of the protocol: no error
 
 
 def test_a_refusal_after_the_commit_rolls_nothing_back() -> None:
@@ -92,22 +101,45 @@ def test_a_refusal_after_the_commit_rolls_nothing_back() -> None:
     assert "Pippi" in adaptive.coordinator.reconfigurator.situation.lost
 
 
-def test_a_robot_not_up_during_a_switch_is_sent_its_new_part_when_it_appears() -> None:
-    """Pippi's process is not up when Emil's compass fails (47 needs her):
-    when she appears she gets her part of 47 under its id, not her part of
-    44 (she ran half of another configuration)."""
-    adaptive, network, _clock, _events = _society()
+def test_a_robot_back_is_sent_nothing_of_a_switch_before_it_is_ready() -> None:
+    """Pippi's process dies and comes back. Her token appears before her
+    subscriber is known: a part or a prepare sent on the token alone was lost
+    (issue 33: a spurious "silent" failure and seconds without the goal after
+    a restart). She is greeted, less and less often, until she says she is
+    ready; then she is sent the running configuration's part and taken back:
+    the society switches to 47 with her."""
+    adaptive, network, clock, events = _society()
     reconfigurator = adaptive.coordinator.reconfigurator
     adaptive.deployer.parts = reconfigurator.parts()  # as coordinate() starts it: 44
     network.alive = {"Emil"}
-    adaptive.take(COMPASS)
-    running = reconfigurator.running
-    assert running is not None and running.cost == 47 and adaptive.deployer.switch is None
+    adaptive.take(COMPASS)  # 47, which needs her: installed on Emil, for Pippi once back
+    adaptive.take(Detection("lost", "Emil", time.time(), other="Pippi"))
+    assert reconfigurator.running is None  # nothing admissible without her
     network.alive.add("Pippi")
+    network.sent.clear()
     adaptive.take(Detection("seen", "Emil", time.time(), other="Pippi"))
-    sent = network.to("Pippi", "commit")[-1]
-    assert sent["id"] == adaptive.deployer.current > 0
-    assert sent["part"] == part_to_json(reconfigurator.parts()["Pippi"])
+    assert [m["op"] for _, m in network.sent] == ["hello"]  # nothing of a switch yet
+    assert "Pippi" in reconfigurator.situation.lost  # not taken back before she is ready
+    for wait in (0.25, 0.5, 1.0, 2.0, 2.0):  # greeted again, less and less often
+        network.sent.clear()
+        _wait(adaptive, clock, wait - 0.01)
+        assert network.sent == []
+        _wait(adaptive, clock, 0.01)
+        assert [m["op"] for _, m in network.sent] == ["hello"]
+    network.sent.clear()
+    adaptive.receive(encode(Ready("Pippi")))
+    resync, prepare = (m for k, m in network.sent if k.endswith("/Pippi/configure"))
+    assert (resync["op"], resync["id"]) == ("commit", adaptive.deployer.current)
+    assert resync["part"] == part_to_json(adaptive.deployer.parts["Pippi"])
+    assert prepare["op"] == "prepare" and prepare["id"] == reconfigurator.id
+    assert ("recovery", "seen") in _what(events)
+    adaptive.deployer.acked("Pippi", reconfigurator.id, Phase.READY, "")
+    adaptive.deployer.acked("Pippi", reconfigurator.id, Phase.INSTALLED, "")
+    running = reconfigurator.running
+    assert running is not None and running.cost == 47 and "Pippi" in running.agents
+    network.sent.clear()
+    _wait(adaptive, clock, 5.0)
+    assert not network.to("Pippi", "hello")  # ready: greeted no more
 
 
 def test_two_robots_silent_in_one_switch_are_lost_in_one_decision() -> None:
@@ -171,3 +203,28 @@ def test_robots_silent_in_one_switch_start_one_switch_not_one_each() -> None:
     first = Decision("switch", 1, None, "C0", None)  # type: ignore[arg-type]
     coordinator._apply(first, Detection("failure", "Vacu", 0.0))
     assert deployer.in_flight == [2] and reconfigurator.situation.lost == {"Rasmus", "Robby"}
+
+
+def test_a_helpers_failed_call_is_said_on_the_coordinators_console() -> None:
+    """Issue 33: the coordinator said only "(stale)" when a helper's
+    implementation raised; now its error event (printed on its console) has
+    the helper's own message."""
+    adaptive, _network, _clock, _events = _society()
+    said = "the implementation raised ZeroDivisionError: division by zero (impl.py:12 in f)"
+    adaptive.receive(encode(CallError("Pippi", "F7: transform-info(Pippi, Emil, Door1)", said)))
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == [f"Pippi F7: transform-info(Pippi, Emil, Door1): {said}"]
+
+
+def test_a_helpers_view_of_a_robot_lost_leaves_it_ready() -> None:
+    """Only the coordinator's own liveliness view makes a robot not ready:
+    Rasmus reporting Emil lost then seen (his link to Emil dropped a while)
+    takes Emil back at once, with his part, without waiting for a new ready."""
+    adaptive, network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    lost = Detection("lost", "Rasmus", time.time(), other="Emil")
+    adaptive.receive(encode(Report("Rasmus", lost)))
+    assert "Emil" in adaptive.deployer.ready
+    network.sent.clear()
+    adaptive.receive(encode(Report("Rasmus", replace(lost, kind="seen"))))
+    assert "Emil" in adaptive._present and not adaptive._held  # taken back at once
+    assert not network.to("Emil", "hello")

@@ -12,6 +12,7 @@ import pytest
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
 from cfgplan.runtime import Adaptation, Registry, society
+from cfgplan.runtime.events import Call
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.member import Member
 from cfgplan.runtime.monitor import Detection, Monitor
@@ -63,7 +64,10 @@ def _member() -> tuple[Robot, Member, Network, dict[str, Any]]:
     emil = next(r for r in running.robots if r.name == "Emil")
     network = Network()
     own = part_to_json(next(p for p in parts if p.robot == "Emil"))
-    return emil, Member(emil, network, Monitor()), network, own
+    member = Member(emil, network, Monitor())
+    assert network.sent == [("cfgplan/test/coordinator", {"type": "ready", "robot": "Emil"})]
+    network.sent.clear()
+    return emil, member, network, own
 
 
 def _message(op: str, number: object, part: object = None, epoch: str = "A") -> bytes:
@@ -176,3 +180,43 @@ def test_told_to_finish_a_robot_says_so_answers_and_takes_no_one_for_lost() -> N
     assert [dict(e.info) for e in noted] == [{"id": 2, "from": "Pippi", "goal": "g(Emil)"}]
     emil._presence("Pippi", False)  # the coordinator leaves, as the transport reports it
     assert not [e for e in emil.events if e.kind == "robot-lost"]
+
+
+def test_a_robot_says_it_is_ready_when_it_can_receive_and_when_greeted() -> None:
+    """Issue 33: the coordinator sends a robot nothing of a switch before it
+    says it is ready (its subscriber exists); a coordinator that sees its
+    token without that word (started after it) greets it, and it answers."""
+    emil, member, network, _ = _member()  # _member checks the first word: ready
+    member.receive(json.dumps({"op": "hello", "from": "Pippi", "epoch": "B"}).encode())
+    member.receive(json.dumps({"op": "hello", "from": "Pippi", "epoch": "C"}).encode())
+    assert [m for _, m in network.sent] == [{"type": "ready", "robot": "Emil"}] * 2
+    assert member.epoch == "" and member.current == 0  # a greeting changes nothing
+    coordinator = Member(emil, Network(), forward=False)  # the coordinator's own member
+    assert coordinator.network.sent == []  # type: ignore[attr-defined]
+
+
+def test_a_call_that_fails_is_told_to_the_coordinator_once_a_run_with_its_message() -> None:
+    """Issue 33: a helper's implementation raised and the coordinator's console
+    said only that its input went stale; now it gets the helper's own message
+    (its file and line), once for each run of failed calls, clipped."""
+    emil, member, network, _ = _member()
+    failing = Call(
+        robot="Emil",
+        t=1.0,
+        label="F7",
+        name="transform-info",
+        args=("Emil", "Pippi", "Door1"),
+        status="error",
+        error="the implementation raised ZeroDivisionError: division by zero (impl.py:12 in f)"
+        + "!" * 10_000,
+    )
+    for status in ("error", "error", "timeout", "ran", "error"):
+        emil.record(replace(failing, status=status))  # type: ignore[arg-type]
+        member.report()
+    emil.record(replace(failing, label="F8", failure="reported"))  # a resource: a detection
+    member.report()
+    told = [m for _, m in network.sent if m["type"] == "call-error"]
+    assert len(told) == 2 and told[0] == told[1]
+    assert told[0]["functionality"] == "F7: transform-info(Emil, Pippi, Door1)"
+    assert told[0]["error"].startswith("the implementation raised ZeroDivisionError")
+    assert len(told[0]["error"]) == 4000

@@ -1,0 +1,78 @@
+"""A helper killed and started again rejoins its society (5.5, issue 33).
+
+Cross-door step 2 (6.2.2) with each robot its own process: Emil owns the goal
+and coordinates, Pippi helps (both configurations need her). Pippi's process
+is killed with SIGKILL and started again, twice: each time the society serves
+the goal again with the new process, and no "silent" failure is recorded for
+her. Before, the coordinator sent the restarted robot its part and the
+prepare of the switch back as soon as her liveliness token appeared, before
+her subscriber was known: the prepare was lost, the switch aborted after
+2 s ("failure (silent)") and retried 1 s later, in most restarts. Hermetic:
+loopback, free ports, scouting off, bounded waits, every process stopped by
+its pid (:mod:`tests.runtime.netutil`).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tests.backends.support import EXAMPLE_IMPL
+from tests.reconfigure.test_network import LIMIT, _network, _robot
+from tests.runtime.netutil import Record, processes, read_trace, wait_for
+
+SERVED = 30.0  # seconds: a process started on a loaded machine, and its first cycles
+
+
+def _after(trace: Path, t: float, event: str, **fields: object) -> Callable[[], Record | None]:
+    """A ``found`` for :func:`wait_for`: the first ``event`` of ``trace`` after ``t``
+    with ``fields``."""
+
+    def look() -> Record | None:
+        for r in read_trace(trace):
+            later = r["event"] == event and float(r["t"]) > t  # type: ignore[arg-type]
+            if later and all(r.get(k) == v for k, v in fields.items()):
+                return r
+        return None
+
+    return look
+
+
+@pytest.mark.slow
+def test_a_helper_killed_and_started_again_serves_the_goal_again(tmp_path: Path) -> None:
+    emil_net, pippi_net = _network(tmp_path, "restart-test")
+    served = {"functionality": "cross-door", "status": "ran"}
+    with processes() as running:
+        _, emil_trace = _robot(
+            running, tmp_path, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120"
+        )
+        pippi, _ = _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, pippi_net)
+        wait_for("the goal served", _after(emil_trace, 0.0, "call", **served), LIMIT)
+        for attempt in (1, 2):
+            killed = time.time()
+            os.kill(pippi.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+            assert pippi.wait(timeout=30) == -signal.SIGKILL  # type: ignore[attr-defined]
+            wait_for("Pippi lost", _after(emil_trace, killed, "robot-lost"), LIMIT)
+            folder = tmp_path / f"again-{attempt}"
+            folder.mkdir()
+            pippi, pippi_trace = _robot(running, folder, "Pippi", EXAMPLE_IMPL, pippi_net)
+            started = wait_for("Pippi running again", _after(pippi_trace, 0.0, "start"), LIMIT)
+            t = float(started["t"])  # type: ignore[arg-type]
+            again = wait_for("the goal again", _after(emil_trace, t, "call", **served), SERVED)
+            # with the restarted Pippi: she installed the configuration Emil switched to
+            switch = wait_for("the switch back", _after(emil_trace, killed, "switch"), LIMIT)
+            installs = [r["id"] for r in read_trace(pippi_trace) if r["event"] == "install"]
+            assert switch["id"] in installs, (switch, installs)
+            # a switch's round trip after her loop starts, not a lost prepare's 2 s and more
+            assert float(again["t"]) - t < 2.0  # type: ignore[arg-type]
+        running.stop_all()
+    mine = read_trace(emil_trace)
+    silent = [r for r in mine if r["event"] in ("failure", "abort") and "silent" in str(r)]
+    assert silent == []
+    assert [r["resource"] for r in mine if r["event"] == "failure"] == ["Pippi", "Pippi"]
+    assert "Traceback" not in (tmp_path / "emil.log").read_text()
