@@ -57,10 +57,12 @@ from cfgplan.runtime.options import (
     INJECT,
     LEASE,
     LISTEN,
+    MAX_VALUE_BYTES,
     RATE,
     SOCIETY,
     STALE_PERIODS,
     TRACE,
+    TRACE_MAX_BYTES,
     VERBOSE,
     ZENOH_CONFIG,
     Option,
@@ -129,7 +131,9 @@ def run(
     duration: Annotated[float | None, option(DURATION)] = DURATION.default,
     stale_periods: Annotated[float, option(STALE_PERIODS)] = STALE_PERIODS.default,
     budget: Annotated[float, option(BUDGET)] = BUDGET.default,
+    max_value_bytes: Annotated[int, option(MAX_VALUE_BYTES)] = MAX_VALUE_BYTES.default,
     trace: Annotated[Path | None, option(TRACE)] = None,
+    trace_max_bytes: Annotated[int, option(TRACE_MAX_BYTES)] = TRACE_MAX_BYTES.default,
     force: Annotated[bool, option(FORCE)] = FORCE.default,
     verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
     inject: Annotated[list[str] | None, option(INJECT)] = None,
@@ -185,7 +189,9 @@ def run(
         duration=duration,
         stale_periods=stale_periods,
         budget=budget or None,
+        max_value_bytes=max_value_bytes,
         trace=None if trace is None else str(trace),
+        trace_max_bytes=trace_max_bytes,
         force=force,
         verbose=verbose,
     )
@@ -215,7 +221,7 @@ def run(
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
         if options.trace is not None:
-            written = open_trace(options.trace, options.force)
+            written = open_trace(options.trace, options.force, max_bytes=options.trace_max_bytes)
         adapting = hooks(
             running, registry, problem, config, parts, settings, written, whole=robot is None
         )

@@ -38,6 +38,7 @@ from cfgplan.runtime.events import Event, Lifecycle, Presence, Transfer
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.transport import InProcessTransport, Transport
+from cfgplan.runtime.values import MAX_VALUE_BYTES, oversized
 from cfgplan.runtime.wrapper import Input, Wrapper
 
 __all__ = [
@@ -97,6 +98,8 @@ class Robot:
         self.rate = 0.0
         self.budget: float | None = DEFAULT_BUDGET
         self.stale_periods = 3.0
+        self.max_value_bytes = MAX_VALUE_BYTES
+        """The size rule (:mod:`cfgplan.runtime.values`): bytes of JSON per value, 0: any."""
         self.faults: dict[tuple[str, ...], str] = {}
         """Scripted faults in effect, by functionality instance (5.5)."""
         self.before: list[Callable[[Robot], None]] = []
@@ -158,7 +161,13 @@ class Robot:
         )
         wrapper.injected = self.faults.get((name, self.name, *objects))
         if self.started_at is not None:  # joining a running robot: on its beat
-            wrapper.schedule(self.rate, self.started_at, self.budget, self.stale_periods)
+            wrapper.schedule(
+                self.rate,
+                self.started_at,
+                self.budget,
+                self.stale_periods,
+                max_value_bytes=self.max_value_bytes,
+            )
             if wrapper.period is not None and self.now > self.started_at:
                 beats = math.ceil((self.now - self.started_at) / wrapper.period - 1e-9)
                 wrapper.next_due = self.started_at + beats * wrapper.period
@@ -181,12 +190,16 @@ class Robot:
         rate: float,
         budget: float | None = DEFAULT_BUDGET,
         stale_periods: float = 3.0,
+        *,
+        max_value_bytes: int = MAX_VALUE_BYTES,
     ) -> None:
-        """Schedule every functionality from ``now`` and watch the partners."""
+        """Schedule every functionality from ``now`` and watch the partners;
+        a value may be ``max_value_bytes`` of JSON (0: any), sent or received."""
         self.now = self.started_at = self._idle_next = now
         self.rate, self.budget, self.stale_periods = rate, budget, stale_periods
+        self.max_value_bytes = max_value_bytes
         for w in self.wrappers:
-            w.schedule(rate, now, budget, stale_periods)
+            w.schedule(rate, now, budget, stale_periods, max_value_bytes=max_value_bytes)
         self._record(
             Lifecycle(
                 robot=self.name,
@@ -266,6 +279,26 @@ class Robot:
         return event
 
     def _receive(self, channel: Channel, payload: bytes) -> None:
+        if oversized(payload, self.max_value_bytes):  # dropped unread: never parsed
+            size, limit = len(payload), self.max_value_bytes
+            self._record(
+                Lifecycle(
+                    robot=self.name,
+                    t=time.time(),
+                    what="error",
+                    info=(
+                        (
+                            "message",
+                            f"channel {channel.key}: a message of {size:,} bytes, over the "
+                            f"limit of {limit:,} bytes (--max-value-bytes); dropped unread",
+                        ),
+                        ("channel", str(channel.key)),
+                        ("bytes", size),
+                        ("limit", limit),
+                    ),
+                )
+            )
+            return
         try:
             message = channel.receive(payload, self.clock())
         except RunError as exc:

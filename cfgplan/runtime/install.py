@@ -75,6 +75,7 @@ class Installed:
             ("kept_channels", len(self.kept_channels)),
             ("stopped_channels", list(self.stopped_channels)),
             ("started_channels", list(self.started_channels)),
+            *((("problems", list(self.problems)),) if self.problems else ()),
         )
 
 

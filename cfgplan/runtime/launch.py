@@ -39,7 +39,9 @@ from cfgplan.runtime.console import FAULTS_SHOWN, STATUS_EVERY, WAIT_NOTICE, Pri
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.society import Society
 from cfgplan.runtime.trace import summary, undelivered
+from cfgplan.runtime.tracefile import MAX_BYTES as TRACE_MAX_BYTES
 from cfgplan.runtime.tracefile import TraceFile, open_trace
+from cfgplan.runtime.values import MAX_VALUE_BYTES
 
 __all__ = [
     "EXIT_NONE",
@@ -89,7 +91,9 @@ class RunOptions:
     duration: float | None = None  # seconds; None: no limit
     stale_periods: float = 3.0
     budget: float | None = DEFAULT_BUDGET  # None: no time budget
+    max_value_bytes: int = MAX_VALUE_BYTES  # a value's JSON on a global channel; 0: any
     trace: str | None = None
+    trace_max_bytes: int = TRACE_MAX_BYTES  # then FILE.1; 0: no cap
     force: bool = False
     verbose: bool = False
     status_every: int = STATUS_EVERY
@@ -143,7 +147,7 @@ def execute(
     err = err or sys.stderr
     try:
         if trace is None and options.trace is not None:
-            trace = open_trace(options.trace, options.force)
+            trace = open_trace(options.trace, options.force, max_bytes=options.trace_max_bytes)
     except BaseException:
         society.close("not started")
         raise
@@ -183,6 +187,7 @@ def execute(
                 duration=options.duration,
                 budget=options.budget,
                 stale_periods=options.stale_periods,
+                max_value_bytes=options.max_value_bytes,
                 stop=stop,
                 after_cycle=after_cycle,
                 before=None if hooks is None else hooks.before,

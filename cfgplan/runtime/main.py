@@ -109,7 +109,9 @@ def options_of(args: argparse.Namespace) -> RunOptions:
         duration=args.duration,
         stale_periods=args.stale_periods,
         budget=args.budget or None,
+        max_value_bytes=args.max_value_bytes,
         trace=args.trace,
+        trace_max_bytes=args.trace_max_bytes,
         force=args.force,
         verbose=args.verbose,
     )
@@ -128,7 +130,7 @@ def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = Non
         shared = transport if isinstance(transport, InProcessTransport) else None
         running = Society([robot], shared)
         if args.trace is not None:
-            trace = open_trace(args.trace, args.force)
+            trace = open_trace(args.trace, args.force, max_bytes=args.trace_max_bytes)
         injections = [parse_injection(text) for text in args.inject]
         hooks = _follow(running, injections, trace)
         return execute(

@@ -21,6 +21,8 @@ from cfgplan.option_values import choice, number, whole
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.faults import SYNTAX, parse_injection
+from cfgplan.runtime.tracefile import MAX_BYTES as TRACE_LIMIT
+from cfgplan.runtime.values import MAX_VALUE_BYTES as VALUE_LIMIT
 from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, DEFAULT_SOCIETY, endpoint_problem
 
 __all__ = [
@@ -33,12 +35,14 @@ __all__ = [
     "INJECT",
     "LEASE",
     "LISTEN",
+    "MAX_VALUE_BYTES",
     "NETWORK_OPTIONS",
     "RATE",
     "RUN_OPTIONS",
     "SOCIETY",
     "STALE_PERIODS",
     "TRACE",
+    "TRACE_MAX_BYTES",
     "UNTIL",
     "VERBOSE",
     "ZENOH_CONFIG",
@@ -132,12 +136,30 @@ BUDGET = Option(
     "--budget",
     "S",
     DEFAULT_BUDGET,
-    f"Seconds one call may take before it is reported as blocked (default "
+    f"Seconds one call, or a stop hook, may take before it is reported as blocked (default "
     f"{DEFAULT_BUDGET:g}; 0: no budget, calls run on the robot's thread).",
     number(0),
 )
+MAX_VALUE_BYTES = Option(
+    "--max-value-bytes",
+    "N",
+    VALUE_LIMIT,
+    f"Bytes of JSON one value on a global channel may have (default {VALUE_LIMIT}: 1 MiB; "
+    "0: no limit): a bigger output is the call's error, a bigger message received is "
+    "dropped unread.",
+    whole(0),
+)
 TRACE: Option[str | None] = Option(
     "--trace", "FILE", None, "Write every event to FILE as JSON lines."
+)
+TRACE_MAX_BYTES = Option(
+    "--trace-max-bytes",
+    "N",
+    TRACE_LIMIT,
+    f"Cap of the --trace FILE in bytes (default {TRACE_LIMIT}: 64 MiB; 0: no cap): past it, "
+    "FILE becomes FILE.1 (replacing an older one) and a new FILE begins, so the newest events "
+    "are kept, in at most twice the cap.",
+    whole(0),
 )
 FORCE = Option("--force", None, False, "Overwrite the --trace FILE if it exists.")
 VERBOSE = Option(
@@ -184,7 +206,8 @@ ZENOH_CONFIG: Option[str | None] = Option(
     "--zenoh-config",
     "FILE",
     None,
-    "A Zenoh configuration file (JSON5) for anything else; the options above go on top.",
+    "A Zenoh configuration file (JSON5) for anything else; cfgplan's lease and retry stay "
+    "unless it sets them, and the options above go on top.",
 )
 LEASE: Option[float | None] = Option(
     "--lease",
@@ -201,7 +224,9 @@ RUN_OPTIONS: tuple[Option[Any], ...] = (
     DURATION,
     STALE_PERIODS,
     BUDGET,
+    MAX_VALUE_BYTES,
     TRACE,
+    TRACE_MAX_BYTES,
     FORCE,
     VERBOSE,
     INJECT,

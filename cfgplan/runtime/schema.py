@@ -155,10 +155,16 @@ class Stop(Base):
 
 
 class Message(Base):
-    """A message that could not be read."""
+    """A message that could not be read, or, on the coordinator, what a helper's
+    functionality said when its call failed (the switch protocol's `call-error`)."""
 
     event: Literal["error"]
     message: str
+    channel: str | None = Field(
+        default=None, description="A message over the value limit: the channel it came on."
+    )
+    bytes: int | None = Field(default=None, description="Its size, never read.")
+    limit: int | None = Field(default=None, description="The limit (`--max-value-bytes`).")
 
 
 class Inject(Base):
@@ -294,6 +300,11 @@ class InstallEvent(Base):
     kept_channels: int = Field(description="A count.")
     stopped_channels: list[str]
     started_channels: list[str]
+    problems: list[str] | None = Field(
+        default=None,
+        description="Stop hooks that raised or overran the call budget (`F11: compass(Pippi): "
+        "its stop hook took longer ...`); absent when none did.",
+    )
 
 
 TraceEvent = Annotated[

@@ -37,6 +37,7 @@ from cfgplan.runtime.executor import (
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.transport import InProcessTransport, Transport
+from cfgplan.runtime.values import MAX_VALUE_BYTES
 from cfgplan.runtime.wrapper import Wrapper
 
 __all__ = ["Hook", "Society", "assemble", "society"]
@@ -73,7 +74,7 @@ class Society:
         """False: the loop never waits for the next robot to be due (a simulated clock)."""
         self.listeners: list[Listener] = []
         self.cycles = 0  # cycles run so far, over every run
-        self._settings: tuple[float, float, float | None, float] | None = None
+        self._settings: tuple[float, float, float | None, float, int] | None = None
 
     def subscribe(self, listener: Listener) -> None:
         """Give ``listener`` every event of every robot, those added later too."""
@@ -91,8 +92,8 @@ class Society:
         for listener in self.listeners:
             robot.subscribe(listener)
         if self._settings is not None:
-            _, rate, budget, stale_periods = self._settings
-            robot.start(robot.clock(), rate, budget, stale_periods)
+            _, rate, budget, stale_periods, limit = self._settings
+            robot.start(robot.clock(), rate, budget, stale_periods, max_value_bytes=limit)
         return robot
 
     def kill(self, name: str) -> None:
@@ -131,6 +132,7 @@ class Society:
         duration: float | None = None,
         budget: float | None = DEFAULT_BUDGET,
         stale_periods: float = 3.0,
+        max_value_bytes: int = MAX_VALUE_BYTES,
         stop: threading.Event | None = None,
         after_cycle: Callable[[], None] | None = None,
         before: Hook | None = None,
@@ -151,9 +153,9 @@ class Society:
         society, killed) every pass in which a robot ran counts."""
         clock = self.clock
         begin = clock()
-        self._settings = (begin, rate, budget, stale_periods)
+        self._settings = (begin, rate, budget, stale_periods, max_value_bytes)
         for robot in self.robots:
-            robot.start(begin, rate, budget, stale_periods)
+            robot.start(begin, rate, budget, stale_periods, max_value_bytes=max_value_bytes)
         done = 0
         while True:
             if stop is not None and stop.is_set():

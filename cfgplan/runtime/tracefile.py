@@ -9,6 +9,15 @@ are written as events happen and flushed once per cycle, so a trace can be
 followed while the robot runs (``tail -f``) and survives the process being
 killed. When writing fails later (a full disk), tracing stops, the robot
 goes on, and the failure is reported.
+
+Bounded (issue 33): a value whose JSON is longer than ``elide`` characters
+(:data:`ELIDE`, 4096) is recorded by its size and digest
+(:func:`~cfgplan.runtime.values.elide`, the rule the simulator's trace
+follows too), and the file is capped at ``max_bytes`` (:data:`MAX_BYTES`,
+64 MiB; ``--trace-max-bytes``, 0: no cap): when a line would take it past the
+cap, FILE is renamed FILE.1 (replacing an older FILE.1) and a new FILE
+begins. So at most twice the cap is kept on disk: the newest events in FILE,
+those just before them in FILE.1; older ones are dropped.
 """
 
 from __future__ import annotations
@@ -18,17 +27,47 @@ import json
 import os
 import stat
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TextIO
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.events import Event
+from cfgplan.runtime.events import Call, Data, Event, Transfer
+from cfgplan.runtime.values import elide
 
-__all__ = ["TraceFile", "open_trace"]
+__all__ = ["ELIDE", "MAX_BYTES", "TraceFile", "elided", "open_trace"]
+
+ELIDE = 4096
+"""Characters of JSON beyond which a value is recorded by its size and digest."""
+
+MAX_BYTES = 64 << 20
+"""The default cap of a trace file (``--trace-max-bytes``): 64 MiB, then FILE.1."""
 
 
-def open_trace(path: str | Path, force: bool = False) -> TraceFile:
-    """A new trace file at ``path``; :class:`RunError` when it may or cannot be written."""
+def elided(event: Event, limit: int) -> Event:
+    """``event`` with each value of a call or a message longer than ``limit``
+    characters of JSON in place by its size and digest (0: as they are)."""
+    if not limit:
+        return event
+    if isinstance(event, Call) and (event.inputs or event.outputs):
+        return replace(
+            event, inputs=_pairs(event.inputs, limit), outputs=_pairs(event.outputs, limit)
+        )
+    if isinstance(event, Transfer):
+        return replace(event, value=elide(event.value, limit))
+    return event
+
+
+def _pairs(pairs: tuple[tuple[Data, object], ...], limit: int) -> tuple[tuple[Data, object], ...]:
+    return tuple((data, elide(value, limit)) for data, value in pairs)
+
+
+def open_trace(
+    path: str | Path, force: bool = False, *, max_bytes: int = MAX_BYTES, elide: int = ELIDE
+) -> TraceFile:
+    """A new trace file at ``path``, capped at ``max_bytes`` (0: no cap), values
+    over ``elide`` characters recorded by size and digest (0: whole);
+    :class:`RunError` when it may or cannot be written."""
     p = Path(path)
     if p.is_symlink() and not p.exists():
         raise RunError(
@@ -42,6 +81,16 @@ def open_trace(path: str | Path, force: bool = False) -> TraceFile:
             raise RunError(f"trace file {p} exists; pass --force to overwrite it")
         if not stat.S_ISREG(p.stat().st_mode):
             raise RunError(f"trace file {p} exists and is not a regular file")
+    try:
+        stream = _create(p, force)
+    except FileExistsError:
+        raise RunError(f"trace file {p} exists; pass --force to overwrite it") from None
+    except OSError as exc:
+        raise RunError(f"cannot write the trace file {p}: {exc.strerror}") from None
+    return TraceFile(p, stream, max_bytes=max_bytes, elide=elide)
+
+
+def _create(p: Path, force: bool) -> TextIO:
     flags = os.O_WRONLY | os.O_CREAT | getattr(os, "O_CLOEXEC", 0)
     if force:
         flags |= os.O_TRUNC
@@ -49,21 +98,22 @@ def open_trace(path: str | Path, force: bool = False) -> TraceFile:
             flags |= getattr(os, "O_NOFOLLOW", 0)
     else:
         flags |= os.O_EXCL  # also refuses any symbolic link, dangling or not
-    try:
-        fd = os.open(p, flags, 0o644)
-    except FileExistsError:
-        raise RunError(f"trace file {p} exists; pass --force to overwrite it") from None
-    except OSError as exc:
-        raise RunError(f"cannot write the trace file {p}: {exc.strerror}") from None
-    return TraceFile(p, os.fdopen(fd, "w", encoding="utf-8", newline="\n"))
+    fd = os.open(p, flags, 0o644)
+    return os.fdopen(fd, "w", encoding="utf-8", newline="\n")
 
 
 class TraceFile:
     """Events as JSON lines; a subscriber of the robots it traces."""
 
-    def __init__(self, path: Path, stream: TextIO) -> None:
+    def __init__(
+        self, path: Path, stream: TextIO, *, max_bytes: int = MAX_BYTES, elide: int = ELIDE
+    ) -> None:
         self.path = path
         self.failed: str | None = None  # why tracing stopped, if it did
+        self.max_bytes = max_bytes
+        self.elide = elide
+        self.written = 0  # bytes in the current file
+        self.rotations = 0
         self._stream: TextIO | None = stream
 
     def __call__(self, event: Event) -> None:
@@ -73,10 +123,30 @@ class TraceFile:
         if self._stream is None:
             return
         try:
-            line = json.dumps(event.record(), separators=(",", ":"))
+            line = json.dumps(elided(event, self.elide).record(), separators=(",", ":")) + "\n"
         except (TypeError, ValueError) as exc:  # pragma: no cover - records are JSON-ready
-            line = json.dumps({"event": "error", "robot": event.robot, "message": str(exc)})
-        self._guard(lambda s: s.write(line + "\n"))
+            line = json.dumps({"event": "error", "robot": event.robot, "message": str(exc)}) + "\n"
+        size = len(line)  # ASCII: json.dumps escapes the rest
+        if self.max_bytes and self.written and self.written + size > self.max_bytes:
+            self._rotate()
+        self._guard(lambda s: s.write(line))
+        self.written += size
+
+    def _rotate(self) -> None:
+        """FILE becomes FILE.1 (replacing an older one) and a new FILE begins."""
+        self.close()
+        if self.failed is not None:
+            return
+        try:
+            os.replace(self.path, self.path.with_name(self.path.name + ".1"))
+            self._stream = _create(self.path, force=False)
+        except OSError as exc:
+            self.failed = (
+                f"cannot rotate the trace file {self.path}: {exc.strerror}; tracing stopped"
+            )
+            return
+        self.written = 0
+        self.rotations += 1
 
     def flush(self) -> None:
         self._guard(lambda s: s.flush())

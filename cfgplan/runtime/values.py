@@ -18,10 +18,17 @@ A message on the wire is one JSON object, the *envelope*::
 network lost), ``t`` is the sender's clock (seconds since the epoch) and
 ``period`` the sender's period in seconds (``null``: none), from which the
 receiver judges staleness (3.2).
+
+The size rule: a value's JSON may be at most ``max_value_bytes`` bytes
+(:data:`MAX_VALUE_BYTES`, 1 MiB, unless ``--max-value-bytes`` says otherwise;
+0: no limit). A bigger output is the call's error (:func:`size_problem`); a
+bigger message from the network (its envelope over the limit and
+:data:`ENVELOPE_ROOM`) is dropped unread (:func:`oversized`).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from typing import NamedTuple
 
@@ -29,18 +36,27 @@ from cfgplan.runtime.errors import RunError, printable
 from cfgplan.runtime.wire import is_number, is_whole
 
 __all__ = [
+    "ENVELOPE_ROOM",
     "MAX_DEPTH",
+    "MAX_VALUE_BYTES",
     "Envelope",
     "ValueRuleError",
     "check",
+    "elide",
     "encode",
     "envelope",
     "jsonable",
     "open_envelope",
+    "oversized",
     "safe_repr",
+    "size_problem",
 ]
 
 MAX_DEPTH = 64
+MAX_VALUE_BYTES = 1 << 20
+"""The default limit on one value's JSON, in bytes (``--max-value-bytes``): 1 MiB."""
+ENVELOPE_ROOM = 4096
+"""Bytes a received message may have beyond the value limit: the envelope's other fields."""
 RULE = "JSON: None, bool, int, float, str, list, tuple, dict with str keys"
 _SCALARS = frozenset({type(None), bool, int, float, str})
 
@@ -115,6 +131,19 @@ def encode(value: object) -> str:
     return json.dumps(value, separators=(",", ":"))
 
 
+def size_problem(size: int, limit: int) -> str | None:
+    """What is wrong with a value whose JSON is ``size`` bytes under a limit of
+    ``limit`` bytes (0: none); ``None`` when nothing is."""
+    if not limit or size <= limit:
+        return None
+    return f"its JSON is {size:,} bytes, over the limit of {limit:,} bytes (--max-value-bytes)"
+
+
+def oversized(payload: bytes, limit: int) -> bool:
+    """A received message too big to read under a value limit of ``limit`` (0: none)."""
+    return bool(limit) and len(payload) > limit + ENVELOPE_ROOM
+
+
 def envelope(sender: str, seq: int, t: float, period: float | None, encoded: str) -> bytes:
     """The message of one write on a global channel (``encoded``: the value's JSON)."""
     head = json.dumps({"from": sender, "seq": seq, "t": t, "period": period})
@@ -166,6 +195,31 @@ def _message(exc: BaseException) -> str:
     except Exception:
         return "(unprintable)"
     return printable(text[:120])
+
+
+def elide(value: object, limit: int) -> object:
+    """``value`` as a trace records it when its JSON may be ``limit``
+    characters at most (0: any): the value itself, or in place of a longer one
+    ``{"$elided": type, "$bytes": size, "$sha256": digest}``, the size and the
+    first 16 hex digits of the SHA-256 of its compact JSON (what a global
+    channel sends: a value sent and received has one digest). The one rule of
+    the run's ``--trace`` and the simulator's ``trace.jsonl``."""
+    if not limit or value is None or isinstance(value, bool | int | float):
+        return value
+    if isinstance(value, str) and len(value) <= limit // 6 - 2:  # escaped, still short
+        return value
+    try:
+        text = json.dumps(value, separators=(",", ":"))
+    except (TypeError, ValueError, RecursionError):  # not JSON: as the trace writes it
+        text = json.dumps(jsonable(value), separators=(",", ":"))
+    if len(text) <= limit:
+        return value
+    data = text.encode()
+    return {
+        "$elided": type(value).__name__,
+        "$bytes": len(data),
+        "$sha256": hashlib.sha256(data).hexdigest()[:16],
+    }
 
 
 def jsonable(value: object) -> object:

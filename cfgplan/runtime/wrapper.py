@@ -30,7 +30,7 @@ Beyond the thesis, for running on real robots:
 * **Time budget.** With a budget the function runs on its own
   :class:`~cfgplan.runtime.worker.Worker` thread; a call over budget is
   reported (``timeout``) and the functionality is skipped (``busy``) until it
-  returns.
+  returns. The ``stop`` hook has the same budget (:meth:`Wrapper.stop`).
 
 Each call returns a :class:`~cfgplan.runtime.events.Call` saying what happened
 (``None`` when the wrapper was not due).
@@ -45,13 +45,14 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 
-from cfgplan.notation import call_text, instance_text
+from cfgplan.notation import instance_text
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Data, Event, Staleness, Status, Transfer
 from cfgplan.runtime.faults import ACHIEVED, Failed, failed, fault
+from cfgplan.runtime.outputs import encoded_for, split
 from cfgplan.runtime.registry import Implementation
-from cfgplan.runtime.values import ValueRuleError, encode, safe_repr, type_name
+from cfgplan.runtime.values import MAX_VALUE_BYTES
 from cfgplan.runtime.worker import Worker
 
 __all__ = ["Input", "Stats", "Wrapper", "current_robot", "running_on"]
@@ -136,6 +137,7 @@ class Wrapper:
         self.next_due = 0.0
         self.budget: float | None = None  # None: runs on the robot's thread
         self.stale_periods = 3.0
+        self.max_value_bytes = MAX_VALUE_BYTES  # an output's JSON for another robot (0: any)
         self.stats = Stats()
         self.injected: str | None = None  # a scripted fault: every call fails (5.5)
         self.stopped = False  # switched out by a reconfiguration, or stopped safely
@@ -145,14 +147,22 @@ class Wrapper:
         return instance_text(self.label, self.name, (self.robot, *self.objects))
 
     def schedule(
-        self, rate: float, now: float, budget: float | None = None, stale_periods: float = 3.0
+        self,
+        rate: float,
+        now: float,
+        budget: float | None = None,
+        stale_periods: float = 3.0,
+        *,
+        max_value_bytes: int = MAX_VALUE_BYTES,
     ) -> None:
         """Run at ``:freq`` or else ``rate`` per second from ``now`` (``rate`` 0:
-        in every cycle); calls get ``budget`` seconds (``None``: no limit)."""
+        in every cycle); calls get ``budget`` seconds (``None``: no limit); an
+        output for another robot may be ``max_value_bytes`` of JSON (0: any)."""
         self.period = None if rate <= 0 else 1.0 / (self.freq or rate)
         self.next_due = now
         self.budget = budget
         self.stale_periods = stale_periods
+        self.max_value_bytes = max_value_bytes
 
     def due(self, now: float) -> bool:
         return self.period is None or now >= self.next_due - 1e-9
@@ -227,9 +237,9 @@ class Wrapper:
             return self._event("ran", inputs=read, action=action, duration=duration, achieved=True)
         out_data = [_data(chs, "output", k) for k, chs in enumerate(outputs)]
         try:
-            produced = self._split(result, len(outputs))
+            produced = split(result, len(outputs))
             encoded = [
-                self._encode(v, chs, d)
+                encoded_for(v, chs, d, self.max_value_bytes)
                 for v, chs, d in zip(produced, outputs, out_data, strict=True)
             ]
         except RunError as exc:
@@ -342,51 +352,54 @@ class Wrapper:
         return status == "ran" and result is not None
 
     def stop(self) -> str | None:
-        """The functionality stops running (switched out, or a safe stop): the
-        implementation's ``stop`` hook, then its thread ends. What went wrong
-        in the hook, if anything."""
-        problem = None
+        """The functionality stops running (switched out, or a safe stop, 5.5):
+        the implementation's ``stop`` hook, then its thread ends. What went
+        wrong in the hook, if anything (also reported as a failed call of the
+        functionality, status ``error`` or ``timeout``).
+
+        The hook has the time budget of a call: one that blocks is abandoned
+        after it (its thread, a daemon, is left to finish), so that a switch or
+        a stop never freezes the robot. With no budget it runs on the robot's
+        thread, as calls do."""
         self.stopped = True
-        hook = self.implementation.stop
-        if hook is not None:
-            with running_on(self.robot):
-                try:
-                    hook(*self.objects)
-                except (Exception, SystemExit) as exc:
-                    problem = f"its stop hook failed: {fault(exc)}"
+        problem = self._stop_hook()
         if self._worker is not None:
             self._worker.close()
             self._worker = None
         return problem
 
+    def _stop_hook(self) -> str | None:
+        hook, objects = self.implementation.stop, self.objects
+        if hook is None:
+            return None
+        started = time.perf_counter()
+        status: Status = "error"
+        problem = None
+        if self.budget is None:
+            with running_on(self.robot):
+                try:
+                    hook(*objects)
+                except (Exception, SystemExit) as exc:
+                    problem = f"its stop hook failed: {fault(exc)}"
+        else:
+            worker = Worker(f"cfgplan {self.robot} {self} stop", self._on_worker)
+            kind, result = worker.run(lambda: hook(*objects), self.budget)
+            worker.close()  # its thread ends when the hook returns, if ever
+            if kind == "overran":
+                status = "timeout"
+                problem = (
+                    f"its stop hook took longer than its time budget of {self.budget:g} s; "
+                    "abandoned, the functionality may not have stopped"
+                )
+            elif kind == "raised":
+                assert isinstance(result, BaseException)
+                problem = f"its stop hook failed: {fault(result)}"
+        if problem is not None:
+            event = self._event(status, error=problem, duration=time.perf_counter() - started)
+            self.stats.count(event)
+            self._emit(event)
+        return problem
+
     def _on_worker(self) -> None:
         """On the worker thread, before its first call: whose robot it is."""
         _robot.set(self.robot)
-
-    def _split(self, result: object, n: int) -> list[object]:
-        """The outputs in :out order (one value when there is one output)."""
-        if n == 0:
-            return []
-        if n == 1:
-            return [result]
-        if result is None:
-            return [None] * n
-        if not isinstance(result, tuple | list) or len(result) != n:
-            raise RunError(
-                f"the implementation must return {n} outputs "
-                f"(a tuple in :out order), not {safe_repr(result, 80)[0]}"
-            )
-        return list(result)
-
-    def _encode(self, value: object, channels: Sequence[Channel], data: Data) -> str | None:
-        """The JSON of an output that goes to another robot (checked before anything is written)."""
-        if value is None or not any(c.remote for c in channels):
-            return None
-        try:
-            return encode(value)
-        except ValueRuleError as exc:
-            raise RunError(
-                f"output {call_text(data)} goes to "
-                f"another robot, but {exc.message} (type {type_name(value)})",
-                hint=exc.hint,
-            ) from None

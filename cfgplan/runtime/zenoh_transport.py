@@ -21,8 +21,10 @@ Addressing (:class:`ZenohOptions`): ``--listen`` and ``--connect`` endpoints
 (``tcp/192.168.1.7:7447``); without them, robots find each other by
 multicast scouting on the local network, with them multicast scouting is off.
 ``--society`` keeps societies on one network apart. A Zenoh configuration
-file (JSON5, Zenoh's own format) sets anything else; options given on the
-command line are applied on top of it.
+file (JSON5, Zenoh's own format) sets anything else: it goes on top of
+cfgplan's defaults (:data:`DEFAULTS`: peer mode, the connection retry, the
+lease), which it keeps unless it sets them, and the options given on the
+command line go on top of it.
 
 :mod:`zenoh` is imported only when a :class:`ZenohTransport` is made, so
 ``import cfgplan.runtime`` stays light.
@@ -87,7 +89,7 @@ class ZenohOptions:
     listen: tuple[str, ...] = ()
     connect: tuple[str, ...] = ()
     config_file: str | None = None
-    lease: float | None = None  # seconds; None: DEFAULT_LEASE, or the file's
+    lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
 
     def __post_init__(self) -> None:
         if not self.society:
@@ -121,8 +123,23 @@ def _reason(exc: BaseException) -> str:
     return re.sub(r" at \S+\.rs:\d+\.?", "", text).strip()
 
 
+DEFAULTS: tuple[tuple[str, str, str], ...] = (
+    ("mode", '"peer"', "peer mode"),
+    ("connect/retry", RETRY, "the connection retry"),
+    ("transport/link/tx/lease", str(round(DEFAULT_LEASE * 1000)), "the lease"),
+)
+"""cfgplan's settings under anything a ``--zenoh-config`` file sets: (key, JSON5, what)."""
+
+
 def zenoh_config(options: ZenohOptions) -> zenoh.Config:
-    """The session configuration of a robot program."""
+    """The session configuration of a robot program: cfgplan's :data:`DEFAULTS`
+    (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s),
+    then a configuration file's settings, then the options.
+
+    A file is read whole by Zenoh, which fills in its own default for every
+    key the file leaves out; so a key whose value in the file is Zenoh's own
+    default counts as not set, and gets cfgplan's (``--lease 10`` asks for
+    Zenoh's 10 s lease)."""
     z = _zenoh()
     config: zenoh.Config
     if options.config_file is not None:
@@ -132,19 +149,22 @@ def zenoh_config(options: ZenohOptions) -> zenoh.Config:
             raise RunError(
                 f"cannot read the Zenoh configuration {options.config_file}: {_reason(exc)}"
             ) from None
+        zenohs = z.Config()
+        for key, value, what in DEFAULTS:
+            if config.get_json(key) == zenohs.get_json(key):  # the file leaves it
+                _set(config, key, value, what)
     else:
         config = z.Config()
-        _set(config, "mode", '"peer"', "peer mode")
-        _set(config, "connect/retry", RETRY, "the connection retry")
+        for key, value, what in DEFAULTS:
+            _set(config, key, value, what)
     if options.listen:
         _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
     if options.connect:
         _set(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
     if options.listen or options.connect:
         _set(config, "scouting/multicast/enabled", "false", "scouting")
-    lease = options.lease if options.lease is not None or options.config_file else DEFAULT_LEASE
-    if lease is not None:
-        _set(config, "transport/link/tx/lease", str(max(1, round(lease * 1000))), "--lease")
+    if options.lease is not None:
+        _set(config, "transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease")
     return config
 
 

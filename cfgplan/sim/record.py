@@ -7,8 +7,10 @@ event becomes one JSON line of the trace, the runtime's schema
 simulation's clock, and the fields that measure the host's wall clock — a call's ``duration``, a
 switch's ``plan_ms`` and ``latency``, a message's ``sent`` — are left out,
 so that one seed gives one trace, byte for byte. Values longer than
-:data:`ELIDE` characters of JSON (a laser scan) are written as
-``{"$elided": "dict"}`` (their type).
+:data:`ELIDE` characters of JSON (a laser scan) are written by their type,
+size and digest, ``{"$elided": "dict", "$bytes": 5210, "$sha256": "..."}``:
+the rule of the runtime's ``--trace``
+(:func:`~cfgplan.runtime.tracefile.elided`) with a shorter limit.
 """
 
 from __future__ import annotations
@@ -16,12 +18,13 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import IO, Any
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.task import Ground
-from cfgplan.runtime.events import Adaptation, Call, Data, Event, Transfer
+from cfgplan.runtime.events import Adaptation, Call, Event
+from cfgplan.runtime.tracefile import elided
 from cfgplan.sim.world import World
 
 __all__ = ["ELIDE", "Notable", "Recorder", "Segment"]
@@ -77,10 +80,7 @@ class Recorder:
     def __call__(self, event: Event) -> None:
         if isinstance(event, Call):
             self.last_calls[event.instance] = event
-            event = replace(event, inputs=_elided(event.inputs), outputs=_elided(event.outputs))
-        elif isinstance(event, Transfer):
-            event = replace(event, value=_elide(event.value))
-        record = event.record()
+        record = elided(event, ELIDE).record()
         now = round(self.world.time, 4)
         record["t"] = now
         for key in _WALL_CLOCK:
@@ -108,37 +108,6 @@ class Recorder:
 
     def of(self, *what: str) -> list[Notable]:
         return [n for n in self.notable if n.what in what]
-
-
-def _items(value: object, budget: int) -> int:
-    """How many scalars ``value`` holds, counting no further than ``budget``."""
-    if isinstance(value, dict):
-        value = list(value.values())
-    if not isinstance(value, list | tuple):
-        return 1
-    count = 0
-    for item in value:
-        count += _items(item, budget - count)
-        if count > budget:
-            break
-    return count
-
-
-def _elide(value: object) -> object:
-    """``value``, or a note of its size when its JSON is longer than :data:`ELIDE`."""
-    if _items(value, ELIDE // 4) > ELIDE // 4:  # surely long: no need to write it out
-        return {"$elided": type(value).__name__}
-    try:
-        text = json.dumps(value, separators=(",", ":"))
-    except (TypeError, ValueError):
-        return value  # not JSON: the trace writes it as the runtime does
-    if len(text) <= ELIDE:
-        return value
-    return {"$elided": type(value).__name__}
-
-
-def _elided(pairs: tuple[tuple[Data, object], ...]) -> tuple[tuple[Data, object], ...]:
-    return tuple((data, _elide(value)) for data, value in pairs)
 
 
 def _line(record: dict[str, Any]) -> str:

@@ -207,7 +207,9 @@ def trace_page() -> str:
         "per line, as events happen, flushed every cycle. Every line has `event`, `robot` (where "
         "it happened), `t` (seconds since the epoch; in a simulation's `trace.jsonl`, the "
         "simulated time) and `cycle` (the robot's cycle); the other keys depend on `event`. A "
-        'value that is not JSON is written as `{"$type": "module.Class", "$repr": "..."}`. '
+        'value that is not JSON is written as `{"$type": "module.Class", "$repr": "..."}`, '
+        "one longer than 4096 characters of JSON (400 in a simulation) as "
+        '`{"$elided": "type", "$bytes": size, "$sha256": "first 16 hex digits"}`. '
         "Keys marked not required are left out when they do not apply.",
         "",
         "This page is generated from the pydantic models of `cfgplan/runtime/schema.py`; a "

@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 import cfgplan.cli.run  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT, cross_door_44
+from tests.runtime.netutil import first, processes, wait_for
 
 ARGS = [str(DOMAINS / CROSS[0]), str(DOMAINS / CROSS[1])]
 FAST = ["--impl", str(EXAMPLE_IMPL), "--rate", "0"]
@@ -183,3 +187,65 @@ def test_cycles_count_the_goal_robot_after_a_robot_joins(tmp_path: Path) -> None
     pippi = [e for e in events if e["event"] == "call" and e["functionality"] == "compass"]
     assert [e["cycle"] for e in pippi if e["robot"] == "Pippi"] == list(range(1, 41))
     assert "Pippi F10 compass(Pippi): ran in 40 of 40 cycles" in result.output
+
+
+BLOCKING_STOP = """
+import dataclasses as _dataclasses
+import time as _time
+
+from cfgplan.runtime import Implementation as _Implementation
+
+for _name, _value in list(globals().items()):  # every stop hook blocks (issue 33)
+    if isinstance(_value, _Implementation):
+        globals()[_name] = _dataclasses.replace(_value, stop=lambda *objects: _time.sleep(3600))
+"""
+
+
+@pytest.mark.slow
+def test_a_stop_hook_that_blocks_neither_freezes_the_switch_nor_outlives_sigterm(
+    tmp_path: Path,
+) -> None:
+    """Issue 33: a switch whose stop hook blocks froze the run for good, and
+    SIGTERM did not end it. Now the hook is abandoned after the call budget,
+    its functionality is reported failed, the switch goes on, and SIGTERM ends
+    the process."""
+    impl = tmp_path / "impl.py"
+    impl.write_text(EXAMPLE_IMPL.read_text(encoding="utf-8") + BLOCKING_STOP, encoding="utf-8")
+    trace = tmp_path / "run.jsonl"
+    step2 = str(DOMAINS / "cross-door/state-6.2.2-step2.lisp")
+    args = ["-m", "cfgplan", "run", ARGS[0], step2, "--impl", str(impl), "--rate", "50"]
+    args += ["--budget", "0.3", "--inject", "fail compass(Emil) at cycle 5"]
+    args += ["--trace", str(trace)]
+    with processes() as running:
+        run = running.start(args, tmp_path / "run.log")
+        wait_for("the switch", first(trace, lambda e: e["event"] == "switch"), 30)
+        hook = first(trace, lambda e: e.get("status") == "timeout")
+        failed = wait_for("the hook reported", hook, 10)
+        assert "its stop hook took longer than its time budget of 0.3 s" in str(failed["error"])
+        os.kill(run.pid, signal.SIGTERM)
+        assert run.wait(timeout=10) == 1  # a functionality failed
+    log = (tmp_path / "run.log").read_text(encoding="utf-8")
+    assert "its stop hook took longer than its time budget of 0.3 s; abandoned" in log
+
+
+def test_the_trace_is_capped_and_rotates_once(tmp_path: Path) -> None:
+    """Issue 33: traces grew without a cap. ``--trace-max-bytes`` caps FILE;
+    past it FILE becomes FILE.1 and a new FILE begins."""
+    trace = tmp_path / "run.jsonl"
+    args = ["run", *ARGS, *FAST, "--cycles", "60", "--trace", str(trace)]
+    result = CliRunner().invoke(app, [*args, "--trace-max-bytes", "20000"])
+    assert result.exit_code == 0, result.output
+    older = tmp_path / "run.jsonl.1"
+    assert trace.stat().st_size <= 20_000 and 10_000 < older.stat().st_size <= 20_000
+    last = json.loads(trace.read_text().splitlines()[-1])
+    assert last["event"] == "stop" and last["reason"] == "cycles"
+
+
+def test_max_value_bytes_is_a_run_option() -> None:
+    """Cross-door's values are small: a limit of 10 bytes refuses its global outputs."""
+    args = ["run", *ARGS, *FAST, "--cycles", "3", "--max-value-bytes", "10"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1
+    assert "over the limit of 10 bytes (--max-value-bytes); not sent" in result.output
+    bad = CliRunner().invoke(app, ["run", *ARGS, *FAST, "--max-value-bytes", "-1"])
+    assert bad.exit_code == 2 and "Traceback" not in bad.output

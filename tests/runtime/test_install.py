@@ -7,6 +7,9 @@ share keeps running with its state, the rest is stopped or started.
 
 from __future__ import annotations
 
+import threading
+import time
+
 import pytest
 
 from cfgplan.backends.part import runtime_part
@@ -16,7 +19,8 @@ from cfgplan.problem import load
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime import Implementation, Part, Registry, Society, build, install, society
-from cfgplan.runtime.install import crash
+from cfgplan.runtime.events import Call
+from cfgplan.runtime.install import Installed, crash
 from cfgplan.runtime.part import ChannelSpec
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL
 
@@ -149,3 +153,70 @@ def test_a_global_channel_whose_other_end_moved_still_receives() -> None:
     assert [c.other for c in pippi.channels] == ["Ida"]
     transport.send(pippi.channels[0].key, "Pippi", b"{}")
     assert transport.undelivered == 0
+
+
+def _blocking(release: threading.Event) -> Registry:
+    """The example's implementations, each with a stop hook that blocks until ``release``."""
+    base = Registry.load(EXAMPLE_IMPL)
+
+    def hooked(impl: Implementation) -> Implementation:
+        def stop(*objects: str) -> None:
+            release.wait(60)
+
+        return Implementation(impl.name, impl.function, impl.precondition, stop)
+
+    return Registry(hooked(base.lookup(n)) for n in base.names())
+
+
+def test_a_stop_hook_that_blocks_is_abandoned_after_its_budget() -> None:
+    """Issue 33: a hook that blocks froze the switch, and the robot, for good.
+    Now it has the budget of a call: the switch goes on after it, and the
+    functionality's failure is reported (a call ``timeout``, the install's problems)."""
+    before, after = _switch()
+    release = threading.Event()
+    pippi = build(before["Pippi"], _blocking(release))
+    pippi.start(pippi.clock(), rate=0.0, budget=0.2)
+    done: list[object] = []
+    switching = threading.Thread(target=lambda: done.append(install(pippi, after["Pippi"])))
+    began = time.monotonic()
+    try:
+        switching.start()
+        switching.join(10)
+        took = time.monotonic() - began
+        assert done, "the switch is still waiting for the stop hook"
+    finally:
+        release.set()
+        switching.join(10)
+    (installed,) = done
+    assert isinstance(installed, Installed)
+    assert took < 3  # two hooks, 0.2 s each
+    assert len(installed.problems) == 2
+    assert all(
+        "stop hook took longer than its time budget of 0.2 s" in p for p in installed.problems
+    )
+    assert ("problems", list(installed.problems)) in installed.record()
+    failed = [e for e in pippi.events if isinstance(e, Call) and e.status == "timeout"]
+    assert sorted(e.name for e in failed) == ["compass", "measure-robot-orient-compass"]
+    assert "abandoned" in failed[0].error
+
+
+def test_a_stop_hook_that_raises_is_reported_as_a_failed_call() -> None:
+    before, after = _switch()
+
+    def broken(impl: Implementation) -> Implementation:
+        def stop(*objects: str) -> None:
+            raise OSError("motor controller unplugged")
+
+        return Implementation(impl.name, impl.function, impl.precondition, stop)
+
+    base = Registry.load(EXAMPLE_IMPL)
+    pippi = build(before["Pippi"], Registry(broken(base.lookup(n)) for n in base.names()))
+    pippi.start(pippi.clock(), rate=0.0)
+    installed = install(pippi, after["Pippi"])
+    assert len(installed.problems) == 2
+    failed = [e for e in pippi.events if isinstance(e, Call) and e.status == "error"]
+    assert len(failed) == 2
+    assert (
+        "its stop hook failed: the implementation raised OSError: motor controller unplugged"
+        in (failed[0].error)
+    )

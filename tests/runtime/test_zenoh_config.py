@@ -44,6 +44,21 @@ def test_a_config_file_is_the_base_and_options_go_on_top(tmp_path: Path) -> None
     assert _get(ZenohOptions(config_file=str(path), lease=2), "transport/link/tx/lease") == 2000
 
 
+def test_a_config_file_keeps_cfgplans_lease_and_retry_unless_it_sets_them(tmp_path: Path) -> None:
+    """Issue 33: a file that set only an endpoint dropped the 1 s lease (a
+    frozen robot was reported lost after 10 s, Zenoh's default)."""
+    path = tmp_path / "zenoh.json5"
+    path.write_text('{ listen: { endpoints: ["tcp/127.0.0.1:7447"] } }')
+    options = ZenohOptions(config_file=str(path))
+    assert _get(options, "listen/endpoints") == ["tcp/127.0.0.1:7447"]  # the file's
+    assert _get(options, "transport/link/tx/lease") == 1000  # cfgplan's
+    assert _get(options, "connect/retry")["period_max_ms"] == 1000  # type: ignore[index]
+    assert _get(options, "mode") == "peer"
+    path.write_text("{ connect: { retry: { period_init_ms: 500, period_max_ms: 4000 } } }")
+    assert _get(options, "connect/retry")["period_max_ms"] == 4000  # type: ignore[index]
+    assert _get(options, "transport/link/tx/lease") == 1000
+
+
 def test_what_is_refused_is_said_clearly(tmp_path: Path) -> None:
     with pytest.raises(RunError, match="an endpoint is PROTOCOL/ADDRESS"):
         ZenohOptions(listen=("7447",))
