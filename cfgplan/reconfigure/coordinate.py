@@ -28,6 +28,7 @@ from typing import Protocol
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text, call_text
+from cfgplan.planner.task import Ground
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.decision import Decision
 from cfgplan.reconfigure.fallbacks import Resource
@@ -83,6 +84,9 @@ class Coordinator:
     _achieved: Configuration | None = None  # the configuration whose task was accomplished
     _installed_at: float = 0.0  # when the running configuration was deployed (time.time())
     _installed: int = -1  # its id; -1: the first, deployed before the coordinator started
+    _blamed_stale: dict[Ground, str] = field(default_factory=dict)
+    """Functionality instances failed because their outputs went stale, with the
+    robot whose data stopped: they recover when that robot is seen again."""
 
     def __post_init__(self) -> None:
         self._suspects = Suspicions(self.clock)
@@ -231,6 +235,11 @@ class Coordinator:
         self._apply(decision, found[0][0])
 
     def _recovery(self, detection: Detection) -> None:
+        """A resource works again, or a robot is seen again (5.5). A robot seen
+        again is also evidence for what was blamed only because its data went
+        stale (a silent robot looks, at first, like a silent computation on
+        it): those instances recover with it, in one decision, so the
+        configurations that need them are admissible again."""
         resource = self._resource(detection)
         if resource is None:
             return
@@ -239,9 +248,20 @@ class Coordinator:
             resource.kind == "functionality" and resource.instance not in situation.failed
         ):
             return  # it was never out
-        self._note_resource("recovery", detection, resource)
+        together: tuple[Resource, ...] = ()
+        if resource.kind == "robot":
+            together = tuple(
+                Resource("functionality", instance=instance, text=call_text(instance))
+                for instance, sender in self._blamed_stale.items()
+                if sender == resource.robot and instance in situation.failed
+            )
+        for each in (resource, *together):
+            if each.kind == "functionality":
+                self._blamed_stale.pop(each.instance, None)
+            self._note_resource("recovery", detection, each)
+        texts = " and ".join(each.text for each in (resource, *together))
         self._apply(
-            self.reconfigurator.recovered(resource, f"{resource.text} recovered"), detection
+            self.reconfigurator.recovered(resource, f"{texts} recovered", together), detection
         )
 
     def _settled(self) -> bool:
@@ -249,6 +269,8 @@ class Coordinator:
         blamed = self._suspects.settled(self.reconfigurator.running)
         if blamed is None:
             return False
+        if blamed.instance and blamed.other:
+            self._blamed_stale[tuple(blamed.instance)] = blamed.other
         self._failure(blamed)
         return True
 

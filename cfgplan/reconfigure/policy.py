@@ -220,14 +220,18 @@ class Reconfigurator:
             best, why = self._best()
         return self._to(best, source, time.perf_counter() - started, why, withdrawn, cause)
 
-    def recovered(self, resource: Resource, cause: str = "") -> Decision:
-        """``resource`` works again (or a robot is back)."""
-        if resource.kind == "functionality":
-            self.situation = self.situation.recovered(resource.instance)
-        elif resource.kind == "robot":
-            self.situation = self.situation.returning(resource.robot)
-        else:
-            self.situation = self.situation.medium_up(resource.medium)
+    def recovered(
+        self, resource: Resource, cause: str = "", together: tuple[Resource, ...] = ()
+    ) -> Decision:
+        """``resource`` works again (or a robot is back), and with it
+        ``together``: one decision for all."""
+        for each in (resource, *together):
+            if each.kind == "functionality":
+                self.situation = self.situation.recovered(each.instance)
+            elif each.kind == "robot":
+                self.situation = self.situation.returning(each.robot)
+            else:
+                self.situation = self.situation.medium_up(each.medium)
         return self._better(cause, still_valid=True)
 
     def updated(

@@ -89,6 +89,7 @@ class Suspicions:
             suspicion.detection.t,
             instance=labels[label].key,
             label=label,
+            other=suspicion.detection.other,  # the robot whose data stopped
             how="stale",
             detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
         )

@@ -9,6 +9,7 @@ from __future__ import annotations
 import time
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.problem import load
 from cfgplan.reconfigure.coordinate import Coordinator, Done
@@ -258,3 +259,30 @@ def test_installing_a_configuration_keeps_what_is_shared() -> None:
     coordinator.install(None, "done")
     assert coordinator.stopped and coordinator.reconfigurator.running is None
     assert first.cost == 44
+
+
+def test_a_robot_seen_again_brings_back_what_its_silence_blamed() -> None:
+    """Pippi freezes: her output to Emil goes stale and, before her lease runs
+    out, the computation on her is blamed (issue 33: a silent robot looks like
+    a silent computation at first); every configuration of step 2 needs her,
+    so the society stops. Her loss is then noticed and, once she is seen
+    again, what her silence blamed recovers with her: the society runs again
+    (before, transform-info stayed failed and it stopped for good)."""
+    coordinator, deployer, clock, events, config = _coordinator()
+    transform = next(
+        f for f in config.functionalities if f.name == "transform-info" and f.robot == "Pippi"
+    )
+    coordinator.handle(_stale(transform.label, "Pippi", "transform->cross"))
+    clock.now += 0.5
+    coordinator.tick()
+    ((stopped, _),) = deployer.deployed
+    assert stopped.config is None  # nothing admissible without transform-info(Pippi ...)
+    coordinator.handle(Detection("lost", "Emil", 2.0, other="Pippi"))
+    coordinator.handle(Detection("seen", "Emil", 3.0, other="Pippi"))
+    decision, _ = deployer.deployed[-1]
+    assert decision.config is not None and decision.config.cost == 44
+    recovered = [e for e in events if e.kind == "recovery"]
+    assert [e.field("resource") for e in recovered if isinstance(e, Adaptation)] == [
+        "Pippi",
+        call_text(transform.key),
+    ]
