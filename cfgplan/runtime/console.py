@@ -29,6 +29,7 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any, TextIO
 
+from cfgplan.runtime.errors import printable
 from cfgplan.runtime.events import Adaptation, Call, Event, Lifecycle, Presence, Staleness
 from cfgplan.runtime.trace import (
     describe,
@@ -101,7 +102,11 @@ class Printer:
 
     def say(self, text: str, stream: TextIO | None = None) -> None:
         """A line on ``stream`` (default: ``out``); a stream that cannot be
-        written to (closed pipe, full disk) is given up, not fatal."""
+        written to (closed pipe, full disk) is given up, not fatal. What came
+        from another process (a helper's error text, a refusal's reason) or
+        from the input is shown with control characters escaped: nothing on
+        the network can drive this terminal."""
+        text = "\n".join(printable(line) for line in text.split("\n"))
         stream = self.out if stream is None or self._live is not None else stream
         if id(stream) in self._dead:
             return
@@ -162,10 +167,14 @@ class Printer:
         self.say(f"cycle {self._shown_at}: status: " + "; ".join(self._parts()))
 
     def _parts(self) -> list[str]:
-        cycles = self._cycles
+        """The status's parts. rich redraws a live status on its own thread
+        while the robots' thread adds actions and counts: read copies (each
+        made by one C call, under the GIL), never the dicts themselves."""
+        cycles = dict(self._cycles)
         if self._society is not None:  # robots that run nothing have cycles too
             cycles = {robot.name: robot.cycles for robot in list(self._society.robots)}
-        return status_parts(cycles, self._actions.values(), self._counts, self._cost)
+        actions = list(self._actions.values())
+        return status_parts(cycles, actions, dict(self._counts), self._cost)
 
     def _rendered(self) -> Any:
         from rich.text import Text

@@ -188,10 +188,10 @@ class Report:
 @dataclass(frozen=True)
 class Ready:
     """The robot's subscriber for switch messages exists: it can be sent its
-    part. Sent when the robot starts (again until the coordinator answers) and
-    in answer to :class:`Hello`; the coordinator sends a robot nothing of a
-    switch before it has this (a liveliness token appears before the
-    subscriber is known)."""
+    part. Sent once when the robot starts and again in answer to each
+    :class:`Hello` (the coordinator's, repeated until a robot answers); the
+    coordinator sends a robot nothing of a switch before it has this (a
+    liveliness token appears before the subscriber is known)."""
 
     TYPE: ClassVar[str] = "ready"
     robot: str

@@ -81,6 +81,19 @@ def open_trace(
             raise RunError(f"trace file {p} exists; pass --force to overwrite it")
         if not stat.S_ISREG(p.stat().st_mode):
             raise RunError(f"trace file {p} exists and is not a regular file")
+    rotated = p.with_name(p.name + ".1")  # where a capped trace rotates to
+    if max_bytes and (rotated.exists() or rotated.is_symlink()):
+        if not force:
+            raise RunError(
+                f"trace file {rotated} (where {p} rotates when full) exists; "
+                "pass --force to overwrite it"
+            )
+        if rotated.is_dir():
+            raise RunError(f"trace file {rotated} (where {p} rotates when full) is a directory")
+        try:  # it would hold an earlier run's events until the first rotation
+            rotated.unlink()
+        except OSError as exc:
+            raise RunError(f"cannot remove the trace file {rotated}: {exc.strerror}") from None
     try:
         stream = _create(p, force)
     except FileExistsError:
@@ -133,7 +146,8 @@ class TraceFile:
         self.written += size
 
     def _rotate(self) -> None:
-        """FILE becomes FILE.1 (replacing an older one) and a new FILE begins."""
+        """FILE becomes FILE.1 (replacing the one an earlier rotation of this
+        run made: :func:`open_trace` cleared any other) and a new FILE begins."""
         self.close()
         if self.failed is not None:
             return

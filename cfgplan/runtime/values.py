@@ -206,7 +206,8 @@ def elide(value: object, limit: int) -> object:
     the run's ``--trace`` and the simulator's ``trace.jsonl``."""
     if not limit or value is None or isinstance(value, bool | int | float):
         return value
-    if isinstance(value, str) and len(value) <= limit // 6 - 2:  # escaped, still short
+    # a character escapes to at most 12 of JSON (a pair of \\uXXXX beyond the basic plane)
+    if isinstance(value, str) and len(value) <= limit // 12 - 2:  # escaped, still short
         return value
     try:
         text = json.dumps(value, separators=(",", ":"))

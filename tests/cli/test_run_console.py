@@ -20,6 +20,7 @@ import cfgplan.cli.run  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
 from cfgplan.runtime import Call, Presence
 from cfgplan.runtime.console import Printer
+from cfgplan.runtime.events import Lifecycle
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL
 
 STEP2 = [str(DOMAINS / "cross-door" / name) for name in ("domain.lisp", "state-6.2.2-step2.lisp")]
@@ -78,6 +79,18 @@ def test_a_failure_of_the_implementation_is_tagged_with_its_file() -> None:
         "cfgplan: cycle 3: Emil F10 compass(Emil) failed: injected fault (x) [injected]",
     ]
     assert out.getvalue() == ""
+
+
+def test_text_from_another_process_cannot_drive_the_terminal() -> None:
+    """A helper's error text (``call-error``) is printed by the coordinator:
+    an escape sequence in it is shown escaped, never written raw."""
+    out, err = io.StringIO(), io.StringIO()
+    printer = Printer(False, "impl.py", out, err)
+    said = "Pippi F7 transform-info(Pippi): boom \x1b[2J\x1b]0;owned\x07"
+    printer(Lifecycle(robot="Emil", t=0.0, what="error", info=(("message", said),)))
+    shown = out.getvalue() + err.getvalue()
+    assert "boom" in shown and "\x1b" not in shown and "\x07" not in shown
+    assert "\\x1b[2J" in shown
 
 
 class _Terminal(io.StringIO):

@@ -87,9 +87,9 @@ def test_the_wire_format_is_that_of_the_protocol_before_it_was_typed() -> None:
     }
 
 
-def _table() -> dict[str, tuple[str, list[str]]]:
+def _table(page: Path = PAGE) -> dict[str, tuple[str, list[str]]]:
     """The page's message table: name -> (tag on the wire, fields)."""
-    text = PAGE.read_text(encoding="utf-8")
+    text = page.read_text(encoding="utf-8")
     section = text.split("## Messages", 1)[1].split("\n## ", 1)[0]
     rows = {}
     for line in section.splitlines():
@@ -107,8 +107,19 @@ def test_the_docs_table_of_messages_is_the_module() -> None:
 
 
 def test_the_docs_table_check_can_fail(tmp_path: Path) -> None:
-    rows = _table()
-    assert "Ready" in rows and "Hello" in rows and rows["Ack"][1][-1] == "reason"
+    """The check reads the rows it compares: a page whose Ack row lost its
+    ``reason`` field, or that lost the Ready row, no longer matches."""
+    expected = {m.__name__: ('"{}": "{}"'.format(*tag(m)), wire_fields(m)) for m in MESSAGES}
+    text = PAGE.read_text(encoding="utf-8")
+    ack = next(line for line in text.splitlines() if line.startswith("| `Ack`"))
+    assert "`reason`" in ack
+    no_reason = tmp_path / "no-reason.md"
+    no_reason.write_text(text.replace(ack, ack.replace("`reason`", "")), encoding="utf-8")
+    assert _table(no_reason) != expected and "reason" not in _table(no_reason)["Ack"][1]
+    ready = next(line for line in text.splitlines() if line.startswith("| `Ready`"))
+    no_ready = tmp_path / "no-ready.md"
+    no_ready.write_text(text.replace(ready + "\n", ""), encoding="utf-8")
+    assert "Ready" not in _table(no_ready) and _table(no_ready) != expected
 
 
 def _literals(path: Path) -> list[tuple[int, str]]:

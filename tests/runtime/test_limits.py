@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from cfgplan.runtime import Implementation, Part, Registry, Society, build
+from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Lifecycle, Transfer
 from cfgplan.runtime.part import CallSpec, ChannelSpec
 from cfgplan.runtime.tracefile import ELIDE, open_trace
@@ -159,6 +160,24 @@ def test_a_trace_file_rotates_once_past_its_cap(tmp_path: Path) -> None:
     before = [json.loads(x)["message"] for x in old.read_text().splitlines()]
     assert newest[-1] == "m199"
     assert int(before[-1][1:]) + 1 == int(newest[0][1:])  # FILE.1 ends where FILE begins
+
+
+def test_a_rotated_file_of_an_earlier_run_is_not_overwritten_silently(tmp_path: Path) -> None:
+    """FILE.1 is where FILE rotates: one left by an earlier run is refused
+    without --force (it would be overwritten at the first rotation) and, with
+    it, removed at once (until then it would pass for this run's events)."""
+    path = tmp_path / "run.jsonl"
+    old = tmp_path / "run.jsonl.1"
+    old.write_text("earlier run\n")
+    with pytest.raises(RunError, match=r"run\.jsonl\.1 .*exists; pass --force"):
+        open_trace(path, max_bytes=2_000)
+    assert old.read_text() == "earlier run\n" and not path.exists()
+    open_trace(path, force=True, max_bytes=2_000).close()
+    assert not old.exists()
+    open_trace(tmp_path / "other.jsonl", max_bytes=0).close()  # no cap: no FILE.1 to mind
+    (tmp_path / "other.jsonl.1").write_text("kept\n")
+    open_trace(tmp_path / "other.jsonl", force=True, max_bytes=0).close()
+    assert (tmp_path / "other.jsonl.1").read_text() == "kept\n"
 
 
 def test_a_trace_file_without_a_cap_does_not_rotate(tmp_path: Path) -> None:
