@@ -15,9 +15,11 @@ Bounded (issue 33): a value whose JSON is longer than ``elide`` characters
 (:func:`~cfgplan.runtime.values.elide`, the rule the simulator's trace
 follows too), and the file is capped at ``max_bytes`` (:data:`MAX_BYTES`,
 64 MiB; ``--trace-max-bytes``, 0: no cap): when a line would take it past the
-cap, FILE is renamed FILE.1 (replacing an older FILE.1) and a new FILE
-begins. So at most twice the cap is kept on disk: the newest events in FILE,
-those just before them in FILE.1; older ones are dropped.
+cap, FILE is renamed FILE.1 (replacing the one an earlier rotation made) and
+a new FILE begins. So at most twice the cap is kept on disk: the newest
+events in FILE, those just before them in FILE.1; older ones are dropped. A
+FILE.1 already there when the run starts is, like FILE, overwritten (removed
+at once) only with ``--force``.
 """
 
 from __future__ import annotations
