@@ -28,14 +28,13 @@ from typing import Protocol
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text, call_text
-from cfgplan.planner.task import Ground
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.decision import Decision
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Reconfigurator
-from cfgplan.reconfigure.suspect import Suspicions
+from cfgplan.reconfigure.suspect import Blamed, Suspicions
 from cfgplan.runtime.events import Adaptation
-from cfgplan.runtime.monitor import Detection
+from cfgplan.runtime.monitor import HOLD, Detection
 from cfgplan.runtime.part import Part
 
 __all__ = ["Coordinator", "Deployer", "Done"]
@@ -84,12 +83,15 @@ class Coordinator:
     _achieved: Configuration | None = None  # the configuration whose task was accomplished
     _installed_at: float = 0.0  # when the running configuration was deployed (time.time())
     _installed: int = -1  # its id; -1: the first, deployed before the coordinator started
-    _blamed_stale: dict[Ground, str] = field(default_factory=dict)
-    """Functionality instances failed because their outputs went stale, with the
-    robot whose data stopped: they recover when that robot is seen again."""
+    hold: float = HOLD
+    """Seconds after which what was blamed only for stale outputs is tried
+    again, its robot not lost; doubled with each blame of it, up to
+    :data:`~cfgplan.runtime.monitor.HOLD_MAX` (the robots' hold, ``--hold``)."""
+    _blamed: Blamed = field(init=False, repr=False)  # out for stale outputs (suspect.py)
 
     def __post_init__(self) -> None:
         self._suspects = Suspicions(self.clock)
+        self._blamed = Blamed(self.hold)
 
     # -- input --------------------------------------------------------------
 
@@ -185,7 +187,7 @@ class Coordinator:
             for detection in backlog:
                 self.handle(detection)
             return
-        if self._settled():
+        if self._settled() or self._retry():
             return
         if self.ahead is None:
             self.reconfigurator.prepare()
@@ -252,12 +254,11 @@ class Coordinator:
         if resource.kind == "robot":
             together = tuple(
                 Resource("functionality", instance=instance, text=call_text(instance))
-                for instance, sender in self._blamed_stale.items()
-                if sender == resource.robot and instance in situation.failed
+                for instance in self._blamed.silenced_by(resource.robot, situation)
             )
         for each in (resource, *together):
             if each.kind == "functionality":
-                self._blamed_stale.pop(each.instance, None)
+                self._blamed.forget(each.instance)
             self._note_resource("recovery", detection, each)
         texts = " and ".join(each.text for each in (resource, *together))
         self._apply(
@@ -270,8 +271,30 @@ class Coordinator:
         if blamed is None:
             return False
         if blamed.instance and blamed.other:
-            self._blamed_stale[tuple(blamed.instance)] = blamed.other
+            self._blamed.blame(tuple(blamed.instance), blamed.other, self.clock())
         self._failure(blamed)
+        return True
+
+    def _retry(self) -> bool:
+        """Try again what was blamed only for stale outputs once its hold is
+        over, when the robot whose data stopped is not lost (5.5, 7.2): a
+        link that stalled or a robot frozen for less than its lease leaves no
+        other evidence, and no scripted ``recover`` is needed. Blamed again,
+        its hold doubles. True when it acted."""
+        if self.finished is not None:
+            return False
+        due = tuple(
+            Resource("functionality", instance=instance, text=call_text(instance))
+            for instance in self._blamed.due(self.reconfigurator.situation, self.clock())
+        )
+        if not due:
+            return False
+        retry = Detection("recovery", self.robot, time.time(), how="retry")
+        for each in due:
+            self._blamed.forget(each.instance)
+            self._note_resource("recovery", retry, each)
+        texts = " and ".join(each.text for each in due)
+        self._apply(self.reconfigurator.recovered(due[0], f"{texts} tried again", due[1:]), retry)
         return True
 
     # -- output -------------------------------------------------------------

@@ -162,5 +162,6 @@ def adapt(
         deployer,
         clock=clock or society.clock,
         ahead=Ahead(reconfigurator) if ahead else None,
+        hold=hold,
     )
     return Adaptive(coordinator, monitor, Injector(injections, society))

@@ -178,7 +178,7 @@ def coordinate(
         task, domain, goal, config, hysteresis or Hysteresis(), goals=goals
     )
     coordinator = Coordinator(
-        reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator)
+        reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator), hold=hold
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)

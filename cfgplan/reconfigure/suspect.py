@@ -17,7 +17,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.runtime.monitor import Detection
+from cfgplan.planner.task import Ground
+from cfgplan.reconfigure.situation import Situation
+from cfgplan.runtime.monitor import HOLD_MAX, Detection
 
 __all__ = ["Suspicions", "upstream"]
 
@@ -93,3 +95,48 @@ class Suspicions:
             how="stale",
             detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
         )
+
+
+@dataclass(frozen=True)
+class _Blame:
+    """Why and since when a functionality instance is out for stale outputs."""
+
+    sender: str  # the robot whose data stopped
+    since: float  # when it was blamed (the coordinator's clock)
+    hold: float  # how long before it is tried again
+
+
+@dataclass
+class Blamed:
+    """The functionality instances failed only because their outputs went
+    stale (:meth:`Suspicions.settled`): a silent robot looks at first like a
+    silent computation on it, so these come back on evidence about the robot
+    (5.5): it is seen again (:meth:`silenced_by`), or its hold is over while
+    it is not lost (:meth:`due`); each blame of the same instance doubles its
+    hold, up to :data:`~cfgplan.runtime.monitor.HOLD_MAX`."""
+
+    hold: float
+    _out: dict[Ground, _Blame] = field(default_factory=dict)
+    _times: dict[Ground, int] = field(default_factory=dict)
+
+    def blame(self, instance: Ground, sender: str, now: float) -> None:
+        """``instance`` failed at ``now`` because ``sender``'s data stopped."""
+        times = self._times[instance] = self._times.get(instance, 0) + 1
+        hold = min(self.hold * 2 ** (times - 1), HOLD_MAX)
+        self._out[instance] = _Blame(sender, now, hold)
+
+    def forget(self, instance: Ground) -> None:
+        """``instance`` recovered (its count of blames stays, for the next hold)."""
+        self._out.pop(instance, None)
+
+    def silenced_by(self, robot: str, situation: Situation) -> list[Ground]:
+        """What is still out because ``robot``'s data stopped."""
+        return [i for i, b in self._out.items() if b.sender == robot and i in situation.failed]
+
+    def due(self, situation: Situation, now: float) -> list[Ground]:
+        """What is still out, its hold over, the robot whose data stopped not lost."""
+        return [
+            i
+            for i, b in self._out.items()
+            if i in situation.failed and b.sender not in situation.lost and now - b.since >= b.hold
+        ]

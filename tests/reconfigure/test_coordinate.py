@@ -286,3 +286,57 @@ def test_a_robot_seen_again_brings_back_what_its_silence_blamed() -> None:
         "Pippi",
         call_text(transform.key),
     ]
+
+
+def test_what_staleness_blamed_is_tried_again_after_its_hold_doubling() -> None:
+    """Pippi's output to Emil stalls without Pippi being lost (a freeze shorter
+    than her lease, a stalled link): the computation on her is blamed and the
+    society stops. After the hold (1 s) it is tried again by itself, no
+    scripted recover: the society runs 44 again. Blamed a second time, it
+    waits twice as long."""
+    coordinator, deployer, clock, events, config = _coordinator()
+
+    def stall(running: Configuration) -> None:
+        transform = next(
+            f for f in running.functionalities if f.name == "transform-info" and f.robot == "Pippi"
+        )
+        coordinator.handle(_stale(transform.label, "Pippi", "transform->cross"))
+        clock.now += 0.5
+        coordinator.tick()
+
+    stall(config)
+    assert deployer.deployed[-1][0].config is None  # stopped
+    clock.now += 0.9
+    coordinator.tick()
+    assert len(deployer.deployed) == 1  # within the hold: still out
+    clock.now += 0.2
+    coordinator.tick()
+    decision, _ = deployer.deployed[-1]
+    assert decision.config is not None and decision.config.cost == 44
+    retried = [e for e in events if e.kind == "recovery" and isinstance(e, Adaptation)]
+    assert [(e.field("resource"), e.field("how")) for e in retried] == [
+        ("transform-info(Pippi, Emil, Door1)", "retry")
+    ]
+    stall(decision.config)  # relabelled by the switch
+    assert deployer.deployed[-1][0].config is None
+    clock.now += 1.1
+    coordinator.tick()
+    assert deployer.deployed[-1][0].config is None  # the hold doubled: 2 s now
+    clock.now += 1.0
+    coordinator.tick()
+    assert deployer.deployed[-1][0].config is not None
+
+
+def test_a_lost_robot_is_not_tried_again_before_it_is_seen() -> None:
+    """The robot whose data stopped is lost: its hold passing is no evidence."""
+    coordinator, deployer, clock, _, config = _coordinator()
+    transform = next(
+        f for f in config.functionalities if f.name == "transform-info" and f.robot == "Pippi"
+    )
+    coordinator.handle(_stale(transform.label, "Pippi", "transform->cross"))
+    clock.now += 0.5
+    coordinator.tick()
+    coordinator.handle(Detection("lost", "Emil", 2.0, other="Pippi"))
+    clock.now += 5.0
+    coordinator.tick()
+    assert all(decision.config is None for decision, _ in deployer.deployed)
