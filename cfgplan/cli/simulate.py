@@ -133,8 +133,8 @@ def _run(
     quiet: bool,
 ) -> int:
     from cfgplan.cli.run import diagnostic
+    from cfgplan.runtime.console import Printer
     from cfgplan.runtime.errors import RunError
-    from cfgplan.runtime.launch import Printer
     from cfgplan.sim.outputs import write_all
     from cfgplan.sim.report import why
     from cfgplan.sim.run import Prepared

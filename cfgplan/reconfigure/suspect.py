@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.task import Ground
 from cfgplan.reconfigure.situation import Situation
-from cfgplan.runtime.monitor import HOLD_MAX, Detection
+from cfgplan.runtime.monitor import Detection, doubled_hold
 
 __all__ = ["Suspicions", "upstream"]
 
@@ -122,8 +122,7 @@ class Blamed:
     def blame(self, instance: Ground, sender: str, now: float) -> None:
         """``instance`` failed at ``now`` because ``sender``'s data stopped."""
         times = self._times[instance] = self._times.get(instance, 0) + 1
-        hold = min(self.hold * 2 ** (times - 1), HOLD_MAX)
-        self._out[instance] = _Blame(sender, now, hold)
+        self._out[instance] = _Blame(sender, now, doubled_hold(self.hold, times))
 
     def forget(self, instance: Ground) -> None:
         """``instance`` recovered (its count of blames stays, for the next hold)."""

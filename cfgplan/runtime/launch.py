@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from types import FrameType
 from typing import Protocol, TextIO
 
-from cfgplan.runtime.console import FAULTS_SHOWN, STATUS_EVERY, WAIT_NOTICE, Printer
+from cfgplan.runtime.console import STATUS_EVERY, Printer
 from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.society import Society
 from cfgplan.runtime.trace import summary, undelivered
@@ -43,15 +43,7 @@ from cfgplan.runtime.tracefile import MAX_BYTES as TRACE_MAX_BYTES
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.values import MAX_VALUE_BYTES
 
-__all__ = [
-    "EXIT_NONE",
-    "FAULTS_SHOWN",
-    "WAIT_NOTICE",
-    "Hooks",
-    "Printer",
-    "RunOptions",
-    "execute",
-]
+__all__ = ["EXIT_NONE", "Hooks", "RunOptions", "execute"]
 
 EXIT_NONE = 3
 """Exit status of a run that ends with no admissible configuration (as ``cfgplan plan``)."""

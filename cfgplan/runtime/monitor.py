@@ -50,13 +50,20 @@ from cfgplan.runtime.faults import term_text
 from cfgplan.runtime.wire import is_number, names, whole
 from cfgplan.runtime.wrapper import Wrapper
 
-__all__ = ["HOLD", "HOLD_MAX", "PROBE", "Detection", "Monitor", "Prober"]
+__all__ = ["HOLD", "HOLD_MAX", "PROBE", "Detection", "Monitor", "Prober", "doubled_hold"]
 
 HOLD = 1.0
 """Seconds a failed resource must work again before it counts as recovered."""
 
 HOLD_MAX = 30.0
 """The hold doubles with each failure of the same resource, up to this."""
+
+
+def doubled_hold(hold: float, failures: int) -> float:
+    """The hold after the ``failures``-th failure of one resource: ``hold``,
+    then doubled with each further failure, up to :data:`HOLD_MAX` (no flapping)."""
+    return min(hold * 2.0 ** (failures - 1), HOLD_MAX)
+
 
 PROBE = 0.2
 """Seconds between two probes of a failed sensing resource."""
@@ -159,8 +166,7 @@ class Prober:
         """``instance`` failed: probe it (again), with a doubled hold."""
         count = self.failures.get(instance, 0) + 1
         self.failures[instance] = count
-        hold = min(self.hold * 2 ** (count - 1), HOLD_MAX)
-        self.probes[instance] = _Probe(wrapper, how, hold)
+        self.probes[instance] = _Probe(wrapper, how, doubled_hold(self.hold, count))
 
     def __call__(self, robot: Robot) -> None:
         now = robot.now

@@ -323,25 +323,25 @@ def _fields(message: type[ToRobot] | type[ToCoordinator], data: dict[str, object
     return message(**values)
 
 
+def _read(payload: bytes, key: str, kinds: dict[str, type[Any]]) -> object:
+    """The message ``payload`` holds, its class named by field ``key``."""
+    data = _object(payload)
+    tag = data.get(key)
+    message = kinds.get(tag) if isinstance(tag, str) else None
+    if message is None:
+        raise ProtocolError(f"{key} is {tag!r}, not one of {', '.join(kinds)}")
+    return _fields(message, data)
+
+
 def read_to_robot(payload: bytes) -> ToRobot:
     """A message from the coordinator (:class:`ProtocolError` when it is none)."""
-    data = _object(payload)
-    op = data.get("op")
-    message = _TO_ROBOT.get(op) if isinstance(op, str) else None
-    if message is None:
-        raise ProtocolError(f"op is {op!r}, not one of {', '.join(_TO_ROBOT)}")
-    out = _fields(message, data)
-    assert isinstance(out, message)
+    out = _read(payload, "op", _TO_ROBOT)
+    assert isinstance(out, ToRobot)
     return out
 
 
 def read_to_coordinator(payload: bytes) -> ToCoordinator:
     """A message from a robot (:class:`ProtocolError` when it is none)."""
-    data = _object(payload)
-    kind = data.get("type")
-    message = _TO_COORDINATOR.get(kind) if isinstance(kind, str) else None
-    if message is None:
-        raise ProtocolError(f"type is {kind!r}, not one of {', '.join(_TO_COORDINATOR)}")
-    out = _fields(message, data)
-    assert isinstance(out, message)
+    out = _read(payload, "type", _TO_COORDINATOR)
+    assert isinstance(out, ToCoordinator)
     return out

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 import cfgplan.cli.emit  # noqa: F401  (registers the command)
 from cfgplan.cli.app import app
-from cfgplan.runtime.launch import WAIT_NOTICE
+from cfgplan.runtime.console import WAIT_NOTICE
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT
 from tests.runtime.netutil import first, processes, read_trace, wait_for
 

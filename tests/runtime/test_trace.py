@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from cfgplan.runtime import Call, Presence, RunError, show
-from cfgplan.runtime.launch import WAIT_NOTICE, Printer
+from cfgplan.runtime.console import WAIT_NOTICE, Printer
 from cfgplan.runtime.trace import describe, show_checked
 from cfgplan.runtime.tracefile import open_trace
 
