@@ -17,8 +17,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from cfgplan.documents import Closed, Number
 from cfgplan.planner.report import Condition, StopReason
 
 __all__ = [
@@ -38,15 +39,6 @@ __all__ = [
     "SequenceStats",
     "StepEntry",
 ]
-
-Number = int | float
-"""A cost, bandwidth or capacity: written ``44``, not ``44.0``, when whole."""
-
-
-class Closed(BaseModel):
-    """A JSON object whose keys are all named here (validation refuses others)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, populate_by_name=True)
 
 
 class FunctionalityEntry(Closed):

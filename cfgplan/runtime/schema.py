@@ -17,8 +17,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, JsonValue, TypeAdapter
+from pydantic import Field, JsonValue, TypeAdapter
 
+from cfgplan.documents import Closed, Number
 from cfgplan.runtime.faults import Action
 
 __all__ = [
@@ -46,12 +47,6 @@ __all__ = [
 
 Data = list[str]
 """A data descriptor, e.g. ``["pos", "Pippi", "Door1"]``."""
-
-Number = int | float
-
-
-class Closed(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, populate_by_name=True)
 
 
 class Base(Closed):
