@@ -12,16 +12,21 @@ with the messages of :mod:`cfgplan.runtime.protocol`:
   back) is greeted (:class:`~cfgplan.runtime.protocol.Hello`), again after
   ``greet`` seconds, twice as long each time (at most ``greet_most``), until
   it answers;
-* **prepare** to every robot of the new (or old) configuration that is alive
-  and ready; each answers ``ready`` or ``refused``;
+* **prepare** to every robot of the new configuration that is alive and
+  ready; each answers ``ready`` or ``refused``. A robot of the old
+  configuration only that leaves (its new part is empty) has nothing to
+  prepare or refuse and is not waited for — it may be the robot that froze;
 * when all are ready, the coordinator installs its own part and sends
-  **commit**; each robot installs its part between two cycles and answers
-  ``installed``; the switch is *running* when every answer is in (its
+  **commit** (with the empty part, to those that leave); each robot installs
+  its part between two cycles and answers ``installed``; the switch is
+  *running* when every answer of the new configuration's robots is in (its
   latency is measured to that moment);
-* a refusal, or no answer within :data:`SWITCH_TIMEOUT` seconds while
-  preparing, **aborts** the switch (nobody changed anything); the robots that
-  failed to answer are taken as lost (in one decision), and the coordinator
-  plans again without them. A commit not answered in time is taken as done
+* a refusal, no answer within :data:`SWITCH_TIMEOUT` seconds while
+  preparing, or a robot's liveliness token going away (:meth:`gone`: no
+  waiting out the timeout for it), **aborts** the switch (nobody changed
+  anything); the robots that failed to answer are taken as lost (in one
+  decision), and the coordinator plans again without them. A commit not
+  answered in time is taken as done
   (the robot installs it when it gets it, or liveliness reports it lost); a
   commit refused (the robot lost what it prepared) is sent again with the
   part, and refused again makes the robot lost: nothing is rolled back,
@@ -125,7 +130,7 @@ class NetworkDeployer:
         targets = {
             r: p for r, p in parts.items() if r == self.me or (r in alive and r in self.ready)
         }
-        others = sorted(r for r in targets if r != self.me)
+        joining = sorted(r for r in targets if r != self.me and not _empty(targets[r]))
         self.switch = _Switch(
             decision,
             targets,
@@ -133,7 +138,7 @@ class NetworkDeployer:
             done,
             failed,
             Phase.READY,
-            set(others),
+            set(joining),
             self.clock() + self.timeout,
         )
         own = targets.get(self.me)
@@ -141,10 +146,10 @@ class NetworkDeployer:
         if refusal is not None:  # as a robot refuses a prepare
             self._abort([self.me], f"refused: {refusal}")
             return
-        for robot in others:
+        for robot in joining:
             part = part_to_json(targets[robot])
             self._to(robot, Prepare(decision.id, self.me, self.epoch, part))
-        if not others:
+        if not joining:
             self._commit()
 
     def _commit(self) -> None:
@@ -152,16 +157,18 @@ class NetworkDeployer:
         assert switch is not None
         number = switch.decision.id
         others = sorted(r for r in switch.parts if r != self.me)
-        switch.awaiting, switch.waiting = Phase.INSTALLED, set(others)
+        joining = [r for r in others if not _empty(switch.parts[r])]
+        switch.awaiting, switch.waiting = Phase.INSTALLED, set(joining)
         switch.deadline = self.clock() + self.timeout
         for robot in others:  # first: they install while this robot does
-            self._to(robot, Commit(number, self.me, self.epoch))
+            leaving = None if robot in joining else part_to_json(switch.parts[robot])
+            self._to(robot, Commit(number, self.me, self.epoch, leaving))
         own = switch.parts.get(self.me)
         if own is not None:
             self.member.install(number, own)
         self.parts = {**self.parts, **switch.everyone}
         self.current = number
-        if not others:
+        if not joining:
             self._finish()
 
     def _finish(self) -> None:
@@ -274,10 +281,22 @@ class NetworkDeployer:
         self._greeting.pop(robot, None)
 
     def gone(self, robot: str) -> None:
-        """``robot``'s token went away: ready no more (back, it says so again)."""
+        """``robot``'s token went away: ready no more (back, it says so again).
+        A switch that awaits its answer does not wait any longer: one being
+        prepared is aborted at once (the robot is lost, the coordinator plans
+        without it); one committed goes on without it."""
         self.ready.discard(robot)
         self._greeting.pop(robot, None)
         self._owed.discard(robot)
+        switch = self.switch
+        if switch is None or robot not in switch.waiting:
+            return
+        if switch.awaiting is Phase.READY:
+            self._abort([robot], "lost")
+            return
+        switch.waiting.discard(robot)
+        if not switch.waiting:
+            self._finish()
 
     def resync(self, robot: str) -> None:
         """Send ``robot`` the part it should be running (it said it is ready);
@@ -310,3 +329,9 @@ class NetworkDeployer:
         if waiting and self.clock() < deadline:
             return None
         return sorted(waiting)
+
+
+def _empty(part: Part) -> bool:
+    """A part that only stops what the robot ran: nothing to prepare or refuse,
+    so a switch does not wait for the robot (it may be the one that froze)."""
+    return not part.calls and not part.channels

@@ -39,7 +39,14 @@ from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.member import Member
 from cfgplan.runtime.monitor import HOLD, Detection, Monitor
 from cfgplan.runtime.part import Part
-from cfgplan.runtime.protocol import Ack, CallError, ProtocolError, Ready, read_to_coordinator
+from cfgplan.runtime.protocol import (
+    Ack,
+    CallError,
+    ProtocolError,
+    Ready,
+    Report,
+    read_to_coordinator,
+)
 from cfgplan.runtime.society import Society
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
@@ -101,11 +108,10 @@ class NetworkAdaptive:
                 return
             self._present.add(robot)
             self.deployer.resync(robot)
-        elif detection.kind == "lost":
+        elif detection.kind == "lost":  # its token went (or it refused): ready no more
             self._present.discard(robot)
-            if detection.robot == self.deployer.me:  # its token went: ready no more
-                self._held.pop(robot, None)  # (a helper's view of it may differ)
-                self.deployer.gone(robot)
+            self._held.pop(robot, None)
+            self.deployer.gone(robot)
         self.coordinator.handle(detection)
 
     def receive(self, payload: bytes) -> None:
@@ -124,7 +130,21 @@ class NetworkAdaptive:
             said = f"{message.robot} {message.functionality}: {message.error}"
             self.deployer.member.error(said)
         else:
-            self.take(message.detection)
+            self._report(message)
+
+    def _report(self, report: Report) -> None:
+        """A helper's detection. It speaks only for itself: a detection made
+        on another robot is dropped (recorded). Who is in the society is the
+        coordinator's own liveliness view: a helper's ``lost`` or ``seen``
+        says only how *it* sees the network (a helper frozen a while sees
+        everyone lost once it runs again; a link between two helpers that
+        dropped shows as stale inputs), so it is not acted on here."""
+        detection = report.detection
+        if detection.robot != report.robot:
+            said = f"{report.robot} reported a detection made by {detection.robot!r}: dropped"
+            self.deployer.member.error(said)
+        elif detection.kind not in ("lost", "seen"):
+            self.take(detection)
 
     def _ready(self, robot: str) -> None:
         """``robot`` can be sent its part: take it back if it was seen, else

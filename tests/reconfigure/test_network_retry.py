@@ -25,8 +25,8 @@ from cfgplan.reconfigure.network import (
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Adaptation, Event
 from cfgplan.runtime.monitor import Detection, Monitor
-from cfgplan.runtime.part import Part
-from cfgplan.runtime.protocol import Ready, encode
+from cfgplan.runtime.part import CallSpec, Part
+from cfgplan.runtime.protocol import Phase, Ready, encode
 from tests.reconfigure.test_coordinate import STEP2, Clock
 
 
@@ -102,28 +102,33 @@ def test_a_silent_robot_still_alive_is_tried_again_and_rejoins() -> None:
     """Emil's compass fails; the switch needs Pippi, whose prepare goes
     unanswered: the switch is aborted and she is taken as lost. Nothing is
     admissible without her, so Emil stops, and tells her so too, since she is
-    alive: unanswered again, aborted again. Alive all the while, she is tried
-    again 2·RETRY seconds later (her second silence in a row), answers this
-    time, and the society switches to the configuration with her (6.2.2
-    step 2: 47)."""
+    alive — with her empty part in the commit, not waiting for her answer
+    (she has nothing to prepare). Alive all the while, she is tried again
+    RETRY seconds later, answers this time, and the society switches to the
+    configuration with her (6.2.2 step 2: 47)."""
     adaptive, network, clock, events = _society()
     compass = Detection("failure", "Emil", 1.0, instance=("compass", "Emil"), how="injected")
     adaptive.take(compass)
     assert len(network.to("Pippi", "prepare")) == 1
     _wait(adaptive, clock, SWITCH_TIMEOUT + 0.1)
-    assert _what(events)[-2:] == [("abort", "silent"), ("failure", "silent")]
+    assert _what(events)[-3:] == [
+        ("abort", "silent"),
+        ("failure", "silent"),
+        ("no-configuration", ""),
+    ]
     assert "Pippi" in adaptive.coordinator.reconfigurator.situation.lost
-    assert len(network.to("Pippi", "prepare")) == 2  # the stop
-    _wait(adaptive, clock, SWITCH_TIMEOUT + 0.1)
-    assert _what(events)[-1] == ("abort", "silent")
-    _wait(adaptive, clock, 2 * RETRY - 0.1)  # not yet
+    assert len(network.to("Pippi", "prepare")) == 1  # the stop is not prepared
+    stop = network.to("Pippi", "commit")[-1]
+    assert stop["part"] == {"robot": "Pippi", "channels": [], "calls": []}
+    assert adaptive.deployer.switch is None  # and not waited for
+    _wait(adaptive, clock, RETRY - 0.2)  # not yet
     assert ("recovery", "retry") not in _what(events)
-    assert len(network.to("Pippi", "prepare")) == 2
-    _wait(adaptive, clock, 0.1)
+    assert len(network.to("Pippi", "prepare")) == 1
+    _wait(adaptive, clock, 0.2)
     assert _what(events)[-1] == ("recovery", "retry")
     assert "Pippi" not in adaptive.coordinator.reconfigurator.situation.lost
     prepare = network.to("Pippi", "prepare")[-1]
-    assert len(network.to("Pippi", "prepare")) == 3
+    assert len(network.to("Pippi", "prepare")) == 2
     number = int(str(prepare["id"]))
     adaptive.deployer.acked("Pippi", number, "ready", "")
     adaptive.deployer.acked("Pippi", number, "installed", "")
@@ -140,7 +145,8 @@ def test_each_silence_in_a_row_doubles_the_wait_and_an_answer_resets_it() -> Non
     waits = []
     for number in range(1, 8):
         decision = SimpleNamespace(id=number)
-        parts = {"Pippi": Part("Pippi", (), ())}
+        camera = CallSpec("F1", "camera", ("Pippi",), (), ())  # a part to prepare
+        parts = {"Pippi": Part("Pippi", (), (camera,))}
         deployer.deploy(decision, parts, lambda: None, lambda robots, _: aborted.append(robots))  # type: ignore[arg-type]
         assert deployer.due() == []  # not while a switch is on
         clock.now += SWITCH_TIMEOUT + 0.1
@@ -169,3 +175,56 @@ def test_a_silent_robot_that_is_gone_is_left_to_liveliness() -> None:
     _wait(adaptive, clock, RETRY_MOST)
     assert ("recovery", "retry") not in _what(events)
     assert adaptive.deployer.silent == {} and adaptive.deployer._wait == {}
+
+
+def _deployer() -> tuple[NetworkDeployer, Network, Clock]:
+    network, clock = Network(alive={"Emil", "Pippi", "Rasmus"}), Clock()
+    deployer = NetworkDeployer(network, Me(), clock=clock)  # type: ignore[arg-type]
+    for robot in ("Pippi", "Rasmus"):
+        deployer.said_ready(robot)
+    return deployer, network, clock
+
+
+def test_a_robot_that_only_leaves_is_not_waited_for() -> None:
+    """A switch away from Rasmus (frozen, say): his new part is empty, so he
+    is sent no prepare, only the commit carrying his empty part; the switch
+    runs once Pippi, who joins, answers — not after the timeout."""
+    deployer, network, _clock = _deployer()
+    done: list[bool] = []
+    camera = CallSpec("F1", "camera", ("Pippi",), (), ())
+    parts = {"Pippi": Part("Pippi", (), (camera,)), "Rasmus": Part("Rasmus", (), ())}
+    deployer.deploy(SimpleNamespace(id=1), parts, lambda: done.append(True), lambda *_: None)  # type: ignore[arg-type]
+    assert [m["op"] for m in network.to("Pippi", "prepare")] == ["prepare"]
+    assert network.to("Rasmus", "prepare") == []
+    deployer.acked("Pippi", 1, Phase.READY, "")
+    (leave,) = network.to("Rasmus", "commit")
+    assert leave["part"] == {"robot": "Rasmus", "channels": [], "calls": []}
+    assert network.to("Pippi", "commit")[0].get("part") is None  # prepared: no part again
+    deployer.acked("Pippi", 1, Phase.INSTALLED, "")
+    assert done == [True] and deployer.switch is None
+
+
+def test_a_robot_gone_in_a_switch_is_not_waited_out() -> None:
+    """Liveliness says Pippi went while the switch awaits her: a prepare is
+    aborted at once (she is lost), a commit goes on without her."""
+    deployer, network, _clock = _deployer()  # the clock never moves
+    camera = CallSpec("F1", "camera", ("Pippi",), (), ())
+    laser = CallSpec("F2", "laser", ("Rasmus",), (), ())
+    parts = {"Pippi": Part("Pippi", (), (camera,)), "Rasmus": Part("Rasmus", (), (laser,))}
+    aborted: list[tuple[list[str], str]] = []
+    done: list[bool] = []
+    fail = lambda robots, why: aborted.append((robots, why))  # noqa: E731
+    deployer.deploy(SimpleNamespace(id=1), parts, lambda: done.append(True), fail)  # type: ignore[arg-type]
+    network.alive.discard("Pippi")
+    deployer.gone("Pippi")
+    assert aborted == [(["Pippi"], "lost")] and deployer.switch is None
+    deployer.said_ready("Pippi")  # back
+    network.alive.add("Pippi")
+    deployer.deploy(SimpleNamespace(id=3), parts, lambda: done.append(True), fail)  # type: ignore[arg-type]
+    for robot in ("Pippi", "Rasmus"):
+        deployer.acked(robot, 3, Phase.READY, "")
+    deployer.acked("Rasmus", 3, Phase.INSTALLED, "")
+    assert done == [] and deployer.switch is not None
+    deployer.gone("Pippi")
+    assert done == [True] and deployer.switch is None
+    assert aborted == [(["Pippi"], "lost")]

@@ -216,15 +216,31 @@ def test_a_helpers_failed_call_is_said_on_the_coordinators_console() -> None:
     assert errors == [f"Pippi F7: transform-info(Pippi, Emil, Door1): {said}"]
 
 
-def test_a_helpers_view_of_a_robot_lost_leaves_it_ready() -> None:
-    """Only the coordinator's own liveliness view makes a robot not ready:
-    Rasmus reporting Emil lost then seen (his link to Emil dropped a while)
-    takes Emil back at once, with his part, without waiting for a new ready."""
-    adaptive, network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
-    lost = Detection("lost", "Rasmus", time.time(), other="Emil")
-    adaptive.receive(encode(Report("Rasmus", lost)))
-    assert "Emil" in adaptive.deployer.ready
-    network.sent.clear()
-    adaptive.receive(encode(Report("Rasmus", replace(lost, kind="seen"))))
-    assert "Emil" in adaptive._present and not adaptive._held  # taken back at once
-    assert not network.to("Emil", "hello")
+def test_a_helpers_view_of_who_is_lost_changes_nothing() -> None:
+    """Only the coordinator's own liveliness view says who is in the society.
+    Rasmus reporting Emil lost (his link to Emil dropped a while), and Emil,
+    frozen 5 s, reporting the coordinator Pippi lost once he runs again (the
+    society stopped for good: Pippi's own facts were withdrawn), change
+    nothing: no failure, every robot still ready, nothing sent."""
+    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    for helper, other in (("Rasmus", "Emil"), ("Emil", "Pippi")):
+        lost = Detection("lost", helper, time.time(), other=other)
+        adaptive.receive(encode(Report(helper, lost)))
+        adaptive.receive(encode(Report(helper, replace(lost, kind="seen"))))
+    adaptive.coordinator.tick()
+    assert adaptive.deployer.ready >= {"Emil", "Rasmus"}
+    assert [e for e in events if e.what in ("failure", "recovery", "switch")] == []
+    assert adaptive.coordinator.reconfigurator.situation.lost == ()
+    assert network.sent == []
+
+
+def test_a_report_of_another_robots_detection_is_dropped_and_said() -> None:
+    """A report speaks only for its sender: Rasmus forwarding a failure that
+    names Emil as the robot that saw it is dropped, and the console says so."""
+    adaptive, _network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    forged = Detection("failure", "Emil", time.time(), instance=("camera", "Emil"), label="F1")
+    adaptive.receive(encode(Report("Rasmus", forged)))
+    adaptive.coordinator.tick()
+    assert [e for e in events if e.what == "failure"] == []
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == ["Rasmus reported a detection made by 'Emil': dropped"]

@@ -161,7 +161,8 @@ def test_a_frozen_robot_is_lost_after_the_lease_and_seen_again(
 ) -> None:
     """Pippi runs from the domain (``cfgplan run --robot Pippi``), Emil from its
     emitted file: the same key layout. Emil frozen (SIGSTOP) is lost after the
-    lease; let go (SIGCONT), it is seen again and the door data flows again."""
+    lease (Pippi coordinates: her failure of robot Emil); let go (SIGCONT),
+    he is seen again (his recovery) and the door data flows again."""
     lease = 0.5
     config = hermetic_config(tmp_path)
     emil_port = free_port()
@@ -198,9 +199,10 @@ def test_a_frozen_robot_is_lost_after_the_lease_and_seen_again(
         frozen = time.time()
         lost = wait_for(
             "frozen Emil lost",
-            first(pippi_trace, lambda r: r["event"] == "robot-lost"),
+            first(pippi_trace, lambda r: r["event"] == "failure" and r["resource"] == "Emil"),
             lease + 10.0,
         )
+        assert lost["how"] == "lost"
         assert float(lost["t"]) - frozen < lease + 1.5
         os.kill(emil.pid, signal.SIGCONT)
         seen_again = wait_for(
@@ -209,7 +211,9 @@ def test_a_frozen_robot_is_lost_after_the_lease_and_seen_again(
                 (
                     r
                     for r in read_trace(pippi_trace)
-                    if r["event"] == "robot-seen" and float(r["t"]) > frozen
+                    if r["event"] == "recovery"
+                    and r["resource"] == "Emil"
+                    and float(r["t"]) > frozen
                 ),
                 None,
             ),
