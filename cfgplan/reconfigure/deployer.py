@@ -58,7 +58,16 @@ from cfgplan.reconfigure.decision import Decision
 from cfgplan.runtime.keys import configure_key
 from cfgplan.runtime.member import Member, send
 from cfgplan.runtime.part import Part, part_to_json
-from cfgplan.runtime.protocol import Abort, Commit, Finish, Hello, Phase, Prepare, ToRobot
+from cfgplan.runtime.protocol import (
+    Abort,
+    Commit,
+    Duplicate,
+    Finish,
+    Hello,
+    Phase,
+    Prepare,
+    ToRobot,
+)
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
 __all__ = ["RETRY", "RETRY_MOST", "SWITCH_TIMEOUT", "NetworkDeployer"]
@@ -279,6 +288,10 @@ class NetworkDeployer:
         """``robot`` says its subscriber exists: it may be sent its part."""
         self.ready.add(robot)
         self._greeting.pop(robot, None)
+
+    def refuse(self, robot: str, instance: str) -> None:
+        """A second process of ``robot`` (its ``instance``) stops."""
+        self._to(robot, Duplicate(self.me, self.epoch, instance))
 
     def gone(self, robot: str) -> None:
         """``robot``'s token went away: ready no more (back, it says so again).

@@ -111,6 +111,11 @@ class Adaptive:
         return self.coordinator.finished
 
     @property
+    def refusal(self) -> None:
+        """In one process nobody can be refused."""
+        return None
+
+    @property
     def stopped(self) -> bool:
         """The run ends with nothing admissible running."""
         return self.coordinator.stopped

@@ -15,6 +15,14 @@ and any switch it takes part in reaches it. A helper's functionality that fails 
 helper's own message, so the coordinator's console says why, not only that
 its input went stale. A message that cannot be read is recorded as an
 ``error`` event and dropped.
+
+No split brain: a second process of a robot that is alive (its ``ready``
+carries another ``instance`` than the first one's) is told it is a
+:class:`~cfgplan.runtime.protocol.Duplicate` and stops; a coordinator told by
+a robot that it is a :class:`~cfgplan.runtime.protocol.Rival` (the robot
+follows another coordinator, alive) stops (:attr:`NetworkAdaptive.refusal`).
+Messages from robots the state does not declare are dropped (the first few
+said).
 """
 
 from __future__ import annotations
@@ -36,6 +44,7 @@ from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
+from cfgplan.runtime.launch import REFUSED
 from cfgplan.runtime.member import Member
 from cfgplan.runtime.monitor import HOLD, Detection, Monitor
 from cfgplan.runtime.part import Part
@@ -45,6 +54,7 @@ from cfgplan.runtime.protocol import (
     ProtocolError,
     Ready,
     Report,
+    Rival,
     read_to_coordinator,
 )
 from cfgplan.runtime.society import Society
@@ -71,6 +81,13 @@ class NetworkAdaptive:
     _silent: list[str] | None = None  # once the finish is over: who did not answer it
     _present: set[str] = field(default_factory=set)  # robots seen (each re-synchronised once)
     _held: dict[str, Detection] = field(default_factory=dict)  # seen, not yet ready
+    members: frozenset[str] = frozenset()
+    """The robots and devices of the state: messages from others are dropped
+    (empty: any robot is taken)."""
+    _instances: dict[str, str] = field(default_factory=dict)  # the process of each robot
+    _noted: set[str] = field(default_factory=set)  # strangers and rivals said (a few)
+    refusal: str | None = None
+    """Why this coordinator stops: another one coordinates the society."""
     reconfigures: bool = True
 
     def before(self, cycle: int, elapsed: float) -> None:
@@ -111,6 +128,7 @@ class NetworkAdaptive:
         elif detection.kind == "lost":  # its token went (or it refused): ready no more
             self._present.discard(robot)
             self._held.pop(robot, None)
+            self._instances.pop(robot, None)
             self.deployer.gone(robot)
         self.coordinator.handle(detection)
 
@@ -121,11 +139,16 @@ class NetworkAdaptive:
         except ProtocolError as exc:
             self.deployer.member.error(f"a message to the coordinator that cannot be read: {exc}")
             return
-        if isinstance(message, Ack):
+        if self.members and message.robot not in self.members:
+            self._once(message.robot, f"a message from {message.robot!r}, not a robot of the state")
+        elif isinstance(message, Ack):
             if message.epoch == self.deployer.epoch:  # else: to the coordinator before this one
                 self.deployer.acked(message.robot, message.id, message.phase, message.reason)
         elif isinstance(message, Ready):
-            self._ready(message.robot)
+            if not self._duplicate(message):
+                self._ready(message.robot)
+        elif isinstance(message, Rival):
+            self._rival(message)
         elif isinstance(message, CallError):
             said = f"{message.robot} {message.functionality}: {message.error}"
             self.deployer.member.error(said)
@@ -146,6 +169,38 @@ class NetworkAdaptive:
         elif detection.kind not in ("lost", "seen"):
             self.take(detection)
 
+    def _once(self, key: str, said: str) -> None:
+        """Say ``said`` (dropped), the first time for ``key``, for a few keys."""
+        if key not in self._noted and len(self._noted) < 16:
+            self._noted.add(key)
+            self.deployer.member.error(f"{said}: dropped")
+
+    def _duplicate(self, ready: Ready) -> bool:
+        """Whether ``ready`` is from a second process of a robot whose first
+        one is alive: it is told so (it stops) and nothing else is done."""
+        robot, first = ready.robot, self._instances.get(ready.robot)
+        if first is None or not ready.instance or robot not in self.deployer.transport.alive:
+            if ready.instance:
+                self._instances[robot] = ready.instance
+            return False
+        if ready.instance == first:
+            return False
+        self.deployer.refuse(robot, ready.instance)
+        self._once(f"{robot} {ready.instance}", f"a second process of robot {robot}")
+        return True
+
+    def _rival(self, rival: Rival) -> None:
+        """A robot follows another coordinator: if it is this one that is the
+        second, it stops; else the console says a second one was refused."""
+        if rival.epoch == self.deployer.epoch:
+            if self.refusal is None:
+                self.refusal = (
+                    f"society {self.deployer.transport.society} has a coordinator already: "
+                    f"{rival.robot} follows {rival.leader}; this one stops"
+                )
+            return
+        self._once(rival.epoch, f"a second coordinator of the society, refused by {rival.robot}")
+
     def _ready(self, robot: str) -> None:
         """``robot`` can be sent its part: take it back if it was seen, else
         (said again, or before its token is seen) send it its part."""
@@ -161,6 +216,8 @@ class NetworkAdaptive:
     @property
     def finished(self) -> str | None:
         """Why the run ends, once every robot was told and answered (or the wait is over)."""
+        if self.refusal is not None:
+            return REFUSED
         return self.coordinator.finished if self._silent is not None else None
 
     @property
@@ -201,7 +258,9 @@ def coordinate(
         reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator), hold=hold
     )
     injector = Injector(injections, society, kill=kill)
-    adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
+    adaptive = NetworkAdaptive(
+        coordinator, deployer, monitor, injector, members=frozenset(_agents(task))
+    )
     transport.subscribe(coordinator_key(transport.society), adaptive.receive)
     for other in sorted(_agents(task) - {robot.name}):  # ready to talk to every robot
         transport.declare(configure_key(transport.society, other))

@@ -124,5 +124,10 @@ class Scripted:
     def between(self, cycle: int, elapsed: float) -> None:
         """Nothing: no reconfiguration."""
 
+    @property
+    def refusal(self) -> None:
+        """Scripted faults refuse nothing."""
+        return None
+
     def close(self) -> None:
         """Nothing runs beside the loop."""

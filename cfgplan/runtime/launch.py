@@ -43,9 +43,11 @@ from cfgplan.runtime.tracefile import MAX_BYTES as TRACE_MAX_BYTES
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.values import MAX_VALUE_BYTES
 
-__all__ = ["EXIT_NONE", "Hooks", "RunOptions", "execute"]
+__all__ = ["EXIT_NONE", "REFUSED", "Hooks", "RunOptions", "execute"]
 
 EXIT_NONE = 3
+REFUSED = "refused"
+"""Why a run ends whose process may not run at all (:attr:`Hooks.refusal`)."""
 """Exit status of a run that ends with no admissible configuration (as ``cfgplan plan``)."""
 
 
@@ -65,6 +67,12 @@ class Hooks(Protocol):
     @property
     def stopped(self) -> bool:
         """Nothing admissible is running."""
+
+    @property
+    def refusal(self) -> str | None:
+        """Why this process may not run at all (a second process of a robot, a
+        second coordinator of a society): the run ends (``finished`` is
+        :data:`REFUSED`) with this message and exit status 1."""
 
     @property
     def reconfigures(self) -> bool:
@@ -201,6 +209,8 @@ def execute(
     if transport is not None and transport.undelivered:
         printer.say(undelivered(transport.undelivered), err)
     problems = [p for p in (trace.failed if trace else None, printer.lost) if p]
+    if hooks is not None and hooks.refusal is not None:
+        problems.append(hooks.refusal)
     for problem in problems:
         printer.say(f"cfgplan: error: {problem}", err)
     if problems or printer.failed:

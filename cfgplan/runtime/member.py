@@ -36,8 +36,15 @@ Messages are idempotent: a repeated prepare or commit is answered again,
 an old id is ignored. Every message carries the coordinator's ``epoch``,
 drawn when it starts: a coordinator started again numbers its
 configurations afresh, and a robot that hears a new epoch on a prepare or
-commit follows it from its first id. Messages come from other processes:
-what cannot be read is recorded as an error and dropped.
+commit follows it from its first id — but only if the coordinator it
+followed went away since (its liveliness token): while that one is alive, a
+message of another epoch is from a second coordinator, which the robot
+tells it is a **rival** (:class:`~cfgplan.runtime.protocol.Rival`; it then
+stops) and ignores. A robot's ``ready`` carries an ``instance`` drawn when
+its process starts; a second process of the same robot name is sent
+**duplicate** (:class:`~cfgplan.runtime.protocol.Duplicate`) by the
+coordinator and stops (:attr:`Member.refused`). Messages come from other
+processes: what cannot be read is recorded as an error and dropped.
 
 Channels the two configurations share carry the same data either side of a
 commit (the same instances at both ends, :mod:`~cfgplan.reconfigure.switch`),
@@ -48,6 +55,7 @@ switched.
 
 from __future__ import annotations
 
+import secrets
 import time
 from dataclasses import replace
 from typing import Any, Protocol
@@ -58,6 +66,7 @@ from cfgplan.runtime.events import Adaptation, Call, Event, Lifecycle
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.install import install, runnable
 from cfgplan.runtime.keys import configure_key, coordinator_key
+from cfgplan.runtime.launch import REFUSED
 from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.part import Part, part_from_json
 from cfgplan.runtime.protocol import (
@@ -65,6 +74,7 @@ from cfgplan.runtime.protocol import (
     Ack,
     CallError,
     Commit,
+    Duplicate,
     Finish,
     Hello,
     Phase,
@@ -72,6 +82,7 @@ from cfgplan.runtime.protocol import (
     ProtocolError,
     Ready,
     Report,
+    Rival,
     ToCoordinator,
     ToRobot,
     encode,
@@ -117,6 +128,12 @@ class Member:
         self.forward = forward
         self.current = 0  # the configuration id it runs
         self.epoch = ""  # the coordinator's run it follows (``epoch`` of its messages)
+        self.leader = ""  # the robot that coordinates that run
+        self._leader_gone = False  # its token went since: a new epoch may be followed
+        self._rivals: set[str] = set()  # epochs of second coordinators told (a few)
+        self.instance = secrets.token_hex(8)  # this process, in its ``ready``
+        self.refused: str | None = None
+        """Why this process may not run its robot (another one does): the run ends."""
         self.pending: dict[int, Part] = {}
         self.finished: str | None = None
         self._erring: set[str] = set()  # labels whose last call failed (already told)
@@ -126,8 +143,17 @@ class Member:
         if declare is not None:  # the first answer then goes out at once
             declare(coordinator_key(network.society))
         if forward:  # the subscriber exists: the coordinator may send a part now
-            self._send(Ready(robot.name))
+            self._send(Ready(robot.name, self.instance))
             robot.subscribe(self._event)
+            listeners = getattr(network, "presence_listeners", None)
+            if listeners is not None:
+                listeners.append(self._presence)
+
+    def _presence(self, other: str, alive: bool) -> None:
+        """The coordinator followed went away (a message of its run, after it
+        is seen again, says it is the same run: :meth:`receive`)."""
+        if other == self.leader and not alive:
+            self._leader_gone = True
 
     def _event(self, event: Event) -> None:
         """Note the first failed call of each run of them (:meth:`report` sends it)."""
@@ -149,15 +175,28 @@ class Member:
         except ProtocolError as exc:
             self.error(f"a switch message that cannot be read: {exc}")
             return
-        if isinstance(message, Hello):
-            self._send(Ready(self.robot.name))
+        if isinstance(message, Duplicate):
+            if message.instance == self.instance and self.refused is None:
+                self.refused = (
+                    f"another process runs robot {self.robot.name} in society "
+                    f"{self.network.society} (the coordinator, {message.sender}, keeps it): "
+                    "this one stops"
+                )
             return
         epoch = message.epoch
+        if epoch == self.epoch:
+            self._leader_gone = False  # it did not go, or came back as it was
+        elif self._rival(message):
+            return
+        if isinstance(message, Hello):
+            self._send(Ready(self.robot.name, self.instance))
+            return
         if epoch != self.epoch and isinstance(message, Prepare | Commit):
-            # A coordinator started again (or another one): it numbers its
-            # configurations afresh, and this robot keeps running its part
-            # until that coordinator installs one.
+            # A coordinator started again: it numbers its configurations
+            # afresh, and this robot keeps running its part until that
+            # coordinator installs one.
             self.epoch, self.current, self.pending = epoch, 0, {}
+            self.leader, self._leader_gone = message.sender, False
         elif epoch != self.epoch and isinstance(message, Abort):
             return  # of a switch of a coordinator no longer followed
         if isinstance(message, Prepare):
@@ -168,6 +207,22 @@ class Member:
             self.pending.pop(message.id, None)
         else:
             self._finish(message)
+
+    def _rival(self, message: ToRobot) -> bool:
+        """Whether ``message``, of another epoch than the one followed, is from
+        a second coordinator: one is followed and its robot has not gone
+        since. The first time, the rival is told (it stops) and the console
+        says so."""
+        if not self.epoch or self._leader_gone or isinstance(message, Duplicate):
+            return False
+        if message.epoch not in self._rivals and len(self._rivals) < 16:
+            self._rivals.add(message.epoch)
+            self._send(Rival(self.robot.name, message.epoch, self.leader))
+            self.error(
+                f"a second coordinator ({message.sender}) of society {self.network.society} "
+                f"is ignored: {self.leader} coordinates it"
+            )
+        return True
 
     def _finish(self, message: Finish) -> None:
         """The coordinator says the task is accomplished: say so, answer, end the run."""
@@ -295,4 +350,8 @@ class Membership:
 
     @property
     def finished(self) -> str | None:
-        return self.member.finished
+        return REFUSED if self.member.refused is not None else self.member.finished
+
+    @property
+    def refusal(self) -> str | None:
+        return self.member.refused

@@ -48,6 +48,7 @@ __all__ = [
     "Ack",
     "CallError",
     "Commit",
+    "Duplicate",
     "Finish",
     "Hello",
     "Phase",
@@ -55,6 +56,7 @@ __all__ = [
     "ProtocolError",
     "Ready",
     "Report",
+    "Rival",
     "ToCoordinator",
     "ToRobot",
     "clip",
@@ -145,6 +147,19 @@ class Finish:
 
 
 @dataclass(frozen=True)
+class Duplicate:
+    """Another process runs this robot: the coordinator keeps the one whose
+    :class:`Ready` came first, and the process of ``instance`` stops (a second
+    process named Pippi would hide the first one's death: one liveliness
+    token for both). Not answered."""
+
+    OP: ClassVar[str] = "duplicate"
+    sender: str = field(metadata={"wire": "from"})
+    epoch: str
+    instance: str
+
+
+@dataclass(frozen=True)
 class Hello:
     """The coordinator sees the robot's token but has no :class:`Ready` from
     it (the coordinator started after it): the robot answers :class:`Ready`."""
@@ -154,7 +169,7 @@ class Hello:
     epoch: str
 
 
-ToRobot = Prepare | Commit | Abort | Finish | Hello
+ToRobot = Prepare | Commit | Abort | Finish | Duplicate | Hello
 """A message on a robot's ``configure`` key."""
 
 
@@ -195,6 +210,9 @@ class Ready:
 
     TYPE: ClassVar[str] = "ready"
     robot: str
+    instance: str = ""
+    """Drawn when the robot's process starts: two processes that claim one
+    robot name differ in it (:class:`Duplicate`)."""
 
 
 @dataclass(frozen=True)
@@ -214,7 +232,20 @@ class CallError:
         object.__setattr__(self, "error", clip(self.error))
 
 
-ToCoordinator = Ack | Report | Ready | CallError
+@dataclass(frozen=True)
+class Rival:
+    """The robot follows a live coordinator, ``leader``, and a message of
+    another coordinator's run (``epoch``) reached it: that one is a second
+    coordinator of the society and stops (no split brain). Sent once per
+    such epoch; the coordinator of another epoch only notes it."""
+
+    TYPE: ClassVar[str] = "rival"
+    robot: str
+    epoch: str
+    leader: str
+
+
+ToCoordinator = Ack | Report | Ready | CallError | Rival
 """A message on the coordinator's key."""
 
 MESSAGES: tuple[type[ToRobot] | type[ToCoordinator], ...] = (
@@ -222,17 +253,21 @@ MESSAGES: tuple[type[ToRobot] | type[ToCoordinator], ...] = (
     Commit,
     Abort,
     Finish,
+    Duplicate,
     Hello,
     Ack,
     Report,
     Ready,
     CallError,
+    Rival,
 )
 """Every message of the protocol (the docs' protocol page is checked against it)."""
 
-_TO_ROBOT: dict[str, type[ToRobot]] = {m.OP: m for m in (Prepare, Commit, Abort, Finish, Hello)}
+_TO_ROBOT: dict[str, type[ToRobot]] = {
+    m.OP: m for m in (Prepare, Commit, Abort, Finish, Duplicate, Hello)
+}
 _TO_COORDINATOR: dict[str, type[ToCoordinator]] = {
-    m.TYPE: m for m in (Ack, Report, Ready, CallError)
+    m.TYPE: m for m in (Ack, Report, Ready, CallError, Rival)
 }
 
 
@@ -296,10 +331,12 @@ def _fields(message: type[ToRobot] | type[ToCoordinator], data: dict[str, object
         key = f.metadata.get("wire", f.name)
         if f.name == "id":
             values[f.name] = _id(data)
-        elif f.name in ("sender", "robot"):
+        elif f.name in ("sender", "robot", "leader"):
             values[f.name] = _text(data, key, MAX_NAME, empty=False)
         elif f.name == "epoch":
             values[f.name] = _text(data, key, MAX_NAME)
+        elif f.name == "instance":
+            values[f.name] = _text(data, key, MAX_NAME, empty=message is not Duplicate)
         elif f.name in ("reason", "goal", "error"):
             values[f.name] = _text(data, key, MAX_TEXT)
         elif f.name == "functionality":

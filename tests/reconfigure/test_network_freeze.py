@@ -21,9 +21,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.backends.support import EXAMPLE_IMPL
-from tests.reconfigure.test_network import LIMIT, _network, _robot
-from tests.reconfigure.test_network_restart import _after
+from tests.reconfigure.test_network import LIMIT
+from tests.reconfigure.test_network_restart import SERVED_FIELDS, _after, served_step2
 from tests.runtime.netutil import processes, read_trace, wait_for
 
 HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
@@ -32,14 +31,9 @@ HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
 @pytest.mark.slow
 @pytest.mark.parametrize("frozen", [0.8, 5.0])
 def test_a_helper_frozen_and_let_go_serves_the_goal_again(tmp_path: Path, frozen: float) -> None:
-    emil_net, pippi_net = _network(tmp_path, "freeze-test")
-    served = {"functionality": "cross-door", "status": "ran"}
+    served = SERVED_FIELDS
     with processes() as running:
-        _, emil_trace = _robot(
-            running, tmp_path, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120"
-        )
-        pippi, _ = _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, pippi_net)
-        wait_for("the goal served", _after(emil_trace, 0.0, "call", **served), LIMIT)
+        pippi, emil_trace, _ = served_step2(running, tmp_path, "freeze-test")
         time.sleep(1.0)  # past the first switches' hold
         stopped = time.time()
         os.kill(pippi.pid, signal.SIGSTOP)  # type: ignore[attr-defined]

@@ -19,12 +19,13 @@ import signal
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from tests.backends.support import EXAMPLE_IMPL
 from tests.reconfigure.test_network import LIMIT, _network, _robot
-from tests.runtime.netutil import Record, processes, read_trace, wait_for
+from tests.runtime.netutil import Processes, Record, processes, read_trace, wait_for
 
 SERVED = 30.0  # seconds: a process started on a loaded machine, and its first cycles
 
@@ -43,16 +44,26 @@ def _after(trace: Path, t: float, event: str, **fields: object) -> Callable[[], 
     return look
 
 
+SERVED_FIELDS = {"functionality": "cross-door", "status": "ran"}
+"""A trace event of the goal's action running on data (with ``call``)."""
+
+
+def served_step2(running: Processes, folder: Path, society: str) -> tuple[Any, Path, list[str]]:
+    """Emil (coordinating, 120 s at most) and Pippi of 6.2.2 step 2, each its
+    own process, once the goal is served: Pippi's process, Emil's trace and
+    Pippi's network options (``--listen P --connect E ...``)."""
+    emil_net, pippi_net = _network(folder, society)
+    _, emil_trace = _robot(running, folder, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120")
+    pippi, _ = _robot(running, folder, "Pippi", EXAMPLE_IMPL, pippi_net)
+    wait_for("the goal served", _after(emil_trace, 0.0, "call", **SERVED_FIELDS), LIMIT)
+    return pippi, emil_trace, pippi_net
+
+
 @pytest.mark.slow
 def test_a_helper_killed_and_started_again_serves_the_goal_again(tmp_path: Path) -> None:
-    emil_net, pippi_net = _network(tmp_path, "restart-test")
-    served = {"functionality": "cross-door", "status": "ran"}
+    served = SERVED_FIELDS
     with processes() as running:
-        _, emil_trace = _robot(
-            running, tmp_path, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120"
-        )
-        pippi, _ = _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, pippi_net)
-        wait_for("the goal served", _after(emil_trace, 0.0, "call", **served), LIMIT)
+        pippi, emil_trace, pippi_net = served_step2(running, tmp_path, "restart-test")
         for attempt in (1, 2):
             killed = time.time()
             os.kill(pippi.pid, signal.SIGKILL)  # type: ignore[attr-defined]

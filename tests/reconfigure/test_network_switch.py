@@ -18,9 +18,10 @@ from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.network import SWITCH_TIMEOUT, NetworkAdaptive, NetworkDeployer
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Event
+from cfgplan.runtime.launch import REFUSED
 from cfgplan.runtime.monitor import Detection, Monitor
 from cfgplan.runtime.part import part_to_json
-from cfgplan.runtime.protocol import CallError, Phase, Ready, Report, encode
+from cfgplan.runtime.protocol import CallError, Phase, Ready, Report, Rival, encode
 from tests.backends.support import DOMAINS
 from tests.reconfigure.test_coordinate import Clock
 from tests.reconfigure.test_network_retry import Idle, Me, Network, _society, _wait, _what
@@ -244,3 +245,65 @@ def test_a_report_of_another_robots_detection_is_dropped_and_said() -> None:
     assert [e for e in events if e.what == "failure"] == []
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == ["Rasmus reported a detection made by 'Emil': dropped"]
+
+
+def test_a_second_process_of_a_live_robot_is_told_to_stop() -> None:
+    """Issue 33 (no split brain): Emil's ready names his process; a ready of
+    another process named Emil while he is alive is answered ``duplicate``
+    with that process's instance, and nothing else happens. Once Emil's token
+    went away, a new process (a restart) is taken."""
+    adaptive, network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.receive(encode(Ready("Emil", "first")))
+    network.sent.clear()
+    adaptive.receive(encode(Ready("Emil", "second")))
+    assert [m for _, m in network.sent] == [
+        {"op": "duplicate", "from": "Pippi", "epoch": adaptive.deployer.epoch, "instance": "second"}
+    ]
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == ["a second process of robot Emil: dropped"]
+    network.sent.clear()
+    adaptive.receive(encode(Ready("Emil", "first")))  # answering a hello: the same process
+    assert network.to("Emil", "duplicate") == []
+    network.alive.discard("Emil")
+    adaptive.take(Detection("lost", "Pippi", time.time(), other="Emil"))
+    network.alive.add("Emil")
+    adaptive.receive(encode(Ready("Emil", "second")))  # started again
+    assert network.to("Emil", "duplicate") == []
+    assert "Emil" in adaptive.deployer.ready
+
+
+def test_a_coordinator_told_it_is_a_rival_stops() -> None:
+    """A robot that follows another live coordinator answers this one's
+    messages with ``rival``: this coordinator's run ends, refused, saying
+    why; a rival message about another coordinator's run is only noted."""
+    adaptive, _network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    other = Rival("Emil", "another-epoch", "Pippi")
+    adaptive.receive(encode(other))
+    adaptive.receive(encode(other))
+    assert adaptive.finished is None and adaptive.refusal is None
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == ["a second coordinator of the society, refused by Emil: dropped"]
+    adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Pippi")))
+    assert adaptive.finished == REFUSED
+    assert adaptive.refusal == (
+        "society retry-test has a coordinator already: Emil follows Pippi; this one stops"
+    )
+
+
+def test_messages_from_robots_the_state_does_not_declare_are_dropped() -> None:
+    """A ready or a report from a name the state does not have changes nothing
+    (no set of names grows without bound); the first few are said."""
+    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.members = frozenset({"Pippi", "Emil", "Rasmus"})  # as coordinate() sets them
+    for n in range(40):
+        adaptive.receive(encode(Ready(f"Mallory{n}", "x")))
+    forged = Detection("failure", "Mallory0", time.time(), instance=("camera", "Emil"), label="F1")
+    adaptive.receive(encode(Report("Mallory0", forged)))
+    adaptive.coordinator.tick()
+    assert adaptive.deployer.ready == {"Emil", "Rasmus"} and network.sent == []
+    assert [e for e in events if e.what == "failure"] == []
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert (
+        len(errors) == 16
+        and errors[0] == "a message from 'Mallory0', not a robot of the state: dropped"
+    )

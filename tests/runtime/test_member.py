@@ -27,6 +27,12 @@ class Network:
 
     def __init__(self) -> None:
         self.sent: list[tuple[str, dict[str, Any]]] = []
+        self.presence_listeners: list[Any] = []
+
+    def presence(self, robot: str, alive: bool) -> None:
+        """``robot``'s token appears or goes, as the Zenoh transport tells it."""
+        for listener in self.presence_listeners:
+            listener(robot, alive)
 
     def subscribe(self, key: str, handler: object) -> None:
         pass
@@ -65,7 +71,8 @@ def _member() -> tuple[Robot, Member, Network, dict[str, Any]]:
     network = Network()
     own = part_to_json(next(p for p in parts if p.robot == "Emil"))
     member = Member(emil, network, Monitor())
-    assert network.sent == [("cfgplan/test/coordinator", {"type": "ready", "robot": "Emil"})]
+    ready = {"type": "ready", "robot": "Emil", "instance": member.instance}
+    assert network.sent == [("cfgplan/test/coordinator", ready)]
     network.sent.clear()
     return emil, member, network, own
 
@@ -147,22 +154,58 @@ def test_a_part_whose_implementation_cannot_take_its_arguments_is_refused_at_pre
 
 def test_a_coordinator_started_again_is_followed_from_its_first_id() -> None:
     """A coordinator that starts again numbers its configurations from 0: its
-    messages carry another epoch, and the robot follows them (before, a
-    commit of id 0 after id 1 was dropped without an answer for good)."""
+    messages carry another epoch, and the robot follows them once the one it
+    followed went away (before, a commit of id 0 after id 1 was dropped
+    without an answer for good)."""
     _, member, network, own = _member()
     member.receive(_message("prepare", 1, own, epoch="A"))
     member.receive(_message("commit", 1, epoch="A"))
     assert member.current == 1 and _acks(network) == [(1, "ready"), (1, "installed")]
     member.receive(_message("prepare", 1, own, epoch="A"))  # an old switch: ignored
     assert len(_acks(network)) == 2
+    network.presence("Pippi", False)  # the coordinator's process died ...
+    network.presence("Pippi", True)  # ... and it was started again
     member.receive(_message("commit", 0, own, epoch="B"))  # the new one re-synchronises
     assert member.current == 0 and _acks(network)[-1] == (0, "installed")
     assert network.sent[-1][1]["epoch"] == "B"
     member.receive(_message("prepare", 1, own, epoch="B"))
-    member.receive(_message("abort", 1, epoch="A"))  # from the coordinator before: ignored
     assert 1 in member.pending
-    member.receive(_message("finish", 1, epoch="A"))  # the task is done, whoever says so
+    member.receive(_message("finish", 1, epoch="B"))
     assert member.finished == "achieved"
+
+
+def test_a_second_coordinator_is_told_it_is_a_rival_and_not_followed() -> None:
+    """Issue 33 (no split brain): while the coordinator it follows is alive, a
+    robot ignores another coordinator's messages — a commit, a finish, a
+    hello — and tells it once that it is a rival (it then stops); the
+    console says so once. Once its coordinator is gone, a new one is followed."""
+    emil, member, network, own = _member()
+    member.receive(_message("commit", 1, own, epoch="A"))
+    network.sent.clear()
+    for op, number in (("commit", 0), ("finish", 1), ("hello", 0)):
+        member.receive(_message(op, number, own if op == "commit" else None, epoch="B"))
+    assert member.current == 1 and member.epoch == "A" and member.finished is None
+    rival = {"type": "rival", "robot": "Emil", "epoch": "B", "leader": "Pippi"}
+    assert [m for _, m in network.sent] == [rival]
+    said = [dict(e.info)["message"] for e in emil.events if getattr(e, "what", "") == "error"]
+    assert said == ["a second coordinator (Pippi) of society test is ignored: Pippi coordinates it"]
+    network.presence("Pippi", False)
+    member.receive(_message("commit", 0, own, epoch="B"))
+    assert (member.epoch, member.current) == ("B", 0)
+
+
+def test_a_second_process_of_a_robot_stops_when_told_it_is_a_duplicate() -> None:
+    """The coordinator names the process to stop by the instance in its ready:
+    the other process of the same robot name ignores it."""
+    _, member, _, _ = _member()
+    told = {"op": "duplicate", "from": "Pippi", "epoch": "A", "instance": "not-mine"}
+    member.receive(json.dumps(told).encode())
+    assert member.refused is None
+    member.receive(json.dumps({**told, "instance": member.instance}).encode())
+    assert member.refused == (
+        "another process runs robot Emil in society test (the coordinator, Pippi, keeps it): "
+        "this one stops"
+    )
 
 
 def test_told_to_finish_a_robot_says_so_answers_and_takes_no_one_for_lost() -> None:
@@ -189,7 +232,8 @@ def test_a_robot_says_it_is_ready_when_it_can_receive_and_when_greeted() -> None
     emil, member, network, _ = _member()  # _member checks the first word: ready
     member.receive(json.dumps({"op": "hello", "from": "Pippi", "epoch": "B"}).encode())
     member.receive(json.dumps({"op": "hello", "from": "Pippi", "epoch": "C"}).encode())
-    assert [m for _, m in network.sent] == [{"type": "ready", "robot": "Emil"}] * 2
+    ready = {"type": "ready", "robot": "Emil", "instance": member.instance}
+    assert [m for _, m in network.sent] == [ready] * 2
     assert member.epoch == "" and member.current == 0  # a greeting changes nothing
     coordinator = Member(emil, Network(), forward=False)  # the coordinator's own member
     assert coordinator.network.sent == []  # type: ignore[attr-defined]
