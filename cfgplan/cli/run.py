@@ -55,6 +55,7 @@ from cfgplan.runtime.options import (
     FORCE,
     IMPL,
     INJECT,
+    KEYS,
     LEASE,
     LISTEN,
     MAX_VALUE_BYTES,
@@ -126,6 +127,7 @@ def run(
     connect: Annotated[list[str] | None, option(CONNECT)] = None,
     zenoh_config: Annotated[Path | None, option(ZENOH_CONFIG)] = None,
     lease: Annotated[float | None, option(LEASE)] = LEASE.default,
+    keys: Annotated[Path | None, option(KEYS)] = None,
     rate: Annotated[float, option(RATE)] = RATE.default,
     cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
     duration: Annotated[float | None, option(DURATION)] = DURATION.default,
@@ -180,6 +182,8 @@ def run(
     kind = transport or ("zenoh" if robot is not None else "inprocess")
     if robot is None and kind == "zenoh":
         usage_error("runs one robot per process: give --robot NAME", "--transport zenoh")
+    if keys is not None and kind != "zenoh":
+        usage_error("secures the network between robots: give --robot NAME", "--keys")
     problem = load_problem(domain, state, goal, weights, sequence=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p) for p in deploy(config, problem.domain)]
@@ -210,12 +214,18 @@ def run(
                 raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
             part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
             registry.require(c.name for c in part.calls)
+            keyed = None if keys is None else str(keys)
+            if keyed is not None:  # the keys name the society, unless --society does
+                from cfgplan.security.zenoh_tls import society_for
+
+                society_name = society_for(keyed, society_name, SOCIETY.default)
             zenoh = ZenohOptions(
                 society=society_name,
                 listen=tuple(listen or ()),
                 connect=tuple(connect or ()),
                 config_file=None if zenoh_config is None else str(zenoh_config),
                 lease=lease,
+                keys=keyed,
             )
             opened = open_transport(robot, kind, zenoh)
             shared = opened if isinstance(opened, InProcessTransport) else None

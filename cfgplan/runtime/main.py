@@ -36,6 +36,7 @@ from cfgplan.runtime.options import (
     IMPL,
     NETWORK_OPTIONS,
     RUN_OPTIONS,
+    SOCIETY,
     UNTIL,
     Option,
     choice,
@@ -176,12 +177,18 @@ def _follow(
 
 
 def zenoh_options(args: argparse.Namespace) -> ZenohOptions:
+    society = args.society
+    if args.keys is not None:  # the keys name the society, unless --society does
+        from cfgplan.security.zenoh_tls import society_for
+
+        society = society_for(args.keys, society, SOCIETY.default)
     return ZenohOptions(
-        society=args.society,
+        society=society,
         listen=tuple(args.listen),
         connect=tuple(args.connect),
         config_file=args.zenoh_config,
         lease=args.lease,
+        keys=args.keys,
     )
 
 

@@ -33,6 +33,7 @@ __all__ = [
     "FORCE",
     "IMPL",
     "INJECT",
+    "KEYS",
     "LEASE",
     "LISTEN",
     "MAX_VALUE_BYTES",
@@ -217,6 +218,15 @@ LEASE: Option[float | None] = Option(
     number(0, above=True),
 )
 
+KEYS: Option[str | None] = Option(
+    "--keys",
+    "DIR",
+    None,
+    "The society's keys (made by cfgplan keys new): TLS with mutual authentication, and "
+    "Zenoh access control by certificate name; tcp/ endpoints become tls/, and --society "
+    "is the keys' unless given.",
+)
+
 RUN_OPTIONS: tuple[Option[Any], ...] = (
     IMPL,
     RATE,
@@ -233,7 +243,7 @@ RUN_OPTIONS: tuple[Option[Any], ...] = (
 )
 """Every run's options: ``cfgplan run``, a robot's module, ``run_all.py``."""
 
-NETWORK_OPTIONS: tuple[Option[Any], ...] = (SOCIETY, LISTEN, CONNECT, ZENOH_CONFIG, LEASE)
+NETWORK_OPTIONS: tuple[Option[Any], ...] = (SOCIETY, LISTEN, CONNECT, ZENOH_CONFIG, LEASE, KEYS)
 """A robot on the network: ``cfgplan run --robot`` and a robot's module."""
 
 

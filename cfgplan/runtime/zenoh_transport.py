@@ -90,6 +90,7 @@ class ZenohOptions:
     connect: tuple[str, ...] = ()
     config_file: str | None = None
     lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
+    keys: str | None = None  # a folder of society keys: TLS, mTLS, access control
 
     def __post_init__(self) -> None:
         if not self.society:
@@ -131,7 +132,7 @@ DEFAULTS: tuple[tuple[str, str, str], ...] = (
 """cfgplan's settings under anything a ``--zenoh-config`` file sets: (key, JSON5, what)."""
 
 
-def zenoh_config(options: ZenohOptions) -> zenoh.Config:
+def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Config:
     """The session configuration of a robot program: cfgplan's :data:`DEFAULTS`
     (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s),
     then a configuration file's settings, then the options.
@@ -165,6 +166,12 @@ def zenoh_config(options: ZenohOptions) -> zenoh.Config:
         _set(config, "scouting/multicast/enabled", "false", "scouting")
     if options.lease is not None:
         _set(config, "transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease")
+    if options.keys is not None:  # last: every endpoint, the file's too, becomes TLS
+        from cfgplan.security.zenoh_tls import secure
+
+        if robot is None:
+            raise RunError("--keys: whose keys? (no robot named)")
+        secure(config, options.keys, robot, options.society, _set)
     return config
 
 
@@ -183,7 +190,7 @@ class ZenohTransport:
         self.options = options or ZenohOptions()
         self.society = self.options.society
         z = self._z = _zenoh()
-        config = zenoh_config(self.options)
+        config = zenoh_config(self.options, robot)
         try:
             self._session = z.open(config)
         except z.ZError as exc:

@@ -6,7 +6,8 @@ stop hooks block for good. Before issue 33 Pippi froze in the first hook
 (the switch never completed there, her trace called it nothing) and SIGTERM
 did not end her. Now each hook is abandoned after the call budget, reported
 as a failure of its functionality on Pippi's terminal and in her trace, the
-switch completes, and SIGTERM ends both processes. Hermetic: loopback, free
+switch completes, the coordinator's console says what her hook did, and
+SIGTERM ends both processes. Hermetic: loopback, free
 ports, scouting off, bounded waits, every process stopped by its pid.
 """
 
@@ -71,10 +72,17 @@ def test_a_helpers_blocking_stop_hook_is_a_failure_and_sigterm_ends_it(tmp_path:
             30,
         )
         wait_for("the switch", first(emil_trace, lambda r: r["event"] == "switch"), 20)
+        told = wait_for(  # the coordinator's console says what Pippi's hook did
+            "Emil told of Pippi's hook",
+            first(emil_trace, lambda r: r["event"] == "error" and "stop hook" in str(r)),
+            20,
+        )
         for process in (pippi, emil):
             os.kill(process.pid, signal.SIGTERM)
         assert pippi.wait(20) == 1  # a functionality failed
         assert emil.wait(20) == 0
+    assert str(told["message"]).startswith("Pippi F")
+    assert "its stop hook took longer than its time budget of 0.3 s" in str(told["message"])
     problems = installed["problems"]
     assert isinstance(problems, list) and len(problems) == 2
     assert all("its stop hook took longer than its time budget of 0.3 s" in p for p in problems)
