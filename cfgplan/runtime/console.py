@@ -55,6 +55,9 @@ WAIT_NOTICE = 10
 (1 s at the default rate): a robot whose partner has not started does not
 look hung."""
 
+ERROR_KINDS = 64
+"""Kinds of ``error`` events the console counts apart (:meth:`Printer._error`)."""
+
 STATUS_EVERY = 100
 """The default of :attr:`~cfgplan.runtime.launch.RunOptions.status_every`."""
 
@@ -84,6 +87,7 @@ class Printer:
         self.failed = False
         self.lost: str | None = None  # why the console could not be written to
         self._faults: dict[str, int] = {}
+        self._errors: dict[str, int] = {}  # error events per kind (_error)
         self._warned: set[tuple[str, str]] = set()
         self._dead: set[int] = set()
         self._waits: dict[tuple[str, str], int] = {}  # calls in a row each one waited
@@ -201,7 +205,7 @@ class Printer:
             return
         self._count(event)
         if isinstance(event, Lifecycle) and event.what == "error":
-            self.say(f"cfgplan: {notice(event)}", self.err)
+            self._error(event)
             return
         line = notice(event)
         if line is not None:
@@ -273,6 +277,26 @@ class Printer:
         waited = self._waits.pop(key, 0)
         if waited >= WAIT_NOTICE and event.status == "ran" and not event.action:
             self.say(runs_again(event))
+
+    def _error(self, event: Lifecycle) -> None:
+        """A message dropped, a helper's error: the first :data:`FAULTS_SHOWN`
+        of each kind (the text before its first ``": "``: the channel, the
+        helper's functionality) are printed, later ones only counted (the
+        status; the trace has each). At most :data:`ERROR_KINDS` kinds are
+        told apart: what comes from the network may name anything."""
+        self._counts["error"] = self._counts.get("error", 0) + 1
+        kind = str(dict(event.info).get("message", "")).split(": ", 1)[0]
+        if kind not in self._errors and len(self._errors) >= ERROR_KINDS:
+            kind = ""  # one kind for all the others
+        seen = self._errors[kind] = self._errors.get(kind, 0) + 1
+        if seen <= FAULTS_SHOWN:
+            self.say(f"cfgplan: {notice(event)}", self.err)
+        if seen == FAULTS_SHOWN:
+            what = f"of {kind} " if kind else ""
+            self.say(
+                f"cfgplan: further errors {what}are only counted (status; --trace has each)",
+                self.err,
+            )
 
     def _fault(self, event: Call) -> None:
         key = f"{event.robot} {event.label}"

@@ -288,8 +288,8 @@ def status_parts(
     cost: object = None,
 ) -> list[str]:
     """The compact status of a run, piece by piece: each robot's cycles;
-    switches (and the cost now), failures, stale inputs and robots lost, when
-    any; each action, how often it ran and what it last received (or why not)."""
+    switches (and the cost now), failures, stale inputs, robots lost and
+    errors (messages dropped), when any; each action, how often it ran and what it last received (or why not)."""
     parts = ["cycles " + ", ".join(f"{robot} {n}" for robot, n in cycles.items())]
     switches = counts.get("switch", 0)
     if switches:
@@ -299,6 +299,7 @@ def status_parts(
         ("failure", "failure", "failures"),
         ("stale", "stale input", "stale inputs"),
         ("lost", "robot lost", "robots lost"),
+        ("error", "error", "errors"),
     ):
         n = counts.get(key, 0)
         if n:

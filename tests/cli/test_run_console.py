@@ -93,6 +93,39 @@ def test_text_from_another_process_cannot_drive_the_terminal() -> None:
     assert "\\x1b[2J" in shown
 
 
+def test_errors_of_one_kind_are_shown_three_times_then_counted() -> None:
+    """Issue 33: 500 oversized messages on one channel printed 500 lines. Now
+    each kind of error (its text before the first ``": "``: the channel) is
+    shown three times, then counted in the status; a flood of kinds from the
+    network is told apart only up to a bound."""
+    out, err = io.StringIO(), io.StringIO()
+    printer = Printer(False, "impl.py", out, err, status_every=1)
+
+    def error(said: str) -> None:
+        printer(Lifecycle(robot="Emil", t=0.0, what="error", info=(("message", said),)))
+
+    for n in range(500):
+        error(f"channel F7->F3 (pos Emil Door1): a message of {n} bytes; dropped")
+    error("channel F9->F3 (orient Emil Door1): a message of 9 bytes; dropped")
+    for n in range(200):
+        error(f"robot{n}: forged")
+    lines = err.getvalue().splitlines()
+    assert lines[:4] == [
+        "cfgplan: cycle 0: Emil: channel F7->F3 (pos Emil Door1): a message of 0 bytes; dropped",
+        "cfgplan: cycle 0: Emil: channel F7->F3 (pos Emil Door1): a message of 1 bytes; dropped",
+        "cfgplan: cycle 0: Emil: channel F7->F3 (pos Emil Door1): a message of 2 bytes; dropped",
+        "cfgplan: further errors of channel F7->F3 (pos Emil Door1) are only counted "
+        "(status; --trace has each)",
+    ]
+    assert (
+        lines[4]
+        == "cfgplan: cycle 0: Emil: channel F9->F3 (orient Emil Door1): a message of 9 bytes; dropped"
+    )
+    assert len(lines) < 5 + 64 * 4 + 4
+    printer.cycle(1)
+    assert "701 errors" in out.getvalue()
+
+
 class _Terminal(io.StringIO):
     def isatty(self) -> bool:
         return True
