@@ -21,6 +21,7 @@ HELP = (
     "Commands:\n"
     "  check     Check a domain (and a state with its goal) without planning.\n"
     "  emit      Write one executable file per robot for a configuration (5.1-5.3).\n"
+    "  keys      Make a society's keys for TLS with mutual authentication.\n"
     "  plan      Plan ranked admissible configurations (4.5), or sequences of them.\n"
     "  render    Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).\n"
     "  run       Run a configuration: all robots here, or one on the network (5.2).\n"

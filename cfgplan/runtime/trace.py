@@ -289,7 +289,8 @@ def status_parts(
 ) -> list[str]:
     """The compact status of a run, piece by piece: each robot's cycles;
     switches (and the cost now), failures, stale inputs, robots lost and
-    errors (messages dropped), when any; each action, how often it ran and what it last received (or why not)."""
+    errors (messages dropped), when any; each action, how often it ran and
+    what it last received (or why not)."""
     parts = ["cycles " + ", ".join(f"{robot} {n}" for robot, n in cycles.items())]
     switches = counts.get("switch", 0)
     if switches:

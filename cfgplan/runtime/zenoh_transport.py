@@ -24,7 +24,9 @@ multicast scouting on the local network, with them multicast scouting is off.
 file (JSON5, Zenoh's own format) sets anything else: it goes on top of
 cfgplan's defaults (:data:`DEFAULTS`: peer mode, the connection retry, the
 lease), which it keeps unless it sets them, and the options given on the
-command line go on top of it.
+command line go on top of it. With ``--keys DIR`` (the society's keys, made by
+``cfgplan keys new``) every link is TLS with mutual authentication and Zenoh's
+access control by certificate name (:mod:`cfgplan.security.zenoh_tls`).
 
 :mod:`zenoh` is imported only when a :class:`ZenohTransport` is made, so
 ``import cfgplan.runtime`` stays light.

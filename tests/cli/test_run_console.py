@@ -117,10 +117,8 @@ def test_errors_of_one_kind_are_shown_three_times_then_counted() -> None:
         "cfgplan: further errors of channel F7->F3 (pos Emil Door1) are only counted "
         "(status; --trace has each)",
     ]
-    assert (
-        lines[4]
-        == "cfgplan: cycle 0: Emil: channel F9->F3 (orient Emil Door1): a message of 9 bytes; dropped"
-    )
+    orient = "channel F9->F3 (orient Emil Door1): a message of 9 bytes; dropped"
+    assert lines[4] == f"cfgplan: cycle 0: Emil: {orient}"
     assert len(lines) < 5 + 64 * 4 + 4
     printer.cycle(1)
     assert "701 errors" in out.getvalue()

@@ -1,0 +1,175 @@
+"""``cfgplan keys new SOCIETY -o DIR``: a society's certificate authority and its members' keys.
+
+One key and certificate per robot and device of a state (``--domain DOMAIN
+--state STATE``) or per ``--robot NAME``, and per ``--operator NAME`` tool,
+signed by a new certificate authority of the society
+(:mod:`cfgplan.security.keys`). ``--keys DIR`` on ``cfgplan run --robot`` and
+on the emitted robot programs then opens every session with TLS, mutual
+authentication and access control by certificate name
+(:mod:`cfgplan.security.zenoh_tls`). The coordinators, the robots that may
+send switches (5.5), are those a goal of the state names first, or
+``--coordinator NAME``. Nothing secret is printed: only which file is which.
+
+Needs the ``cryptography`` package (``pip install 'cfgplan[keys]'``); a robot
+that only uses keys does not.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from cfgplan.cli.app import app, usage_error
+from cfgplan.cli.options import count_of, load_problem
+from cfgplan.cli.root import Command, Group
+from cfgplan.diagnostics import CfgplanError, Diagnostic, printable
+from cfgplan.runtime.errors import RunError
+
+keys_app = typer.Typer(
+    name="keys",
+    cls=Group,
+    no_args_is_help=True,
+    help="Make a society's keys: TLS with mutual authentication for its robots.",
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+app.add_typer(keys_app, short_help="Make a society's keys for TLS with mutual authentication.")
+
+DEFAULT_DAYS = 730
+
+
+def _failed(exc: RunError) -> CfgplanError:
+    return CfgplanError([Diagnostic("error", exc.message, None, exc.hint)])
+
+
+class name(str):
+    """A society's name (lower case: typer shows an argument's type by its class
+    name, ``SOCIETY <name>``)."""
+
+
+def _name(text: str) -> name:
+    """A society's name: not empty."""
+    if not text:
+        raise typer.BadParameter("the society name is empty")
+    return name(text)
+
+
+def _state_members(domain: Path, state: Path) -> tuple[list[str], list[str]]:
+    """The robots and devices of a state, and the robots its goals name first."""
+    problem = load_problem(domain, state, None, None, sequence=True)
+    agents = list(dict.fromkeys(f[1] for f in problem.task.facts if f[0] in ("robot", "device")))
+    leading = []
+    for call in problem.goal_calls:
+        first = next((a for a in call[1:] if a in agents), None)
+        if first is not None and first not in leading:
+            leading.append(first)
+    return agents, leading
+
+
+@keys_app.command("new", cls=Command)
+def new(
+    society: Annotated[
+        name,
+        typer.Argument(
+            metavar="SOCIETY", parser=_name, help="The society's name (as --society of run)."
+        ),
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "--output", "-o", metavar="DIR", help="The folder to write (made with mode 0700)."
+        ),
+    ],
+    domain: Annotated[
+        Path | None,
+        typer.Option("--domain", metavar="DOMAIN", help="The domain of --state."),
+    ] = None,
+    state: Annotated[
+        Path | None,
+        typer.Option(
+            "--state",
+            metavar="STATE",
+            help="Keys for every robot and device of this state (with --domain).",
+        ),
+    ] = None,
+    robots: Annotated[
+        list[str] | None,
+        typer.Option("--robot", metavar="NAME", help="Keys for this robot (repeatable)."),
+    ] = None,
+    operators: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--operator",
+            metavar="NAME",
+            help="Keys for an operator tool, which may watch the society and send nothing "
+            "(repeatable).",
+        ),
+    ] = None,
+    coordinators: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--coordinator",
+            metavar="NAME",
+            help="A robot that may send switches (repeatable; default: the robots the "
+            "state's goals name first).",
+        ),
+    ] = None,
+    days: Annotated[
+        int,
+        typer.Option(
+            "--days",
+            metavar="N",
+            parser=count_of(1),
+            help=f"Days the certificates are valid (default {DEFAULT_DAYS}).",
+            show_default=False,
+        ),
+    ] = DEFAULT_DAYS,
+    force: Annotated[
+        bool, typer.Option("--force", help="Replace the society's keys in DIR.")
+    ] = False,
+) -> None:
+    """Make a society's certificate authority and a key and certificate per robot, device
+    and operator tool, for --keys DIR on cfgplan run and the emitted robot programs.
+
+    Writes DIR/ca.pem and DIR/ca.key (the authority: keep ca.key off the robots),
+    per member NAME.pem and NAME.key (its name in lower case), and DIR/society.json
+    (the members and what they may do). A robot's host needs society.json, ca.pem
+    and its own two files. Exit codes: 0 written, 1 invalid input, 2 usage.
+    """
+    if (domain is None) != (state is None):
+        usage_error("give --domain DOMAIN and --state STATE together", "--state")
+    names = list(robots or ())
+    leading = list(coordinators or ())
+    if state is not None and domain is not None:
+        agents, first = _state_members(domain, state)
+        names = list(dict.fromkeys([*agents, *names]))
+        leading = leading or first
+    if not names:
+        usage_error("no robot: give --domain and --state, or --robot NAME", "--robot")
+    if not leading:
+        usage_error(
+            "which robot may send switches? give --coordinator NAME (the robot of the goal)",
+            "--coordinator",
+        )
+    from cfgplan.security.keys import make_society, plan_society, write_society
+
+    try:
+        plan = plan_society(str(society), names, list(operators or ()), leading)
+        written = write_society(output, make_society(plan, days), force)
+    except RunError as exc:
+        raise _failed(exc) from None
+    members = {m.stem: m for m in plan.members}
+    what = {
+        "ca.pem": "the society's certificate authority (to every member)",
+        "ca.key": "the authority's private key (keep it off the robots)",
+        "society.json": "the members and what each may do (to every member)",
+    }
+    for m in plan.members:
+        role = " (coordinator)" if m.coordinator else ""
+        what[f"{m.stem}.pem"] = f"{m.kind} {m.name}'s certificate, {m.common_name}{role}"
+        what[f"{m.stem}.key"] = f"{m.kind} {m.name}'s private key (to its host only)"
+    width = max(len(p.name) for p in written)
+    lines = [f"society {plan.society}: keys for {len(members)} member(s) in {output}/ (0700)"]
+    lines += [f"  {path.name:<{width}}  {what[path.name]}" for path in written]
+    typer.echo(printable("\n".join(lines), keep="\n"))  # names from the input, escaped

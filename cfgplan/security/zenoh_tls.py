@@ -1,0 +1,249 @@
+"""A robot's Zenoh session with its society's keys: TLS, mutual authentication,
+access control by certificate name (``--keys DIR``).
+
+From a folder made by ``cfgplan keys new`` (:mod:`cfgplan.security.keys`)
+and the name of a robot (or operator tool), :func:`secure_settings` gives the
+settings put on top of the session's configuration
+(:func:`cfgplan.runtime.zenoh_transport.zenoh_config`), with the keys of the
+Zenoh configuration schema (``DEFAULT_CONFIG.json5`` of eclipse-zenoh,
+``transport/link/tls`` and ``access_control``; checked against the installed
+eclipse-zenoh by tests/security/test_zenoh_tls.py):
+
+* **TLS with mutual authentication**: the society's CA is the only root
+  (``root_ca_certificate``), the member's certificate and key serve both when
+  it listens and when it connects, ``enable_mtls`` makes the listening side
+  ask for the connecting side's certificate. A peer without a certificate of
+  the society's CA cannot open a session at all: the TLS handshake fails.
+  ``verify_name_on_connect`` is off: a robot's certificate names the robot,
+  not a host (robots move between networks), and what a peer may do is
+  decided by its certificate's name below, not by the address it is reached at.
+  ``close_link_on_expiration``: a connection ends when a certificate expires.
+* **Endpoints**: with keys every endpoint is TLS: ``tcp/HOST:PORT`` becomes
+  ``tls/HOST:PORT`` (so the same ``--listen``/``--connect`` work with and
+  without keys), ``tls/`` and ``quic/`` stay, any other protocol is refused;
+  Zenoh's own default listener (``tcp/[::]:0``) becomes ``tls/[::]:0``.
+* **Access control of least privilege** (``access_control``, default
+  ``deny``), the same rules in every member's configuration: each robot
+  enforces them on what it receives (``ingress``) and sends (``egress``),
+  per peer, the peer named by its certificate's common name
+  (``cert_common_names``, :func:`cfgplan.security.keys.common_name`).
+  With ``P`` = ``cfgplan/<society>`` (:mod:`cfgplan.runtime.keys`), a robot R may
+
+  - put on ``P/*/ch/**`` (the global channels: see below) and ``P/coordinator``
+    (its reports and acknowledgements, 5.5); a coordinator also on
+    ``P/*/configure`` (prepare, commit, abort, finish): no other robot can
+    send a robot the steps of a switch;
+  - declare only its own liveliness token ``P/R/alive``;
+  - subscribe only to its own channels ``P/R/ch/**`` and ``P/R/configure``
+    (a coordinator also to ``P/coordinator``), and watch ``P/*/alive``;
+  - be sent only those (egress): another robot's channels and switches, and
+    the reports of the others, are not sent to it even when it asks.
+
+  An operator tool may watch and read everything under ``P`` and publish nothing.
+
+What Zenoh's access control cannot express with today's key layout: the
+key of a global channel names the robot that *receives* it and the two
+functionality labels (``P/<receiver>/ch/<source>/<target>/<data>``), not the
+robot that sends it, and which robot sends into which channel changes with
+every switch while the rules are fixed when the session opens. So any robot
+of the society may put a value on any other robot's channel key: an
+authenticated robot can still forge a channel value. A key naming the sender
+(``P/<receiver>/ch/<sender>/...``) would let the rule "R puts only on
+``P/*/ch/R/**``" close that; until then the receiver must check the sender
+itself. Likewise the rules cannot say which robot is the coordinator of the
+current goal: every robot ``cfgplan keys new`` marked as a coordinator (by
+default the robots a goal of the state names) may send switches.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.keys import PREFIX, chunk
+from cfgplan.security.keys import CA_STEM, Member, SocietyKeys, read_society
+
+__all__ = [
+    "SECURE_PROTOCOLS",
+    "access_control",
+    "member_of",
+    "secure",
+    "secure_endpoint",
+    "secure_settings",
+    "society_for",
+    "society_of",
+]
+
+SECURE_PROTOCOLS = ("tls", "quic")
+"""Protocols of Zenoh links that carry the certificates."""
+
+_PROTOCOL = re.compile(r"^([A-Za-z0-9+.-]+)/(.*)$", re.DOTALL)
+
+
+def secure_endpoint(endpoint: str) -> str:
+    """``tcp/HOST:PORT`` as ``tls/HOST:PORT``; ``tls/`` and ``quic/`` as they are;
+    :class:`RunError` for any other protocol (it would carry no certificate)."""
+    match = _PROTOCOL.match(endpoint)
+    protocol = match.group(1).lower() if match else ""
+    if match and protocol == "tcp":
+        return f"tls/{match.group(2)}"
+    if protocol in SECURE_PROTOCOLS:
+        return endpoint
+    raise RunError(
+        f"{endpoint!r}: with --keys every endpoint is TLS (tcp/ is taken as tls/); "
+        f"{protocol or 'this'} carries no certificate",
+        hint="give tls/HOST:PORT or tcp/HOST:PORT",
+    )
+
+
+def society_of(folder: str | Path) -> SocietyKeys:
+    """The society a keys folder is for (its ``society.json``)."""
+    return read_society(Path(folder))
+
+
+def member_of(keys: SocietyKeys, name: str, folder: Path) -> Member:
+    """The member ``name`` (a robot, else an operator tool) of ``keys``, with its
+    files in ``folder``; :class:`RunError` naming what is missing."""
+    member = keys.member(name) or keys.member(name, "operator")
+    if member is None:
+        robots = ", ".join(m.name for m in keys.robots)
+        raise RunError(
+            f"{folder} has no certificate for {name} (society {keys.society}: {robots})",
+            hint=f"make the society's keys with --robot {name}",
+        )
+    for path in (folder / f"{CA_STEM}.pem", folder / f"{member.stem}.pem"):
+        if not path.is_file():
+            raise RunError(f"{path} not found (copy it from where the society's keys were made)")
+    key = folder / f"{member.stem}.key"
+    if not key.is_file():
+        raise RunError(f"{key} not found: {name}'s private key")
+    if key.stat().st_mode & 0o077:
+        raise RunError(
+            f"{key} can be read by others; a private key must be readable by its owner only",
+            hint=f"chmod 600 {key}",
+        )
+    return member
+
+
+def _rule(rules: list[dict[str, Any]], flow: str, messages: Sequence[str], keys: list[str]) -> str:
+    rule_id = f"r{len(rules)}"
+    rules.append(
+        {
+            "id": rule_id,
+            "messages": list(messages),
+            "flows": [flow],
+            "permission": "allow",
+            "key_exprs": keys,
+        }
+    )
+    return rule_id
+
+
+WATCH = ("declare_liveliness_subscriber", "liveliness_query")
+
+
+def access_control(keys: SocietyKeys) -> dict[str, Any]:
+    """Zenoh's ``access_control`` for a society (see the module docstring):
+    deny by default, then per member what it may send and be sent."""
+    p = f"{PREFIX}/{chunk(keys.society)}"
+    rules: list[dict[str, Any]] = []
+    subjects: list[dict[str, Any]] = []
+    policies: list[dict[str, Any]] = []
+    alive = [f"{p}/*/alive"]
+    for i, member in enumerate(keys.members):
+        subject = f"s{i}"
+        subjects.append({"id": subject, "cert_common_names": [member.common_name]})
+        if member.kind == "operator":
+            mine = [
+                _rule(rules, "ingress", ["declare_subscriber"], [f"{p}/**"]),
+                _rule(rules, "ingress", WATCH, alive),
+                _rule(rules, "egress", ["put"], [f"{p}/**"]),
+                _rule(rules, "egress", ["liveliness_token", "reply"], alive),
+            ]
+        else:
+            r = f"{p}/{chunk(member.name)}"
+            puts = [f"{p}/*/ch/**", f"{p}/coordinator"]
+            reads = [f"{r}/ch/**", f"{r}/configure"]
+            if member.coordinator:
+                puts.append(f"{p}/*/configure")
+                reads.append(f"{p}/coordinator")
+            mine = [
+                _rule(rules, "ingress", ["put"], puts),
+                _rule(rules, "ingress", ["declare_subscriber"], reads),
+                _rule(rules, "ingress", ["liveliness_token"], [f"{r}/alive"]),
+                _rule(rules, "ingress", [*WATCH, "reply"], alive),
+                _rule(rules, "egress", ["put"], reads),
+                _rule(rules, "egress", ["declare_subscriber"], [f"{p}/**"]),
+                _rule(rules, "egress", ["liveliness_token", *WATCH, "reply"], alive),
+            ]
+        policies.append({"id": f"p{i}", "rules": mine, "subjects": [subject]})
+    return {
+        "enabled": True,
+        "default_permission": "deny",
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
+    }
+
+
+def secure_settings(folder: str | Path, name: str, society: str) -> list[tuple[str, str, str]]:
+    """The settings of ``name``'s session with the keys in ``folder``, as
+    (key, JSON5 value, what) for :meth:`zenoh.Config.insert_json5`; the
+    endpoints are made secure by :func:`secure_endpoint` apart from these."""
+    where = Path(folder)
+    keys = society_of(where)
+    if keys.society != society:
+        raise RunError(
+            f"--society {society}, but the keys in {where} are for society {keys.society}",
+            hint=f"give --society {keys.society}, or leave --society out",
+        )
+    member = member_of(keys, name, where)
+    tls = {
+        "root_ca_certificate": str((where / f"{CA_STEM}.pem").resolve()),
+        "listen_private_key": str((where / f"{member.stem}.key").resolve()),
+        "listen_certificate": str((where / f"{member.stem}.pem").resolve()),
+        "enable_mtls": True,
+        "connect_private_key": str((where / f"{member.stem}.key").resolve()),
+        "connect_certificate": str((where / f"{member.stem}.pem").resolve()),
+        "verify_name_on_connect": False,
+        "close_link_on_expiration": True,
+    }
+    return [
+        *((f"transport/link/tls/{k}", json.dumps(v), "--keys") for k, v in tls.items()),
+        ("access_control", json.dumps(access_control(keys)), "--keys (access control)"),
+    ]
+
+
+Setter = Callable[[Any, str, str, str], None]
+"""How a setting goes into a Zenoh configuration: (config, key, JSON5, what)."""
+
+
+def _secured(value: Any) -> Any:
+    """A configuration's endpoints (a list, or lists per mode) made secure."""
+    if isinstance(value, dict):
+        return {mode: _secured(endpoints) for mode, endpoints in value.items()}
+    if isinstance(value, list):
+        return [secure_endpoint(str(e)) for e in value]
+    return value
+
+
+def secure(config: Any, folder: str, name: str, society: str, put: Setter) -> None:
+    """Put ``name``'s keys from ``folder`` on ``config`` (:func:`secure_settings`)
+    and make every listen and connect endpoint it has TLS (:func:`secure_endpoint`)."""
+    for key, value, what in secure_settings(folder, name, society):
+        put(config, key, value, what)
+    for key in ("listen/endpoints", "connect/endpoints"):
+        endpoints = json.loads(config.get_json(key))
+        put(config, key, json.dumps(_secured(endpoints)), f"--keys ({key})")
+
+
+def society_for(folder: str | None, society: str, default: str) -> str:
+    """The society of a run: ``society`` as given, or with ``folder`` of keys and
+    ``society`` left at ``default``, the keys' society."""
+    if folder is None or society != default:
+        return society
+    return society_of(folder).society

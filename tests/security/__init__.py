@@ -1,0 +1,1 @@
+"""Transport security of a society: keys, TLS with mutual authentication, access control."""
