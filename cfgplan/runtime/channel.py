@@ -182,5 +182,5 @@ def make_global_channel(
         def receiver(payload: bytes) -> None:
             channel.receive(payload)
 
-        transport.attach(robot, channel.key, receiver)
+        transport.attach(robot, channel.key, receiver, other)
     return channel

@@ -129,7 +129,9 @@ class Robot:
             "global", self.name, source, target, data, other=other, transport=self.transport
         )
         if channel.remote:
-            self.transport.attach(self.name, channel.key, lambda p: self._receive(channel, p))
+            self.transport.attach(
+                self.name, channel.key, lambda p: self._receive(channel, p), other
+            )
         self.channels.append(channel)
         return channel
 

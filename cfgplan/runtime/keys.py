@@ -3,16 +3,20 @@
 One robot program per robot; robots of one *society* share a prefix, so two
 societies on one network stay apart::
 
-    cfgplan/<society>/<robot>/alive                              the robot is running
-    cfgplan/<society>/<robot>/ch/<source>/<target>/<data ...>    a global channel into <robot>
-    cfgplan/<society>/<robot>/configure                          switches, to <robot>
-    cfgplan/<society>/coordinator                                reports and acks (5.5)
+    cfgplan/<society>/<robot>/alive                                     the robot runs
+    cfgplan/<society>/<robot>/ch/<sender>/<source>/<target>/<data ...>  a channel into it
+    cfgplan/<society>/<robot>/configure                                 switches, to it
+    cfgplan/<society>/coordinator                                       reports, acks (5.5)
 
-``<robot>`` is the robot that *receives*; ``<source>`` and ``<target>`` are the
-channel's functionality labels and ``<data ...>`` its data descriptor, one
-chunk per element, e.g. the channel from Emil's F7 to Pippi's F3 carrying
-``(pos Pippi Door1)`` in society ``lab`` is
-``cfgplan/lab/Pippi/ch/F7/F3/pos/Pippi/Door1``. Each chunk is
+``<robot>`` is the robot that *receives*, ``<sender>`` the robot that sends;
+``<source>`` and ``<target>`` are the channel's functionality labels and
+``<data ...>`` its data descriptor, one chunk per element, e.g. the channel
+from Emil's F7 to Pippi's F3 carrying ``(pos Pippi Door1)`` in society
+``lab`` is ``cfgplan/lab/Pippi/ch/Emil/F7/F3/pos/Pippi/Door1``. A receiver
+listens only to the key naming the sender it expects, and with ``--keys``
+Zenoh's access control lets a robot put only on keys that name it as the
+sender (:mod:`cfgplan.security.zenoh_tls`): no robot can pass its values off
+as another's. Each chunk is
 percent-encoded: letters, digits and ``_ . - + = , : ~`` stay as they are,
 any other character becomes ``%XX`` per UTF-8 byte (so ``/``, ``*``, ``$``,
 ``#``, ``?``, ``@`` and ``%`` never reach Zenoh raw). A chunk is never empty.
@@ -59,9 +63,9 @@ def unchunk(part: str) -> str:
     return _ESCAPED.sub(lambda m: bytes.fromhex(m.group(0).replace("%", "")).decode(), part)
 
 
-def channel_key(society: str, robot: str, key: ChannelKey) -> str:
-    """Where the data of channel ``key`` into ``robot`` is published."""
-    parts = [PREFIX, society, robot, "ch", key.source, key.target, *key.data]
+def channel_key(society: str, robot: str, key: ChannelKey, sender: str) -> str:
+    """Where ``sender`` publishes the data of channel ``key`` into ``robot``."""
+    parts = [PREFIX, society, robot, "ch", sender, key.source, key.target, *key.data]
     return "/".join(p if i == 0 or i == 3 else chunk(p) for i, p in enumerate(parts))
 
 

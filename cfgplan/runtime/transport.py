@@ -54,8 +54,9 @@ Presence = Callable[[str, bool], None]
 class Transport(Protocol):
     """The connection global channels write through."""
 
-    def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
-        """Deliver messages sent to channel ``key`` on ``robot`` to ``receiver``."""
+    def attach(self, robot: str, key: ChannelKey, receiver: Receiver, sender: str) -> None:
+        """Deliver messages ``sender`` sends to channel ``key`` on ``robot`` to
+        ``receiver`` (those of any other robot are not)."""
 
     def detach(self, robot: str, key: ChannelKey) -> None:
         """Stop delivering channel ``key`` on ``robot`` (the channel was stopped)."""
@@ -92,7 +93,8 @@ class InProcessTransport:
         self.sent = 0
         self.undelivered = 0
 
-    def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
+    def attach(self, robot: str, key: ChannelKey, receiver: Receiver, sender: str) -> None:
+        """Robots of one process cannot pass for one another: ``sender`` is not checked."""
         if (robot, key) in self._receivers:
             raise RunError(f"channel {key} is created twice on {robot}")
         self._receivers[(robot, key)] = receiver

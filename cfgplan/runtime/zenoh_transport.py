@@ -204,7 +204,8 @@ class ZenohTransport:
             raise RunError(f"cannot declare {robot} alive: {_reason(exc)}") from None
         self._subscribers: list[Any] = []
         self._channels: Any = None  # the subscriber of cfgplan/<society>/<robot>/ch/**
-        self._receivers: dict[str, Receiver] = {}
+        self._receivers: dict[str, Receiver] = {}  # by key expression (with the sender)
+        self._attached: dict[ChannelKey, str] = {}  # each channel's key expression
         self._newest: dict[str, bytes] = {}  # per key, what arrived since the last poll
         self._lock = threading.Lock()
         self._arrived = threading.Event()
@@ -221,12 +222,14 @@ class ZenohTransport:
         )
         self.sent = 0
 
-    def attach(self, robot: str, key: ChannelKey, receiver: Receiver) -> None:
+    def attach(self, robot: str, key: ChannelKey, receiver: Receiver, sender: str) -> None:
+        """Messages on the key naming ``sender`` go to ``receiver``; one on the
+        same channel's key naming another robot reaches nobody."""
         if robot != self.robot:
             raise RunError(f"this Zenoh session carries {self.robot}'s channels, not {robot}'s")
-        where = channel_key(self.society, robot, key)
-        if where in self._receivers:
+        if key in self._attached:
             raise RunError(f"channel {key} is created twice on {robot}")
+        where = self._attached[key] = channel_key(self.society, robot, key, sender)
         self._receivers[where] = receiver
         if self._channels is None:  # one subscriber for every channel into this robot
             every = channels_pattern(self.society, robot)
@@ -235,7 +238,9 @@ class ZenohTransport:
 
     def detach(self, robot: str, key: ChannelKey) -> None:
         """Nothing more is handed to channel ``key`` (what still arrives is dropped)."""
-        where = channel_key(self.society, robot, key)
+        where = self._attached.pop(key, None)
+        if where is None:
+            return
         self._receivers.pop(where, None)
         with self._lock:
             self._newest.pop(where, None)
@@ -271,7 +276,7 @@ class ZenohTransport:
         self._arrived.set()
 
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
-        where = channel_key(self.society, robot, key)
+        where = channel_key(self.society, robot, key, self.robot)
         publisher = self._publishers.get(where)
         if publisher is None:
             publisher = self._session.declare_publisher(where, express=True)

@@ -29,7 +29,8 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
   (``cert_common_names``, :func:`cfgplan.security.keys.common_name`).
   With ``P`` = ``cfgplan/<society>`` (:mod:`cfgplan.runtime.keys`), a robot R may
 
-  - put on ``P/*/ch/**`` (the global channels: see below) and ``P/coordinator``
+  - put on ``P/*/ch/R/**`` (the global channels it sends on: the keys that
+    name it as their sender) and ``P/coordinator``
     (its reports and acknowledgements, 5.5); a coordinator also on
     ``P/*/configure`` (prepare, commit, abort, finish): no other robot can
     send a robot the steps of a switch;
@@ -41,18 +42,15 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
 
   An operator tool may watch and read everything under ``P`` and publish nothing.
 
-What Zenoh's access control cannot express with today's key layout: the
-key of a global channel names the robot that *receives* it and the two
-functionality labels (``P/<receiver>/ch/<source>/<target>/<data>``), not the
-robot that sends it, and which robot sends into which channel changes with
-every switch while the rules are fixed when the session opens. So any robot
-of the society may put a value on any other robot's channel key: an
-authenticated robot can still forge a channel value. A key naming the sender
-(``P/<receiver>/ch/<sender>/...``) would let the rule "R puts only on
-``P/*/ch/R/**``" close that; until then the receiver must check the sender
-itself. Likewise the rules cannot say which robot is the coordinator of the
-current goal: every robot ``cfgplan keys new`` marked as a coordinator (by
-default the robots a goal of the state names) may send switches.
+A channel's key names its receiver *and its sender*
+(``P/<receiver>/ch/<sender>/<source>/<target>/<data>``,
+:mod:`cfgplan.runtime.keys`), and a receiver listens only to the key naming
+the robot it expects data from: so no robot of the society can pass a value
+off as another's, though which robot sends into which channel changes with
+every switch while these rules are fixed when the session opens. What the
+rules cannot say is which robot is the coordinator of the current goal:
+every robot ``cfgplan keys new`` marked as a coordinator (by default the
+robots a goal of the state names) may send switches.
 """
 
 from __future__ import annotations
@@ -166,7 +164,7 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
             ]
         else:
             r = f"{p}/{chunk(member.name)}"
-            puts = [f"{p}/*/ch/**", f"{p}/coordinator"]
+            puts = [f"{p}/*/ch/{chunk(member.name)}/**", f"{p}/coordinator"]
             reads = [f"{r}/ch/**", f"{r}/configure"]
             if member.coordinator:
                 puts.append(f"{p}/*/configure")

@@ -17,7 +17,10 @@ from cfgplan.runtime.keys import (
 
 def test_the_key_of_a_global_channel_reads_society_robot_channel() -> None:
     key = ChannelKey("F7", "F3", ("pos", "Pippi", "Door1"))
-    assert channel_key("lab", "Pippi", key) == "cfgplan/lab/Pippi/ch/F7/F3/pos/Pippi/Door1"
+    assert (
+        channel_key("lab", "Pippi", key, "Emil")
+        == "cfgplan/lab/Pippi/ch/Emil/F7/F3/pos/Pippi/Door1"
+    )
     assert alive_key("lab", "Emil") == "cfgplan/lab/Emil/alive"
     assert alive_pattern("lab") == "cfgplan/lab/*/alive"
 

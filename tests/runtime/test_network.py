@@ -265,8 +265,8 @@ class Lossy:
         self.random = random.Random(seed)
         self.sent = self.lost = 0
 
-    def attach(self, robot: str, key: ChannelKey, receiver: object) -> None:
-        self.inner.attach(robot, key, receiver)
+    def attach(self, robot: str, key: ChannelKey, receiver: object, sender: str) -> None:
+        self.inner.attach(robot, key, receiver, sender)
 
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         self.sent += 1
@@ -330,8 +330,8 @@ def test_the_zenoh_key_layout_is_what_travels(tmp_path: Path) -> None:
             config_file=config,
         ),
     )
-    where = "cfgplan/doc/Pippi/ch/F7/F3/pos/Pippi/Door1"
-    assert channel_key("doc", "Pippi", key) == where
+    where = "cfgplan/doc/Pippi/ch/Emil/F7/F3/pos/Pippi/Door1"
+    assert channel_key("doc", "Pippi", key, "Emil") == where
     got: list[Record] = []
     subscriber = listener._session.declare_subscriber(
         where, lambda s: got.append({"payload": s.payload.to_string()})
@@ -361,10 +361,10 @@ def test_a_channel_attached_twice_is_refused_as_on_one_machine(tmp_path: Path) -
         "Pippi", ZenohOptions(society="twice", listen=(endpoint(free_port()),), config_file=config)
     )
     try:
-        pippi.attach("Pippi", key, lambda payload: None)
+        pippi.attach("Pippi", key, lambda payload: None, "Emil")
         with pytest.raises(RunError, match=r"channel F7->F3 \(pos Pippi Door1\) is created twice"):
-            pippi.attach("Pippi", key, lambda payload: None)
+            pippi.attach("Pippi", key, lambda payload: None, "Emil")
         pippi.detach("Pippi", key)
-        pippi.attach("Pippi", key, lambda payload: None)
+        pippi.attach("Pippi", key, lambda payload: None, "Emil")
     finally:
         pippi.close()
