@@ -16,9 +16,12 @@ orders them. The time limit is the one :mod:`cfgplan.planner.clock` holds.
 In distinct mode a partial configuration reached again (its canonical form)
 is expanded once, by the node taken first; bounds of the node alone price
 both alike, so that is the first in depth-first order. A child priced from
-its parent's split (:mod:`cfgplan.planner.split`) may not be; should the
-later node have been taken first, the search starts over without the
-splits (:meth:`BestFirst._again`).
+its parent's split (:mod:`cfgplan.planner.split`), or one priced before a
+bound was given up and its twin after, may not be; should the later node
+have been taken first, the search starts over, once, without the splits
+(:meth:`BestFirst._again`). (Before, it started over only when a split had
+lifted a priority: ``-k 5`` was not a prefix of ``--all`` on
+``tests/data/repros/k-not-prefix-of-all``.)
 """
 
 from __future__ import annotations
@@ -60,6 +63,7 @@ class BestFirst:
     _closed: dict[bytes, tuple[int, ...]] = field(default_factory=dict)
     """The canonical forms of the partial nodes expanded (distinct), each with
     the path of the node that was expanded."""
+    _restarted: bool = False  # the search started over once (:meth:`_again`)
 
     @property
     def stats(self) -> Stats:
@@ -133,7 +137,7 @@ class BestFirst:
                 key = canonical(node, grower.grounder)
                 first = self._closed.get(key)
                 if first is not None:
-                    if node.path < first and grower.lifted:
+                    if node.path < first and not self._restarted:
                         raise _Twins
                     grower.splits.pop(node.path, None)  # it is not expanded
                     continue
@@ -149,6 +153,7 @@ class BestFirst:
         (they cost at least what the earlier node was taken at, and come
         after it at that cost), and what was listed before is listed again,
         numbered alike, and skipped."""
+        self._restarted = True
         grower = self.grower
         grower.split = None
         grower.splits.clear()

@@ -8,6 +8,8 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.planner.report import Condition
+from cfgplan.problem import Problem, load
+from tests.backends.support import ROOT
 from tests.planner.oracle import depth_first
 from tests.planner.problems import load_text, run
 
@@ -145,3 +147,31 @@ def test_an_eval_before_the_atom_binding_its_variable_waits_for_it() -> None:
     assert len(run(full, distinct=True)) == 1
     low = load_text(CAMERA, "(state (robot r1) (camera r1) (battery r1 5)) (goal (go r1))")
     assert run(low, distinct=True) == []
+
+
+K_NOT_PREFIX = ROOT / "tests" / "data" / "repros" / "k-not-prefix-of-all"
+
+
+def test_k_best_is_a_prefix_of_all_when_the_partition_bound_was_given_up() -> None:
+    """Issue 35 (../shared/repros/k-not-prefix-of-all): ``-k 5`` listed as
+    rank 5 the labels of derivation 7 while ``--all`` listed derivation 5's.
+    Two partial configurations of one canonical form had been taken out of
+    the thesis's depth-first order, and the search started over (without the
+    parents' splits) only when a split had lifted a priority; here the
+    partition bound had been given up before it lifted anything. Every k is
+    now a prefix of all, labels and derivation numbers included, and all is
+    the depth-first oracle's list without repeats."""
+
+    def fresh() -> Problem:  # each search from a task read afresh, as the CLI's
+        return load(K_NOT_PREFIX / "labels-domain.lisp", K_NOT_PREFIX / "labels-state.lisp")
+
+    everything = run(fresh(), distinct=True)
+    assert len(everything) == 6
+    for k in range(1, len(everything) + 2):
+        assert run(fresh(), limit=k, distinct=True) == everything[:k], k
+    problem = fresh()
+    oracle: list[tuple[float, object]] = []
+    for cost, identity in depth_first(problem, Weights()):
+        if identity not in [i for _, i in oracle]:
+            oracle.append((cost, identity))
+    assert [(c.cost, c.identity()) for c in everything] == oracle
