@@ -26,19 +26,24 @@ __all__ = ["jsonl", "lisp", "more_note", "stats", "streamed", "summary", "table"
 NO_MEDIA = "the state declares no media: communication admissibility not checked"
 
 
-def more_note(listed: int, what: str = "configuration") -> str:
-    """What the table says when ``-k`` cut the list: ``-k N`` plans one
+def more_note(listed: int, what: str = "configuration", more: bool | None = True) -> str:
+    """What the table says when ``-k`` cut the list: ``-k N`` looks for one
     configuration (or sequence, ``what``) more than it lists, so that one more
     is known to exist, never how many (counting them would mean searching to
-    the end)."""
+    the end); ``more`` None: the look-ahead's work ran out before it knew."""
     wider = listed + 10
+    if more is None:
+        return (
+            f"note: more {what}s may exist (the search for one more stopped early): "
+            f"-k {wider} searches for up to {wider}, --all for them all\n"
+        )
     return (
         f"note: at least one more {what} exists: "
         f"-k {wider} lists up to {wider}, --all lists them all\n"
     )
 
 
-def stats(search: Run, more: bool = False) -> dict[str, object]:
+def stats(search: Run, more: bool | None = False) -> dict[str, object]:
     s = search.stats
     return {
         "more": more,
@@ -53,7 +58,11 @@ def stats(search: Run, more: bool = False) -> dict[str, object]:
 
 
 def table(
-    problem: Problem, configs: list[Configuration], details: bool, more: bool, first: int = 1
+    problem: Problem,
+    configs: list[Configuration],
+    details: bool,
+    more: bool | None,
+    first: int = 1,
 ) -> str:
     """The table for people: names with control characters escaped (a name
     holding ESC cannot drive the terminal)."""
@@ -91,8 +100,8 @@ def table(
     # With --details the table is as wide as the terminal (200 when not one).
     width = shutil.get_terminal_size((200, 24)).columns if details else 100
     Console(file=buffer, width=width, force_terminal=False, color_system=None).print(shown)
-    if more:
-        buffer.write(more_note(len(configs)))
+    if more or more is None:
+        buffer.write(more_note(len(configs), more=more))
     if not problem.state.media:
         buffer.write(f"note: {NO_MEDIA}\n")
     if any(not c.proven for c in configs):
@@ -127,7 +136,7 @@ def summary(
     problem: Problem,
     configs: list[Configuration],
     search: Run,
-    more: bool = False,
+    more: bool | None = False,
     explained: dict[str, object] | None = None,
 ) -> str:
     """The last line of ``--format jsonl``: what was planned for, and how."""
@@ -152,7 +161,11 @@ def lisp(problem: Problem, configs: list[Configuration], first: int = 1) -> str:
 
 
 def jsonl(
-    problem: Problem, configs: list[Configuration], search: Run, more: bool, first: int = 1
+    problem: Problem,
+    configs: list[Configuration],
+    search: Run,
+    more: bool | None,
+    first: int = 1,
 ) -> str:
     """One configuration a line, ranked from ``first``, then the summary line:
     byte for byte what :func:`streamed` and :func:`summary` print."""

@@ -58,26 +58,27 @@ def _plan(
     distinct: bool,
     time_limit: float | None,
     asked: _Asked,
-) -> tuple[Run, list[Configuration], bool]:
-    """Plan (streaming what is proven when asked to); with ``-k N`` one more is
-    planned, to say whether more exist: the run, the configurations, and that."""
+) -> tuple[Run, list[Configuration], bool | None]:
+    """Plan (streaming what is proven when asked to); with ``-k N`` the search
+    looks ahead for one more, within as much work again, to say whether more
+    exist (:attr:`~cfgplan.planner.plan.Run.ahead`): the run, the
+    configurations, and that (None: not known)."""
     search = Run(  # the time limit counts from here: planning, not reading
         problem.task,
         problem.goal_call,
-        None if limit is None else limit + 1,
+        limit,
         distinct,
         time_limit,
         _progress,
+        ahead=limit is not None and asked.listing,
     )
     configs: list[Configuration] = []
     for config in search:
-        if limit is not None and len(configs) == limit:
-            return search, configs, True
         configs.append(config)
         if asked.stream:  # printed as soon as it is proven
             sys.stdout.write(formats.streamed(problem, config, len(configs), asked.format))
             sys.stdout.flush()
-    return search, configs, False
+    return search, configs, search.more if search.ahead else False
 
 
 def _nothing(
@@ -121,7 +122,7 @@ def _print(
     problem: Problem,
     configs: list[Configuration],
     search: Run,
-    more: bool,
+    more: bool | None,
     backups: list[Fallback] | None,
     asked: _Asked,
 ) -> None:
@@ -147,7 +148,9 @@ def _print(
         if backups is not None:
             text += fallback_lisp(configs[0], backups, first)
     else:
-        text = formats.table(problem, configs, asked.details, more and asked.listing, first)
+        text = formats.table(
+            problem, configs, asked.details, more if asked.listing else False, first
+        )
         if backups is not None:
             text += fallback_table(configs[0], backups, first)
     write_output(text, asked.output, asked.force)

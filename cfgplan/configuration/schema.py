@@ -113,7 +113,11 @@ class MediumEntry(Closed):
 class SearchStats(Closed):
     """How the search went."""
 
-    more: bool = Field(description="True when `-k` cut the list and more configurations exist.")
+    more: bool | None = Field(
+        description="True when `-k` cut the list and more configurations exist; null when "
+        "that is not known (the search for one more stopped at its work limit: as much "
+        "work again as the listed ones took)."
+    )
     nodes: int = Field(description="Partial configurations created.")
     expansions: int = Field(description="Nodes expanded.")
     derivations: int = Field(description="Complete derivations reached.")

@@ -14,12 +14,41 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
+from dataclasses import dataclass
 
 _deadline: ContextVar[float | None] = ContextVar("cfgplan_deadline", default=None)
 
 
+@dataclass
+class Work:
+    """The calls of :func:`check` in a :func:`counting` block: a measure of
+    the search's work that, unlike time, is the same on every machine."""
+
+    done: int = 0
+    most: int | None = None
+    """Past this many, :func:`check` raises :class:`OutOfWork` (None: never)."""
+
+
+_work: ContextVar[Work | None] = ContextVar("cfgplan_work", default=None)
+
+
 class OutOfTime(Exception):
     """The time limit has passed; the search stops with what it has."""
+
+
+class OutOfWork(Exception):
+    """The work allowed a look-ahead (:attr:`Work.most`) is spent."""
+
+
+@contextmanager
+def counting() -> Iterator[Work]:
+    """Count the work of the block (:class:`Work`)."""
+    work = Work()
+    token = _work.set(work)
+    try:
+        yield work
+    finally:
+        _work.reset(token)
 
 
 @contextmanager
@@ -33,10 +62,16 @@ def limit(deadline: float | None) -> Iterator[None]:
 
 
 def check() -> None:
-    """Raise :class:`OutOfTime` if the current deadline has passed."""
+    """Raise :class:`OutOfTime` if the current deadline has passed, and
+    :class:`OutOfWork` if the work allowed is spent (one step of it)."""
     deadline = _deadline.get()
     if deadline is not None and time.perf_counter() > deadline:
         raise OutOfTime
+    work = _work.get()
+    if work is not None:
+        work.done += 1
+        if work.most is not None and work.done > work.most:
+            raise OutOfWork
 
 
 def remaining() -> float | None:

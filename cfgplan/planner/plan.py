@@ -128,6 +128,16 @@ class Run:
     components: bool = True
     """Search the goal's independent parts apart when it has some
     (:mod:`cfgplan.planner.combine`; the ``limit`` cheapest only)."""
+    ahead: bool = False
+    """Once ``limit`` configurations are listed, look for one more (not
+    listed) to say whether more exist (:attr:`more`), with at most as much
+    work again as the first ``limit`` took (and at least :attr:`ahead_least`
+    steps): ``-k 1`` never runs to the end of a search to prove there is no
+    second configuration."""
+    ahead_least: int = 10_000
+    more: bool | None = field(init=False, default=False)
+    """With :attr:`ahead`: True, one more exists; False, none (the search
+    ended); None, not known (the look-ahead's work ran out)."""
     strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
@@ -177,14 +187,23 @@ class Run:
         deadline = None if self.time_limit is None else started + self.time_limit
         listed = 0
         try:
-            with clock.limit(deadline):
+            with clock.limit(deadline), clock.counting() as work:
                 self._divide()
                 for config in self.strategy:
+                    if self.limit is not None and listed >= self.limit:  # the look-ahead's
+                        self.more = True
+                        self.stats.complete = False
+                        break
                     listed += 1
                     yield config
                     if self.limit is not None and listed >= self.limit:
-                        self.stats.complete = False
-                        break
+                        if not self.ahead:
+                            self.stats.complete = False
+                            break
+                        work.most = work.done + max(self.ahead_least, work.done)
+        except clock.OutOfWork:
+            self.more = None
+            self.stats.complete = False
         except KeyboardInterrupt:
             self.stats.complete = False
             self.strategy.stopped = StopReason.INTERRUPTED

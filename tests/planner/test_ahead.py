@@ -1,0 +1,58 @@
+"""``-k N`` looks ahead for one more configuration within bounded work (issue 35).
+
+``cfgplan plan -k 1`` used to plan two configurations to say whether more
+exist, so where only one exists it searched to the end to prove it (112 s on
+a recursive delegation where the first took 0.39 s). Now the search looks for
+one more with at most as much work again as the listed ones took (at least
+``ahead_least`` steps of :func:`cfgplan.planner.clock.check`, a measure that
+is the same on every machine): one found, more exist; the search ended, none
+do; the work ran out, not known.
+"""
+
+from __future__ import annotations
+
+from benchmarks.families.delegation import delegation
+from cfgplan.cli.formats import more_note
+from cfgplan.planner.plan import Run, plan
+from tests.planner.problems import load_text
+from tests.planner.test_reproducers import REUSED_SENSOR
+
+
+def _listed(domain: str, state: str, least: int) -> tuple[Run, list[object]]:
+    problem = load_text(domain, state)
+    search = Run(problem.task, problem.goal_call, 1, ahead=True, ahead_least=least)
+    return search, list(search)
+
+
+def test_the_look_ahead_says_more_exist_none_or_not_known() -> None:
+    """Recursive delegation among 6 robots (benchmarks/families/delegation.py):
+    with room to look, one more is found; with no room beyond the work the
+    first took, it is not known. Either way the one listed is the first of a
+    plain search, and the one looked for is not listed."""
+    domain, state = delegation(6)
+    problem = load_text(domain, state)
+    first, _ = plan(problem.task, problem.goal_call, limit=1)
+    found, listed = _listed(domain, state, 10_000)
+    assert found.more is True and listed == first
+    cut, listed = _listed(domain, state, 0)
+    assert cut.more is None and listed == first
+    assert cut.stats.nodes < found.stats.nodes  # it stopped looking early
+    alone, listed = _listed(REUSED_SENSOR, "(state robot(R1))\n(goal (do-task R1))\n", 10_000)
+    assert alone.more is False and len(listed) == 1
+
+
+def test_without_the_look_ahead_nothing_is_said() -> None:
+    domain, state = delegation(6)
+    problem = load_text(domain, state)
+    search = Run(problem.task, problem.goal_call, 1)
+    assert len(list(search)) == 1 and search.more is False
+
+
+def test_the_note_says_may_when_it_is_not_known() -> None:
+    assert more_note(1) == (
+        "note: at least one more configuration exists: -k 11 lists up to 11, --all lists them all\n"
+    )
+    assert more_note(1, more=None) == (
+        "note: more configurations may exist (the search for one more stopped early): "
+        "-k 11 searches for up to 11, --all for them all\n"
+    )
