@@ -88,9 +88,13 @@ class Coordinator:
     again, its robot not lost; doubled with each blame of it, up to
     :data:`~cfgplan.runtime.monitor.HOLD_MAX` (the robots' hold, ``--hold``)."""
     _blamed: Blamed = field(init=False, repr=False)  # out for stale outputs (suspect.py)
+    grace: float = 0.0
+    """Seconds a stale link (every channel from one robot into another) is
+    waited for before a computation on it is blamed
+    (:attr:`~cfgplan.reconfigure.suspect.Suspicions.grace`)."""
 
     def __post_init__(self) -> None:
-        self._suspects = Suspicions(self.clock)
+        self._suspects = Suspicions(self.clock, self.grace)
         self._blamed = Blamed(self.hold)
 
     # -- input --------------------------------------------------------------

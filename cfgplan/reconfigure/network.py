@@ -255,7 +255,13 @@ def coordinate(
         task, domain, goal, config, hysteresis or Hysteresis(), goals=goals
     )
     coordinator = Coordinator(
-        reconfigurator, robot.record, robot.name, deployer, ahead=Ahead(reconfigurator), hold=hold
+        reconfigurator,
+        robot.record,
+        robot.name,
+        deployer,
+        ahead=Ahead(reconfigurator),
+        hold=hold,
+        grace=2 * transport.lease,  # the lease runs out, and its loss is seen, first
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(

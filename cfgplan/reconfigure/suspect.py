@@ -8,6 +8,16 @@ the most upstream suspects: a functionality whose own inputs come, directly
 or not, from another suspect is starved, not failed (staleness flows
 downstream). :class:`Suspicions` keeps them for the
 :class:`~cfgplan.reconfigure.coordinate.Coordinator`.
+
+**Blame what failed** (5.5, issue 33): a functionality is suspected only on
+evidence about *it*. When every channel from one robot into another is stale
+at once, nothing tells a silent computation from a silent robot or a link
+that stalls (a lost packet is retransmitted after 200 ms or more: at 10 %
+loss, inputs go stale every few seconds): the suspicion then waits
+:attr:`Suspicions.grace` — the robot's lease (liveliness) decides first, and
+the link gets time to catch up — and is acted on only if data has not come
+back by then. When another channel from the same robot still flows, the
+suspect's own outputs stopped: it is acted on at its staleness limit.
 """
 
 from __future__ import annotations
@@ -51,6 +61,10 @@ class Suspicions:
     """The open suspicions, by (robot, label, channel detail)."""
 
     clock: Callable[[], float] = time.monotonic
+    grace: float = 0.0
+    """Seconds a suspicion waits when every channel from its sender's robot
+    into the robot that saw it is stale (module docstring); 0: no wait (robots
+    of one process share no link to blame)."""
     _open: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
 
     def note(self, detection: Detection) -> None:
@@ -76,7 +90,12 @@ class Suspicions:
         now = self.clock()
         for key in [k for k, s in self._open.items() if s.detection.label not in labels]:
             del self._open[key]  # a channel of an earlier configuration
-        ripe = {s.detection.label: s for s in self._open.values() if now - s.since >= s.limit}
+        silent = self._silent_links(running)
+        ripe = {
+            s.detection.label: s
+            for s in self._open.values()
+            if now - s.since >= self._wait(s, silent)
+        }
         suspected = {s.detection.label for s in self._open.values()}
         roots = [label for label in ripe if not (upstream(running, label) & suspected)]
         if not roots:
@@ -95,6 +114,28 @@ class Suspicions:
             how="stale",
             detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
         )
+
+    def _silent_links(self, running: Configuration) -> set[tuple[str, str]]:
+        """The (sender, receiver) robot pairs every channel of which is suspected."""
+        suspected = {
+            (s.detection.other, s.detection.robot, s.detection.label) for s in self._open.values()
+        }
+        links: dict[tuple[str, str], set[str]] = {}
+        for c in running.channels:
+            if c.kind == "global" and c.source_robot != c.target_robot:
+                links.setdefault((c.source_robot, c.target_robot), set()).add(c.source)
+        return {
+            link
+            for link, sources in links.items()
+            if all((*link, source) in suspected for source in sources)
+        }
+
+    def _wait(self, suspicion: _Suspicion, silent: set[tuple[str, str]]) -> float:
+        """How long ``suspicion`` must stay open to be acted on."""
+        link = (suspicion.detection.other, suspicion.detection.robot)
+        if link in silent:
+            return max(suspicion.limit, self.grace)
+        return suspicion.limit
 
 
 @dataclass(frozen=True)

@@ -193,6 +193,8 @@ class ZenohTransport:
         self.society = self.options.society
         z = self._z = _zenoh()
         config = zenoh_config(self.options, robot)
+        self.lease = float(json.loads(config.get_json("transport/link/tx/lease"))) / 1000
+        """Seconds of silence after which a robot is lost (the session's lease)."""
         try:
             self._session = z.open(config)
         except z.ZError as exc:

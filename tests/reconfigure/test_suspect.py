@@ -1,0 +1,79 @@
+"""Blame what failed (5.5, issue 33): a stale link is waited for, a silent
+computation is not.
+
+Robot X runs ``a(X)`` and ``b(X)``, each sending to ``c(Y)`` on robot Y over
+a global channel. Both inputs of ``c`` stale at once say nothing about ``a``
+or ``b``: X or the link between them fell silent (a lost packet is resent
+after 200 ms or more), and the suspicion waits the grace, during which X's
+lease decides. One stale while the other flows is evidence about its sender:
+it is acted on at its staleness limit. The clock is stepped by hand.
+"""
+
+from __future__ import annotations
+
+from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
+from cfgplan.reconfigure.suspect import Suspicions
+from cfgplan.runtime.monitor import Detection
+from tests.reconfigure.test_coordinate import Clock
+
+LINK = Configuration(
+    functionalities=(
+        FunctionalityInstance(label="F1", name="a", args=("X",)),
+        FunctionalityInstance(label="F2", name="b", args=("X",)),
+        FunctionalityInstance(label="F3", name="c", args=("Y",)),
+    ),
+    channels=tuple(
+        Channel(kind="global", source=s, target="F3", source_robot="X", target_robot="Y", data=(d,))
+        for s, d in (("F1", "p"), ("F2", "q"))
+    ),
+    cost=25,
+)
+
+
+def _stale(label: str, kind: str = "stale") -> Detection:
+    return Detection(kind, "Y", 1.0, label=label, other="X", detail=f"{label}->F3", limit=0.3)  # type: ignore[arg-type]
+
+
+def test_a_computation_whose_outputs_stop_while_its_robots_others_flow_is_blamed_at_the_limit() -> (
+    None
+):
+    clock = Clock()
+    suspicions = Suspicions(clock, grace=2.0)
+    suspicions.note(_stale("F1"))
+    clock.now += 0.29
+    assert suspicions.settled(LINK) is None
+    clock.now += 0.02
+    blamed = suspicions.settled(LINK)
+    assert blamed is not None and blamed.label == "F1" and blamed.how == "stale"
+
+
+def test_a_link_whose_every_channel_is_stale_is_waited_for_the_grace() -> None:
+    clock = Clock()
+    suspicions = Suspicions(clock, grace=2.0)
+    suspicions.note(_stale("F1"))
+    suspicions.note(_stale("F2"))
+    clock.now += 1.9
+    assert suspicions.settled(LINK) is None  # a stalled link: not a failure yet
+    suspicions.note(_stale("F2", "fresh"))  # data again from b(X): a(X) alone is silent
+    blamed = suspicions.settled(LINK)
+    assert blamed is not None and blamed.label == "F1"
+
+
+def test_a_link_silent_past_the_grace_blames_its_first_sender() -> None:
+    clock = Clock()
+    suspicions = Suspicions(clock, grace=2.0)
+    suspicions.note(_stale("F1"))
+    suspicions.note(_stale("F2"))
+    clock.now += 2.01
+    blamed = suspicions.settled(LINK)
+    assert blamed is not None and blamed.label == "F1"
+
+
+def test_without_grace_a_silent_link_is_blamed_at_the_limit() -> None:
+    """Robots of one process share no link: the thesis's rule, at once."""
+    clock = Clock()
+    suspicions = Suspicions(clock)
+    suspicions.note(_stale("F1"))
+    suspicions.note(_stale("F2"))
+    clock.now += 0.31
+    assert suspicions.settled(LINK) is not None
