@@ -32,7 +32,7 @@ from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.decision import Decision
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Reconfigurator
-from cfgplan.reconfigure.suspect import Blamed, Suspicions
+from cfgplan.reconfigure.suspect import SILENT_LINK, Blamed, Suspicions
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.monitor import HOLD, Detection
 from cfgplan.runtime.part import Part
@@ -275,7 +275,10 @@ class Coordinator:
         if blamed is None:
             return False
         if blamed.instance and blamed.other:
-            self._blamed.blame(tuple(blamed.instance), blamed.other, self.clock())
+            doubling = blamed.how != SILENT_LINK
+            self._blamed.blame(
+                tuple(blamed.instance), blamed.other, self.clock(), doubling=doubling
+            )
         self._failure(blamed)
         return True
 

@@ -21,9 +21,11 @@ with the messages of :mod:`cfgplan.runtime.protocol`:
   its part between two cycles and answers ``installed``; the switch is
   *running* when every answer of the new configuration's robots is in (its
   latency is measured to that moment);
-* a refusal, no answer within :data:`SWITCH_TIMEOUT` seconds while
-  preparing, or a robot's liveliness token going away (:meth:`gone`: no
-  waiting out the timeout for it), **aborts** the switch (nobody changed
+* a robot of the new configuration that is not running (no token: declared
+  in the state, never started), a refusal, no answer within
+  :data:`SWITCH_TIMEOUT` seconds while preparing, or a robot's liveliness
+  token going away (:meth:`gone`: no waiting out the timeout for it),
+  **aborts** the switch (nobody changed
   anything); the robots that failed to answer are taken as lost (in one
   decision), and the coordinator plans again without them. A commit not
   answered in time is taken as done
@@ -70,7 +72,11 @@ from cfgplan.runtime.protocol import (
 )
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
-__all__ = ["RETRY", "RETRY_MOST", "SWITCH_TIMEOUT", "NetworkDeployer"]
+__all__ = ["NOT_RUNNING", "RETRY", "RETRY_MOST", "SWITCH_TIMEOUT", "NetworkDeployer"]
+
+NOT_RUNNING = "not running"
+"""Why robots are taken as lost whose part a switch needs while no process
+of theirs is seen (its token): declared in the state, never started or gone."""
 
 SWITCH_TIMEOUT = 2.0
 """Seconds the coordinator waits for every robot to answer a step of a switch."""
@@ -154,6 +160,12 @@ class NetworkDeployer:
         refusal = None if own is None else self.member.refusal(own)
         if refusal is not None:  # as a robot refuses a prepare
             self._abort([self.me], f"refused: {refusal}")
+            return
+        absent = sorted(
+            r for r in parts if r != self.me and r not in alive and not _empty(parts[r])
+        )
+        if absent:  # its part would reach nobody: the others would wait for its data for good
+            self._abort(absent, NOT_RUNNING)
             return
         for robot in joining:
             part = part_to_json(targets[robot])

@@ -31,7 +31,12 @@ from cfgplan.planner.task import Ground
 from cfgplan.reconfigure.situation import Situation
 from cfgplan.runtime.monitor import Detection, doubled_hold
 
-__all__ = ["Suspicions", "upstream"]
+__all__ = ["SILENT_LINK", "Blamed", "Suspicions", "upstream"]
+
+SILENT_LINK = "silent link"
+"""How a failure blamed past the grace on a link whose every channel was
+stale is said: it is tried again after the plain hold, never a doubled one
+(the link, not the computation, was silent)."""
 
 
 def upstream(config: Configuration, label: str) -> set[str]:
@@ -104,6 +109,8 @@ class Suspicions:
         suspicion = ripe[label]
         for key in [k for k in self._open if k[1] == label]:
             del self._open[key]
+        link = self.grace > 0 and (suspicion.detection.other, suspicion.detection.robot) in silent
+        waited = self._wait(suspicion, silent)
         return Detection(
             "failure",
             suspicion.detection.robot,
@@ -111,8 +118,8 @@ class Suspicions:
             instance=labels[label].key,
             label=label,
             other=suspicion.detection.other,  # the robot whose data stopped
-            how="stale",
-            detail=f"input {suspicion.detection.detail} stale for over {suspicion.limit:g} s",
+            how=SILENT_LINK if link else "stale",
+            detail=f"input {suspicion.detection.detail} stale for over {waited:g} s",
         )
 
     def _silent_links(self, running: Configuration) -> set[tuple[str, str]]:
@@ -160,10 +167,13 @@ class Blamed:
     _out: dict[Ground, _Blame] = field(default_factory=dict)
     _times: dict[Ground, int] = field(default_factory=dict)
 
-    def blame(self, instance: Ground, sender: str, now: float) -> None:
-        """``instance`` failed at ``now`` because ``sender``'s data stopped."""
+    def blame(self, instance: Ground, sender: str, now: float, *, doubling: bool = True) -> None:
+        """``instance`` failed at ``now`` because ``sender``'s data stopped; not
+        ``doubling``: on no evidence about it (a silent link), tried again
+        after the plain hold each time."""
         times = self._times[instance] = self._times.get(instance, 0) + 1
-        self._out[instance] = _Blame(sender, now, doubled_hold(self.hold, times))
+        hold = doubled_hold(self.hold, times) if doubling else self.hold
+        self._out[instance] = _Blame(sender, now, hold)
 
     def forget(self, instance: Ground) -> None:
         """``instance`` recovered (its count of blames stays, for the next hold)."""

@@ -15,6 +15,7 @@ from types import SimpleNamespace
 from cfgplan.planner import plan
 from cfgplan.problem import load
 from cfgplan.reconfigure.coordinate import Coordinator
+from cfgplan.reconfigure.deployer import NOT_RUNNING
 from cfgplan.reconfigure.network import (
     RETRY,
     RETRY_MOST,
@@ -228,3 +229,21 @@ def test_a_robot_gone_in_a_switch_is_not_waited_out() -> None:
     deployer.gone("Pippi")
     assert done == [True] and deployer.switch is None
     assert aborted == [(["Pippi"], "lost")]
+
+
+def test_a_robot_of_the_new_configuration_not_running_aborts_the_switch_at_once() -> None:
+    """Docking with the ceiling camera declared but its process never started:
+    a switch to the configuration with the camera completed at once, nobody
+    sent the camera its part, and the dock waited for its data for good. Now
+    the switch is aborted before anything is sent and the camera is taken as
+    lost (``not running``): the coordinator plans without it until it is seen."""
+    deployer, network, _clock = _deployer()
+    camera = CallSpec("F1", "camera", ("Cam",), (), ())
+    laser = CallSpec("F2", "laser", ("Rasmus",), (), ())
+    parts = {"Cam": Part("Cam", (), (camera,)), "Rasmus": Part("Rasmus", (), (laser,))}
+    aborted: list[tuple[list[str], str]] = []
+    done: list[bool] = []
+    fail = lambda robots, why: aborted.append((robots, why))  # noqa: E731
+    deployer.deploy(SimpleNamespace(id=1), parts, lambda: done.append(True), fail)  # type: ignore[arg-type]
+    assert aborted == [(["Cam"], NOT_RUNNING)] and done == [] and deployer.switch is None
+    assert network.to("Rasmus", "prepare") == []  # nothing prepared, only the abort

@@ -11,8 +11,10 @@ it is acted on at its staleness limit. The clock is stepped by hand.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
-from cfgplan.reconfigure.suspect import Suspicions
+from cfgplan.reconfigure.suspect import SILENT_LINK, Blamed, Suspicions
 from cfgplan.runtime.monitor import Detection
 from tests.reconfigure.test_coordinate import Clock
 
@@ -59,14 +61,30 @@ def test_a_link_whose_every_channel_is_stale_is_waited_for_the_grace() -> None:
     assert blamed is not None and blamed.label == "F1"
 
 
-def test_a_link_silent_past_the_grace_blames_its_first_sender() -> None:
+def test_a_link_silent_past_the_grace_blames_its_first_sender_as_a_silent_link() -> None:
     clock = Clock()
     suspicions = Suspicions(clock, grace=2.0)
     suspicions.note(_stale("F1"))
     suspicions.note(_stale("F2"))
     clock.now += 2.01
     blamed = suspicions.settled(LINK)
-    assert blamed is not None and blamed.label == "F1"
+    assert blamed is not None and blamed.label == "F1" and blamed.how == SILENT_LINK
+    assert blamed.detail == "input F1->F3 stale for over 2 s"
+
+
+def test_a_silent_links_blame_is_tried_again_after_the_plain_hold_each_time() -> None:
+    """A computation blamed on evidence waits a hold doubled with each blame;
+    one blamed only because its link fell silent waits the plain hold each
+    time: once the link is back, its society serves again within hold + 1 s."""
+    situation = SimpleNamespace(failed={("a", "X")}, lost=())
+    blamed = Blamed(1.0)
+    for n in range(4):
+        blamed.blame(("a", "X"), "X", 10.0 * n, doubling=False)
+        assert blamed.due(situation, 10.0 * n + 0.99) == []  # type: ignore[arg-type]
+        assert blamed.due(situation, 10.0 * n + 1.0) == [("a", "X")]  # type: ignore[arg-type]
+        blamed.forget(("a", "X"))
+    blamed.blame(("a", "X"), "X", 100.0)  # on evidence: the fifth blame's hold
+    assert blamed.due(situation, 100.0 + 15.9) == []  # type: ignore[arg-type]
 
 
 def test_without_grace_a_silent_link_is_blamed_at_the_limit() -> None:
