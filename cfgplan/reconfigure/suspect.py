@@ -6,7 +6,10 @@ staleness limit of that channel (so a new configuration's first cycles, when
 data is not yet flowing, are not mistaken for a failure), and only against
 the most upstream suspects: a functionality whose own inputs come, directly
 or not, from another suspect is starved, not failed (staleness flows
-downstream). :class:`Suspicions` keeps them for the
+downstream), and its suspicion's clock starts only once nothing upstream
+of it is suspected any more (fed again, it needs a cycle to send: the
+upstream's ``fresh`` and its own may arrive in two messages, and between
+them it must not look failed). :class:`Suspicions` keeps them for the
 :class:`~cfgplan.reconfigure.coordinate.Coordinator`.
 
 **Blame what failed** (5.5, issue 33): a functionality is suspected only on
@@ -95,13 +98,16 @@ class Suspicions:
         now = self.clock()
         for key in [k for k, s in self._open.items() if s.detection.label not in labels]:
             del self._open[key]  # a channel of an earlier configuration
+        suspected = {s.detection.label for s in self._open.values()}
+        for suspicion in self._open.values():
+            if upstream(running, suspicion.detection.label) & suspected:
+                suspicion.since = now  # starved, not failed: its clock runs once fed again
         silent = self._silent_links(running)
         ripe = {
             s.detection.label: s
             for s in self._open.values()
             if now - s.since >= self._wait(s, silent)
         }
-        suspected = {s.detection.label for s in self._open.values()}
         roots = [label for label in ripe if not (upstream(running, label) & suspected)]
         if not roots:
             return None

@@ -14,9 +14,11 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
+from cfgplan.planner import plan
+from cfgplan.problem import load
 from cfgplan.reconfigure.suspect import SILENT_LINK, Blamed, Suspicions
 from cfgplan.runtime.monitor import Detection
-from tests.reconfigure.test_coordinate import Clock
+from tests.reconfigure.test_coordinate import STEP2, Clock
 
 LINK = Configuration(
     functionalities=(
@@ -95,3 +97,50 @@ def test_without_grace_a_silent_link_is_blamed_at_the_limit() -> None:
     suspicions.note(_stale("F2"))
     clock.now += 0.31
     assert suspicions.settled(LINK) is not None
+
+
+def test_a_starved_functionality_is_not_blamed_between_its_feeders_fresh_and_its_own() -> None:
+    """From the fault benchmark at 10 % loss: Emil's compass (F10) went stale
+    on Pippi, so her measure-robot-orient-compass (F12) starved and its output
+    went stale too. The compass's data came back; Pippi said so in one
+    message and that F12 was fed again in the next, and between the two the
+    coordinator blamed F12 (a spurious switch). A starved suspicion's clock
+    now starts only when nothing upstream of it is suspected any more."""
+    problem = load(*STEP2)
+    (config, *_), _ = plan(problem.task, problem.goal_call)
+    clock = Clock()
+    suspicions = Suspicions(clock, grace=2.0)
+
+    def on_pippi(label: str, sender: str, kind: str = "stale") -> Detection:
+        return Detection(kind, "Pippi", 1.0, label=label, other=sender, detail=label, limit=0.15)  # type: ignore[arg-type]
+
+    suspicions.note(on_pippi("F10", "Emil"))  # global-orient from Emil's compass
+    suspicions.note(on_pippi("F12", "Pippi"))  # F12 -> F7, starved
+    clock.now += 0.5
+    assert suspicions.settled(config) is None
+    suspicions.note(on_pippi("F10", "Emil", "fresh"))  # the compass's data is back
+    clock.now += 0.01
+    assert suspicions.settled(config) is None  # F12's own fresh is on its way
+    clock.now += 0.1
+    assert suspicions.settled(config) is None
+    suspicions.note(on_pippi("F12", "Pippi", "fresh"))
+    clock.now += 1.0
+    assert suspicions.settled(config) is None
+
+
+def test_a_functionality_fed_again_that_stays_silent_is_blamed_at_its_limit() -> None:
+    problem = load(*STEP2)
+    (config, *_), _ = plan(problem.task, problem.goal_call)
+    clock = Clock()
+    suspicions = Suspicions(clock, grace=2.0)
+    for label, sender in (("F10", "Emil"), ("F12", "Pippi")):
+        suspicions.note(
+            Detection("stale", "Pippi", 1.0, label=label, other=sender, detail=label, limit=0.15)
+        )
+    clock.now += 0.5
+    assert suspicions.settled(config) is None
+    suspicions.note(Detection("fresh", "Pippi", 1.0, label="F10", other="Emil", detail="F10"))
+    assert suspicions.settled(config) is None
+    clock.now += 0.16
+    blamed = suspicions.settled(config)
+    assert blamed is not None and blamed.label == "F12" and blamed.how == "stale"
