@@ -21,8 +21,10 @@ carries another ``instance`` than the first one's) is told it is a
 :class:`~cfgplan.runtime.protocol.Duplicate` and stops; a coordinator told by
 a robot that it is a :class:`~cfgplan.runtime.protocol.Rival` (the robot
 follows another coordinator, alive) stops (:attr:`NetworkAdaptive.refusal`).
-Messages from robots the state does not declare are dropped (the first few
-said).
+Each robot speaks on a key of its own (:func:`~cfgplan.runtime.keys.coordinator_key`),
+one for each robot and device of the state: nobody else is heard, and a
+message that says it is from another robot than its key's is dropped (the
+first few said).
 """
 
 from __future__ import annotations
@@ -81,9 +83,6 @@ class NetworkAdaptive:
     _silent: list[str] | None = None  # once the finish is over: who did not answer it
     _present: set[str] = field(default_factory=set)  # robots seen (each re-synchronised once)
     _held: dict[str, Detection] = field(default_factory=dict)  # seen, not yet ready
-    members: frozenset[str] = frozenset()
-    """The robots and devices of the state: messages from others are dropped
-    (empty: any robot is taken)."""
     _instances: dict[str, str] = field(default_factory=dict)  # the process of each robot
     _noted: set[str] = field(default_factory=set)  # strangers and rivals said (a few)
     refusal: str | None = None
@@ -132,15 +131,21 @@ class NetworkAdaptive:
             self.deployer.gone(robot)
         self.coordinator.handle(detection)
 
-    def receive(self, payload: bytes) -> None:
-        """A report, an acknowledgement or a robot's word that it is ready."""
+    def receiver(self, sender: str) -> Callable[[bytes], None]:
+        """What reads the messages on ``sender``'s key to the coordinator."""
+        return lambda payload: self.receive(payload, sender)
+
+    def receive(self, payload: bytes, sender: str) -> None:
+        """A report, an acknowledgement or a robot's word that it is ready, on
+        ``sender``'s key: one that says it is from another robot is dropped."""
         try:
             message = read_to_coordinator(payload)
         except ProtocolError as exc:
             self.deployer.member.error(f"a message to the coordinator that cannot be read: {exc}")
             return
-        if self.members and message.robot not in self.members:
-            self._once(message.robot, f"a message from {message.robot!r}, not a robot of the state")
+        if message.robot != sender:
+            said = f"a message on {sender}'s key that says it is from {message.robot!r}"
+            self._once(f"{sender} {message.robot}", said)
         elif isinstance(message, Ack):
             if message.epoch == self.deployer.epoch:  # else: to the coordinator before this one
                 self.deployer.acked(message.robot, message.id, message.phase, message.reason)
@@ -264,12 +269,10 @@ def coordinate(
         grace=2 * transport.lease,  # the lease runs out, and its loss is seen, first
     )
     injector = Injector(injections, society, kill=kill)
-    adaptive = NetworkAdaptive(
-        coordinator, deployer, monitor, injector, members=frozenset(_agents(task))
-    )
-    transport.subscribe(coordinator_key(transport.society), adaptive.receive)
-    for other in sorted(_agents(task) - {robot.name}):  # ready to talk to every robot
-        transport.declare(configure_key(transport.society, other))
+    adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
+    for other in sorted(_agents(task) - {robot.name}):  # each robot of the state, its own key
+        transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
+        transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
 
 

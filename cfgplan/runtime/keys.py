@@ -6,7 +6,7 @@ societies on one network stay apart::
     cfgplan/<society>/<robot>/alive                                     the robot runs
     cfgplan/<society>/<robot>/ch/<sender>/<source>/<target>/<data ...>  a channel into it
     cfgplan/<society>/<robot>/configure                                 switches, to it
-    cfgplan/<society>/coordinator                                       reports, acks (5.5)
+    cfgplan/<society>/coordinator/<robot>                               its reports, acks (5.5)
 
 ``<robot>`` is the robot that *receives*, ``<sender>`` the robot that sends;
 ``<source>`` and ``<target>`` are the channel's functionality labels and
@@ -79,9 +79,11 @@ def configure_key(society: str, robot: str) -> str:
     return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/configure"
 
 
-def coordinator_key(society: str) -> str:
-    """Where robots send the coordinator their detections and acknowledgements."""
-    return f"{PREFIX}/{chunk(society)}/coordinator"
+def coordinator_key(society: str, robot: str) -> str:
+    """Where ``robot`` sends the coordinator its detections and answers: a key
+    of its own, so that the coordinator knows who speaks (and, with
+    ``--keys``, Zenoh's access control lets only ``robot`` put there)."""
+    return f"{PREFIX}/{chunk(society)}/coordinator/{chunk(robot)}"
 
 
 def alive_key(society: str, robot: str) -> str:

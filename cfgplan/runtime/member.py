@@ -141,7 +141,7 @@ class Member:
         network.subscribe(configure_key(network.society, robot.name), self.receive)
         declare = getattr(network, "declare", None)
         if declare is not None:  # the first answer then goes out at once
-            declare(coordinator_key(network.society))
+            declare(coordinator_key(network.society, robot.name))
         if forward:  # the subscriber exists: the coordinator may send a part now
             self._send(Ready(robot.name, self.instance))
             robot.subscribe(self._event)
@@ -301,7 +301,7 @@ class Member:
         )
 
     def _send(self, message: ToCoordinator) -> None:
-        send(self.network, coordinator_key(self.network.society), message)
+        send(self.network, coordinator_key(self.network.society, self.robot.name), message)
 
     def _ack(self, number: int, phase: Phase, reason: str = "", epoch: str | None = None) -> None:
         epoch = self.epoch if epoch is None else epoch

@@ -4,7 +4,7 @@ the robots, typed, in one module that both sides build and read them with.
 The coordinator (:mod:`cfgplan.reconfigure.network`) sends a robot, on the
 robot's key ``cfgplan/<society>/<robot>/configure``, one of :data:`ToRobot`
 (``{"op": ...}``); a robot (:mod:`cfgplan.runtime.member`) sends the
-coordinator, on ``cfgplan/<society>/coordinator``, one of
+coordinator, on ``cfgplan/<society>/coordinator/<robot>``, one of
 :data:`ToCoordinator` (``{"type": ...}``). Each message is a frozen dataclass;
 :func:`encode` writes it as one line of JSON, :func:`read_to_robot` and
 :func:`read_to_coordinator` read one back. Field ``sender`` is written

@@ -30,13 +30,14 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
   With ``P`` = ``cfgplan/<society>`` (:mod:`cfgplan.runtime.keys`), a robot R may
 
   - put on ``P/*/ch/R/**`` (the global channels it sends on: the keys that
-    name it as their sender) and ``P/coordinator``
+    name it as their sender) and ``P/coordinator/R`` (its own key to the
+    coordinator: no robot can speak there in another's name)
     (its reports and acknowledgements, 5.5); a coordinator also on
     ``P/*/configure`` (prepare, commit, abort, finish): no other robot can
     send a robot the steps of a switch;
   - declare only its own liveliness token ``P/R/alive``;
   - subscribe only to its own channels ``P/R/ch/**`` and ``P/R/configure``
-    (a coordinator also to ``P/coordinator``), and watch ``P/*/alive``;
+    (a coordinator also to ``P/coordinator/*``), and watch ``P/*/alive``;
   - be sent only those (egress): another robot's channels and switches, and
     the reports of the others, are not sent to it even when it asks.
 
@@ -164,11 +165,11 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
             ]
         else:
             r = f"{p}/{chunk(member.name)}"
-            puts = [f"{p}/*/ch/{chunk(member.name)}/**", f"{p}/coordinator"]
+            puts = [f"{p}/*/ch/{chunk(member.name)}/**", f"{p}/coordinator/{chunk(member.name)}"]
             reads = [f"{r}/ch/**", f"{r}/configure"]
             if member.coordinator:
                 puts.append(f"{p}/*/configure")
-                reads.append(f"{p}/coordinator")
+                reads.append(f"{p}/coordinator/*")
             mine = [
                 _rule(rules, "ingress", ["put"], puts),
                 _rule(rules, "ingress", ["declare_subscriber"], reads),

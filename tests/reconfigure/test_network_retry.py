@@ -82,7 +82,7 @@ def _society() -> tuple[NetworkAdaptive, Network, Clock, list[Event]]:
     coordinator = Coordinator(reconfigurator, events.append, "Emil", deployer, clock)
     adaptive = NetworkAdaptive(coordinator, deployer, Monitor(), Idle())  # type: ignore[arg-type]
     for robot in sorted(network.alive - {"Emil"}):  # each says its subscriber exists
-        adaptive.receive(encode(Ready(robot)))
+        adaptive.receive(encode(Ready(robot)), robot)
     return adaptive, network, clock, events
 
 

@@ -46,7 +46,7 @@ def _wall(alive: set[str]) -> tuple[NetworkAdaptive, Network, Clock, list[Event]
     coordinator = Coordinator(reconfigurator, events.append, "Pippi", deployer, clock)
     adaptive = NetworkAdaptive(coordinator, deployer, Monitor(), Idle())  # type: ignore[arg-type]
     for robot in sorted(alive - {"Pippi"}):  # each says its subscriber exists
-        adaptive.receive(encode(Ready(robot)))
+        adaptive.receive(encode(Ready(robot)), robot)
     network.sent.clear()  # their parts, as they said so
     return adaptive, network, clock, events
 
@@ -60,17 +60,19 @@ def test_malformed_answers_and_reports_are_ignored_even_during_a_switch() -> Non
     switch = adaptive.deployer.switch
     assert switch is not None
     number = switch.decision.id
-    adaptive.receive(b'{"type":"ack","robot":"Pippi","id":1e999,"phase":"ready"}')
+    adaptive.receive(b'{"type":"ack","robot":"Pippi","id":1e999,"phase":"ready"}', "Pippi")
     bad = {"kind": "achieved", "robot": "Pippi", "t": 1.0, "label": "F1", "config": "x"}
-    adaptive.receive(json.dumps({"type": "report", "robot": "Pippi", "detection": bad}).encode())
+    adaptive.receive(
+        json.dumps({"type": "report", "robot": "Pippi", "detection": bad}).encode(), "Pippi"
+    )
     assert adaptive.coordinator._backlog == []
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert len(errors) == 2 and "not a configuration id" in errors[0]
     assert "config" in errors[1] and "cannot be read" in errors[1]
     for phase in ("ready", "installed"):
         ack = {"type": "ack", "robot": "Pippi", "id": number, "phase": phase}
-        adaptive.receive(json.dumps({**ack, "epoch": "another coordinator's"}).encode())
-        adaptive.receive(json.dumps({**ack, "epoch": adaptive.deployer.epoch}).encode())
+        adaptive.receive(json.dumps({**ack, "epoch": "another coordinator's"}).encode(), "Pippi")
+        adaptive.receive(json.dumps({**ack, "epoch": adaptive.deployer.epoch}).encode(), "Pippi")
     adaptive.between(0, 0.0)
     running = adaptive.coordinator.reconfigurator.running
     assert adaptive.deployer.switch is None and running is not None and running.cost == 47
@@ -128,7 +130,7 @@ def test_a_robot_back_is_sent_nothing_of_a_switch_before_it_is_ready() -> None:
         _wait(adaptive, clock, 0.01)
         assert [m["op"] for _, m in network.sent] == ["hello"]
     network.sent.clear()
-    adaptive.receive(encode(Ready("Pippi")))
+    adaptive.receive(encode(Ready("Pippi")), "Pippi")
     resync, prepare = (m for k, m in network.sent if k.endswith("/Pippi/configure"))
     assert (resync["op"], resync["id"]) == ("commit", adaptive.deployer.current)
     assert resync["part"] == part_to_json(adaptive.deployer.parts["Pippi"])
@@ -212,7 +214,9 @@ def test_a_helpers_failed_call_is_said_on_the_coordinators_console() -> None:
     the helper's own message."""
     adaptive, _network, _clock, _events = _society()
     said = "the implementation raised ZeroDivisionError: division by zero (impl.py:12 in f)"
-    adaptive.receive(encode(CallError("Pippi", "F7: transform-info(Pippi, Emil, Door1)", said)))
+    adaptive.receive(
+        encode(CallError("Pippi", "F7: transform-info(Pippi, Emil, Door1)", said)), "Pippi"
+    )
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == [f"Pippi F7: transform-info(Pippi, Emil, Door1): {said}"]
 
@@ -226,8 +230,8 @@ def test_a_helpers_view_of_who_is_lost_changes_nothing() -> None:
     adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
     for helper, other in (("Rasmus", "Emil"), ("Emil", "Pippi")):
         lost = Detection("lost", helper, time.time(), other=other)
-        adaptive.receive(encode(Report(helper, lost)))
-        adaptive.receive(encode(Report(helper, replace(lost, kind="seen"))))
+        adaptive.receive(encode(Report(helper, lost)), helper)
+        adaptive.receive(encode(Report(helper, replace(lost, kind="seen"))), helper)
     adaptive.coordinator.tick()
     assert adaptive.deployer.ready >= {"Emil", "Rasmus"}
     assert [e for e in events if e.what in ("failure", "recovery", "switch")] == []
@@ -240,7 +244,7 @@ def test_a_report_of_another_robots_detection_is_dropped_and_said() -> None:
     names Emil as the robot that saw it is dropped, and the console says so."""
     adaptive, _network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
     forged = Detection("failure", "Emil", time.time(), instance=("camera", "Emil"), label="F1")
-    adaptive.receive(encode(Report("Rasmus", forged)))
+    adaptive.receive(encode(Report("Rasmus", forged)), "Rasmus")
     adaptive.coordinator.tick()
     assert [e for e in events if e.what == "failure"] == []
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
@@ -253,21 +257,21 @@ def test_a_second_process_of_a_live_robot_is_told_to_stop() -> None:
     with that process's instance, and nothing else happens. Once Emil's token
     went away, a new process (a restart) is taken."""
     adaptive, network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
-    adaptive.receive(encode(Ready("Emil", "first")))
+    adaptive.receive(encode(Ready("Emil", "first")), "Emil")
     network.sent.clear()
-    adaptive.receive(encode(Ready("Emil", "second")))
+    adaptive.receive(encode(Ready("Emil", "second")), "Emil")
     assert [m for _, m in network.sent] == [
         {"op": "duplicate", "from": "Pippi", "epoch": adaptive.deployer.epoch, "instance": "second"}
     ]
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == ["a second process of robot Emil: dropped"]
     network.sent.clear()
-    adaptive.receive(encode(Ready("Emil", "first")))  # answering a hello: the same process
+    adaptive.receive(encode(Ready("Emil", "first")), "Emil")  # answering a hello: the same process
     assert network.to("Emil", "duplicate") == []
     network.alive.discard("Emil")
     adaptive.take(Detection("lost", "Pippi", time.time(), other="Emil"))
     network.alive.add("Emil")
-    adaptive.receive(encode(Ready("Emil", "second")))  # started again
+    adaptive.receive(encode(Ready("Emil", "second")), "Emil")  # started again
     assert network.to("Emil", "duplicate") == []
     assert "Emil" in adaptive.deployer.ready
 
@@ -278,32 +282,33 @@ def test_a_coordinator_told_it_is_a_rival_stops() -> None:
     why; a rival message about another coordinator's run is only noted."""
     adaptive, _network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
     other = Rival("Emil", "another-epoch", "Pippi")
-    adaptive.receive(encode(other))
-    adaptive.receive(encode(other))
+    adaptive.receive(encode(other), "Emil")
+    adaptive.receive(encode(other), "Emil")
     assert adaptive.finished is None and adaptive.refusal is None
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == ["a second coordinator of the society, refused by Emil: dropped"]
-    adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Pippi")))
+    adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Pippi")), "Emil")
     assert adaptive.finished == REFUSED
     assert adaptive.refusal == (
         "society retry-test has a coordinator already: Emil follows Pippi; this one stops"
     )
 
 
-def test_messages_from_robots_the_state_does_not_declare_are_dropped() -> None:
-    """A ready or a report from a name the state does not have changes nothing
-    (no set of names grows without bound); the first few are said."""
+def test_a_message_that_says_it_is_from_another_robot_than_its_key_is_dropped() -> None:
+    """Each robot speaks on its own key to the coordinator (with ``--keys``,
+    only it may put there): a ready, a report or an ack on Rasmus's key that
+    says it is from Emil changes nothing; the first few are said."""
     adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
-    adaptive.members = frozenset({"Pippi", "Emil", "Rasmus"})  # as coordinate() sets them
+    network.alive.discard("Emil")
+    adaptive.take(Detection("lost", "Pippi", time.time(), other="Emil"))
+    network.sent.clear()
+    events.clear()
     for n in range(40):
-        adaptive.receive(encode(Ready(f"Mallory{n}", "x")))
-    forged = Detection("failure", "Mallory0", time.time(), instance=("camera", "Emil"), label="F1")
-    adaptive.receive(encode(Report("Mallory0", forged)))
+        adaptive.receive(encode(Ready("Emil", f"x{n}")), "Rasmus")
+    forged = Detection("failure", "Emil", time.time(), instance=("camera", "Emil"), label="F1")
+    adaptive.receive(encode(Report("Emil", forged)), "Rasmus")
     adaptive.coordinator.tick()
-    assert adaptive.deployer.ready == {"Emil", "Rasmus"} and network.sent == []
+    assert "Emil" not in adaptive.deployer.ready and network.sent == []
     assert [e for e in events if e.what == "failure"] == []
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
-    assert (
-        len(errors) == 16
-        and errors[0] == "a message from 'Mallory0', not a robot of the state: dropped"
-    )
+    assert errors == ["a message on Rasmus's key that says it is from 'Emil': dropped"]

@@ -10,6 +10,8 @@ from cfgplan.runtime.keys import (
     alive_pattern,
     channel_key,
     chunk,
+    configure_key,
+    coordinator_key,
     robot_of_alive,
     unchunk,
 )
@@ -23,6 +25,8 @@ def test_the_key_of_a_global_channel_reads_society_robot_channel() -> None:
     )
     assert alive_key("lab", "Emil") == "cfgplan/lab/Emil/alive"
     assert alive_pattern("lab") == "cfgplan/lab/*/alive"
+    assert configure_key("lab", "Pippi") == "cfgplan/lab/Pippi/configure"
+    assert coordinator_key("lab", "Pippi") == "cfgplan/lab/coordinator/Pippi"  # from Pippi
 
 
 @pytest.mark.parametrize(

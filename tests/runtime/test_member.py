@@ -72,7 +72,7 @@ def _member() -> tuple[Robot, Member, Network, dict[str, Any]]:
     own = part_to_json(next(p for p in parts if p.robot == "Emil"))
     member = Member(emil, network, Monitor())
     ready = {"type": "ready", "robot": "Emil", "instance": member.instance}
-    assert network.sent == [("cfgplan/test/coordinator", ready)]
+    assert network.sent == [("cfgplan/test/coordinator/Emil", ready)]
     network.sent.clear()
     return emil, member, network, own
 

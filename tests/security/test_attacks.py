@@ -220,7 +220,7 @@ def test_members_beyond_their_rights_get_nothing_through(tmp_path: Path) -> None
     where, emils = f"tls/127.0.0.1:{free_port()}", f"tls/127.0.0.1:{free_port()}"
     pippi_in, eve_in, seen = Inbox(), Inbox(), Inbox()
     with session(member(keys, "Pippi", listen=(where,))) as pippi:
-        for key in (f"{P}/Pippi/ch/**", f"{P}/Pippi/configure", f"{P}/coordinator"):
+        for key in (f"{P}/Pippi/ch/**", f"{P}/Pippi/configure", f"{P}/coordinator/*"):
             pippi.declare_subscriber(key, pippi_in)
         pippi.liveliness().declare_subscriber(f"{P}/*/alive", seen, history=True)
         with (
@@ -229,7 +229,7 @@ def test_members_beyond_their_rights_get_nothing_through(tmp_path: Path) -> None
             session(member(keys, "console", connect=(where,))) as console,
         ):
             eve.declare_subscriber(f"{P}/Pippi/**", eve_in)
-            eve.declare_subscriber(f"{P}/coordinator", eve_in)
+            eve.declare_subscriber(f"{P}/coordinator/*", eve_in)
             token = eve.liveliness().declare_token(f"{P}/Eve/alive")
             forged = eve.liveliness().declare_token(f"{P}/Emil/alive")
             assert seen.wait(lambda k: k == f"{P}/Eve/alive", LIMIT), "Eve never joined"
@@ -260,17 +260,20 @@ def test_a_robot_cannot_forge_a_value_on_another_robots_channel(tmp_path: Path) 
     key Emil's cross-door reads, naming Pippi as its sender (as Pippi sends
     it): the access control drops it, since a channel key names its sender
     (:mod:`cfgplan.runtime.keys`). Under her own name it would reach nobody:
-    Emil's channel listens to the key naming Pippi."""
+    Emil's channel listens to the key naming Pippi. Nor can she report to
+    the coordinator in Pippi's name: each robot has its own key to it."""
     keys = _keys(tmp_path / "keys")
     where = f"tls/127.0.0.1:{free_port()}"
     emil_in = Inbox()
     with session(member(keys, "Emil", listen=(where,))) as emil:
         emil.declare_subscriber(f"{P}/Emil/ch/**", emil_in)
-        emil.declare_subscriber(f"{P}/coordinator", emil_in)
+        emil.declare_subscriber(f"{P}/coordinator/*", emil_in)
         with session(member(keys, "Eve", connect=(where,))) as eve:
             time.sleep(1.0)  # the subscriptions reach Eve
             eve.put(f"{P}/Emil/ch/Pippi/F7/F3/pos/Emil/Door1", b"[666, 666]")
-            eve.put(f"{P}/coordinator", b"Eve's own report")
-            assert emil_in.wait(lambda k: k == f"{P}/coordinator", LIMIT)
+            eve.put(f"{P}/coordinator/Pippi", b"Eve's report as Pippi")
+            eve.put(f"{P}/coordinator/Eve", b"Eve's own report")
+            assert emil_in.wait(lambda k: k == f"{P}/coordinator/Eve", LIMIT)
             time.sleep(0.5)
-            assert b"[666, 666]" not in [p for _, p in emil_in.got]
+            got = [p for _, p in emil_in.got]
+            assert b"[666, 666]" not in got and b"Eve's report as Pippi" not in got
