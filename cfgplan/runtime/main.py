@@ -193,11 +193,19 @@ def zenoh_options(args: argparse.Namespace) -> ZenohOptions:
 
 
 def open_transport(robot: str, kind: str, options: ZenohOptions) -> Transport:
-    """``zenoh``: a session of ``robot``'s own; ``inprocess``: robots of this process only."""
+    """``zenoh``: a session of ``robot``'s own; ``inprocess``: robots of this
+    process only. Without keys, a warning on stderr says the society is open
+    to anyone on the network (``cfgplan run`` and emitted programs alike)."""
     if kind == "inprocess":
         return InProcessTransport()
     from cfgplan.runtime.zenoh_transport import ZenohTransport
 
+    if options.keys is None:
+        print(
+            f"cfgplan: warning: society {options.society} runs without keys: anyone on the "
+            "network can read and steer it (cfgplan keys new, then --keys DIR)",
+            file=sys.stderr,
+        )
     return ZenohTransport(robot, options)
 
 

@@ -142,3 +142,27 @@ def test_an_emitted_robot_program_takes_keys_and_their_society(keys: Path) -> No
     assert (options.keys, options.society) == (str(keys), "lab")
     other = zenoh_options(parser.parse_args(["--impl", "i.py", "--society", "x"]))
     assert (other.keys, other.society) == (None, "x")
+
+
+def test_a_society_without_keys_is_said_to_be_open_and_one_with_keys_is_not(
+    keys: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 34: nothing said that anyone on the network could read and steer
+    a society. Opening a robot's session without keys now warns, once, on
+    stderr (``cfgplan run`` and emitted programs open it the same way)."""
+    from cfgplan.runtime.main import open_transport
+    from tests.runtime.netutil import endpoint, free_port, hermetic_config
+
+    config = str(hermetic_config(tmp_path))
+    for keyed in (None, str(keys)):
+        listen = endpoint(free_port())
+        if keyed is not None:
+            listen = listen.replace("tcp/", "tls/")
+        options = ZenohOptions(society="lab", listen=(listen,), config_file=config, keys=keyed)
+        transport = open_transport("Emil", "zenoh", options)
+        transport.close()
+    err = capsys.readouterr().err
+    assert err == (
+        "cfgplan: warning: society lab runs without keys: anyone on the network can read "
+        "and steer it (cfgplan keys new, then --keys DIR)\n"
+    )
