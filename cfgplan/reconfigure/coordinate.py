@@ -93,8 +93,12 @@ class Coordinator:
     waited for before a computation on it is blamed
     (:attr:`~cfgplan.reconfigure.suspect.Suspicions.grace`)."""
 
+    reported: float = 0.0
+    """Seconds a stale input another robot reported is waited for at least
+    (:attr:`~cfgplan.reconfigure.suspect.Suspicions.reported`)."""
+
     def __post_init__(self) -> None:
-        self._suspects = Suspicions(self.clock, self.grace)
+        self._suspects = Suspicions(self.clock, self.grace, self.robot, self.reported)
         self._blamed = Blamed(self.hold)
 
     # -- input --------------------------------------------------------------

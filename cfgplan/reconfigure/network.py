@@ -267,6 +267,7 @@ def coordinate(
         ahead=Ahead(reconfigurator),
         hold=hold,
         grace=2 * transport.lease,  # the lease runs out, and its loss is seen, first
+        reported=transport.lease,
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)

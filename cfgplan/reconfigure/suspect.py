@@ -20,7 +20,9 @@ loss, inputs go stale every few seconds): the suspicion then waits
 :attr:`Suspicions.grace` — the robot's lease (liveliness) decides first, and
 the link gets time to catch up — and is acted on only if data has not come
 back by then. When another channel from the same robot still flows, the
-suspect's own outputs stopped: it is acted on at its staleness limit.
+suspect's own outputs stopped: it is acted on at its staleness limit, or,
+when another robot saw it, after :attr:`Suspicions.reported` at least (its
+reports cross the same lossy network).
 """
 
 from __future__ import annotations
@@ -73,6 +75,12 @@ class Suspicions:
     """Seconds a suspicion waits when every channel from its sender's robot
     into the robot that saw it is stale (module docstring); 0: no wait (robots
     of one process share no link to blame)."""
+    here: str = ""
+    """The coordinator's robot: what it saw itself took no network to learn."""
+    reported: float = 0.0
+    """Seconds a suspicion another robot reported waits at least: its stale
+    and its fresh cross the network, and a lost packet delays the one after
+    the other by 200 ms or more (0: no wait)."""
     _open: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
 
     def note(self, detection: Detection) -> None:
@@ -146,9 +154,12 @@ class Suspicions:
     def _wait(self, suspicion: _Suspicion, silent: set[tuple[str, str]]) -> float:
         """How long ``suspicion`` must stay open to be acted on."""
         link = (suspicion.detection.other, suspicion.detection.robot)
+        wait = suspicion.limit
         if link in silent:
-            return max(suspicion.limit, self.grace)
-        return suspicion.limit
+            wait = max(wait, self.grace)
+        if suspicion.detection.robot != self.here:
+            wait = max(wait, self.reported)
+        return wait
 
 
 @dataclass(frozen=True)

@@ -144,3 +144,23 @@ def test_a_functionality_fed_again_that_stays_silent_is_blamed_at_its_limit() ->
     clock.now += 0.16
     blamed = suspicions.settled(config)
     assert blamed is not None and blamed.label == "F12" and blamed.how == "stale"
+
+
+def test_what_another_robot_reported_stale_is_waited_for_as_its_reports_travel() -> None:
+    """From the fault benchmark with 100 ms delay and 5 % loss: Pippi's fresh
+    report of a starved functionality's output came more than its 0.15 s
+    limit after the one that fed it (a lost packet is resent after 200 ms or
+    more), and the coordinator switched. What another robot saw now waits
+    ``reported`` seconds at least; what the coordinator saw itself does not."""
+    clock = Clock()
+    suspicions = Suspicions(clock, grace=2.0, here="Y", reported=1.0)
+    suspicions.note(_stale("F1"))  # seen on Y: the coordinator's robot
+    clock.now += 0.31
+    assert suspicions.settled(LINK) is not None
+    elsewhere = Suspicions(clock, grace=2.0, here="Z", reported=1.0)
+    elsewhere.note(_stale("F1"))  # seen on Y, reported to Z
+    clock.now += 0.31
+    assert elsewhere.settled(LINK) is None
+    clock.now += 0.7
+    blamed = elsewhere.settled(LINK)
+    assert blamed is not None and blamed.detail == "input F1->F3 stale for over 1 s"
