@@ -20,13 +20,17 @@ each robot program opens one Zenoh session in *peer* mode (no router) and:
 Addressing (:class:`ZenohOptions`): ``--listen`` and ``--connect`` endpoints
 (``tcp/192.168.1.7:7447``); without them, robots find each other by
 multicast scouting on the local network, with them multicast scouting is off.
-``--society`` keeps societies on one network apart. A Zenoh configuration
-file (JSON5, Zenoh's own format) sets anything else: it goes on top of
-cfgplan's defaults (:data:`DEFAULTS`: peer mode, the connection retry, the
-lease), which it keeps unless it sets them, and the options given on the
-command line go on top of it. With ``--keys DIR`` (the society's keys, made by
-``cfgplan keys new``) every link is TLS with mutual authentication and Zenoh's
-access control by certificate name (:mod:`cfgplan.security.zenoh_tls`).
+``--society`` keeps societies on one network apart. A robot given only
+``--connect`` listens nowhere (Zenoh would listen on every interface): it
+reaches out and cannot be reached — peers do not route for one another, so
+in a society of three or more a robot that others must reach is given
+``--listen``. A Zenoh configuration file (JSON5, Zenoh's own format) sets
+anything else: it goes on top of cfgplan's defaults (:data:`DEFAULTS`: peer
+mode, the connection retry, the lease), which it keeps unless it sets them,
+and the options given on the command line go on top of it. With ``--keys
+DIR`` (the society's keys, made by ``cfgplan keys new``) every link is TLS
+with mutual authentication and Zenoh's access control by certificate name
+(:mod:`cfgplan.security.zenoh_tls`).
 
 :mod:`zenoh` is imported only when a :class:`ZenohTransport` is made, so
 ``import cfgplan.runtime`` stays light.
@@ -162,6 +166,10 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
             _set(config, key, value, what)
     if options.listen:
         _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
+    elif options.connect and config.get_json("listen/endpoints") == z.Config().get_json(
+        "listen/endpoints"
+    ):  # it reaches out; Zenoh's default would listen on every interface
+        _set(config, "listen/endpoints", "[]", "--connect (listens nowhere)")
     if options.connect:
         _set(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
     if options.listen or options.connect:

@@ -35,6 +35,21 @@ def test_endpoints_turn_multicast_scouting_off() -> None:
     assert _get(ZenohOptions(lease=0.25), "transport/link/tx/lease") == 250
 
 
+def test_a_robot_that_only_connects_listens_nowhere(tmp_path: Path) -> None:
+    """Issue 34: a robot started with only ``--connect`` listened on every
+    interface (Zenoh's default ``tcp/[::]:0``). It reaches out; it listens only
+    where it is told — by ``--listen`` or by a configuration file."""
+    assert _get(ZenohOptions(connect=("tcp/10.0.0.2:7447",)), "listen/endpoints") == []
+    assert _get(ZenohOptions(), "listen/endpoints") == {  # no endpoints: scouting, Zenoh's
+        "router": ["tcp/[::]:7447"],
+        "peer": ["tcp/[::]:0"],
+    }
+    path = tmp_path / "zenoh.json5"
+    path.write_text('{ listen: { endpoints: ["tcp/127.0.0.1:7447"] } }')
+    from_file = ZenohOptions(config_file=str(path), connect=("tcp/10.0.0.2:7447",))
+    assert _get(from_file, "listen/endpoints") == ["tcp/127.0.0.1:7447"]
+
+
 def test_a_config_file_is_the_base_and_options_go_on_top(tmp_path: Path) -> None:
     path = tmp_path / "zenoh.json5"
     path.write_text('{ mode: "client", transport: { link: { tx: { lease: 3000 } } } }')
