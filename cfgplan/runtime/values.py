@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from typing import NamedTuple
 
 from cfgplan.runtime.errors import RunError, printable
@@ -150,6 +151,13 @@ def envelope(sender: str, seq: int, t: float, period: float | None, encoded: str
     return (head[:-1] + ', "value": ' + encoded + "}").encode()
 
 
+MAX_PERIOD = 60.0
+"""The longest period (seconds) a message may claim for its sender: a
+staleness limit is a few periods, and a forged ``1e9`` would switch
+detection off (issue 34). A functionality slower than once a minute is not
+what a configuration's channels are for."""
+
+
 class Envelope(NamedTuple):
     sender: str
     seq: int
@@ -169,10 +177,13 @@ def open_envelope(payload: bytes) -> Envelope:
     sender, seq, t, period = (data.get(k) for k in ("from", "seq", "t", "period"))
     if not isinstance(sender, str) or not is_whole(seq):
         raise RunError("a message whose envelope lacks its sender or sequence number")
-    if not is_number(t):
+    if not is_number(t) or not math.isfinite(t):
         raise RunError("a message whose envelope lacks its time")
-    if period is not None and (not is_number(period) or not period > 0):
-        raise RunError(f"a message whose period is not a positive number: {period!r}")
+    if period is not None and (not is_number(period) or not 0 < period <= MAX_PERIOD):
+        raise RunError(
+            f"a message whose period is not a number of seconds from 0 to {MAX_PERIOD:g}: "
+            f"{period!r}"
+        )
     return Envelope(sender, seq, float(t), None if period is None else float(period), data["value"])
 
 

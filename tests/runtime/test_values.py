@@ -90,6 +90,7 @@ def test_the_envelope_round_trip_and_what_is_refused() -> None:
     message = open_envelope(payload)
     assert message == ("Emil", 7, 1712.5, 0.1, [0.695, -2.601])
     assert open_envelope(envelope("Emil", 1, 2.0, None, "null")).period is None
+    assert open_envelope(envelope("Emil", 1, 2.0, 60.0, "null")).period == 60.0  # once a minute
     for bad in (
         b"not json",
         b'{"from": "Emil"}',
@@ -97,6 +98,9 @@ def test_the_envelope_round_trip_and_what_is_refused() -> None:
         b'{"value": 1, "from": "E", "seq": true, "t": 0}',
         b'{"value": 1, "from": "E", "seq": 1, "t": "now"}',
         b'{"value": 1, "from": "E", "seq": 1, "t": 0, "period": -1}',
+        b'{"value": 1, "from": "E", "seq": 1, "t": 0, "period": 1e9}',  # detection off
+        b'{"value": 1, "from": "E", "seq": 1, "t": 0, "period": 1e999}',
+        b'{"value": 1, "from": "E", "seq": 1, "t": 1e999}',
         b"[" * 100_000,
     ):
         with pytest.raises(RunError):
