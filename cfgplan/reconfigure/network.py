@@ -87,12 +87,21 @@ class NetworkAdaptive:
     _noted: set[str] = field(default_factory=set)  # strangers and rivals said (a few)
     refusal: str | None = None
     """Why this coordinator stops: another one coordinates the society."""
+    _dropped: int = 0  # messages the transport dropped, said so far
     reconfigures: bool = True
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)
 
     def between(self, cycle: int, elapsed: float) -> None:
+        dropped = self.deployer.transport.dropped
+        if dropped > self._dropped:
+            most = self.deployer.transport.options.backlog
+            self.deployer.member.error(
+                f"messages to the coordinator dropped: {dropped - self._dropped} more than "
+                f"the {most} that may wait (a robot floods it)"
+            )
+            self._dropped = dropped
         for detection in self.monitor.drain():
             self.take(detection)
         self.deployer.tick()

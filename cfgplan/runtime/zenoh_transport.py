@@ -97,6 +97,10 @@ class ZenohOptions:
     config_file: str | None = None
     lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
     keys: str | None = None  # a folder of society keys: TLS, mTLS, access control
+    backlog: int = 10_000
+    """Switch-protocol messages that may wait for the robot's loop; past it,
+    more are dropped and counted (:attr:`ZenohTransport.dropped`): a robot
+    that floods the coordinator cannot grow its memory without bound."""
 
     def __post_init__(self) -> None:
         if not self.society:
@@ -231,6 +235,8 @@ class ZenohTransport:
             queue.SimpleQueue()
         )
         self.sent = 0
+        self.dropped = 0
+        """Messages dropped because :attr:`ZenohOptions.backlog` were waiting."""
 
     def attach(self, robot: str, key: ChannelKey, receiver: Receiver, sender: str) -> None:
         """Messages on the key naming ``sender`` go to ``receiver``; one on the
@@ -260,6 +266,9 @@ class ZenohTransport:
         :meth:`poll`: the reconfiguration protocol's messages."""
 
         def queue_it(sample: Any) -> None:
+            if self._messages.qsize() >= self.options.backlog:
+                self.dropped += 1
+                return
             self._messages.put((handler, sample.payload.to_bytes()))
             self._arrived.set()
 

@@ -36,6 +36,8 @@ class Network:
     society: str = "retry-test"
     alive: set[str] = field(default_factory=lambda: {"Emil", "Pippi"})
     sent: list[tuple[str, dict[str, object]]] = field(default_factory=list)
+    dropped: int = 0  # messages past the backlog (none here)
+    options: SimpleNamespace = field(default_factory=lambda: SimpleNamespace(backlog=10_000))
 
     def publish(self, key: str, payload: bytes) -> None:
         self.sent.append((key, json.loads(payload)))

@@ -312,3 +312,20 @@ def test_a_message_that_says_it_is_from_another_robot_than_its_key_is_dropped() 
     assert [e for e in events if e.what == "failure"] == []
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == ["a message on Rasmus's key that says it is from 'Emil': dropped"]
+
+
+def test_messages_dropped_past_the_backlog_are_said_once_each_time_more_are() -> None:
+    adaptive, network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.between(0, 0.0)
+    network.dropped = 15
+    adaptive.between(1, 0.0)
+    adaptive.between(2, 0.0)
+    network.dropped = 16
+    adaptive.between(3, 0.0)
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == [
+        "messages to the coordinator dropped: 15 more than the 10000 that may wait "
+        "(a robot floods it)",
+        "messages to the coordinator dropped: 1 more than the 10000 that may wait "
+        "(a robot floods it)",
+    ]

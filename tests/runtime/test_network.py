@@ -368,3 +368,28 @@ def test_a_channel_attached_twice_is_refused_as_on_one_machine(tmp_path: Path) -
         pippi.attach("Pippi", key, lambda payload: None, "Emil")
     finally:
         pippi.close()
+
+
+def test_switch_messages_past_the_backlog_are_dropped_and_counted(tmp_path: Path) -> None:
+    """Issue 34: a robot flooding the coordinator's key grew its queue without
+    bound. Past ``backlog`` messages waiting for the robot's loop, more are
+    dropped and counted; the coordinator says so (an ``error`` event)."""
+    config = str(hermetic_config(tmp_path))
+    options = ZenohOptions(
+        society="flood", listen=(endpoint(free_port()),), config_file=config, backlog=5
+    )
+    emil = ZenohTransport("Emil", options)
+    got: list[bytes] = []
+    try:
+        emil.subscribe("cfgplan/flood/coordinator/Pippi", got.append)
+        for n in range(20):
+            emil.publish("cfgplan/flood/coordinator/Pippi", str(n).encode())
+        wait_for(
+            "every message arrived or was dropped",
+            lambda: {} if emil.dropped + emil._messages.qsize() >= 20 else None,
+            STARTUP,
+        )
+        emil.poll()
+    finally:
+        emil.close()
+    assert got == [b"0", b"1", b"2", b"3", b"4"] and emil.dropped == 15
