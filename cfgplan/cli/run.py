@@ -139,6 +139,26 @@ def run(
     force: Annotated[bool, option(FORCE)] = FORCE.default,
     verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
     inject: Annotated[list[str] | None, option(INJECT)] = None,
+    ros2: Annotated[
+        bool,
+        typer.Option(
+            "--ros2",
+            help="Announce the robot as a ROS 2 node over rmw_zenoh and publish its switches, "
+            "failures and recoveries on /cfgplan/events (needs --robot; pip install "
+            "'cfgplan[ros2]').",
+        ),
+    ] = False,
+    ros_domain_id: Annotated[
+        int | None,
+        typer.Option(
+            "--ros-domain-id",
+            metavar="N",
+            min=0,
+            max=232,
+            help="The ROS domain of --ros2 (default: ROS_DOMAIN_ID if set, else 0).",
+            show_default=False,
+        ),
+    ] = None,
     reconfigure: Annotated[
         bool,
         typer.Option(
@@ -184,6 +204,12 @@ def run(
         usage_error("runs one robot per process: give --robot NAME", "--transport zenoh")
     if keys is not None and kind != "zenoh":
         usage_error("secures the network between robots: give --robot NAME", "--keys")
+    if ros2 and kind != "zenoh":
+        usage_error("publishes over the robot's Zenoh session: give --robot NAME", "--ros2")
+    if ros2 and keys is not None:  # mTLS and deny-by-default access control: no ROS node gets in
+        usage_error("cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2")
+    if ros_domain_id is not None and not ros2:
+        usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
     problem = load_problem(domain, state, goal, weights, sequence=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p) for p in deploy(config, problem.domain)]
@@ -230,6 +256,10 @@ def run(
             opened = open_transport(robot, kind, zenoh)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
+            if ros2:  # its Adaptation events on /cfgplan/events (cfgplan.ros2)
+                from cfgplan.ros2.bridge import open_bridge
+
+                running.subscribe(open_bridge(opened, robot, ros_domain_id))
         if options.trace is not None:
             written = open_trace(options.trace, options.force, max_bytes=options.trace_max_bytes)
         adapting = hooks(

@@ -238,6 +238,11 @@ class ZenohTransport:
         self.dropped = 0
         """Messages dropped because :attr:`ZenohOptions.backlog` were waiting."""
 
+    @property
+    def session(self) -> Any:
+        """The robot's Zenoh session, for what shares it (the ROS 2 bridge, :mod:`cfgplan.ros2`)."""
+        return self._session
+
     def attach(self, robot: str, key: ChannelKey, receiver: Receiver, sender: str) -> None:
         """Messages on the key naming ``sender`` go to ``receiver``; one on the
         same channel's key naming another robot reaches nobody."""

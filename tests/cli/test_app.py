@@ -123,9 +123,11 @@ def test_help_shows_whole_one_line_summaries(cfgplan: Run) -> None:
 def test_usage_and_help_speak_cfgplan(cfgplan: Run, command: str) -> None:
     out = cfgplan(command, "-h", env={"COLUMNS": "200"})
     usage = out.stdout.splitlines()[0]
-    arguments = {"simulate": "EXPERIMENT", "keys": r"COMMAND \[ARGS\]\.\.\."}.get(
-        command, r"DOMAIN (STATE|\[STATE\])"
-    )
+    arguments = {
+        "simulate": "EXPERIMENT",
+        "record": "TRACE",
+        "keys": r"COMMAND \[ARGS\]\.\.\.",
+    }.get(command, r"DOMAIN (STATE|\[STATE\])")
     assert re.fullmatch(rf"Usage: cfgplan {command} \[OPTIONS\] {arguments}", usage)
     assert not [w for w in LIBRARY_WORDS if w in out.stdout]
 
