@@ -45,7 +45,7 @@ from cfgplan.ir.model import Span
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.faults import parse_injection
-from cfgplan.runtime.main import open_transport
+from cfgplan.runtime.main import network_options, open_transport
 from cfgplan.runtime.monitor import HOLD
 from cfgplan.runtime.options import (
     BUDGET,
@@ -72,7 +72,6 @@ from cfgplan.runtime.options import (
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
-from cfgplan.runtime.zenoh_transport import ZenohOptions
 
 TRANSPORTS = ("zenoh", "inprocess")
 
@@ -240,18 +239,13 @@ def run(
                 raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
             part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
             registry.require(c.name for c in part.calls)
-            keyed = None if keys is None else str(keys)
-            if keyed is not None:  # the keys name the society, unless --society does
-                from cfgplan.security.zenoh_tls import society_for
-
-                society_name = society_for(keyed, society_name, SOCIETY.default)
-            zenoh = ZenohOptions(
-                society=society_name,
-                listen=tuple(listen or ()),
-                connect=tuple(connect or ()),
-                config_file=None if zenoh_config is None else str(zenoh_config),
-                lease=lease,
-                keys=keyed,
+            zenoh = network_options(
+                society_name,
+                listen or (),
+                connect or (),
+                None if zenoh_config is None else str(zenoh_config),
+                lease,
+                None if keys is None else str(keys),
             )
             opened = open_transport(robot, kind, zenoh)
             shared = opened if isinstance(opened, InProcessTransport) else None

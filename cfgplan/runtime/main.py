@@ -177,18 +177,33 @@ def _follow(
 
 
 def zenoh_options(args: argparse.Namespace) -> ZenohOptions:
-    society = args.society
-    if args.keys is not None:  # the keys name the society, unless --society does
+    """The network options of an emitted program's command line."""
+    return network_options(
+        args.society, args.listen, args.connect, args.zenoh_config, args.lease, args.keys
+    )
+
+
+def network_options(
+    society: str,
+    listen: Sequence[str],
+    connect: Sequence[str],
+    config_file: str | None,
+    lease: float | None,
+    keys: str | None,
+) -> ZenohOptions:
+    """The Zenoh options of a robot, as ``cfgplan run`` and emitted programs
+    take them: with keys and no ``--society``, the keys' society."""
+    if keys is not None:  # the keys name the society, unless --society does
         from cfgplan.security.zenoh_tls import society_for
 
-        society = society_for(args.keys, society, SOCIETY.default)
+        society = society_for(keys, society, SOCIETY.default)
     return ZenohOptions(
         society=society,
-        listen=tuple(args.listen),
-        connect=tuple(args.connect),
-        config_file=args.zenoh_config,
-        lease=args.lease,
-        keys=args.keys,
+        listen=tuple(listen),
+        connect=tuple(connect),
+        config_file=config_file,
+        lease=lease,
+        keys=keys,
     )
 
 
