@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:  # only named in annotations: pydantic is not loaded for a message
     from cfgplan.ir.model import Span
+    from cfgplan.runtime.errors import RunError
 
 Severity = Literal["error", "warning", "note"]
 
@@ -63,6 +64,20 @@ class CfgplanError(Exception):
 def error(message: str, span: Span | None = None, hint: str | None = None) -> CfgplanError:
     """Build a :class:`CfgplanError` holding a single error diagnostic."""
     return CfgplanError([Diagnostic("error", message, span, hint)])
+
+
+def run_error(exc: RunError) -> CfgplanError:
+    """A runtime error as the CLI reports errors: file:line:col and the line
+    quoted with a caret when it has a place, and its hint."""
+    span = None
+    if exc.file is not None and exc.line is not None:
+        from cfgplan.ir.model import Span  # pydantic: loaded only for a placed error
+
+        column = exc.column or 1
+        span = Span(
+            file=exc.file, line=exc.line, column=column, end_line=exc.line, end_column=column + 1
+        )
+    return error(exc.message, span, exc.hint)
 
 
 # -- did you mean ----------------------------------------------------------------

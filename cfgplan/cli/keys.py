@@ -24,7 +24,7 @@ import typer
 from cfgplan.cli.app import app, usage_error
 from cfgplan.cli.options import count_of, load_problem
 from cfgplan.cli.root import Command, Group
-from cfgplan.diagnostics import CfgplanError, Diagnostic, printable
+from cfgplan.diagnostics import printable, run_error
 from cfgplan.runtime.errors import RunError
 
 keys_app = typer.Typer(
@@ -37,10 +37,6 @@ keys_app = typer.Typer(
 app.add_typer(keys_app, short_help="Make a society's keys for TLS with mutual authentication.")
 
 DEFAULT_DAYS = 730
-
-
-def _failed(exc: RunError) -> CfgplanError:
-    return CfgplanError([Diagnostic("error", exc.message, None, exc.hint)])
 
 
 class name(str):
@@ -158,7 +154,7 @@ def new(
         plan = plan_society(str(society), names, list(operators or ()), leading)
         written = write_society(output, make_society(plan, days), force)
     except RunError as exc:
-        raise _failed(exc) from None
+        raise run_error(exc) from None
     members = {m.stem: m for m in plan.members}
     what = {
         "ca.pem": "the society's certificate authority (to every member)",

@@ -19,9 +19,9 @@ import typer
 
 from cfgplan.cli.app import app, say
 from cfgplan.cli.options import ForceOpt
-from cfgplan.diagnostics import CfgplanError, Diagnostic, error
+from cfgplan.diagnostics import error, run_error
 from cfgplan.files import check_target, write_file
-from cfgplan.ir.model import Span
+from cfgplan.runtime.errors import RunError
 
 INSTALL = "pip install 'cfgplan[record]'"
 """How to get what recording needs."""
@@ -42,19 +42,6 @@ def load_exporter() -> ModuleType:
             hint=f"install it with: {INSTALL}",
         ) from None
     return mcap_export
-
-
-def _diagnostic(exc: Exception) -> CfgplanError:
-    """A :class:`~cfgplan.record.mcap_export.TraceError` as the CLI reports
-    errors: ``file:line:col: error: ...`` and the line quoted, when it has a place."""
-    file: str | None = getattr(exc, "file", None)
-    line: int | None = getattr(exc, "line", None)
-    column: int = getattr(exc, "column", 1)
-    span = None
-    if file is not None and line is not None:
-        span = Span(file=file, line=line, column=column, end_line=line, end_column=column + 1)
-    message = str(getattr(exc, "message", exc))
-    return CfgplanError([Diagnostic("error", message, span, getattr(exc, "hint", None))])
 
 
 @app.command(short_help="Turn a run's trace into an MCAP file that Foxglove opens.")
@@ -89,8 +76,8 @@ def record(
         raise error(f"{output} is the trace itself; give another -o file")
     try:
         data, done = exporter.convert(files)
-    except exporter.TraceError as exc:
-        raise _diagnostic(exc) from None
+    except RunError as exc:
+        raise run_error(exc) from None
     write_file(output, data, force)
     read = " then ".join(str(p) for p in files)
     say(f"wrote {output}: {done.total} message(s) on {len(done.messages)} channel(s) from {read}")

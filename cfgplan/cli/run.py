@@ -40,8 +40,7 @@ from cfgplan.cli.options import (
     parsed,
 )
 from cfgplan.cli.sequence import first_step
-from cfgplan.diagnostics import CfgplanError, Diagnostic
-from cfgplan.ir.model import Span
+from cfgplan.diagnostics import run_error
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.faults import parse_injection
@@ -83,17 +82,6 @@ def option(spec: Option[Any]) -> Any:
     return typer.Option(
         spec.flag, metavar=spec.metavar, help=spec.help, parser=parse, show_default=False
     )
-
-
-def diagnostic(exc: RunError) -> CfgplanError:
-    """A runtime error as the CLI reports errors (file:line:col and a caret when it has a place)."""
-    span = None
-    if exc.file is not None and exc.line is not None:
-        column = exc.column or 1
-        span = Span(
-            file=exc.file, line=exc.line, column=column, end_line=exc.line, end_column=column + 1
-        )
-    return CfgplanError([Diagnostic("error", exc.message, span, exc.hint)])
 
 
 @app.command(short_help="Run a configuration: all robots here, or one on the network (5.2).")
@@ -277,6 +265,6 @@ def run(
             opened.close()
         if written is not None:
             written.close()
-        raise diagnostic(exc) from None
+        raise run_error(exc) from None
     if code:
         raise typer.Exit(code)

@@ -24,7 +24,7 @@ import typer
 
 from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report
 from cfgplan.cli.options import count_of, number_of
-from cfgplan.diagnostics import CfgplanError, error
+from cfgplan.diagnostics import CfgplanError, error, run_error
 
 EXIT_FAILED = 4
 EXIT_INTERRUPTED = 130
@@ -105,7 +105,6 @@ def simulate(
     """
     try:
         _need_extra()
-        from cfgplan.cli.run import diagnostic
         from cfgplan.runtime.errors import RunError
         from cfgplan.sim.outputs import prepare as prepare_folder
         from cfgplan.sim.run import open_scenario, prepare
@@ -113,7 +112,7 @@ def simulate(
         try:
             ready = prepare(open_scenario(str(experiment)))
         except RunError as exc:  # the implementations cannot be loaded
-            raise diagnostic(exc) from None
+            raise run_error(exc) from None
         prepare_folder(out, force)
         code = _run(ready, out, seed, duration, rank, animate, quiet)
     except CfgplanError as exc:
@@ -132,7 +131,6 @@ def _run(
     animate: bool,
     quiet: bool,
 ) -> int:
-    from cfgplan.cli.run import diagnostic
     from cfgplan.runtime.console import Printer
     from cfgplan.runtime.errors import RunError
     from cfgplan.sim.outputs import write_all
@@ -161,7 +159,7 @@ def _run(
     except OSError as exc:
         raise error(f"cannot write {out / 'trace.jsonl'}: {exc.strerror}") from None
     except RunError as exc:
-        raise diagnostic(exc) from None
+        raise run_error(exc) from None
     try:
         files = write_all(run, out, animate)
     except OSError as exc:

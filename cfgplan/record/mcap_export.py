@@ -39,6 +39,7 @@ from pydantic import BaseModel, ValidationError
 
 from cfgplan import __version__
 from cfgplan.runtime import schema as s
+from cfgplan.runtime.errors import RunError
 
 __all__ = [
     "MESSAGE_ENCODING",
@@ -47,7 +48,6 @@ __all__ = [
     "Entry",
     "RecordOptions",
     "Recording",
-    "TraceError",
     "TraceLine",
     "convert",
     "entry",
@@ -99,31 +99,6 @@ class RecordOptions:
     chunk_size: int = 1 << 20
 
 
-class TraceError(Exception):
-    """A trace that cannot be recorded: a file that cannot be read, or a line
-    (``file``, ``line``, ``column``: 1-based) that is not a trace event."""
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        file: str | None = None,
-        line: int | None = None,
-        column: int = 1,
-        hint: str | None = None,
-    ) -> None:
-        super().__init__(message)
-        self.message = message
-        self.file = file
-        self.line = line
-        self.column = column
-        self.hint = hint
-
-    def __str__(self) -> str:
-        where = f"{self.file}:{self.line}: " if self.file and self.line else ""
-        return where + self.message
-
-
 @dataclass(frozen=True)
 class TraceLine:
     """One line of a trace file, as read (without its line break)."""
@@ -169,20 +144,20 @@ def trace_files(path: Path) -> list[Path]:
 
 
 def read_lines(paths: Sequence[Path]) -> Iterator[TraceLine]:
-    """The non-blank lines of the files, in order; :class:`TraceError` for a
+    """The non-blank lines of the files, in order; :class:`RunError` for a
     file that is missing, not a regular file, or unreadable."""
     for path in paths:
         name = str(path)
         try:
             mode = os.stat(path).st_mode
         except FileNotFoundError:
-            raise TraceError(f"no such trace file: {name}") from None
+            raise RunError(f"no such trace file: {name}") from None
         except OSError as exc:
-            raise TraceError(f"cannot read the trace file {name}: {exc.strerror}") from None
+            raise RunError(f"cannot read the trace file {name}: {exc.strerror}") from None
         if stat.S_ISDIR(mode):
-            raise TraceError(f"{name} is a directory, not a trace file")
+            raise RunError(f"{name} is a directory, not a trace file")
         if not stat.S_ISREG(mode):
-            raise TraceError(f"{name} is not a regular file; cfgplan reads only regular files")
+            raise RunError(f"{name} is not a regular file; cfgplan reads only regular files")
         try:
             with open(path, "rb") as stream:
                 for number, raw in enumerate(stream, 1):
@@ -190,7 +165,7 @@ def read_lines(paths: Sequence[Path]) -> Iterator[TraceLine]:
                     if text.strip():
                         yield TraceLine(name, number, text)
         except OSError as exc:
-            raise TraceError(f"cannot read the trace file {name}: {exc.strerror}") from None
+            raise RunError(f"cannot read the trace file {name}: {exc.strerror}") from None
 
 
 def segment(text: str) -> str:
@@ -234,11 +209,11 @@ _JSON_TYPES = {list: "an array", str: "a string", int: "a number", float: "a num
 
 
 def entry(line: TraceLine) -> Entry:
-    """The line as an MCAP message on its topic; :class:`TraceError` (with the
+    """The line as an MCAP message on its topic; :class:`RunError` (with the
     file and line) when it is not JSON, not an event, or its time is not a time."""
 
-    def refuse(message: str, column: int = 1) -> TraceError:
-        return TraceError(message, file=line.file, line=line.number, column=column)
+    def refuse(message: str, column: int = 1) -> RunError:
+        return RunError(message, file=line.file, line=line.number, column=column)
 
     try:
         obj = json.loads(line.text.decode("utf-8"))
@@ -342,12 +317,12 @@ def _kinds(entries: Sequence[Entry]) -> list[tuple[type[BaseModel], int]]:
 
 def convert(paths: Sequence[Path], options: RecordOptions | None = None) -> tuple[bytes, Recording]:
     """The MCAP file of the trace in ``paths`` (in order), and what it holds;
-    :class:`TraceError` for a file that cannot be read, a line that is not an
+    :class:`RunError` for a file that cannot be read, a line that is not an
     event, or no event at all."""
     entries = [entry(line) for line in read_lines(paths)]
     if not entries:
         names = " and ".join(str(p) for p in paths)
-        raise TraceError(f"{names}: no trace events (the file is empty)")
+        raise RunError(f"{names}: no trace events (the file is empty)")
     buffer = io.BytesIO()
     done = record(entries, buffer, options)
     done.files = [str(p) for p in paths]
