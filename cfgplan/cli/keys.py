@@ -54,7 +54,7 @@ def _name(text: str) -> name:
 def _state_members(domain: Path, state: Path) -> tuple[list[str], list[str]]:
     """The robots and devices of a state, and the robots its goals name first."""
     problem = load_problem(domain, state, None, None, sequence=True)
-    agents = list(dict.fromkeys(f[1] for f in problem.task.facts if f[0] in ("robot", "device")))
+    agents = list(problem.task.agents)
     leading = []
     for call in problem.goal_calls:
         first = next((a for a in call[1:] if a in agents), None)

@@ -221,8 +221,7 @@ def run(
             running = society(parts, registry)
         else:
             part = next((p for p in parts if p.robot == robot), None)
-            agents = {f[1] for f in problem.task.facts if f[0] in ("robot", "device")}
-            if part is None and not (reconfigure and robot in agents):
+            if part is None and not (reconfigure and robot in problem.task.agents):
                 names = ", ".join(p.robot for p in parts)
                 raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
             part = part or Part(robot, (), ())  # a robot of the state: it waits for a part

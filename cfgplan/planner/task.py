@@ -149,6 +149,13 @@ class Task:
     kept here so that it goes when the task goes; a derived task starts empty."""
 
     @cached_property
+    def agents(self) -> tuple[str, ...]:
+        """The robots and devices the state declares, ``(robot X)`` and
+        ``(device X)``, each once, in state order: who may run a part."""
+        named = (f[1] for f in self.facts if f[0] in ("robot", "device") and len(f) == 2)
+        return tuple(dict.fromkeys(named))
+
+    @cached_property
     def recursive(self) -> frozenset[Signature]:
         """Method signatures that can reach themselves through method bodies:
         only their instances can meet the recursion guard of 4.5."""

@@ -280,12 +280,7 @@ def coordinate(
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
-    for other in sorted(_agents(task) - {robot.name}):  # each robot of the state, its own key
+    for other in sorted(set(task.agents) - {robot.name}):  # each robot of the state, its own key
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
-
-
-def _agents(task: Task) -> set[str]:
-    """The robots and devices the state declares."""
-    return {f[1] for f in task.facts if f[0] in ("robot", "device") and len(f) == 2}
