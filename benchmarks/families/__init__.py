@@ -9,6 +9,8 @@ for ``python -m benchmarks.run`` and the tests:
   (issue 11): covering with shared robots and devices, tight media, weighted
   covering with ``:cost``, long plateaus of equal cost, recursion, media that
   let each camera serve one robot;
+- ``dag(D)``, ``conversion(D)``: shared and recursive sub-derivations, one
+  ground method instance under many ancestors (issue 35);
 - ``deliveries(S, R)``: a sequence of S configurations (issue 14);
 - :mod:`benchmarks.families.weak`: structures the search is still weak on
   (docs/explanation/planner.md, "Weak spots"), not in the benchmark table.
@@ -20,11 +22,14 @@ from benchmarks.families.ecology import ecology, media_tight
 from benchmarks.families.fusion import fusion
 from benchmarks.families.gateway import gateway
 from benchmarks.families.relay import relay
+from benchmarks.families.shared import conversion, dag
 from benchmarks.families.steps import deliveries
 from benchmarks.families.wall import wall
 
 __all__ = [
     "chain",
+    "conversion",
+    "dag",
     "delegation",
     "deliveries",
     "ecology",

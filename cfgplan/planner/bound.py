@@ -104,10 +104,19 @@ class Bound:
         # (certain instances; least cost per group of items that cannot share).
         # Either may be the larger, and both may count the same instance, so
         # they cannot be added up: their max is a lower bound.
-        total = max(mandatory, self._deepest(node, pending))
+        # Each of the two least costs is taken twice, the larger counting: over
+        # every pending item, and without the items that repeat a method
+        # instance already being expanded in this node (see _repeats).
+        repeats = _repeats(node, task)
+        deepest = self._deepest(node, pending)
+        widest = self._widest(pending, future, resolved)
+        if repeats:
+            kept = {label: entry for label, entry in pending.items() if label not in repeats}
+            deepest = max(deepest, self._deepest(node, kept))
+            widest = max(widest, self._widest(kept, future, resolved))
+        total = max(mandatory, deepest)
         total += sum(task.agent_cost(agent) for agent in new_robots - node.robots)
-        total += self._widest(pending, future, resolved)
-        return total
+        return total + widest
 
     def _deepest(self, node: Partial, pending: dict[int, tuple[Ground, Summary]]) -> float:
         """What the pending items must still add in functionalities, by their
@@ -148,6 +157,25 @@ class Bound:
             reusable = sum(cost for name, cost in have.items() if name in names)
             parts.append((names, max(0.0, sub.wiring - reusable)))
         return least(parts)
+
+
+def _repeats(node: Partial, task: Task) -> set[int]:
+    """The labels of pending method items whose ground instance is being
+    expanded elsewhere in the node (an ancestor of another item).
+
+    Left out of a least cost, such an item is priced at nothing, which it may
+    cost (expanded as the other occurrence is, its functionalities are reused
+    and its channels merge, 4.5). Any subset of the pending items gives a
+    lower bound: parts that cannot share still add up, and what the left-out
+    items add is at least nothing. Counted, the repeat could share with every
+    part of the other occurrence's body and join them into one, priced as the
+    largest (the shared sub-derivations of issue 35). Ancestors are part of
+    the canonical form (:mod:`cfgplan.planner.canonical`), so two nodes of
+    one form leave out the same items."""
+    above: set[Ground] = set()
+    for item in node.stack:
+        above |= item.ancestors
+    return {item.label for item in node.stack if item.call in above and task.is_method(item.call)}
 
 
 def _pending_call(pending: dict[int, tuple[Ground, Summary]], label: int, task: Task) -> Key | None:

@@ -111,3 +111,29 @@ def test_the_partitioned_bound_is_the_same_with_its_stack_memo_warm_or_cold() ->
         cold = Partition(grounder)
         assert cold.estimate(node, bound.certain_agents(node)) == estimate
         assert warm.estimate(node, bound.certain_agents(node)) == estimate
+
+
+def test_a_repeated_method_instance_does_not_join_the_parts_of_its_twin() -> None:
+    """Issue 35, shared sub-derivations (benchmarks/families/shared.py ``dag``):
+    level 3 is expanded (by its refining version, ``step3``) while another
+    occurrence of it waits. Counted, the waiting one may share with every
+    part of the first one's body and joined ``level2`` and ``step3`` into one
+    part, priced as the dearer (27 for a node whose cheapest completion is
+    30). Left out (it may cost nothing more: expanded the same way, all is
+    reused), the parts add up: 28. And the bound never exceeds the cheapest
+    completion on the first nodes of that search."""
+    from benchmarks.families import dag
+
+    problem = load_text(*dag(5))
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    seen = False
+    for node in some_nodes(grounder, problem.goal_call):
+        rest = bound.estimate(node)
+        best = least_completion(grounder, node)
+        assert rest is not None and best is not None
+        assert node.cost + rest <= best
+        stack = [item.call[0] for item in node.stack]
+        if stack == ["level2", "step3", "level2", "fuse4", "level3", "fuse5", "act"]:
+            seen = True
+            assert (rest, best) == (28.0, 30.0)
+    assert seen
