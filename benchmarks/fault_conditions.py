@@ -36,6 +36,7 @@ from typing import Literal
 
 from benchmarks.lossy_link import Link, NetnsLink, ProxyLink
 from benchmarks.reconfigure import DOMAINS, HERMETIC, IMPL, ROOT, free_port
+from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE
 
 Record = dict[str, object]
 Kind = Literal["kill", "freeze", "loss", "cut"]
@@ -50,7 +51,7 @@ class Options:
     watch: float = 20.0  # seconds after the fault clears before a run counts as stopped for good
     hold: float = 1.0  # cfgplan run's hysteresis hold (--hold), for the limit hold + 1 s
     rate: float = 20.0  # cycles per second (--rate)
-    lease: float = 1.0  # --lease
+    lease: float = DEFAULT_LEASE  # --lease: cfgplan's default
     restart_after: float = 2.0  # a killed robot is started again after this
     settle: float = 1.5  # seconds of service before the fault (past the first switches' hold)
     startup: float = 90.0  # bound on the first service: interpreters and Zenoh, loaded machine

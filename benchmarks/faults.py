@@ -48,7 +48,7 @@ Pippi helps, every configuration needs her) and docking with Vacu's laser
 failed (Vacu docks and coordinates, Robby's laser localizes him; the ceiling
 camera CamKitchen once left out of the state, once declared but its process
 not started), one `cfgplan run --robot` process per robot over Zenoh, at 20
-cycles per second, lease 1 s, hold 1 s. The coordinator runs in one network
+cycles per second, lease {lease:g} s, hold {hold:g} s. The coordinator runs in one network
 namespace and the helper in another; a forwarder in the benchmark's process
 moves every IP packet between their TUN devices, dropping a seeded share and
 delaying the rest, so TCP sees real loss (no kernel module, no netem). Where
@@ -190,14 +190,16 @@ PAGE = """\
 """
 
 
-def page(lines: list[str], facts: list[str], evidence: list[str], command: list[str]) -> str:
-    """The documentation page of this run; ``evidence``: the coordinator's
-    events in the trials over the limit."""
+def page(
+    options: Options, lines: list[str], facts: list[str], evidence: list[str], command: list[str]
+) -> str:
+    """The documentation page of this run with ``options``; ``evidence``: the
+    coordinator's events in the trials over the limit."""
     shown = shlex.join(["python", "-m", "benchmarks.faults", *command])
     heading = "### Trials over the limit: the coordinator's events from the fault on"
     over = "\n".join([heading, "", "```text", *evidence, "```", "", ""]) if evidence else ""
     return PAGE.format(
-        intro=INTRO,
+        intro=INTRO.format(lease=options.lease, hold=options.hold),
         facts="\n".join(facts),
         table="\n".join(lines),
         evidence=over,
@@ -261,7 +263,7 @@ def main(argv: list[str] | None = None) -> int:
         print("\n".join(evidence))
     if args.markdown:
         args.markdown.write_text(
-            page(lines, facts, evidence, sys.argv[1:] if argv is None else argv)
+            page(options, lines, facts, evidence, sys.argv[1:] if argv is None else argv)
         )
         print(f"\nwrote {args.markdown}")
     return 0

@@ -28,11 +28,15 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from cfgplan.backends.wiring import Call, RobotPart
 from cfgplan.diagnostics import escape_char, is_unsafe, printable
 from cfgplan.notation import call_text
 from cfgplan.safe_names import safe_stem
+
+if TYPE_CHECKING:
+    from cfgplan.security.identity import ProblemId
 
 __all__ = ["module_name", "py_str", "run_all", "to_python"]
 
@@ -123,8 +127,10 @@ def _statement(indent: str, head: str, args: str) -> list[str]:
     return [f"{indent}{head}(", f"{indent}    {args}", f"{indent})"]
 
 
-def to_python(part: RobotPart, title: str) -> str:
-    """The module of one robot; ``title`` says which configuration it is part of."""
+def to_python(part: RobotPart, title: str, problem: ProblemId | None = None) -> str:
+    """The module of one robot; ``title`` says which configuration it is part of;
+    ``problem``, the problem it was planned for, is announced to the society and
+    checked against the other robots' (:mod:`cfgplan.security.identity`)."""
     robot = part.robot
     shown = _doc(robot)
     ind = part.individual
@@ -151,8 +157,10 @@ def to_python(part: RobotPart, title: str) -> str:
         "from __future__ import annotations",
         "",
         "from cfgplan.runtime import Cycle, Robot, robot_main",
+        *(["from cfgplan.security.identity import ProblemId"] if problem else []),
         "",
         f"ROBOT = {_str(robot)}",
+        *(_problem(problem) if problem else []),
         "",
         "",
         "def configure(robot: Robot) -> Cycle:",
@@ -198,9 +206,16 @@ def to_python(part: RobotPart, title: str) -> str:
         "",
         "",
         'if __name__ == "__main__":',
-        "    raise SystemExit(robot_main(ROBOT, configure))",
+        "    raise SystemExit(robot_main(ROBOT, configure"
+        + (", problem=PROBLEM))" if problem else "))"),
     ]
     return "\n".join(lines) + "\n"
+
+
+def _problem(problem: ProblemId) -> list[str]:
+    """``PROBLEM = ProblemId(...)``: what the robot announces (issue 34)."""
+    args = f"{_str(problem.fingerprint)}, {_str(problem.about)}"
+    return _statement("", "PROBLEM = ProblemId", args)
 
 
 def run_all(parts: Sequence[RobotPart], title: str) -> str:

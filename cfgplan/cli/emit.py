@@ -42,6 +42,7 @@ from cfgplan.diagnostics import printable
 from cfgplan.emission import write_emission
 from cfgplan.notation import call_text
 from cfgplan.problem import Problem
+from cfgplan.security.identity import ProblemId, problem_id
 
 LANGS = ("lisp", "python")
 DESCRIPTION = "configuration.txt"
@@ -52,15 +53,22 @@ def title(problem: Problem, config: Configuration, rank: int) -> str:
     return f"Configuration rank {rank}, cost {fmt(config.cost)}, for {call_text(problem.goal_call)}"
 
 
-def files(problem: Problem, config: Configuration, rank: int, lang: str) -> dict[str, str]:
-    """File name -> text, in the order they are written; ``lang`` is ``lisp`` or ``python``."""
+def files(
+    problem: Problem,
+    config: Configuration,
+    rank: int,
+    lang: str,
+    identity: ProblemId | None = None,
+) -> dict[str, str]:
+    """File name -> text, in the order they are written; ``lang`` is ``lisp`` or
+    ``python``; ``identity``, the problem's, is announced by each Python robot."""
     parts = deploy(config, problem.domain)
     head = title(problem, config, rank)
     suffix = ".lisp" if lang == "lisp" else ".py"
     out: dict[str, str] = {}
     for part in parts:
         name = part.stem + suffix
-        out[name] = _lisp(part, head) if lang == "lisp" else to_python(part, head)
+        out[name] = _lisp(part, head) if lang == "lisp" else to_python(part, head, identity)
     if lang == "python":
         out[RUN_ALL] = run_all(parts, head)
     out[DESCRIPTION] = to_text(config, problem.state.media) + "\n" + file_table(parts, suffix)
@@ -118,7 +126,7 @@ def emit(
     3 no configuration of that rank.
     """
     problem = load_problem(domain, state, goal, weights)
-    texts = files(problem, choose(problem, rank), rank, lang)
+    texts = files(problem, choose(problem, rank), rank, lang, problem_id(problem, domain, state))
     removed = write_emission(
         output, {name: text.encode("utf-8") for name, text in texts.items()}, force
     )

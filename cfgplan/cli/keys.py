@@ -1,4 +1,5 @@
-"""``cfgplan keys new SOCIETY -o DIR``: a society's certificate authority and its members' keys.
+"""``cfgplan keys new SOCIETY -o DIR``: a society's certificate authority and its members' keys;
+``cfgplan keys renew NAME -o DIR``: one member's key rotated (:mod:`cfgplan.security.renew`).
 
 One key and certificate per robot and device of a state (``--domain DOMAIN
 --state STATE``) or per ``--robot NAME``, and per ``--operator NAME`` tool,
@@ -31,10 +32,13 @@ keys_app = typer.Typer(
     name="keys",
     cls=Group,
     no_args_is_help=True,
-    help="Make a society's keys: TLS with mutual authentication for its robots.",
+    help="Make a society's keys: TLS with mutual authentication for its robots; renew one "
+    "robot's key.",
     context_settings={"help_option_names": ["-h", "--help"]},
 )
-app.add_typer(keys_app, short_help="Make a society's keys for TLS with mutual authentication.")
+app.add_typer(
+    keys_app, short_help="Make or renew a society's keys for TLS with mutual authentication."
+)
 
 DEFAULT_DAYS = 730
 
@@ -169,3 +173,64 @@ def new(
     lines = [f"society {plan.society}: keys for {len(members)} member(s) in {output}/ (0700)"]
     lines += [f"  {path.name:<{width}}  {what[path.name]}" for path in written]
     typer.echo(printable("\n".join(lines), keep="\n"))  # names from the input, escaped
+
+
+@keys_app.command("renew", cls=Command)
+def renew(
+    member: Annotated[
+        str,
+        typer.Argument(metavar="NAME", help="The robot (or operator tool) whose key is replaced."),
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "--output",
+            "-o",
+            metavar="DIR",
+            help="The society's keys, where cfgplan keys new wrote them (with ca.key).",
+        ),
+    ],
+    days: Annotated[
+        int,
+        typer.Option(
+            "--days",
+            metavar="N",
+            parser=count_of(1),
+            help=f"Days the new certificate is valid (default {DEFAULT_DAYS}).",
+            show_default=False,
+        ),
+    ] = DEFAULT_DAYS,
+) -> None:
+    """Give one robot (or operator tool) a new key and certificate, signed by the society's
+    own authority, and make the old certificate useless where society.json is renewed.
+
+    Replaces DIR/NAME.pem and DIR/NAME.key (NAME in lower case) and DIR/society.json,
+    which now names the new certificate only (its common name ends in @2, @3, ...).
+    Give the robot's host its two new files and every host the new society.json, then
+    restart them: a member still holding the old society.json admits the old certificate.
+    Exit codes: 0 written, 1 invalid input, 2 usage.
+    """
+    if not member:
+        usage_error("the name is empty", "NAME")
+    from cfgplan.security.keys import write_society
+    from cfgplan.security.renew import renew as renew_member
+
+    try:
+        old, new, files = renew_member(output, member, days)
+        written = write_society(output, files, force=True)
+    except RunError as exc:
+        raise run_error(exc) from None
+    what = {
+        f"{new.stem}.pem": f"{new.kind} {new.name}'s new certificate, {new.common_name} "
+        "(to its host)",
+        f"{new.stem}.key": f"{new.kind} {new.name}'s new private key (to its host only)",
+        "society.json": f"admits {new.common_name}, no longer {old.common_name} (to every host)",
+    }
+    width = max(len(p.name) for p in written)
+    lines = [f"{new.kind} {new.name}: key generation {new.generation} in {output}/"]
+    lines += [f"  {path.name:<{width}}  {what[path.name]}" for path in written]
+    lines.append(
+        f"the old certificate ({old.common_name}) can do nothing with a member that has the "
+        "new society.json; until then that member still admits it"
+    )
+    typer.echo(printable("\n".join(lines), keep="\n"))

@@ -94,6 +94,9 @@ class NetworkAdaptive:
         self.injector(cycle, elapsed)
 
     def between(self, cycle: int, elapsed: float) -> None:
+        conflict = getattr(self.deployer.transport, "conflict", None)
+        if self.refusal is None and conflict is not None:
+            self.refusal = conflict  # a robot of another problem in the society: this one stops
         dropped = self.deployer.transport.dropped
         if dropped > self._dropped:
             most = self.deployer.transport.options.backlog

@@ -18,7 +18,9 @@ written and read like a local channel.
 
 Beyond the thesis, a channel remembers when its data was last refreshed and
 the period of the functionality that sent it, which is what staleness (3.2:
-``Freq``) is judged by: :meth:`Channel.stale`.
+``Freq``) is judged by: :meth:`Channel.stale`. A received period also sets
+how many messages per second the transport takes on the channel, if it
+limits them (``pace``: :mod:`cfgplan.security.rates`).
 """
 
 from __future__ import annotations
@@ -132,6 +134,9 @@ class Channel:
         """A message from the other end: read its envelope and deliver the value."""
         message = open_envelope(payload)
         self.deliver(message.value, period=message.period, now=now)
+        pace = getattr(self._transport, "pace", None)
+        if pace is not None:  # the rate this channel takes follows its sender's period
+            pace(self.key, message.period)
         return message
 
     def read(self) -> object:

@@ -7,6 +7,7 @@ societies on one network stay apart::
     cfgplan/<society>/<robot>/ch/<sender>/<source>/<target>/<data ...>  a channel into it
     cfgplan/<society>/<robot>/configure                                 switches, to it
     cfgplan/<society>/coordinator/<robot>                               its reports, acks (5.5)
+    cfgplan/<society>/<robot>/problem/<fingerprint>/<about>            the problem it runs
 
 ``<robot>`` is the robot that *receives*, ``<sender>`` the robot that sends;
 ``<source>`` and ``<target>`` are the channel's functionality labels and
@@ -29,6 +30,7 @@ import re
 from cfgplan.runtime.transport import ChannelKey
 
 __all__ = [
+    "MAX_PROBLEM_KEY",
     "PREFIX",
     "alive_key",
     "alive_pattern",
@@ -37,6 +39,9 @@ __all__ = [
     "chunk",
     "configure_key",
     "coordinator_key",
+    "problem_key",
+    "problem_of_token",
+    "problem_pattern",
     "robot_of_alive",
     "unchunk",
 ]
@@ -106,4 +111,33 @@ def robot_of_alive(key: str, society: str) -> str | None:
     try:
         return unchunk(parts[2])
     except UnicodeDecodeError:  # not written by chunk: no robot of ours
+        return None
+
+
+def problem_key(society: str, robot: str, fingerprint: str, about: str) -> str:
+    """The liveliness token by which ``robot`` says which problem it runs
+    (:mod:`cfgplan.security.identity`): its fingerprint and a description."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/problem/{chunk(fingerprint)}/{chunk(about)}"
+
+
+def problem_pattern(society: str) -> str:
+    """The problem tokens of every robot of ``society``."""
+    return f"{PREFIX}/{chunk(society)}/*/problem/*/*"
+
+
+MAX_PROBLEM_KEY = 2048
+"""The longest problem token read (a description of 160 characters, escaped, fits)."""
+
+
+def problem_of_token(key: str, society: str) -> tuple[str, str, str] | None:
+    """The robot, fingerprint and description a problem token of ``society``
+    names, or ``None`` (not one, too long, not written by :func:`chunk`)."""
+    parts = key.split("/")
+    if len(key) > MAX_PROBLEM_KEY or len(parts) != 6 or parts[0] != PREFIX:
+        return None
+    if parts[1] != chunk(society) or parts[3] != "problem":
+        return None
+    try:
+        return unchunk(parts[2]), unchunk(parts[4]), unchunk(parts[5])
+    except (UnicodeDecodeError, ValueError):
         return None

@@ -47,6 +47,8 @@ from cfgplan.runtime.society import Society, assemble
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.runtime.zenoh_transport import ZenohOptions
+from cfgplan.security.identity import ProblemId
+from cfgplan.security.rates import RateLimits
 
 __all__ = ["KILLED", "crash", "robot_main", "society_main"]
 
@@ -118,15 +120,23 @@ def options_of(args: argparse.Namespace) -> RunOptions:
     )
 
 
-def robot_main(name: str, configure: Configure, argv: Sequence[str] | None = None) -> int:
-    """``python emil.py``: run one robot, its global channels over Zenoh."""
+def robot_main(
+    name: str,
+    configure: Configure,
+    argv: Sequence[str] | None = None,
+    *,
+    problem: ProblemId | None = None,
+) -> int:
+    """``python emil.py``: run one robot, its global channels over Zenoh;
+    ``problem``, if the program knows it, is announced to the society and
+    checked against the others' (:mod:`cfgplan.security.identity`)."""
     description = f"Run {name}'s part of a configuration (cfgplan, thesis 5.2, 5.3)."
     args = parser_of(description, network=True).parse_args(argv)
     transport: Transport | None = None
     trace: TraceFile | None = None
     try:
         registry = Registry.load(args.impl)
-        transport = open_transport(name, args.transport, zenoh_options(args))
+        transport = open_transport(name, args.transport, zenoh_options(args, problem))
         robot = Robot(name, registry, transport).configure(configure)
         shared = transport if isinstance(transport, InProcessTransport) else None
         running = Society([robot], shared)
@@ -176,10 +186,17 @@ def _follow(
     return Membership(member, injector)
 
 
-def zenoh_options(args: argparse.Namespace) -> ZenohOptions:
+def zenoh_options(args: argparse.Namespace, problem: ProblemId | None = None) -> ZenohOptions:
     """The network options of an emitted program's command line."""
     return network_options(
-        args.society, args.listen, args.connect, args.zenoh_config, args.lease, args.keys
+        args.society,
+        args.listen,
+        args.connect,
+        args.zenoh_config,
+        args.lease,
+        args.keys,
+        problem=problem,
+        allowance=args.rate_allowance,
     )
 
 
@@ -190,9 +207,14 @@ def network_options(
     config_file: str | None,
     lease: float | None,
     keys: str | None,
+    *,
+    problem: ProblemId | None = None,
+    allowance: float | None = None,
 ) -> ZenohOptions:
     """The Zenoh options of a robot, as ``cfgplan run`` and emitted programs
-    take them: with keys and no ``--society``, the keys' society."""
+    take them: with keys and no ``--society``, the keys' society; ``problem``:
+    the one it runs, announced to the society (:mod:`cfgplan.security.identity`);
+    ``allowance``: ``--rate-allowance`` (:mod:`cfgplan.security.rates`)."""
     if keys is not None:  # the keys name the society, unless --society does
         from cfgplan.security.zenoh_tls import society_for
 
@@ -204,6 +226,8 @@ def network_options(
         config_file=config_file,
         lease=lease,
         keys=keys,
+        problem=problem,
+        rates=RateLimits() if allowance is None else RateLimits(allowance=allowance),
     )
 
 

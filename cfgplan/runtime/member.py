@@ -142,6 +142,11 @@ class Member:
         declare = getattr(network, "declare", None)
         if declare is not None:  # the first answer then goes out at once
             declare(coordinator_key(network.society, robot.name))
+        notices = getattr(network, "notices", None)
+        if notices is not None:  # a flood's drops, once per interval (cfgplan.security.rates)
+            notices.append(self.error)
+        if hasattr(network, "conflict_handled"):  # another problem in the society: see conflict
+            network.conflict_handled = True
         if forward:  # the subscriber exists: the coordinator may send a part now
             self._send(Ready(robot.name, self.instance))
             robot.subscribe(self._event)
@@ -307,9 +312,17 @@ class Member:
         epoch = self.epoch if epoch is None else epoch
         self._send(Ack(self.robot.name, number, phase, epoch, reason))
 
+    @property
+    def conflict(self) -> str | None:
+        """Why this robot stops because a robot of its society runs another
+        problem (:mod:`cfgplan.security.identity`), or ``None``."""
+        return getattr(self.network, "conflict", None)
+
     def report(self) -> None:
         """Send the coordinator the calls that failed and the detections of
-        this robot's monitor."""
+        this robot's monitor; note a robot of another problem (:attr:`conflict`)."""
+        if self.refused is None and self.conflict is not None:
+            self.refused = self.conflict
         errors, self._errors = self._errors, []
         for error in errors:
             self._send(error)
@@ -319,13 +332,13 @@ class Member:
             made_under = replace(detection, config=self.current)  # the cycle just run's
             self._send(Report(self.robot.name, made_under))
 
-    def error(self, message: str) -> None:
-        """Record a message that was dropped (an ``error`` event: the console says it)."""
-        self.robot.record(
-            Lifecycle(
-                robot=self.robot.name, t=time.time(), what="error", info=(("message", message),)
-            )
-        )
+    def error(self, message: str, channel: str | None = None) -> None:
+        """Record a message that was dropped (an ``error`` event: the console
+        says it), with the channel it came on if any."""
+        info: tuple[tuple[str, object], ...] = (("message", message),)
+        if channel is not None:
+            info += (("channel", channel),)
+        self.robot.record(Lifecycle(robot=self.robot.name, t=time.time(), what="error", info=info))
 
 
 class Membership:

@@ -26,8 +26,9 @@ reaches out and cannot be reached — peers do not route for one another, so
 in a society of three or more a robot that others must reach is given
 ``--listen``. A Zenoh configuration file (JSON5, Zenoh's own format) sets
 anything else: it goes on top of cfgplan's defaults (:data:`DEFAULTS`: peer
-mode, the connection retry, the lease), which it keeps unless it sets them,
-and the options given on the command line go on top of it. With ``--keys
+mode, the connection retry, the lease, the time to open a link), which it
+keeps unless it sets them, and the options given on the command line go on
+top of it. With ``--keys
 DIR`` (the society's keys, made by ``cfgplan keys new``) every link is TLS
 with mutual authentication and Zenoh's access control by certificate name
 (:mod:`cfgplan.security.zenoh_tls`).
@@ -42,20 +43,28 @@ import json
 import queue
 import re
 import threading
+import time
 from collections.abc import Callable, Collection
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.errors import RunError, printable
 from cfgplan.runtime.keys import (
+    MAX_PROBLEM_KEY,
     alive_key,
     alive_pattern,
     channel_key,
     channels_pattern,
+    problem_key,
+    problem_of_token,
+    problem_pattern,
     robot_of_alive,
+    unchunk,
 )
 from cfgplan.runtime.transport import ChannelKey, Presence, Receiver
+from cfgplan.security.identity import ProblemId, conflict_message
+from cfgplan.security.rates import Buckets, RateLimits
 
 if TYPE_CHECKING:
     import zenoh
@@ -69,12 +78,32 @@ __all__ = [
     "zenoh_config",
 ]
 
-DEFAULT_LEASE = 1.0
-"""Seconds without a word after which a frozen robot is reported lost (Zenoh's lease)."""
+DEFAULT_LEASE = 2.0
+"""Seconds without a word after which a frozen robot is reported lost (Zenoh's lease).
+
+Long enough to ride out a TCP stall on a lossy link: the kernel resends a lost
+segment after 200 ms, 400 ms, 800 ms, ..., so three losses of one segment
+stall a link 1.4 s. With a 1 s lease that happened in one of three 30 s runs at
+10 % loss (the robot reported lost, the society stopped 0.4 s); with 2 s, four
+losses in a row are needed. A robot that dies is seen at once all the same
+(its connection closes); only a frozen robot or a cut link waits for the lease
+(issue 33; ``python -m benchmarks.faults``)."""
 
 DEFAULT_SOCIETY = "default"
-RETRY = '{"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2}'
-"""Connecting to a robot that is not up yet is retried every second at most."""
+RETRY = '{"period_init_ms": 250, "period_max_ms": 500, "period_increase_factor": 2}'
+"""Connecting to a robot that is not up yet (or not reachable) is retried every
+half second at most."""
+
+OPEN_TIMEOUT_MS = 1500
+"""Milliseconds one attempt to open a link may take before it is given up and
+retried. Zenoh's default, 10 s, bounds the TCP connect as well, and a connect
+whose SYN was lost to a bad link waits for the kernel's resends (after 1 s, then
+2 s, 4 s, ...) however long ago the link came back (issue 33: 2.8 s to reconnect
+after 50 % loss cleared). Given up after 1.5 s (past the first resend), and
+retried :data:`RETRY` 0.5 s later, an attempt goes out on the link at least
+every second. A link that needs longer to open (a TLS handshake over a link of
+300 ms round trips) needs a longer one: a ``--zenoh-config`` file's
+``transport/unicast/open_timeout``."""
 
 ENDPOINT = re.compile(r"^[A-Za-z0-9+.-]+/\S+$")
 ENDPOINT_HINT = "e.g. tcp/127.0.0.1:7447, tcp/[::1]:7447 or tcp/robot-1.local:7447"
@@ -101,6 +130,11 @@ class ZenohOptions:
     """Switch-protocol messages that may wait for the robot's loop; past it,
     more are dropped and counted (:attr:`ZenohTransport.dropped`): a robot
     that floods the coordinator cannot grow its memory without bound."""
+    rates: RateLimits = field(default_factory=RateLimits)
+    """How many messages per channel and sender are taken (:mod:`cfgplan.security.rates`)."""
+    problem: ProblemId | None = None
+    """The problem the robot runs, announced and checked against the society's
+    (:mod:`cfgplan.security.identity`); ``None``: not known, not checked."""
 
     def __post_init__(self) -> None:
         if not self.society:
@@ -138,14 +172,16 @@ DEFAULTS: tuple[tuple[str, str, str], ...] = (
     ("mode", '"peer"', "peer mode"),
     ("connect/retry", RETRY, "the connection retry"),
     ("transport/link/tx/lease", str(round(DEFAULT_LEASE * 1000)), "the lease"),
+    ("transport/unicast/open_timeout", str(OPEN_TIMEOUT_MS), "the time to open a link"),
 )
 """cfgplan's settings under anything a ``--zenoh-config`` file sets: (key, JSON5, what)."""
 
 
 def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Config:
     """The session configuration of a robot program: cfgplan's :data:`DEFAULTS`
-    (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s),
-    then a configuration file's settings, then the options.
+    (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s, an
+    :data:`OPEN_TIMEOUT_MS` to open a link), then a configuration file's
+    settings, then the options.
 
     A file is read whole by Zenoh, which fills in its own default for every
     key the file leaves out; so a key whose value in the file is Zenoh's own
@@ -235,6 +271,21 @@ class ZenohTransport:
             queue.SimpleQueue()
         )
         self.sent = 0
+        self._buckets = Buckets(self.options.rates)
+        self.notices: list[Callable[[str, str], None]] = []
+        """Told ``(message, channel)`` of the messages a flood cost, once per interval
+        (:attr:`RateLimits.report_every`): the robot's :class:`~cfgplan.runtime.member.Member`
+        records them."""
+        self.conflict: str | None = None
+        """Set when a robot of the society runs another problem: the run ends."""
+        self.conflict_handled = False
+        """True once the switch protocol's member ends the run itself on a
+        :attr:`conflict` (exit status 1, :data:`~cfgplan.runtime.launch.REFUSED`);
+        else :meth:`poll` raises it."""
+        self._problem_token: Any = None
+        self._problems: Any = None
+        if self.options.problem is not None:
+            self._announce(self.options.problem)
         self.dropped = 0
         """Messages dropped because :attr:`ZenohOptions.backlog` were waiting."""
 
@@ -251,7 +302,9 @@ class ZenohTransport:
         if key in self._attached:
             raise RunError(f"channel {key} is created twice on {robot}")
         where = self._attached[key] = channel_key(self.society, robot, key, sender)
-        self._receivers[where] = receiver
+        with self._lock:
+            self._receivers[where] = receiver
+            self._buckets.open(where, time.monotonic())
         if self._channels is None:  # one subscriber for every channel into this robot
             every = channels_pattern(self.society, robot)
             self._channels = self._session.declare_subscriber(every, self._on_sample)
@@ -262,9 +315,18 @@ class ZenohTransport:
         where = self._attached.pop(key, None)
         if where is None:
             return
-        self._receivers.pop(where, None)
         with self._lock:
+            self._receivers.pop(where, None)
             self._newest.pop(where, None)
+            self._buckets.close(where)
+
+    def pace(self, key: ChannelKey, period: float | None) -> None:
+        """The sender of channel ``key`` states ``period``: what the channel takes
+        follows it (:meth:`~cfgplan.security.rates.Buckets.pace`)."""
+        where = self._attached.get(key)
+        if where is not None:
+            with self._lock:
+                self._buckets.pace(where, period)
 
     def subscribe(self, key: str, handler: Callable[[bytes], None]) -> None:
         """Every message on ``key`` (in order, none dropped) to ``handler``, at
@@ -293,10 +355,49 @@ class ZenohTransport:
         return publisher
 
     def _on_sample(self, sample: Any) -> None:
-        """On a Zenoh thread: keep the newest message of its channel for :meth:`poll`."""
-        payload = sample.payload.to_bytes()
+        """On a Zenoh thread: keep the newest message of its channel for
+        :meth:`poll`, if its bucket takes it (:mod:`cfgplan.security.rates`):
+        a message dropped is not read, kept nor woken for."""
+        where = str(sample.key_expr)
         with self._lock:
-            self._newest[str(sample.key_expr)] = payload
+            if not self._buckets.admit(where, time.monotonic()):
+                return
+            self._newest[where] = sample.payload.to_bytes()
+        self._arrived.set()
+
+    def _announce(self, problem: ProblemId) -> None:
+        """Declare the problem token and watch the society's (module
+        :mod:`cfgplan.security.identity`)."""
+        about = problem.about
+        key = problem_key(self.society, self.robot, problem.fingerprint, about)
+        while len(key) > MAX_PROBLEM_KEY and about:  # what the others read (escapes are long)
+            about = about[: len(about) // 2]
+            key = problem_key(self.society, self.robot, problem.fingerprint, about)
+        liveliness = self._session.liveliness()
+        try:  # watching first: a robot that refuses at the sight of this token
+            # has answered the watch (with its own token) before it leaves
+            self._problems = liveliness.declare_subscriber(
+                problem_pattern(self.society), self._on_problem, history=True
+            )
+            self._problem_token = liveliness.declare_token(key)
+        except self._z.ZError as exc:
+            self.close()
+            raise RunError(f"cannot announce {self.robot}'s problem: {_reason(exc)}") from None
+
+    def _on_problem(self, sample: Any) -> None:
+        """On a Zenoh thread: a robot of the society says which problem it runs."""
+        mine = self.options.problem
+        named = problem_of_token(str(sample.key_expr), self.society)
+        if mine is None or named is None or sample.kind != self._z.SampleKind.PUT:
+            return
+        robot, fingerprint, about = named
+        if fingerprint == mine.fingerprint or self.conflict is not None:
+            return
+        try:
+            theirs = ProblemId(fingerprint, about)
+        except ValueError:  # not a fingerprint: not written by cfgplan
+            return
+        self.conflict = conflict_message(self.society, mine, printable(robot[:64]), theirs)
         self._arrived.set()
 
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
@@ -341,9 +442,15 @@ class ZenohTransport:
         return self._arrived.wait(timeout)
 
     def poll(self) -> None:
+        """Hand over what arrived; :class:`RunError` when a robot of the
+        society runs another problem (:attr:`conflict`) and nothing else ends the run."""
+        if self.conflict is not None and not self.conflict_handled:
+            raise RunError(self.conflict, hint="robots of one problem share a society name")
         with self._lock:
             newest, self._newest = self._newest, {}
             self._arrived.clear()
+            drops = self._buckets.due(time.monotonic())
+        self._say_drops(drops)
         for where, payload in newest.items():
             receiver = self._receivers.get(where)
             if receiver is not None:
@@ -364,9 +471,34 @@ class ZenohTransport:
             for listener in self.presence_listeners:
                 listener(name, alive)
 
+    def _say_drops(self, drops: list[tuple[str, int, float]]) -> None:
+        """Tell :attr:`notices` of the messages a flood cost (once per interval)."""
+        if not drops:
+            return
+        names = {where: key for key, where in self._attached.items()}
+        every = self.options.rates.report_every
+        for where, count, rate in drops:
+            key = names.get(where)
+            channel = str(key) if key is not None else where
+            sender = unchunk(where.split("/")[4]) if key is not None else "?"
+            said = (
+                f"channel {channel} from {sender}: {count} message(s) over the rate limit "
+                f"({rate:g} per second) dropped in the last {every:g} s or more (a robot floods it)"
+            )
+            for notice in self.notices:
+                notice(said, channel)
+
+    @property
+    def rate_dropped(self) -> int:
+        """Messages the rate limits dropped, on the channels attached now."""
+        with self._lock:
+            return self._buckets.dropped
+
     def close(self) -> None:
         """Leave: the token goes, so the others see this robot lost at once."""
         if self._session.is_closed():
             return
+        if self._problem_token is not None:
+            self._problem_token.undeclare()
         self._token.undeclare()
         self._session.close()

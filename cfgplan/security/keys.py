@@ -13,9 +13,18 @@ folder only its owner may enter (mode 0700), files only the owner may read
   member (:func:`common_name`), and its private key. A member is a robot or a
   device of the state (a robot program) or an operator tool.
 * ``society.json``: the society's name and, per member, its kind, common
-  name, file stem and whether it may coordinate (send the switches of 5.5);
-  no secret. :mod:`cfgplan.security.zenoh_tls` builds Zenoh's access control
-  from it.
+  name, file stem, key generation and whether it may coordinate (send the
+  switches of 5.5); no secret. :mod:`cfgplan.security.zenoh_tls` builds
+  Zenoh's access control from it.
+
+``cfgplan keys renew NAME -o DIR`` (:mod:`cfgplan.security.renew`) gives one member a
+new key and certificate, signed by the same CA, of the next *generation*:
+its common name ends in ``@2``, ``@3``, ... (``@`` never occurs in a key
+chunk, so no member's name reads as another's generation), and
+``society.json`` names only the new one. Zenoh's access control admits only
+the common names ``society.json`` lists, so wherever the new ``society.json``
+is, the old certificate still passes the TLS handshake (the CA signed it)
+but may do nothing at all: deny by default.
 
 A robot's host needs ``society.json``, ``ca.pem`` and its own two files.
 
@@ -47,6 +56,7 @@ __all__ = [
     "SocietyKeys",
     "common_name",
     "make_society",
+    "member_files",
     "read_society",
     "write_society",
 ]
@@ -61,15 +71,17 @@ INSTALL_HINT = "pip install 'cfgplan[keys]' (or pip install cryptography)"
 KINDS = ("robot", "operator")
 
 
-def common_name(society: str, name: str, kind: str) -> str:
+def common_name(society: str, name: str, kind: str, generation: int = 1) -> str:
     """The certificate common name of a member: ``lab/Emil`` for robot Emil of
-    society ``lab``, ``lab/operator/console`` for operator tool ``console``.
+    society ``lab``, ``lab/operator/console`` for operator tool ``console``,
+    ``lab/Emil@2`` for Emil's second key (:mod:`cfgplan.security.renew`).
     Each part is a key chunk (:func:`cfgplan.runtime.keys.chunk`), so a name
-    never contains a raw ``/`` and a robot's name (two parts) never reads as an
-    operator's (three)."""
+    never contains a raw ``/`` nor ``@``, and a robot's name (two parts) never
+    reads as an operator's (three)."""
+    again = f"@{generation}" if generation > 1 else ""
     if kind == "operator":
-        return f"{chunk(society)}/operator/{chunk(name)}"
-    return f"{chunk(society)}/{chunk(name)}"
+        return f"{chunk(society)}/operator/{chunk(name)}{again}"
+    return f"{chunk(society)}/{chunk(name)}{again}"
 
 
 @dataclass(frozen=True)
@@ -81,6 +93,8 @@ class Member:
     stem: str  # its files: <stem>.pem and <stem>.key
     common_name: str
     coordinator: bool = False
+    generation: int = 1
+    """1 for the key ``cfgplan keys new`` made, one more at each renewal."""
 
 
 @dataclass(frozen=True)
@@ -105,6 +119,7 @@ class SocietyKeys:
                 "stem": m.stem,
                 "common_name": m.common_name,
                 "coordinator": m.coordinator,
+                "generation": m.generation,
             }
             for m in self.members
         ]
@@ -159,36 +174,93 @@ def _crypto() -> Any:
     return x509
 
 
+def _pem_key(key: Any) -> bytes:
+    """A private key as unencrypted PKCS #8 PEM (the file is the protection: 0600)."""
+    from cryptography.hazmat.primitives import serialization
+
+    return bytes(
+        key.private_bytes(
+            serialization.Encoding.PEM,
+            serialization.PrivateFormat.PKCS8,
+            serialization.NoEncryption(),
+        )
+    )
+
+
+def _name(society: str, cn: str) -> Any:
+    """The X.509 name of a society's CA or member."""
+    x509 = _crypto()
+    from cryptography.x509.oid import NameOID
+
+    return x509.Name(
+        [
+            x509.NameAttribute(NameOID.ORGANIZATION_NAME, f"cfgplan society {society}"),
+            x509.NameAttribute(NameOID.COMMON_NAME, cn),
+        ]
+    )
+
+
+def _validity(days: int) -> tuple[datetime.datetime, datetime.datetime]:
+    now = datetime.datetime.now(datetime.UTC)
+    start = now - datetime.timedelta(minutes=10)  # robots' clocks differ a little
+    return start, now + datetime.timedelta(days=days)
+
+
+def member_files(
+    society: str, member: Member, ca_key: Any, ca_name: Any, days: int
+) -> dict[str, bytes]:
+    """A new key for ``member`` and its certificate, signed by the CA's key
+    ``ca_key`` (whose name is ``ca_name``): ``<stem>.pem`` and ``<stem>.key``."""
+    x509 = _crypto()
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import ExtendedKeyUsageOID
+
+    start, end = _validity(days)
+    key = ec.generate_private_key(ec.SECP256R1())
+    cert = (
+        x509.CertificateBuilder()
+        .subject_name(_name(society, member.common_name))
+        .issuer_name(ca_name)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(start)
+        .not_valid_after(end)
+        .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
+        .add_extension(
+            x509.KeyUsage(True, False, False, False, False, False, False, False, False),
+            critical=True,
+        )
+        .add_extension(
+            x509.ExtendedKeyUsage(
+                [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
+            ),
+            critical=False,
+        )
+        .add_extension(
+            x509.SubjectAlternativeName([x509.DNSName(f"{member.stem}.cfgplan.invalid")]),
+            critical=False,
+        )
+        .add_extension(
+            x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), False
+        )
+        .sign(ca_key, hashes.SHA256())
+    )
+    return {
+        f"{member.stem}.pem": cert.public_bytes(serialization.Encoding.PEM),
+        f"{member.stem}.key": _pem_key(key),
+    }
+
+
 def make_society(plan: SocietyKeys, days: int = 730) -> dict[str, bytes]:
     """The files of a society's keys (see the module docstring), by file name."""
     x509 = _crypto()
     from cryptography.hazmat.primitives import hashes, serialization
     from cryptography.hazmat.primitives.asymmetric import ec
-    from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
-    now = datetime.datetime.now(datetime.UTC)
-    start = now - datetime.timedelta(minutes=10)  # robots' clocks differ a little
-    end = now + datetime.timedelta(days=days)
-
-    def pem_key(key: Any) -> bytes:
-        return bytes(
-            key.private_bytes(
-                serialization.Encoding.PEM,
-                serialization.PrivateFormat.PKCS8,
-                serialization.NoEncryption(),
-            )
-        )
-
-    def name(cn: str) -> Any:
-        return x509.Name(
-            [
-                x509.NameAttribute(NameOID.ORGANIZATION_NAME, f"cfgplan society {plan.society}"),
-                x509.NameAttribute(NameOID.COMMON_NAME, cn),
-            ]
-        )
-
+    start, end = _validity(days)
     ca_key = ec.generate_private_key(ec.SECP256R1())
-    ca_name = name(f"{chunk(plan.society)} CA"[:MAX_COMMON_NAME])
+    ca_name = _name(plan.society, f"{chunk(plan.society)} CA"[:MAX_COMMON_NAME])
     ca_cert = (
         x509.CertificateBuilder()
         .subject_name(ca_name)
@@ -207,40 +279,10 @@ def make_society(plan: SocietyKeys, days: int = 730) -> dict[str, bytes]:
     )
     files = {
         f"{CA_STEM}.pem": ca_cert.public_bytes(serialization.Encoding.PEM),
-        f"{CA_STEM}.key": pem_key(ca_key),
+        f"{CA_STEM}.key": _pem_key(ca_key),
     }
     for member in plan.members:
-        key = ec.generate_private_key(ec.SECP256R1())
-        cert = (
-            x509.CertificateBuilder()
-            .subject_name(name(member.common_name))
-            .issuer_name(ca_name)
-            .public_key(key.public_key())
-            .serial_number(x509.random_serial_number())
-            .not_valid_before(start)
-            .not_valid_after(end)
-            .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
-            .add_extension(
-                x509.KeyUsage(True, False, False, False, False, False, False, False, False),
-                critical=True,
-            )
-            .add_extension(
-                x509.ExtendedKeyUsage(
-                    [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
-                ),
-                critical=False,
-            )
-            .add_extension(
-                x509.SubjectAlternativeName([x509.DNSName(f"{member.stem}.cfgplan.invalid")]),
-                critical=False,
-            )
-            .add_extension(
-                x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), False
-            )
-            .sign(ca_key, hashes.SHA256())
-        )
-        files[f"{member.stem}.pem"] = cert.public_bytes(serialization.Encoding.PEM)
-        files[f"{member.stem}.key"] = pem_key(key)
+        files.update(member_files(plan.society, member, ca_key, ca_name, days))
     files[MANIFEST] = plan.to_json().encode("utf-8")
     return files
 
@@ -320,13 +362,22 @@ def read_society(folder: Path) -> SocietyKeys:
                 str(m["stem"]),
                 str(m["common_name"]),
                 bool(m["coordinator"]),
+                _generation(m.get("generation", 1)),
             )
             for m in document["members"]
         )
         society = str(document["society"])
-    except (KeyError, TypeError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise RunError(f"{path}: not a society's keys ({exc} missing or wrong)") from None
     for m in members:
         if m.kind not in KINDS or "/" in m.stem or m.stem in ("", ".", ".."):
             raise RunError(f"{path}: member {m.name!r} is not well formed")
+        if m.common_name != common_name(society, m.name, m.kind, m.generation):
+            raise RunError(f"{path}: member {m.name!r} has the common name of another")
     return SocietyKeys(society, members)
+
+
+def _generation(value: object) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= 1_000_000:
+        raise ValueError(f"generation {value!r}")
+    return value

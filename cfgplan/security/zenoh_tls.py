@@ -26,7 +26,9 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
   ``deny``), the same rules in every member's configuration: each robot
   enforces them on what it receives (``ingress``) and sends (``egress``),
   per peer, the peer named by its certificate's common name
-  (``cert_common_names``, :func:`cfgplan.security.keys.common_name`).
+  (``cert_common_names``, :func:`cfgplan.security.keys.common_name`; only
+  the names ``society.json`` lists: a renewed member's old certificate is
+  nobody, :mod:`cfgplan.security.renew`).
   With ``P`` = ``cfgplan/<society>`` (:mod:`cfgplan.runtime.keys`), a robot R may
 
   - put on ``P/*/ch/R/**`` (the global channels it sends on: the keys that
@@ -35,9 +37,11 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
     (its reports and acknowledgements, 5.5); a coordinator also on
     ``P/*/configure`` (prepare, commit, abort, finish): no other robot can
     send a robot the steps of a switch;
-  - declare only its own liveliness token ``P/R/alive``;
+  - declare only its own liveliness tokens ``P/R/alive`` and
+    ``P/R/problem/**`` (the problem it runs, :mod:`cfgplan.security.identity`);
   - subscribe only to its own channels ``P/R/ch/**`` and ``P/R/configure``
-    (a coordinator also to ``P/coordinator/*``), and watch ``P/*/alive``;
+    (a coordinator also to ``P/coordinator/*``), and watch ``P/*/alive`` and
+    ``P/*/problem/**``;
   - be sent only those (egress): another robot's channels and switches, and
     the reports of the others, are not sent to it even when it asks.
 
@@ -152,7 +156,7 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
     rules: list[dict[str, Any]] = []
     subjects: list[dict[str, Any]] = []
     policies: list[dict[str, Any]] = []
-    alive = [f"{p}/*/alive"]
+    alive = [f"{p}/*/alive", f"{p}/*/problem/**"]  # tokens: who runs, and which problem
     for i, member in enumerate(keys.members):
         subject = f"s{i}"
         subjects.append({"id": subject, "cert_common_names": [member.common_name]})
@@ -173,7 +177,7 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
             mine = [
                 _rule(rules, "ingress", ["put"], puts),
                 _rule(rules, "ingress", ["declare_subscriber"], reads),
-                _rule(rules, "ingress", ["liveliness_token"], [f"{r}/alive"]),
+                _rule(rules, "ingress", ["liveliness_token"], [f"{r}/alive", f"{r}/problem/**"]),
                 _rule(rules, "ingress", [*WATCH, "reply"], alive),
                 _rule(rules, "egress", ["put"], reads),
                 _rule(rules, "egress", ["declare_subscriber"], [f"{p}/**"]),

@@ -17,7 +17,10 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
 from cfgplan.runtime import Registry, assemble, load_module
+from cfgplan.security.identity import problem_id
 from tests.backends.support import (
+    CARRY,
+    CROSS,
     EXAMPLE_IMPL,
     ROOT,
     carry_bar_33,
@@ -36,18 +39,21 @@ def _emit(parts: tuple[RobotPart, ...], title: str, where: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    ("case", "planned", "goal"),
+    ("case", "planned", "goal", "files"),
     [
-        ("cross-door-44", cross_door_44, "do-cross-door(Pippi, Door1)"),
-        ("carry-bar-33", carry_bar_33, "do-carry-bar(Pippi)"),
+        ("cross-door-44", cross_door_44, "do-cross-door(Pippi, Door1)", CROSS),
+        ("carry-bar-33", carry_bar_33, "do-carry-bar(Pippi)", CARRY),
     ],
 )
-def test_golden(case: str, planned: Planned, goal: str) -> None:
-    """One module per robot and run_all.py; each compiles and stays within 100 columns."""
+def test_golden(case: str, planned: Planned, goal: str, files: tuple[str, str]) -> None:
+    """One module per robot and run_all.py; each compiles and stays within 100 columns;
+    each robot announces the problem it was planned for (issue 34: PROBLEM, the
+    fingerprint of the domain, the state and the goal)."""
     problem, config = planned()
     parts = deploy(config, problem.domain)
     title = TITLE.format(cost=int(config.cost), goal=goal)
-    texts = {f"{module_name(p.robot)}.py": to_python(p, title) for p in parts}
+    identity = problem_id(problem, *files)
+    texts = {f"{module_name(p.robot)}.py": to_python(p, title, identity) for p in parts}
     texts["run_all.py"] = run_all(parts, title)
     assert list(texts) == ["pippi.py", "emil.py", "run_all.py"]
     for name, text in texts.items():

@@ -10,7 +10,13 @@ from types import SimpleNamespace
 import pytest
 
 from cfgplan.runtime import RunError
-from cfgplan.runtime.zenoh_transport import ZenohOptions, ZenohTransport, zenoh_config
+from cfgplan.runtime.zenoh_transport import (
+    DEFAULT_LEASE,
+    OPEN_TIMEOUT_MS,
+    ZenohOptions,
+    ZenohTransport,
+    zenoh_config,
+)
 from tests.runtime.netutil import endpoint, hermetic_config
 
 
@@ -22,8 +28,8 @@ def test_peer_mode_multicast_on_a_lan_and_a_lease_of_one_second() -> None:
     options = ZenohOptions()
     assert _get(options, "mode") == "peer"
     assert _get(options, "scouting/multicast/enabled") is None  # Zenoh's default: on
-    assert _get(options, "transport/link/tx/lease") == 1000
-    assert _get(options, "connect/retry")["period_max_ms"] == 1000  # type: ignore[index]
+    assert _get(options, "transport/link/tx/lease") == DEFAULT_LEASE * 1000
+    assert _get(options, "connect/retry")["period_max_ms"] == 500  # type: ignore[index]
 
 
 def test_endpoints_turn_multicast_scouting_off() -> None:
@@ -60,18 +66,21 @@ def test_a_config_file_is_the_base_and_options_go_on_top(tmp_path: Path) -> None
 
 
 def test_a_config_file_keeps_cfgplans_lease_and_retry_unless_it_sets_them(tmp_path: Path) -> None:
-    """Issue 33: a file that set only an endpoint dropped the 1 s lease (a
-    frozen robot was reported lost after 10 s, Zenoh's default)."""
+    """Issue 33: a file that set only an endpoint dropped cfgplan's lease (a
+    frozen robot was reported lost after 10 s, Zenoh's default) and its retry."""
     path = tmp_path / "zenoh.json5"
     path.write_text('{ listen: { endpoints: ["tcp/127.0.0.1:7447"] } }')
     options = ZenohOptions(config_file=str(path))
     assert _get(options, "listen/endpoints") == ["tcp/127.0.0.1:7447"]  # the file's
-    assert _get(options, "transport/link/tx/lease") == 1000  # cfgplan's
-    assert _get(options, "connect/retry")["period_max_ms"] == 1000  # type: ignore[index]
+    assert _get(options, "transport/link/tx/lease") == DEFAULT_LEASE * 1000  # cfgplan's
+    assert _get(options, "transport/unicast/open_timeout") == OPEN_TIMEOUT_MS
+    assert _get(options, "connect/retry")["period_max_ms"] == 500  # type: ignore[index]
     assert _get(options, "mode") == "peer"
     path.write_text("{ connect: { retry: { period_init_ms: 500, period_max_ms: 4000 } } }")
     assert _get(options, "connect/retry")["period_max_ms"] == 4000  # type: ignore[index]
-    assert _get(options, "transport/link/tx/lease") == 1000
+    assert _get(options, "transport/link/tx/lease") == DEFAULT_LEASE * 1000
+    path.write_text("{ transport: { unicast: { open_timeout: 5000 } } }")
+    assert _get(options, "transport/unicast/open_timeout") == 5000  # the file's
 
 
 def test_what_is_refused_is_said_clearly(tmp_path: Path) -> None:

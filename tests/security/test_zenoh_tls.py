@@ -95,7 +95,10 @@ def test_access_control_of_least_privilege(keys: Path) -> None:
         "cfgplan/lab/*/ch/Pippi/**",
         "cfgplan/lab/coordinator/Pippi",
     }
-    assert allowed("lab/Pippi", "ingress", "liveliness_token") == {"cfgplan/lab/Pippi/alive"}
+    assert allowed("lab/Pippi", "ingress", "liveliness_token") == {
+        "cfgplan/lab/Pippi/alive",
+        "cfgplan/lab/Pippi/problem/**",  # the problem she runs (cfgplan.security.identity)
+    }
     assert allowed("lab/Pippi", "ingress", "declare_subscriber") == {
         "cfgplan/lab/Pippi/ch/**",
         "cfgplan/lab/Pippi/configure",

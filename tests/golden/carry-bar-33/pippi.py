@@ -25,8 +25,12 @@ every robot of the configuration in one process.
 from __future__ import annotations
 
 from cfgplan.runtime import Cycle, Robot, robot_main
+from cfgplan.security.identity import ProblemId
 
 ROBOT = "Pippi"
+PROBLEM = ProblemId(
+    "eeaa3426adda4de3", "domain.lisp with state-6.3.2.lisp, goal do-carry-bar(Pippi)"
+)
 
 
 def configure(robot: Robot) -> Cycle:
@@ -45,4 +49,4 @@ def configure(robot: Robot) -> Cycle:
 
 
 if __name__ == "__main__":
-    raise SystemExit(robot_main(ROBOT, configure))
+    raise SystemExit(robot_main(ROBOT, configure, problem=PROBLEM))

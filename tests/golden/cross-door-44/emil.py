@@ -39,8 +39,12 @@ every robot of the configuration in one process.
 from __future__ import annotations
 
 from cfgplan.runtime import Cycle, Robot, robot_main
+from cfgplan.security.identity import ProblemId
 
 ROBOT = "Emil"
+PROBLEM = ProblemId(
+    "6f90748058e57910", "domain.lisp with state-6.2.2-step1.lisp, goal do-cross-door(Pippi, Door1)"
+)
 
 
 def configure(robot: Robot) -> Cycle:
@@ -89,4 +93,4 @@ def configure(robot: Robot) -> Cycle:
 
 
 if __name__ == "__main__":
-    raise SystemExit(robot_main(ROBOT, configure))
+    raise SystemExit(robot_main(ROBOT, configure, problem=PROBLEM))

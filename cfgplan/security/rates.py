@@ -1,0 +1,143 @@
+"""Bounding the rate of what a robot receives: a token bucket per sender and channel (issue 34).
+
+A robot's global channels hold one item (5.2.2): what it computes depends on
+the newest value each channel brought since its last cycle. A robot that
+floods a channel — a bug, or a robot of the society that was compromised —
+would otherwise wake the receiver's loop at every message (a message wakes
+it so that switches go through at once), make it read, trace and hand over
+each one, and so starve it. So every message on a channel key (which names
+the channel *and* its sender, :mod:`cfgplan.runtime.keys`) first passes a
+token bucket of that key, on the Zenoh thread that delivers it, before
+anything is read, stored or woken (:class:`Buckets`):
+
+* the bucket refills at ``allowance`` times the rate the sender's period
+  implies (a functionality of period 0.1 s sends 10 values a second; with
+  the default allowance of 2, 20 a second are taken), at most ``ceiling``
+  per second whatever period a message claims or when it claims none (a
+  robot run with ``--rate 0``); until a first message was read (the period
+  is the one its envelope states, :mod:`cfgplan.runtime.values`, at most
+  60 s), ``ceiling`` holds;
+* it holds ``burst`` messages, so that the jitter of the network, which
+  bunches a sender's values, costs none of them;
+* a message that finds the bucket empty is dropped, unread, and counted;
+  the receiver records the count per channel once per ``report_every``
+  seconds (an ``error`` event naming the channel and its sender), never
+  once per message.
+
+Values that pass are handled exactly as before, so a flood changes what the
+receiver computes by the values dropped and no more. Settable through
+:class:`RateLimits` (``ZenohOptions.rates``); pure Python, no clock of its own
+(the caller passes the time), so it is tested without a network.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from cfgplan.runtime.errors import RunError
+
+__all__ = ["Bucket", "Buckets", "RateLimits"]
+
+
+@dataclass(frozen=True)
+class RateLimits:
+    """How many messages a robot takes per channel and sender (module docstring)."""
+
+    allowance: float = 2.0
+    """Messages taken per period of the sender (its period as its messages state it)."""
+    burst: float = 8.0
+    """Messages a bucket holds: that many may come at once."""
+    ceiling: float = 200.0
+    """The most messages per second taken on one channel, whatever period is stated."""
+    report_every: float = 1.0
+    """Seconds between two records of the messages dropped on one channel."""
+    enabled: bool = True
+    """False: every message is taken (measurements only)."""
+
+    def __post_init__(self) -> None:
+        for name in ("allowance", "burst", "ceiling", "report_every"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise RunError(f"rate limit {name} is {value!r}: a positive finite number")
+        if self.burst < 1:
+            raise RunError(f"rate limit burst is {self.burst!r}: at least one message")
+
+    def rate(self, period: float | None) -> float:
+        """Messages per second taken from a sender of ``period`` seconds (``None``: unknown)."""
+        if period is None or not period > 0:
+            return self.ceiling
+        return min(self.ceiling, self.allowance / period)
+
+
+@dataclass
+class Bucket:
+    """One channel's bucket: ``tokens`` left at time ``last``, refilled at ``rate``."""
+
+    rate: float
+    tokens: float
+    last: float
+    dropped: int = 0
+    """Dropped since the last report."""
+    total: int = 0
+    """Dropped in all."""
+
+
+@dataclass
+class Buckets:
+    """The buckets of a robot's channels, by channel key (not thread-safe:
+    the transport holds its lock around every call)."""
+
+    limits: RateLimits = field(default_factory=RateLimits)
+    _buckets: dict[str, Bucket] = field(default_factory=dict)
+    _reported: float | None = None
+
+    def open(self, key: str, now: float) -> None:
+        """A channel on ``key`` is attached: a full bucket at the ceiling's rate."""
+        limits = self.limits
+        self._buckets.setdefault(key, Bucket(limits.rate(None), limits.burst, now))
+
+    def close(self, key: str) -> None:
+        """The channel is detached (its drops not yet reported are forgotten)."""
+        self._buckets.pop(key, None)
+
+    def pace(self, key: str, period: float | None) -> None:
+        """The sender on ``key`` states ``period``: its bucket refills at that pace."""
+        bucket = self._buckets.get(key)
+        if bucket is not None:
+            bucket.rate = self.limits.rate(period)
+
+    def admit(self, key: str, now: float) -> bool:
+        """Whether a message on ``key`` is taken (a token spent) or dropped (counted).
+        A key with no bucket (no channel attached) is not taken."""
+        bucket = self._buckets.get(key)
+        if bucket is None:
+            return False
+        if not self.limits.enabled:
+            return True
+        elapsed = max(0.0, now - bucket.last)
+        bucket.tokens = min(self.limits.burst, bucket.tokens + elapsed * bucket.rate)
+        bucket.last = now
+        if bucket.tokens >= 1.0:
+            bucket.tokens -= 1.0
+            return True
+        bucket.dropped += 1
+        bucket.total += 1
+        return False
+
+    def due(self, now: float) -> list[tuple[str, int, float]]:
+        """Once per ``report_every`` seconds: per key, the messages dropped since
+        the last report and the rate taken (keys that dropped none are left out)."""
+        if self._reported is not None and now - self._reported < self.limits.report_every:
+            return []
+        out = [(k, b.dropped, b.rate) for k, b in self._buckets.items() if b.dropped]
+        if out:
+            self._reported = now
+            for bucket in self._buckets.values():
+                bucket.dropped = 0
+        return out
+
+    @property
+    def dropped(self) -> int:
+        """Messages dropped in all, on the channels attached now."""
+        return sum(b.total for b in self._buckets.values())

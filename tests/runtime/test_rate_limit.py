@@ -1,0 +1,148 @@
+"""A robot flooding its channels neither starves the receiver nor gets more than
+its allowance through (issue 34; :mod:`cfgplan.security.rates`).
+
+The buckets are tested on a clock of the test's own; the flood is a peer
+holding Pippi's valid certificate, against a society started with --keys
+(hermetic: loopback, free ports, scouting off, bounded waits, processes
+stopped by pid)."""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from pathlib import Path
+
+import pytest
+
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.zenoh_transport import ZenohOptions, zenoh_config
+from cfgplan.security.keys import make_society, plan_society, write_society
+from cfgplan.security.rates import Buckets, RateLimits
+from tests.backends.support import DOMAINS, EXAMPLE_IMPL
+from tests.runtime.netutil import (
+    endpoint,
+    first,
+    free_port,
+    hermetic_config,
+    processes,
+    read_trace,
+    wait_for,
+)
+
+
+def test_a_bucket_takes_its_allowance_per_period_and_a_burst() -> None:
+    """A sender of period 0.1 s with allowance 2 gets 20 messages a second
+    through, after a burst of 4; the rest are dropped and counted; a period
+    claimed tiny is held to the ceiling; a key never attached takes nothing."""
+    buckets = Buckets(RateLimits(allowance=2.0, burst=4.0, ceiling=50.0, report_every=1.0))
+    buckets.open("k", 0.0)
+    buckets.pace("k", 0.1)
+    taken = sum(buckets.admit("k", i / 1000) for i in range(10_000))  # 1000 per s for 10 s
+    assert 4 + 20 * 10 - 2 <= taken <= 4 + 20 * 10 + 1
+    assert buckets.dropped == 10_000 - taken
+    buckets.pace("k", 1e-6)
+    assert buckets.limits.rate(1e-6) == 50.0 and buckets.limits.rate(None) == 50.0
+    assert not buckets.admit("other", 11.0)
+
+
+def test_drops_are_reported_once_per_interval() -> None:
+    """Whatever the flood, one report per key per interval, with the count."""
+    buckets = Buckets(RateLimits(allowance=1.0, burst=1.0, ceiling=10.0, report_every=1.0))
+    buckets.open("k", 0.0)
+    buckets.pace("k", 1.0)
+    reports = []
+    for i in range(3000):  # 3 s at 1000 messages a second
+        now = i / 1000
+        buckets.admit("k", now)
+        reports += buckets.due(now)
+    assert 3 <= len(reports) <= 4
+    assert sum(count for _, count, _ in reports) <= buckets.dropped
+    assert all(key == "k" and rate == 1.0 for key, _, rate in reports)
+
+
+def test_rate_limits_are_checked() -> None:
+    """A limit that is not a positive finite number is refused with a message."""
+    for bad in ({"allowance": 0}, {"ceiling": float("inf")}, {"burst": 0.5}):
+        with pytest.raises(RunError):
+            RateLimits(**bad)
+    assert ZenohOptions().rates == RateLimits()
+
+
+zenoh = pytest.importorskip("zenoh")
+SOCIETY = "flood-test"
+P = f"cfgplan/{SOCIETY}"
+STEP2 = [
+    str(DOMAINS / "cross-door/domain.lisp"),
+    str(DOMAINS / "cross-door/state-6.2.2-step2.lisp"),
+]
+LIMIT = 90.0
+FLOOD = 6.0  # seconds
+CHANNEL = "F7->F3 (pos Emil Door1)"
+
+
+@pytest.mark.slow
+def test_a_flood_on_a_channel_is_cut_to_its_allowance_and_recorded(tmp_path: Path) -> None:
+    """Emil (coordinator) and Pippi run with --keys at 20 Hz; a peer holding
+    Pippi's certificate floods the channel of the door's position into Emil
+    (thousands of messages a second, valid envelopes with Pippi's period)
+    and a channel Emil has not attached. Throughout the flood Emil crosses
+    the door at his pace; he takes at most allowance / period messages a
+    second on the channel (plus the bucket), records the drops once per
+    second at most, and the others never reach him."""
+    keys = tmp_path / "keys"
+    plan = plan_society(SOCIETY, ["Emil", "Pippi"], (), ["Emil"])
+    write_society(keys, make_society(plan), force=False)
+    port = free_port()
+    common = ["--zenoh-config", str(hermetic_config(tmp_path)), "--lease", "1"]
+    common += ["--keys", str(keys), "--rate", "20", "--impl", str(EXAMPLE_IMPL)]
+    trace = tmp_path / "emil.jsonl"
+    with processes() as running:
+        run = ["-m", "cfgplan", "run", *STEP2, *common, "--robot"]
+        emil = running.start(
+            [*run, "Emil", "--listen", endpoint(port), "--trace", str(trace), "--duration", "25"],
+            tmp_path / "emil.log",
+        )
+        running.start(
+            [*run, "Pippi", "--connect", endpoint(port), "--duration", "30"],
+            tmp_path / "pippi.log",
+        )
+        crossing = first(trace, lambda r: r["event"] == "call" and r["status"] == "ran")
+        wait_for("Emil runs with Pippi's data", crossing, LIMIT)
+        options = ZenohOptions(
+            SOCIETY,
+            (),
+            (f"tls/127.0.0.1:{port}",),
+            str(hermetic_config(tmp_path)),
+            keys=str(keys),
+        )
+        with zenoh.open(zenoh_config(options, "Pippi")) as flooder:
+            target = flooder.declare_publisher(f"{P}/Emil/ch/Pippi/F7/F3/pos/Emil/Door1")
+            stranger = flooder.declare_publisher(f"{P}/Emil/ch/Pippi/F99/F3/pos/Emil/Door1")
+            time.sleep(1.0)  # the declarations reach Emil
+            began, sent, seq = time.time(), 0, 10**9
+            while time.time() - began < FLOOD:
+                for _ in range(100):
+                    seq += 1
+                    head = {"from": "Pippi", "seq": seq, "t": time.time(), "period": 0.05}
+                    target.put(json.dumps({**head, "value": [66.6, 6.66]}))
+                    stranger.put(json.dumps({**head, "value": "x"}))
+                    sent += 1
+            ended = time.time()
+        assert sent / FLOOD > 1000, f"only {sent / FLOOD:.0f} messages a second"
+        assert emil.wait(LIMIT) == 0
+    events = read_trace(trace)
+    during = [r for r in events if began <= float(r["t"]) <= ended]  # type: ignore[arg-type]
+    ran = [r for r in during if r["event"] == "call" and r["functionality"] == "cross-door"]
+    ran = [r for r in ran if r["status"] == "ran"]
+    assert len(ran) >= 0.5 * 20 * FLOOD, f"Emil starved: {len(ran)} crossings in {FLOOD} s"
+    taken = [r for r in during if r["event"] == "receive" and r["channel"] == CHANNEL]
+    assert len(taken) <= (2 / 0.05) * (ended - began) + 8 + 2  # allowance / period, and the bucket
+    assert any(r["value"] == [66.6, 6.66] for r in taken)  # the flood's values are taken, bounded
+    assert not [r for r in events if r["event"] == "receive" and "F99" in str(r["channel"])]
+    said = [r for r in events if r["event"] == "error" and "rate limit" in str(r["message"])]
+    assert said and all(r["channel"] == CHANNEL for r in said)
+    assert len(said) <= FLOOD / 1.0 + 3  # once per interval, not per message
+    counts = [re.search(r"(\d+) message", str(r["message"])) for r in said]
+    dropped = sum(int(m.group(1)) for m in counts if m is not None)
+    assert dropped > sent / 4, f"{dropped} recorded dropped of {sent} sent"
