@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 
@@ -26,9 +26,10 @@ from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.notation import call_text
 from cfgplan.option_values import choice, number, whole
 from cfgplan.planner import plan
-from cfgplan.planner.explain import explain
-from cfgplan.planner.report import Report
 from cfgplan.problem import GOAL_SOURCE, Problem, load
+
+if TYPE_CHECKING:
+    from cfgplan.planner.report import Report
 
 __all__ = [
     "DomainArg",
@@ -213,6 +214,8 @@ def no_rank(what: str, found: int, rank: int, kind: str = "configuration") -> No
 
 def nothing(report_: Report, goal: str) -> NoReturn:
     """No admissible configuration: why, on stderr; exit 3."""
+    from cfgplan.planner.explain import explain  # only when nothing is found (issue 32)
+
     say("\n".join(explain(report_, goal)))
     raise typer.Exit(EXIT_NONE)
 

@@ -8,15 +8,13 @@ robustness report (:mod:`cfgplan.cli.fallbacks`).
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated, NamedTuple, NoReturn
 
 import typer
 
 from cfgplan.cli import formats
 from cfgplan.cli.app import EXIT_NONE, app, say, usage_error, write_output
-from cfgplan.cli.fallbacks import fallback_lisp, fallback_table
 from cfgplan.cli.options import (
     DomainArg,
     ForceOpt,
@@ -31,17 +29,19 @@ from cfgplan.cli.options import (
     no_rank,
     number_of,
 )
-from cfgplan.cli.sequence import SequenceOptions, plan_sequences
 from cfgplan.configuration.describe import to_json
 from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
 from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
-from cfgplan.planner.explain import explain, explanation
 from cfgplan.problem import Problem
 
 if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (issue 32: start-up)
     from cfgplan.reconfigure.fallbacks import Fallback
+
+# Loaded only when needed (issue 32: start-up): cfgplan.cli.sequence for several
+# goals, cfgplan.cli.fallbacks for --fallbacks, cfgplan.planner.explain when
+# nothing is found.
 
 FORMATS = ("table", "lisp", "json", "jsonl")
 K = 10
@@ -86,6 +86,8 @@ def _nothing(
 ) -> NoReturn:
     """No admissible configuration: why, on stderr; with JSON, also as data on
     stdout (scripts never get an empty answer); exit 3."""
+    from cfgplan.planner.explain import explain, explanation
+
     say("\n".join(explain(search.report, call_text(problem.goal_call))))
     explained = explanation(search.report)
     if format_ == "json":
@@ -98,9 +100,9 @@ def _nothing(
     raise typer.Exit(EXIT_NONE)
 
 
-@dataclass(frozen=True)
-class _Asked:
-    """What to print, once the configurations are found."""
+class _Asked(NamedTuple):
+    """What to print, once the configurations are found (a named tuple: a
+    frozen dataclass takes about four times as long to define, issue 32)."""
 
     format: str
     details: bool
@@ -129,6 +131,8 @@ def _print(
     """The configurations (and fallbacks) in the format asked for: on stdout,
     the same bytes as in the ``-o`` file (what was streamed is not repeated)."""
     first = asked.first
+    if backups is not None:
+        from cfgplan.cli.fallbacks import fallback_lisp, fallback_table
     if asked.format == "jsonl":
         summary = formats.summary(problem, configs, search, more)
         if asked.stream:
@@ -259,6 +263,8 @@ def plan(
         problem = load_problem(domain, state, goal, weights, sequence=True)
         limit = rank if rank is not None else (None if all_ else (k or K))
         if len(problem.goals) > 1:
+            from cfgplan.cli.sequence import SequenceOptions, plan_sequences
+
             options = SequenceOptions(limit, switch, time_limit, verbose, details, rank)
             write_output(plan_sequences(problem, options, format_), output, force)
             return

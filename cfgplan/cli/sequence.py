@@ -25,7 +25,6 @@ from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_dict, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import call_text
-from cfgplan.planner.explain import explain
 from cfgplan.problem import Problem
 
 if TYPE_CHECKING:  # loaded by the two functions that search (issue 32: start-up)
@@ -46,14 +45,19 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     """Plan, report on stderr, and return the text to print (exit 3 when none)."""
     from cfgplan.planner.sequence import SequenceSearch
 
-    search = SequenceSearch(problem.goal_calls, problem.task, options.switch, options.time_limit)
-    # -k N plans one sequence more than it lists, to say whether more exist (as for one goal)
+    # -k N looks for one sequence more than it lists, with bounded work, to say
+    # whether more exist (as for one goal: cfgplan.planner.prefix)
     ahead = options.limit is not None and options.rank is None
-    wanted = None if options.limit is None else options.limit + ahead
-    found = list(islice(search, wanted) if wanted is not None else search)
-    more = ahead and len(found) > (options.limit or 0)
-    if more:
-        found = found[: options.limit]
+    search = SequenceSearch(
+        problem.goal_calls,
+        problem.task,
+        options.switch,
+        options.time_limit,
+        limit=options.limit,
+        ahead=ahead,
+    )
+    found = list(search)
+    more = search.more if ahead else False
     if search.stopped is not None:
         say(f"cfgplan: search stopped ({search.stopped.value}); reporting {len(found)} found")
     if not found:
@@ -75,7 +79,7 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     if format_ == "lisp":
         return _lisp(problem, found, first)
     return _table(problem, found, options.details, first) + (
-        more_note(len(found), "sequence") if more else ""
+        more_note(len(found), "sequence", more) if more or more is None else ""
     )
 
 
@@ -101,6 +105,8 @@ def first_step(problem: Problem, rank: int) -> Configuration:
 
 def _impossible(problem: Problem, search: SequenceSearch) -> None:
     """Say which step has no admissible configuration, and why."""
+    from cfgplan.planner.explain import explain  # only when nothing is found (issue 32)
+
     blocked = search.blocked()
     if blocked is None:
         say("no admissible sequence found")
@@ -132,7 +138,11 @@ def _sequence(planned: PlannedSequence, rank: int, problem: Problem) -> dict[str
 
 
 def _document(
-    problem: Problem, found: list[PlannedSequence], search: SequenceSearch, first: int, more: bool
+    problem: Problem,
+    found: list[PlannedSequence],
+    search: SequenceSearch,
+    first: int,
+    more: bool | None,
 ) -> dict[str, Any]:
     return {
         "goals": [call_text(g) for g in problem.goal_calls],

@@ -31,6 +31,7 @@ from cfgplan.planner.ground import Grounder
 from cfgplan.planner.grow import Grower, Heuristic, Splitter, Stats
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
+from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
@@ -130,14 +131,12 @@ class Run:
     (:mod:`cfgplan.planner.combine`; the ``limit`` cheapest only)."""
     ahead: bool = False
     """Once ``limit`` configurations are listed, look for one more (not
-    listed) to say whether more exist (:attr:`more`), with at most as much
-    work again as the first ``limit`` took (and at least :attr:`ahead_least`
-    steps): ``-k 1`` never runs to the end of a search to prove there is no
-    second configuration."""
+    listed) to say whether more exist (:attr:`more`), with bounded work
+    (:mod:`cfgplan.planner.prefix`): ``-k 1`` never runs to the end of a
+    search to prove there is no second configuration."""
     ahead_least: int = 10_000
     more: bool | None = field(init=False, default=False)
-    """With :attr:`ahead`: True, one more exists; False, none (the search
-    ended); None, not known (the look-ahead's work ran out)."""
+    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
     strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
@@ -148,6 +147,11 @@ class Run:
             self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
         else:
             self.strategy = BestFirst(grower, self.goal, self.progress)
+
+    def _search(self) -> Iterator[Configuration]:
+        """The configurations, cheapest first: the goal's parts apart, if it has some."""
+        self._divide()
+        yield from self.strategy
 
     def _divide(self) -> None:
         """Search the goal's independent parts apart, if it has some (found
@@ -185,25 +189,16 @@ class Run:
     def __iter__(self) -> Iterator[Configuration]:
         started = time.perf_counter() if self.started is None else self.started
         deadline = None if self.time_limit is None else started + self.time_limit
+        prefix: Prefix[Configuration] = Prefix(self.limit, self.ahead, self.ahead_least)
         listed = 0
         try:
-            with clock.limit(deadline), clock.counting() as work:
-                self._divide()
-                for config in self.strategy:
-                    if self.limit is not None and listed >= self.limit:  # the look-ahead's
-                        self.more = True
-                        self.stats.complete = False
-                        break
+            with clock.limit(deadline):
+                for config in prefix.take(self._search()):
                     listed += 1
                     yield config
-                    if self.limit is not None and listed >= self.limit:
-                        if not self.ahead:
-                            self.stats.complete = False
-                            break
-                        work.most = work.done + max(self.ahead_least, work.done)
-        except clock.OutOfWork:
-            self.more = None
-            self.stats.complete = False
+            self.more = prefix.more
+            if prefix.cut:
+                self.stats.complete = False
         except KeyboardInterrupt:
             self.stats.complete = False
             self.strategy.stopped = StopReason.INTERRUPTED

@@ -43,6 +43,7 @@ from cfgplan.planner import clock
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.levels import Levels
 from cfgplan.planner.plan import Run, partitioned, parts
+from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
 from cfgplan.planner.task import Ground, Task, with_facts
@@ -140,6 +141,14 @@ class SequenceSearch:
     """The task of the first step's state; later steps' are made from it."""
     switch: float = 0.0
     time_limit: float | None = None
+    limit: int | None = None
+    """List at most this many sequences (None: every one)."""
+    ahead: bool = False
+    """Once :attr:`limit` are listed, look for one more with bounded work
+    (:mod:`cfgplan.planner.prefix`), to say whether more exist (:attr:`more`)."""
+    ahead_least: int = 10_000
+    more: bool | None = field(init=False, default=False)
+    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
     stopped: StopReason | None = None
     complete: bool = True
     _ranked: dict[tuple[int, Facts], Ranked] = field(default_factory=dict)
@@ -176,9 +185,13 @@ class SequenceSearch:
 
     def __iter__(self) -> Iterator[PlannedSequence]:
         deadline = None if self.time_limit is None else time.perf_counter() + self.time_limit
+        prefix: Prefix[PlannedSequence] = Prefix(self.limit, self.ahead, self.ahead_least)
         try:
             with clock.limit(deadline):
-                yield from self._search()
+                yield from prefix.take(self._search())
+            self.more = prefix.more
+            if prefix.cut:
+                self.complete = False
         except clock.OutOfTime:
             self.stopped, self.complete = StopReason.TIME_LIMIT, False
         except KeyboardInterrupt:

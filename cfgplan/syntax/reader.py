@@ -1,5 +1,6 @@
-"""Reading source text: Lark (LALR, positions on) plus a Transformer that maps
-each grammar rule straight to an :class:`Sx` node or an IR object.
+"""Reading source text: Lark (LALR) plus a Transformer that maps each grammar
+rule straight to an :class:`Sx` node or an IR object, its span from the
+positions of its first and last tokens.
 
 Entry points: :func:`read_domain` and :func:`read_state` (files or text).
 Errors are :class:`~cfgplan.diagnostics.CfgplanError` with a span; syntax
@@ -16,9 +17,9 @@ import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
-from importlib import resources
+from importlib.util import find_spec
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 import lark
 from lark import Lark, Token, v_args
@@ -30,7 +31,6 @@ from cfgplan.files import read_source
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
 from cfgplan.syntax.sx import Sx
-from cfgplan.syntax.unexpected import syntax_error
 
 T = TypeVar("T")
 
@@ -38,15 +38,29 @@ MAX_NESTING = 64
 """Lists may nest this deep; deeper input is refused (no recursion anywhere)."""
 
 
+GRAMMAR = ("cfgplan.grammar", "cfgplan.lark")
+"""Where the grammar is: a file of the package data ``cfgplan.grammar``."""
+
+
 @cache
 def grammar_text() -> str:
-    """The grammar, read from the installed package data ``cfgplan.grammar``."""
-    return resources.files("cfgplan.grammar").joinpath("cfgplan.lark").read_text("utf-8")
+    """The grammar, read from the installed package data :data:`GRAMMAR`: from
+    the folder the import system finds for it, or through
+    :mod:`importlib.resources` when it is no folder (a zipped package), which
+    costs ``cfgplan plan`` 3 ms more to load (issue 32)."""
+    package, name = GRAMMAR
+    spec = find_spec(package)
+    for folder in (spec and spec.submodule_search_locations) or ():
+        with contextlib.suppress(OSError):
+            return Path(folder, name).read_text("utf-8")
+    from importlib import resources
+
+    return resources.files(package).joinpath(name).read_text("utf-8")
 
 
-@dataclass(frozen=True)
-class GoalSequence:
-    """``(sequence G1 G2 ...)`` as read; it becomes :attr:`State.sequence`."""
+class GoalSequence(NamedTuple):
+    """``(sequence G1 G2 ...)`` as read; it becomes :attr:`State.sequence` (a
+    named tuple: a frozen dataclass takes four times as long to define)."""
 
     goals: tuple[Goal, ...]
     span: Span
@@ -184,13 +198,25 @@ class _ToIR(Transformer[Token, Any]):
 _lock = threading.Lock()
 
 
+OPTIONS: dict[str, Any] = {
+    "parser": "lalr",
+    "propagate_positions": False,
+    "maybe_placeholders": True,
+}
+"""Lark's options. Positions are not propagated: tokens carry theirs whatever
+the option says, and the transformer takes its spans from them (``True`` had
+Lark work out, for each rule reduced, a ``meta`` nothing reads: a tenth of a
+domain's parse)."""
+
+
 def cache_file() -> Path | None:
     """Where the analysed grammar is kept between runs (Lark's ``cache=``), or
     None when there is no folder to keep it in: ``cfgplan/`` in the user's
     cache folder (``$XDG_CACHE_HOME``, else ``~/.cache``). Lark reads it only
     when the hash it wrote inside matches the grammar, the options, Lark's and
-    Python's versions; the name differs with the grammar and the versions too,
-    so that two cfgplans sharing the folder do not overwrite each other's.
+    Python's versions; the name differs with the grammar, the options and the
+    versions too, so that two cfgplans sharing the folder do not overwrite
+    each other's.
     Building the LALR tables cost ``cfgplan plan`` about 30 ms of its 390;
     loading them takes 3 to 5. The file is Lark's pickle: it is kept where only
     its user writes (not Lark's default, the shared temporary folder, where
@@ -198,13 +224,13 @@ def cache_file() -> Path | None:
     home = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     if not os.path.isabs(home):  # as the XDG specification says: ignored
         return None
-    key = f"{grammar_text()}{lark.__version__}{sys.version_info[:2]}".encode()
+    key = f"{grammar_text()}{OPTIONS}{lark.__version__}{sys.version_info[:2]}".encode()
     return Path(home, "cfgplan", f"parser-{hashlib.sha256(key).hexdigest()[:16]}.lark")
 
 
 def build_parser(cache: Path | None) -> tuple[Lark, _ToIR]:
     """A parser, its transformer inside (LALR only: faster than transforming
-    a tree afterwards, and no tree is held), with positions on. With ``cache``,
+    a tree afterwards, and no tree is held), with :data:`OPTIONS`. With ``cache``,
     its tables are read from that file, or built and written there; a file
     that cannot be read (truncated, another Lark's) or written is ignored."""
     transformer = _ToIR()
@@ -213,14 +239,7 @@ def build_parser(cache: Path | None) -> tuple[Lark, _ToIR]:
         with contextlib.suppress(OSError):
             cache.parent.mkdir(parents=True, exist_ok=True)
             where = str(cache)
-    parser = Lark(
-        grammar_text(),
-        parser="lalr",
-        propagate_positions=True,
-        maybe_placeholders=True,
-        transformer=transformer,
-        cache=where,
-    )
+    parser = Lark(grammar_text(), **OPTIONS, transformer=transformer, cache=where)
     return parser, transformer
 
 
@@ -279,6 +298,8 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
             items = parser.parse(text).children
             failed = transformer.failed
     except UnexpectedInput as exc:
+        from cfgplan.syntax.unexpected import syntax_error  # for a wrong file only (issue 32)
+
         raise syntax_error(exc, filename, text) from None
     except RecursionError:  # pragma: no cover - the grammar and transformer are iterative
         raise error("input too deeply nested") from None

@@ -56,3 +56,25 @@ def test_the_note_says_may_when_it_is_not_known() -> None:
         "note: more configurations may exist (the search for one more stopped early): "
         "-k 11 searches for up to 11, --all for them all\n"
     )
+
+
+def test_sequences_look_ahead_by_the_same_rule() -> None:
+    """``cfgplan plan -k N`` of a sequence planned N + 1 sequences to fill
+    ``more`` (issue 35); now it looks for one more as one goal does
+    (:mod:`cfgplan.planner.prefix`). 6.2.2 as a sequence (Pippi, then Emil,
+    crosses): more exist; the one listed is the first of a search without a
+    limit; a sequence of one goal with one configuration has no second."""
+    from pathlib import Path
+
+    from cfgplan.planner.sequence import SequenceSearch
+    from cfgplan.problem import load
+
+    root = Path(__file__).resolve().parents[2] / "domains" / "cross-door"
+    problem = load(root / "domain-steps.lisp", root / "state-6.2.2-sequence.lisp")
+    unlimited = next(iter(SequenceSearch(problem.goal_calls, problem.task)))
+    search = SequenceSearch(problem.goal_calls, problem.task, limit=1, ahead=True)
+    assert list(search) == [unlimited] and search.more is True
+    assert search.complete is False  # it was left before its end
+    alone = load_text(REUSED_SENSOR, "(state robot(R1))\n(sequence (do-task R1))\n")
+    one = SequenceSearch(alone.goal_calls, alone.task, limit=1, ahead=True)
+    assert len(list(one)) == 1 and one.more is False
