@@ -1,6 +1,6 @@
-"""Reading source text: Lark (LALR) plus a Transformer that maps each grammar
-rule straight to an :class:`Sx` node or an IR object, its span from the
-positions of its first and last tokens.
+"""Reading source text: Lark (LALR, positions on) plus a Transformer that maps
+each grammar rule straight to an :class:`Sx` node or an IR object, its span
+from the positions of its first and last tokens.
 
 Entry points: :func:`read_domain` and :func:`read_state` (files or text).
 Errors are :class:`~cfgplan.diagnostics.CfgplanError` with a span; syntax
@@ -17,7 +17,7 @@ import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
-from importlib.util import find_spec
+from importlib import resources
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
 
@@ -38,24 +38,10 @@ MAX_NESTING = 64
 """Lists may nest this deep; deeper input is refused (no recursion anywhere)."""
 
 
-GRAMMAR = ("cfgplan.grammar", "cfgplan.lark")
-"""Where the grammar is: a file of the package data ``cfgplan.grammar``."""
-
-
 @cache
 def grammar_text() -> str:
-    """The grammar, read from the installed package data :data:`GRAMMAR`: from
-    the folder the import system finds for it, or through
-    :mod:`importlib.resources` when it is no folder (a zipped package), which
-    costs ``cfgplan plan`` 3 ms more to load (issue 32)."""
-    package, name = GRAMMAR
-    spec = find_spec(package)
-    for folder in (spec and spec.submodule_search_locations) or ():
-        with contextlib.suppress(OSError):
-            return Path(folder, name).read_text("utf-8")
-    from importlib import resources
-
-    return resources.files(package).joinpath(name).read_text("utf-8")
+    """The grammar, read from the installed package data ``cfgplan.grammar``."""
+    return resources.files("cfgplan.grammar").joinpath("cfgplan.lark").read_text("utf-8")
 
 
 class GoalSequence(NamedTuple):
@@ -200,13 +186,10 @@ _lock = threading.Lock()
 
 OPTIONS: dict[str, Any] = {
     "parser": "lalr",
-    "propagate_positions": False,
+    "propagate_positions": True,
     "maybe_placeholders": True,
 }
-"""Lark's options. Positions are not propagated: tokens carry theirs whatever
-the option says, and the transformer takes its spans from them (``True`` had
-Lark work out, for each rule reduced, a ``meta`` nothing reads: a tenth of a
-domain's parse)."""
+"""Lark's options: LALR, positions on (every rule reduced knows where it was)."""
 
 
 def cache_file() -> Path | None:
