@@ -154,7 +154,18 @@ def _run() -> int | str | None:
     return status
 
 
-COMMANDS = ("check", "emit", "keys", "plan", "record", "render", "run", "simulate")
+COMMANDS = (
+    "check",
+    "emit",
+    "keys",
+    "launch",
+    "plan",
+    "record",
+    "render",
+    "report",
+    "run",
+    "simulate",
+)
 """Every command, each defined (and registered on :data:`app`) by the module
 of its name, ``cfgplan.cli.<name>``; :mod:`cfgplan.cli.commands` imports them all."""
 

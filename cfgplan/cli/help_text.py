@@ -21,10 +21,12 @@ HELP = (
     "Commands:\n"
     "  check     Check a domain (and a state with its goal) without planning.\n"
     "  emit      Write one executable file per robot for a configuration (5.1-5.3).\n"
-    "  keys      Make a society's keys for TLS with mutual authentication.\n"
+    "  keys      Make or renew a society's keys for TLS with mutual authentication.\n"
+    "  launch    Start a whole society here, one process per robot (5.2.2).\n"
     "  plan      Plan ranked admissible configurations (4.5), or sequences of them.\n"
     "  record    Turn a run's trace into an MCAP file that Foxglove opens.\n"
     "  render    Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).\n"
+    "  report    Draw any run (a trace or an MCAP recording): pictures and a page.\n"
     "  run       Run a configuration: all robots here, or one on the network (5.2).\n"
     "  simulate  Run a thesis experiment in the 2-D simulator (chapter 6).\n"
 )

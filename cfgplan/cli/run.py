@@ -17,6 +17,7 @@ switch brings in.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -41,6 +42,7 @@ from cfgplan.cli.options import (
 )
 from cfgplan.cli.sequence import first_step
 from cfgplan.diagnostics import run_error
+from cfgplan.live.address import Address, parse_address
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.faults import parse_injection
@@ -59,6 +61,9 @@ from cfgplan.runtime.options import (
     LISTEN,
     MAX_VALUE_BYTES,
     RATE,
+    RATE_ALLOWANCE,
+    RECORD,
+    RECORD_MAX_BYTES,
     SOCIETY,
     STALE_PERIODS,
     TRACE,
@@ -71,6 +76,7 @@ from cfgplan.runtime.options import (
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
+from cfgplan.security.identity import problem_id
 
 TRANSPORTS = ("zenoh", "inprocess")
 
@@ -115,6 +121,7 @@ def run(
     zenoh_config: Annotated[Path | None, option(ZENOH_CONFIG)] = None,
     lease: Annotated[float | None, option(LEASE)] = LEASE.default,
     keys: Annotated[Path | None, option(KEYS)] = None,
+    rate_allowance: Annotated[float, option(RATE_ALLOWANCE)] = RATE_ALLOWANCE.default,
     rate: Annotated[float, option(RATE)] = RATE.default,
     cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
     duration: Annotated[float | None, option(DURATION)] = DURATION.default,
@@ -123,6 +130,8 @@ def run(
     max_value_bytes: Annotated[int, option(MAX_VALUE_BYTES)] = MAX_VALUE_BYTES.default,
     trace: Annotated[Path | None, option(TRACE)] = None,
     trace_max_bytes: Annotated[int, option(TRACE_MAX_BYTES)] = TRACE_MAX_BYTES.default,
+    record: Annotated[Path | None, option(RECORD)] = None,
+    record_max_bytes: Annotated[int, option(RECORD_MAX_BYTES)] = RECORD_MAX_BYTES.default,
     force: Annotated[bool, option(FORCE)] = FORCE.default,
     verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
     inject: Annotated[list[str] | None, option(INJECT)] = None,
@@ -135,6 +144,15 @@ def run(
             "'cfgplan[ros2]').",
         ),
     ] = False,
+    ros2_map: Annotated[
+        Path | None,
+        typer.Option(
+            "--ros2-map",
+            metavar="FILE",
+            help="Bind functionality inputs and outputs to ROS 2 topics, as the TOML FILE's "
+            "[[bind]] tables say (needs --robot; docs: Use cfgplan with ROS 2).",
+        ),
+    ] = None,
     ros_domain_id: Annotated[
         int | None,
         typer.Option(
@@ -165,6 +183,32 @@ def run(
             show_default=False,
         ),
     ] = HOLD,
+    live: Annotated[
+        Address | None,
+        typer.Option(
+            "--live",
+            metavar="[HOST:]PORT",
+            parser=parsed(parse_address),
+            help="Serve a live page of the run: the configuration, freshness, switches, "
+            "fallbacks (port 0: any free one, its URL printed). HOST defaults to 127.0.0.1, "
+            "this machine only: the page has no login; give 0.0.0.0:PORT to open it to the "
+            "network (pip install 'cfgplan[live]').",
+            show_default=False,
+        ),
+    ] = None,
+    foxglove: Annotated[
+        Address | None,
+        typer.Option(
+            "--foxglove",
+            metavar="[HOST:]PORT",
+            parser=parsed(parse_address),
+            help="Serve the run to Foxglove live (its WebSocket protocol: connect to "
+            "ws://HOST:PORT): the configuration as a topic graph, events, switches and "
+            "freshness on JSON channels. HOST defaults to 127.0.0.1 (port 0: any free one); "
+            "pip install 'cfgplan[foxglove]'.",
+            show_default=False,
+        ),
+    ] = None,
     margin: Annotated[
         float,
         typer.Option(
@@ -195,7 +239,13 @@ def run(
         usage_error("publishes over the robot's Zenoh session: give --robot NAME", "--ros2")
     if ros2 and keys is not None:  # mTLS and deny-by-default access control: no ROS node gets in
         usage_error("cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2")
-    if ros_domain_id is not None and not ros2:
+    if ros2_map is not None and kind != "zenoh":
+        usage_error("binds topics on the robot's Zenoh session: give --robot NAME", "--ros2-map")
+    if ros2_map is not None and keys is not None:
+        usage_error(
+            "cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2-map"
+        )
+    if ros_domain_id is not None and not (ros2 or ros2_map):
         usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
     problem = load_problem(domain, state, goal, weights, sequence=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
@@ -215,6 +265,8 @@ def run(
     settings = Settings(tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin)
     opened: Transport | None = None
     written: TraceFile | None = None
+    recording = None
+    fox = None
     try:
         registry = Registry.load(impl)
         if robot is None:
@@ -225,7 +277,14 @@ def run(
                 names = ", ".join(p.robot for p in parts)
                 raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
             part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
-            registry.require(c.name for c in part.calls)
+            topics = None
+            if ros2_map is not None:  # checked against the domain before the network opens
+                from cfgplan.ros2.topics import load_map
+
+                topics = load_map(ros2_map, problem.domain, problem.task.agents)
+            registry.require(
+                c.name for c in part.calls if topics is None or not topics.implements(c.name, robot)
+            )
             zenoh = network_options(
                 society_name,
                 listen or (),
@@ -233,8 +292,14 @@ def run(
                 None if zenoh_config is None else str(zenoh_config),
                 lease,
                 None if keys is None else str(keys),
+                problem=problem_id(problem, domain, state),
+                allowance=rate_allowance,
             )
             opened = open_transport(robot, kind, zenoh)
+            if topics is not None:  # bound functionalities read and publish ROS 2 topics
+                from cfgplan.ros2.bindings import open_bindings
+
+                registry = open_bindings(opened, robot, topics, ros_domain_id).registry(registry)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
             if ros2:  # its Adaptation events on /cfgplan/events (cfgplan.ros2)
@@ -250,20 +315,52 @@ def run(
         lasting = how_long(options.cycles, options.duration)
         from cfgplan.reconfigure.local import coordinator_of
 
-        code = execute(
-            running,
-            options,
-            source=registry.source,
-            trace=written,
-            hooks=adapting,
-            heading=f"{title(problem, config, rank)}: {names}; {lasting}",
-            lead=coordinator_of(problem.goal_call, config),  # --cycles: the goal robot's
-        )
+        if record is not None:  # mcap is imported only then (cfgplan.record)
+            from cfgplan.record.launch import start_recording
+            from cfgplan.record.policy import Policy
+
+            recording = start_recording(record, force, Policy(max_bytes=record_max_bytes))
+            running.subscribe(recording)
+        if foxglove is not None:  # foxglove-sdk is imported only then
+            from cfgplan.record.launch import open_foxglove
+
+            heading = title(problem, config, rank)
+            fox = open_foxglove(foxglove, running, adapting, config, problem.goal_call, heading)
+            running.subscribe(fox)
+        page = None
+        if live is not None:  # aiohttp is imported only then (cfgplan.live)
+            from cfgplan.live.launch import open_live
+
+            page = open_live(live, running, adapting, problem, config, title(problem, config, rank))
+        try:
+            code = execute(
+                running,
+                options,
+                source=registry.source,
+                trace=written,
+                hooks=adapting,
+                heading=f"{title(problem, config, rank)}: {names}; {lasting}",
+                lead=coordinator_of(problem.goal_call, config),  # --cycles: the goal robot's
+            )
+        finally:
+            if page is not None:
+                page.stop()
+            if fox is not None:
+                fox.stop()
+            if recording is not None:
+                recording.close()
+        if recording is not None and recording.failed:
+            print(f"cfgplan: error: {recording.failed}", file=sys.stderr)
+            code = code or 1
     except RunError as exc:
         if opened is not None:
             opened.close()
         if written is not None:
             written.close()
+        if recording is not None:
+            recording.close()
+        if fox is not None:
+            fox.stop()
         raise run_error(exc) from None
     if code:
         raise typer.Exit(code)

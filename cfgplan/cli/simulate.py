@@ -18,13 +18,14 @@ from __future__ import annotations
 import importlib
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, TextIO, cast
 
 import typer
 
 from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report
 from cfgplan.cli.options import count_of, number_of
 from cfgplan.diagnostics import CfgplanError, error, run_error
+from cfgplan.runtime.options import RECORD, RECORD_MAX_BYTES
 
 EXIT_FAILED = 4
 EXIT_INTERRUPTED = 130
@@ -97,6 +98,25 @@ def simulate(
     quiet: Annotated[
         bool, typer.Option("--quiet", help="Print only the outcome, not the run's events.")
     ] = False,
+    record: Annotated[
+        Path | None,
+        typer.Option(
+            "--record",
+            metavar="FILE",
+            help=RECORD.help,
+            show_default=False,
+        ),
+    ] = None,
+    record_max_bytes: Annotated[
+        int,
+        typer.Option(
+            "--record-max-bytes",
+            metavar="N",
+            parser=count_of(0),
+            help=RECORD_MAX_BYTES.help,
+            show_default=False,
+        ),
+    ] = RECORD_MAX_BYTES.default,
 ) -> None:
     """Simulate a thesis experiment in 2-D: run, fail, reconfigure (chapter 6).
 
@@ -114,7 +134,22 @@ def simulate(
         except RunError as exc:  # the implementations cannot be loaded
             raise run_error(exc) from None
         prepare_folder(out, force)
-        code = _run(ready, out, seed, duration, rank, animate, quiet)
+        recording = None
+        if record is not None:  # mcap is imported only then (cfgplan.record)
+            from cfgplan.record.launch import start_recording
+            from cfgplan.record.policy import Policy
+
+            try:
+                recording = start_recording(record, force, Policy(max_bytes=record_max_bytes))
+            except RunError as exc:
+                raise run_error(exc) from None
+        try:
+            code = _run(ready, out, seed, duration, rank, animate, quiet, recording)
+        finally:
+            if recording is not None:
+                recording.close()
+        if recording is not None and recording.failed:
+            raise error(recording.failed)
     except CfgplanError as exc:
         report(exc.diagnostics)
         raise typer.Exit(EXIT_INPUT) from None
@@ -130,6 +165,7 @@ def _run(
     rank: int | None,
     animate: bool,
     quiet: bool,
+    recording: object = None,
 ) -> int:
     from cfgplan.runtime.console import Printer
     from cfgplan.runtime.errors import RunError
@@ -147,7 +183,13 @@ def _run(
     if not quiet:
         echo(f"{s.name}: {s.title or loaded.file}")
     try:
-        with (out / "trace.jsonl").open("w", encoding="utf-8", newline="\n") as trace:
+        with (out / "trace.jsonl").open("w", encoding="utf-8", newline="\n") as written:
+            trace: TextIO = written
+            if recording is not None:  # each trace line recorded too (cfgplan.record.live)
+                from cfgplan.record.live import LiveRecorder, Tee
+
+                assert isinstance(recording, LiveRecorder)
+                trace = cast(TextIO, Tee(written, recording))
             run = run_simulation(
                 ready,
                 seed=seed,

@@ -3,15 +3,11 @@
 The trace of ``cfgplan run --trace FILE`` (or a robot program's, or a
 simulation's ``trace.jsonl``) is one JSON object per event
 (:mod:`cfgplan.runtime.schema`). Each line becomes one message, its bytes as
-they are (message encoding ``json``), on the channel of its kind of event
-(:data:`TOPICS`): a robot's wrapper calls (5.2.1), the values it sent or
-received on each global channel (5.2.2), its stale and fresh inputs (3.2);
-the society's presence, failures, recoveries and switches (5.5, 7.2). Each
-channel's schema is the JSON Schema of the pydantic model of that kind
-(schema encoding ``jsonschema``): the models are the one description of a
+they are, on the channel of its kind of event with that kind's JSON Schema,
+as :mod:`cfgplan.record.channels` defines them for every writer (this one,
+``--record`` and ``--foxglove``): the models are the one description of a
 trace line, and a line that does not validate against them is refused with
-its file and line. A message's log time is the event's ``t`` in nanoseconds;
-its publish time is the same, but for a received value, the sender's ``t``.
+its file and line.
 
 The file is the same bytes for the same trace: schemas are registered in the
 order of :data:`TOPICS`, channels in the order of their topics, messages in
@@ -24,10 +20,8 @@ from __future__ import annotations
 
 import io
 import json
-import math
 import os
 import stat
-import unicodedata
 from collections import Counter
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -38,10 +32,23 @@ from mcap.writer import CompressionType, Writer
 from pydantic import BaseModel, ValidationError
 
 from cfgplan import __version__
-from cfgplan.runtime import schema as s
+from cfgplan.record.channels import (
+    MESSAGE_ENCODING,
+    SCHEMA_ENCODING,
+    TOPICS,
+    Entry,
+    Registrar,
+    entry_of,
+    nanoseconds,
+    run_metadata,
+    schema_name,
+    schema_of,
+    segment,
+)
 from cfgplan.runtime.errors import RunError
 
 __all__ = [
+    "COMPRESSION",
     "MESSAGE_ENCODING",
     "SCHEMA_ENCODING",
     "TOPICS",
@@ -60,35 +67,6 @@ __all__ = [
     "trace_files",
 ]
 
-SCHEMA_ENCODING = "jsonschema"
-MESSAGE_ENCODING = "json"
-
-TOPICS: dict[type[BaseModel], str] = {
-    s.CallEvent: "/cfgplan/{robot}/calls",
-    s.Send: "/cfgplan/{robot}/channels/{channel}/sent",
-    s.Receive: "/cfgplan/{robot}/channels/{channel}/received",
-    s.Staleness: "/cfgplan/{robot}/freshness",
-    s.InstallEvent: "/cfgplan/{robot}/installs",
-    s.Presence: "/cfgplan/presence",
-    s.Start: "/cfgplan/starts",
-    s.Stop: "/cfgplan/stops",
-    s.Message: "/cfgplan/errors",
-    s.Inject: "/cfgplan/injections",
-    s.Failure: "/cfgplan/failures",
-    s.Recovery: "/cfgplan/recoveries",
-    s.Facts: "/cfgplan/facts",
-    s.Achieved: "/cfgplan/achievements",
-    s.Finish: "/cfgplan/finishes",
-    s.SwitchEvent: "/cfgplan/switches",
-    s.NoConfiguration: "/cfgplan/no-configuration",
-    s.Abort: "/cfgplan/aborts",
-}
-"""The topic of each kind of event (a model of :data:`cfgplan.runtime.schema.TraceEvent`),
-in the order their schemas are registered. ``{robot}`` and ``{channel}`` are the
-event's, each one topic segment (:func:`segment`)."""
-
-MAX_NS = (1 << 64) - 1
-
 
 @dataclass(frozen=True)
 class RecordOptions:
@@ -106,19 +84,6 @@ class TraceLine:
     file: str
     number: int
     text: bytes
-
-
-@dataclass(frozen=True)
-class Entry:
-    """A trace line ready to be written: its kind, topic and times."""
-
-    model: type[BaseModel]
-    robot: str
-    topic: str
-    metadata: tuple[tuple[str, str], ...]
-    log_time: int
-    publish_time: int
-    data: bytes
 
 
 @dataclass
@@ -168,32 +133,6 @@ def read_lines(paths: Sequence[Path]) -> Iterator[TraceLine]:
             raise RunError(f"cannot read the trace file {name}: {exc.strerror}") from None
 
 
-def segment(text: str) -> str:
-    """``text`` as one topic segment: white space as ``_``; ``/``, ``%`` and
-    unprintable characters percent-encoded (``F7->F3 (pos Emil Door1)`` is
-    ``F7->F3_(pos_Emil_Door1)``); the empty text as ``_``."""
-    out: list[str] = []
-    for char in text:
-        if char.isspace():
-            out.append("_")
-        elif char in "/%" or unicodedata.category(char)[0] == "C":
-            out.append("".join(f"%{b:02X}" for b in char.encode("utf-8", "surrogatepass")))
-        else:
-            out.append(char)
-    return "".join(out) or "_"
-
-
-def nanoseconds(seconds: float) -> int | None:
-    """``seconds`` as whole nanoseconds (the fraction rounded apart from the
-    whole seconds, so an epoch time keeps its microseconds); ``None`` when it is
-    not a time MCAP can hold (negative, not finite, past 2**64 ns)."""
-    if not math.isfinite(seconds) or seconds < 0:
-        return None
-    whole = math.floor(seconds)
-    ns = whole * 1_000_000_000 + round((seconds - whole) * 1e9)
-    return ns if ns <= MAX_NS else None
-
-
 def _problem(exc: ValidationError, kind: object) -> str:
     """The first thing wrong, at its key (``label: Field required``); the
     union's tag, which pydantic puts first, left out."""
@@ -225,38 +164,16 @@ def entry(line: TraceLine) -> Entry:
         what = _JSON_TYPES.get(type(obj), "null" if obj is None else "true or false")
         raise refuse(f"not a trace event: a JSON object is expected, not {what}")
     try:
-        event = s.TRACE_EVENT.validate_python(obj)
+        return entry_of(obj, line.text)
     except ValidationError as exc:
         kind = obj.get("event")
         named = f" ({kind})" if isinstance(kind, str) else ""
         raise refuse(f"not a trace event{named}: {_problem(exc, kind)}") from None
-    log_time = nanoseconds(event.t)
-    if log_time is None:
-        raise refuse(f"t: {event.t!r} is not a time (seconds, 0 or more)")
-    publish_time = log_time
-    if isinstance(event, s.Receive) and event.sent is not None:
-        sent = nanoseconds(event.sent)
-        publish_time = log_time if sent is None else sent
-    model = type(event)
-    parts = {"robot": event.robot}
-    if isinstance(event, s.Send | s.Receive):
-        parts["channel"] = event.channel
-    topic = TOPICS[model].format(**{k: segment(v) for k, v in parts.items()})
-    metadata = tuple(parts.items()) if "{robot}" in TOPICS[model] else ()
-    return Entry(model, event.robot, topic, metadata, log_time, publish_time, line.text)
+    except ValueError as exc:
+        raise refuse(str(exc)) from None
 
 
-def schema_name(model: type[BaseModel]) -> str:
-    return f"cfgplan.trace.{model.__name__}"
-
-
-def schema_of(model: type[BaseModel]) -> bytes:
-    """The JSON Schema of a kind of event, as registered: the pydantic model's
-    (keys named as in the trace, ``from`` not ``from_``)."""
-    return json.dumps(model.model_json_schema(by_alias=True), separators=(",", ":")).encode()
-
-
-_COMPRESSION = {
+COMPRESSION = {
     "zstd": CompressionType.ZSTD,
     "lz4": CompressionType.LZ4,
     "none": CompressionType.NONE,
@@ -270,49 +187,31 @@ def record(
     options = options or RecordOptions()
     entries = list(entries)
     models: dict[str, type[BaseModel]] = {}
-    metadata: dict[str, dict[str, str]] = {}
     for e in entries:
         known = models.setdefault(e.topic, e.model)
         assert known is e.model, f"two kinds of event on {e.topic}"
-        metadata.setdefault(e.topic, dict(e.metadata))
     writer = Writer(
-        out, chunk_size=options.chunk_size, compression=_COMPRESSION[options.compression]
+        out, chunk_size=options.chunk_size, compression=COMPRESSION[options.compression]
     )
     writer.start(profile="", library=f"cfgplan {__version__}")
     done = Recording()
-    schema_ids: dict[type[BaseModel], int] = {}
-    for model in TOPICS:
+    registered = Registrar(writer)
+    for model in TOPICS:  # schemas in a fixed order, then channels by topic
         if model in models.values():
-            name = schema_name(model)
-            schema_ids[model] = writer.register_schema(name, SCHEMA_ENCODING, schema_of(model))
-            done.schemas.append(name)
-    channel_ids: dict[str, int] = {}
+            registered.schema(model)
+            done.schemas.append(schema_name(model))
+    firsts = {e.topic: e for e in reversed(entries)}
     for topic in sorted(models):
-        channel_ids[topic] = writer.register_channel(
-            topic, MESSAGE_ENCODING, schema_ids[models[topic]], metadata[topic]
-        )
+        registered.channel(firsts[topic])
         done.messages[topic] = 0
     for e in entries:
         done.messages[e.topic] += 1
         sequence = done.messages[e.topic] & 0xFFFFFFFF
-        writer.add_message(channel_ids[e.topic], e.log_time, e.data, e.publish_time, sequence)
-    robots = sorted({e.robot for e in entries})
-    writer.add_metadata(
-        "cfgplan",
-        {
-            "cfgplan": __version__,
-            "events": str(len(entries)),
-            "robots": " ".join(robots),
-            "kinds": " ".join(f"{k.__name__}={n}" for k, n in _kinds(entries)),
-        },
-    )
+        writer.add_message(registered.channel(e), e.log_time, e.data, e.publish_time, sequence)
+    kinds = Counter(e.model for e in entries)
+    writer.add_metadata("cfgplan", run_metadata(kinds, {e.robot for e in entries}))
     writer.finish()  # type: ignore[no-untyped-call]
     return done
-
-
-def _kinds(entries: Sequence[Entry]) -> list[tuple[type[BaseModel], int]]:
-    counts = Counter(e.model for e in entries)
-    return [(model, counts[model]) for model in TOPICS if counts[model]]
 
 
 def convert(paths: Sequence[Path], options: RecordOptions | None = None) -> tuple[bytes, Recording]:

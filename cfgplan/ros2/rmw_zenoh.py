@@ -56,6 +56,7 @@ __all__ = [
     "qos_key_expr",
     "string_cdr",
     "string_of_cdr",
+    "subscriber_token",
     "topic_key_expr",
     "type_hash",
 ]
@@ -244,6 +245,31 @@ def publisher_token(
     Cache"; e.g. ``.../MP/%/%/talker/%chatter/std_msgs::msg::dds_::String_/
     RIHS01_df66.../::,7:,:,:,,``)."""
     head = _entity(domain_id, session_id, node_id, entity_id, "MP", node, namespace, enclave)
+    return _topic_token(head, topic, type_name, hash_, qos)
+
+
+def subscriber_token(
+    domain_id: int,
+    session_id: str,
+    node_id: int,
+    entity_id: int,
+    node: str,
+    topic: str,
+    type_name: str,
+    hash_: str,
+    qos: QoS = PUBLISHER_QOS,
+    *,
+    namespace: str = "/",
+    enclave: str = "/",
+) -> str:
+    """The liveliness token of a message subscription (``MS``): as
+    :func:`publisher_token`, kind ``MS`` (design.md, "Graph Cache")."""
+    head = _entity(domain_id, session_id, node_id, entity_id, "MS", node, namespace, enclave)
+    return _topic_token(head, topic, type_name, hash_, qos)
+
+
+def _topic_token(head: str, topic: str, type_name: str, hash_: str, qos: QoS) -> str:
+    """An entity's token, then its topic, type, type hash and QoS (design.md)."""
     return f"{head}/{mangle(topic)}/{mangle(type_name)}/{mangle(hash_)}/{qos_key_expr(qos)}"
 
 

@@ -24,6 +24,7 @@ from cfgplan.runtime.faults import SYNTAX, parse_injection
 from cfgplan.runtime.tracefile import MAX_BYTES as TRACE_LIMIT
 from cfgplan.runtime.values import MAX_VALUE_BYTES as VALUE_LIMIT
 from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, DEFAULT_SOCIETY, endpoint_problem
+from cfgplan.security.rates import RateLimits
 
 __all__ = [
     "BUDGET",
@@ -39,6 +40,9 @@ __all__ = [
     "MAX_VALUE_BYTES",
     "NETWORK_OPTIONS",
     "RATE",
+    "RATE_ALLOWANCE",
+    "RECORD",
+    "RECORD_MAX_BYTES",
     "RUN_OPTIONS",
     "SOCIETY",
     "STALE_PERIODS",
@@ -162,6 +166,23 @@ TRACE_MAX_BYTES = Option(
     "are kept, in at most twice the cap.",
     whole(0),
 )
+RECORD: Option[str | None] = Option(
+    "--record",
+    "FILE",
+    None,
+    "Write every event to FILE as an MCAP recording that Foxglove opens, as the run goes "
+    "(replaced only with --force; pip install 'cfgplan[record]'; docs: Record a run for "
+    "Foxglove).",
+)
+RECORD_MAX_BYTES = Option(
+    "--record-max-bytes",
+    "N",
+    TRACE_LIMIT,
+    f"Cap of the --record FILE in bytes (default {TRACE_LIMIT}: 64 MiB; 0: no cap): past it, "
+    "FILE is finished and becomes FILE.1 (replacing an older one) and a new FILE begins.",
+    whole(0),
+)
+"""Only ``cfgplan run`` and ``cfgplan simulate`` record: not in :data:`RUN_OPTIONS`."""
 FORCE = Option("--force", None, False, "Overwrite the --trace FILE if it exists.")
 VERBOSE = Option(
     "--verbose",
@@ -227,6 +248,16 @@ KEYS: Option[str | None] = Option(
     "is the keys' unless given.",
 )
 
+RATE_ALLOWANCE = Option(
+    "--rate-allowance",
+    "K",
+    RateLimits.allowance,
+    f"Messages a robot takes per period of a channel's sender (default {RateLimits.allowance:g}; "
+    f"at most {RateLimits.ceiling:g} a second): more are dropped, counted and recorded once a "
+    "second, so that a robot flooding a channel cannot starve the receiver.",
+    number(0, above=True),
+)
+
 RUN_OPTIONS: tuple[Option[Any], ...] = (
     IMPL,
     RATE,
@@ -243,7 +274,15 @@ RUN_OPTIONS: tuple[Option[Any], ...] = (
 )
 """Every run's options: ``cfgplan run``, a robot's module, ``run_all.py``."""
 
-NETWORK_OPTIONS: tuple[Option[Any], ...] = (SOCIETY, LISTEN, CONNECT, ZENOH_CONFIG, LEASE, KEYS)
+NETWORK_OPTIONS: tuple[Option[Any], ...] = (
+    SOCIETY,
+    LISTEN,
+    CONNECT,
+    ZENOH_CONFIG,
+    LEASE,
+    KEYS,
+    RATE_ALLOWANCE,
+)
 """A robot on the network: ``cfgplan run --robot`` and a robot's module."""
 
 

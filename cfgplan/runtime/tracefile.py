@@ -37,7 +37,16 @@ from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Data, Event, Transfer
 from cfgplan.runtime.values import elide
 
-__all__ = ["ELIDE", "MAX_BYTES", "TraceFile", "elided", "open_trace"]
+__all__ = [
+    "ELIDE",
+    "MAX_BYTES",
+    "TraceFile",
+    "create",
+    "elided",
+    "open_output",
+    "open_trace",
+    "rotated_path",
+]
 
 ELIDE = 4096
 """Characters of JSON beyond which a value is recorded by its size and digest."""
@@ -71,41 +80,59 @@ def open_trace(
     over ``elide`` characters recorded by size and digest (0: whole);
     :class:`RunError` when it may or cannot be written."""
     p = Path(path)
+    fd = open_output(p, force, what="trace file", rotates=bool(max_bytes))
+    return TraceFile(p, _text(fd), max_bytes=max_bytes, elide=elide)
+
+
+def open_output(p: Path, force: bool, *, what: str, rotates: bool) -> int:
+    """The descriptor of a new output file at ``p`` (a trace, a recording:
+    ``what``), refused with :class:`RunError` where it may or cannot be
+    written: an existing file, or ``p``.1 where it ``rotates`` when full,
+    only with ``force`` (the latter removed: it would hold an earlier run's
+    events until the first rotation); never through a dangling symbolic link,
+    never a directory or a special file."""
     if p.is_symlink() and not p.exists():
         raise RunError(
-            f"trace file {p} is a symbolic link to {os.readlink(p)}, which does not exist; "
+            f"{what} {p} is a symbolic link to {os.readlink(p)}, which does not exist; "
             "refusing to create a file through it"
         )
     if p.is_dir():
-        raise RunError(f"trace file {p} is a directory")
+        raise RunError(f"{what} {p} is a directory")
     if p.exists():
         if not force:
-            raise RunError(f"trace file {p} exists; pass --force to overwrite it")
+            raise RunError(f"{what} {p} exists; pass --force to overwrite it")
         if not stat.S_ISREG(p.stat().st_mode):
-            raise RunError(f"trace file {p} exists and is not a regular file")
-    rotated = p.with_name(p.name + ".1")  # where a capped trace rotates to
-    if max_bytes and (rotated.exists() or rotated.is_symlink()):
+            raise RunError(f"{what} {p} exists and is not a regular file")
+    rotated = rotated_path(p)
+    if rotates and (rotated.exists() or rotated.is_symlink()):
         if not force:
             raise RunError(
-                f"trace file {rotated} (where {p} rotates when full) exists; "
+                f"{what} {rotated} (where {p} rotates when full) exists; "
                 "pass --force to overwrite it"
             )
         if rotated.is_dir():
-            raise RunError(f"trace file {rotated} (where {p} rotates when full) is a directory")
-        try:  # it would hold an earlier run's events until the first rotation
+            raise RunError(f"{what} {rotated} (where {p} rotates when full) is a directory")
+        try:
             rotated.unlink()
         except OSError as exc:
-            raise RunError(f"cannot remove the trace file {rotated}: {exc.strerror}") from None
+            raise RunError(f"cannot remove the {what} {rotated}: {exc.strerror}") from None
     try:
-        stream = _create(p, force)
+        return create(p, force)
     except FileExistsError:
-        raise RunError(f"trace file {p} exists; pass --force to overwrite it") from None
+        raise RunError(f"{what} {p} exists; pass --force to overwrite it") from None
     except OSError as exc:
-        raise RunError(f"cannot write the trace file {p}: {exc.strerror}") from None
-    return TraceFile(p, stream, max_bytes=max_bytes, elide=elide)
+        raise RunError(f"cannot write the {what} {p}: {exc.strerror}") from None
 
 
-def _create(p: Path, force: bool) -> TextIO:
+def rotated_path(p: Path) -> Path:
+    """Where an output file capped in size rotates to: FILE.1."""
+    return p.with_name(p.name + ".1")
+
+
+def create(p: Path, force: bool) -> int:
+    """A new file's descriptor: with ``force`` truncated if it exists (not
+    through a link it would follow), else created only if nothing, not even
+    a symbolic link, is there."""
     flags = os.O_WRONLY | os.O_CREAT | getattr(os, "O_CLOEXEC", 0)
     if force:
         flags |= os.O_TRUNC
@@ -113,7 +140,10 @@ def _create(p: Path, force: bool) -> TextIO:
             flags |= getattr(os, "O_NOFOLLOW", 0)
     else:
         flags |= os.O_EXCL  # also refuses any symbolic link, dangling or not
-    fd = os.open(p, flags, 0o644)
+    return os.open(p, flags, 0o644)
+
+
+def _text(fd: int) -> TextIO:
     return os.fdopen(fd, "w", encoding="utf-8", newline="\n")
 
 
@@ -155,7 +185,7 @@ class TraceFile:
             return
         try:
             os.replace(self.path, self.path.with_name(self.path.name + ".1"))
-            self._stream = _create(self.path, force=False)
+            self._stream = _text(create(self.path, force=False))
         except OSError as exc:
             self.failed = (
                 f"cannot rotate the trace file {self.path}: {exc.strerror}; tracing stopped"

@@ -16,7 +16,9 @@ what happened (Figs. 6.5 and 6.6). One module a part:
   functionality of the three bundled domains;
 * ``run`` — the simulation loop; ``record`` — the trace and what ran when;
   ``report`` — summary and failures; ``outputs`` — what goes in ``--out``;
-* ``drawing``, ``timeline``, ``trajectories``, ``animate``, ``diagrams`` — the pictures.
+* ``drawing``, ``timeline``, ``trajectories``, ``laserview``, ``barplot``,
+  ``animate``, ``diagrams`` — the pictures, and ``story``, what the timeline
+  and diagrams draw (``cfgplan report`` draws a trace's with the same modules).
 
 Needs the ``sim`` extra (numpy, shapely, matplotlib): ``pip install
 'cfgplan[sim]'``. Importing this package imports nothing heavy:

@@ -11,17 +11,21 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon, Rectangle
+from matplotlib.text import Text
+from matplotlib.transforms import Bbox
 
 from cfgplan.sim.blocks import slot
 from cfgplan.sim.geometry import Pose, rectangle
 from cfgplan.sim.world import World
 
-__all__ = ["SHADES", "draw_map", "draw_robot", "figure", "save", "shades"]
+__all__ = ["SHADES", "Placer", "draw_map", "draw_robot", "figure", "save", "shades"]
 
 SHADES = ("#8c8c8c", "#111111", "#1f5fa8", "#b5651d", "#2e8b57", "#7b3294")
 """Pippi gray and Emil black as in Fig. 6.6, then blue, brown, green, purple."""
@@ -44,6 +48,13 @@ def figure(width: float, height: float) -> Figure:
 
 
 def save(fig: Figure, path: Path) -> None:
+    """The figure as PNG, or SVG when ``path`` ends in ``.svg`` (no date, fixed ids)."""
+    if path.suffix == ".svg":
+        import matplotlib
+
+        with matplotlib.rc_context({"svg.hashsalt": "cfgplan", "svg.fonttype": "path"}):
+            fig.savefig(path, format="svg", metadata={"Date": None, "Creator": None})
+        return
     fig.savefig(path, format="png", metadata={"Software": None})
 
 
@@ -172,27 +183,34 @@ def draw_block(
 
 
 def draw_robot(
-    ax: Axes, pose: Pose, radius: float, colour: str, *, filled: bool, label: str = ""
-) -> None:
-    """A robot as in Fig. 6.2: a circle with a line giving its heading."""
+    ax: Axes,
+    pose: Pose,
+    radius: float,
+    colour: str,
+    *,
+    filled: bool,
+    label: str = "",
+    alpha: float = 0.85,
+    zorder: float = 5,
+) -> Circle:
+    """A robot as in Fig. 6.2: a circle with a line giving its heading (the circle)."""
     x, y, h = pose
-    ax.add_patch(
-        Circle(
-            (x, y),
-            radius,
-            facecolor=colour if filled else "white",
-            edgecolor=colour,
-            alpha=0.85 if filled else 1.0,
-            lw=1.5,
-            zorder=5,
-        )
+    disc = Circle(
+        (x, y),
+        radius,
+        facecolor=colour if filled else "white",
+        edgecolor=colour,
+        alpha=alpha if filled else 1.0,
+        lw=1.5,
+        zorder=zorder,
     )
+    ax.add_patch(disc)
     ax.plot(
         [x, x + radius * math.cos(h)],
         [y, y + radius * math.sin(h)],
         color="white" if filled else colour,
         lw=1.5,
-        zorder=6,
+        zorder=zorder + 1,
     )
     if label:
         ax.annotate(
@@ -206,3 +224,72 @@ def draw_robot(
             color=colour,
             zorder=6,
         )
+    return disc
+
+
+class Placer:
+    """Labels that never overlap: each is put at the first of its candidate
+    places where its extent, as the renderer measures it, meets no label
+    already placed (nor leaves the figure)."""
+
+    def __init__(self, fig: Figure, pad: float = 1.5) -> None:
+        self.fig = fig
+        self.renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+        self.boxes: list[Bbox] = []
+        self.pad = pad
+
+    def _box(self, artist: Text) -> Bbox:
+        return artist.get_window_extent(self.renderer).padded(self.pad)
+
+    def free(self, box: Bbox) -> bool:
+        inside = self.fig.bbox.padded(-1)
+        whole = inside.x0 <= box.x0 and box.x1 <= inside.x1
+        whole = whole and inside.y0 <= box.y0 and box.y1 <= inside.y1
+        return whole and not any(box.overlaps(b) for b in self.boxes)
+
+    def keep(self, artist: Artist) -> None:
+        """Count something drawn elsewhere (a label, a disc) as taken."""
+        self.boxes.append(artist.get_window_extent(self.renderer).padded(self.pad))
+
+    def near(
+        self,
+        ax: Axes,
+        text: str,
+        xy: tuple[float, float],
+        offsets: list[tuple[float, float]],
+        **common: Any,
+    ) -> Text | None:
+        """``text`` next to the point ``xy``, at the first free offset (points):
+        right of the point when the offset is positive, left when negative."""
+        for dx, dy in offsets:
+            ha = "left" if dx > 0 else "right" if dx < 0 else "center"
+            va = "bottom" if dy > 0 else "top" if dy < 0 else "center"
+            label = ax.annotate(
+                text, xy, xytext=(dx, dy), textcoords="offset points", ha=ha, va=va, **common
+            )
+            box = self._box(label)
+            if self.free(box):
+                self.boxes.append(box)
+                return label
+            label.remove()
+        return None
+
+    def place(
+        self,
+        ax: Axes,
+        text: str,
+        candidates: list[tuple[float, float, dict[str, Any]]],
+        *,
+        within: float | None = None,
+        **common: Any,
+    ) -> Text | None:
+        """``text`` at the first free candidate ``(x, y, options)``; ``None``
+        (nothing drawn) when none is free, or none is narrower than ``within`` pixels."""
+        for x, y, options in candidates:
+            label = ax.text(x, y, text, **common, **options)
+            box = self._box(label)
+            if (within is None or box.width <= within) and self.free(box):
+                self.boxes.append(box)
+                return label
+            label.remove()
+        return None

@@ -3,6 +3,7 @@
 * ``summary.json`` — the outcome (:func:`cfgplan.sim.report.summary`);
 * ``trace.jsonl`` — every event, one JSON line each (written as the run goes);
 * ``trajectories.png`` (Fig. 6.6), ``timeline.png`` (Fig. 6.5);
+* ``bar.png`` — with a bar (carry-a-bar): its length over time and its tolerance;
 * ``configuration-N.png`` — each configuration used, by the render backend;
 * ``animation.gif`` — with ``--animate``.
 
@@ -20,7 +21,14 @@ from cfgplan.diagnostics import error
 
 __all__ = ["OUTPUTS", "prepare", "write_all"]
 
-OUTPUTS = ("summary.json", "trace.jsonl", "trajectories.png", "timeline.png", "animation.gif")
+OUTPUTS = (
+    "summary.json",
+    "trace.jsonl",
+    "trajectories.png",
+    "timeline.png",
+    "bar.png",
+    "animation.gif",
+)
 
 
 def prepare(folder: Path, force: bool) -> None:
@@ -48,8 +56,10 @@ def prepare(folder: Path, force: bool) -> None:
 
 def write_all(run: Any, folder: Path, animate: bool) -> list[str]:
     """Draw the pictures and write the summary; the files written, in order."""
+    from cfgplan.sim.barplot import draw_bar
     from cfgplan.sim.diagrams import draw_configurations
     from cfgplan.sim.report import summary
+    from cfgplan.sim.story import story_of
     from cfgplan.sim.timeline import draw_timeline
     from cfgplan.sim.trajectories import draw_trajectories
 
@@ -57,8 +67,10 @@ def write_all(run: Any, folder: Path, animate: bool) -> list[str]:
     diagrams = draw_configurations(run.recorder.segments, folder)
     written += sorted(set(diagrams.values()))
     draw_trajectories(run, folder / "trajectories.png")
-    draw_timeline(run, folder / "timeline.png")
+    draw_timeline(story_of(run), folder / "timeline.png")
     written += ["trajectories.png", "timeline.png"]
+    if draw_bar(run, folder / "bar.png"):
+        written.append("bar.png")
     if animate:
         from cfgplan.sim.animate import animate as draw_animation
 

@@ -27,7 +27,7 @@ from cfgplan.sim.onboard import notes
 from cfgplan.sim.record import detail
 from cfgplan.sim.run import Run
 
-__all__ = ["summary", "why"]
+__all__ = ["experiment", "summary", "why"]
 
 NOTE_AGE = 5.0
 """Seconds before the end within which a functionality's note still explains."""
@@ -124,6 +124,20 @@ def _lacking(run: Run) -> list[str]:
     return out
 
 
+def experiment(run: Run) -> str:
+    """What ``cfgplan simulate`` was given: a bundled experiment's name, else the
+    scenario file (absolute); ``cfgplan report`` replays the run from it."""
+    from pathlib import Path
+
+    from cfgplan.sim.run import BUNDLED
+
+    found = Path(run.loaded.file)
+    for name, relative in BUNDLED.items():
+        if found.as_posix().endswith("/" + relative):
+            return name
+    return str(found.resolve())
+
+
 def summary(run: Run, diagrams: dict[int, str] | None = None) -> dict[str, Any]:
     """``summary.json``: the outcome, the steps, the switches, the faults, where everyone went."""
     s = run.loaded.scenario
@@ -181,6 +195,7 @@ def summary(run: Run, diagrams: dict[int, str] | None = None) -> dict[str, Any]:
         }
     out: dict[str, Any] = {
         "scenario": s.name,
+        "experiment": experiment(run),
         "title": s.title,
         "seed": world.seed,
         "step": s.step,

@@ -126,6 +126,7 @@ def test_usage_and_help_speak_cfgplan(cfgplan: Run, command: str) -> None:
     arguments = {
         "simulate": "EXPERIMENT",
         "record": "TRACE",
+        "report": r"RUN\.\.\.",
         "keys": r"COMMAND \[ARGS\]\.\.\.",
     }.get(command, r"DOMAIN (STATE|\[STATE\])")
     assert re.fullmatch(rf"Usage: cfgplan {command} \[OPTIONS\] {arguments}", usage)

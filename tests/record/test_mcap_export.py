@@ -87,7 +87,7 @@ def _expected_topic(e: dict[str, Any]) -> str:
     if kind == "install":
         return f"/cfgplan/{robot}/installs"
     plural = {"start": "starts", "stop": "stops", "inject": "injections"}
-    return "/cfgplan/" + plural.get(kind, kind + ("es" if kind.endswith("h") else "s"))
+    return "/cfgplan/" + str(plural.get(kind, kind + ("es" if kind.endswith("h") else "s")))
 
 
 @pytest.fixture(scope="module")

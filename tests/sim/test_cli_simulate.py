@@ -50,6 +50,7 @@ def test_outputs_and_the_same_bytes_for_the_same_seed(tmp_path: Path) -> None:
     assert "33 -> 45" in out and "accomplished in" in out
     names = sorted(p.name for p in one.iterdir())
     assert names == [
+        "bar.png",
         "configuration-1.png",
         "configuration-2.png",
         "summary.json",

@@ -1,0 +1,344 @@
+"""``cfgplan launch DOMAIN STATE --impl IMPL``: a whole society in one command (issue 36).
+
+Every robot and device of the state (with ``--no-reconfigure``: of the
+configuration) runs its own ``cfgplan run --robot NAME`` process on this
+machine, the coordinator (the goal's robot, 5.5) first, on free loopback
+ports, scouting off; their output is one stream, each line prefixed with its
+robot. The logic is :mod:`cfgplan.runtime.spawn`; this module reads the
+command line and writes each robot's command. ``--print-commands`` writes,
+instead, the command each host runs (``--host NAME=ADDRESS``).
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from cfgplan.cli.app import app, usage_error
+from cfgplan.cli.options import (
+    DomainArg,
+    GoalsOpt,
+    RankOpt,
+    StateArg,
+    choose,
+    load_problem,
+    number_of,
+    parsed,
+)
+from cfgplan.cli.run import option
+from cfgplan.cli.sequence import first_step
+from cfgplan.configuration.cost import parse_weights
+from cfgplan.diagnostics import run_error
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.faults import parse_injection
+from cfgplan.runtime.options import (
+    BUDGET,
+    CYCLES,
+    DURATION,
+    FORCE,
+    IMPL,
+    INJECT,
+    KEYS,
+    LEASE,
+    MAX_VALUE_BYTES,
+    RATE,
+    SOCIETY,
+    STALE_PERIODS,
+    TRACE,
+    TRACE_MAX_BYTES,
+    VERBOSE,
+    ZENOH_CONFIG,
+    endpoint,
+)
+from cfgplan.runtime.spawn import Launch, commands, free_port
+
+HERMETIC = (
+    "{ // cfgplan launch: robots meet only through the endpoints given\n"
+    "  scouting: { multicast: { enabled: false }, gossip: { enabled: false } },\n}\n"
+)
+DEFAULT_PORT = 7447
+"""Zenoh's port: each robot's with --print-commands, the next for a second robot on a host."""
+
+
+def _weights(text: str) -> str:
+    parse_weights(text)  # its error, said as --weights's
+    return text
+
+
+def _host(text: str) -> tuple[str, str]:
+    name, sep, address = text.partition("=")
+    if not sep or not name or not address:
+        raise ValueError(f"{text!r} is not NAME=ADDRESS (e.g. Emil=192.168.1.7)")
+    return name, address
+
+
+def trace_of(path: str, robot: str) -> str:
+    """Robot ``robot``'s trace: ``{robot}`` in ``path`` replaced by its name in
+    lower case, else the name before the suffix (``run.jsonl`` -> ``run-emil.jsonl``)."""
+    name = robot.lower()
+    if "{robot}" in path:
+        return path.replace("{robot}", name)
+    p = Path(path)
+    return str(p.with_name(f"{p.stem}-{name}{p.suffix}"))
+
+
+@app.command(short_help="Start a whole society here, one process per robot (5.2.2).")
+def launch(
+    domain: DomainArg,
+    state: StateArg,
+    impl: Annotated[str, option(IMPL)],
+    goal: GoalsOpt = None,
+    rank: RankOpt = 1,
+    weights: Annotated[
+        str | None,
+        typer.Option(
+            "--weights", metavar="NAME=W,...", parser=parsed(_weights), help="As cfgplan run's."
+        ),
+    ] = None,
+    only: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--robot",
+            metavar="NAME",
+            help="Start only this robot (repeatable; default: every robot and device of the "
+            "state, or with --no-reconfigure of the configuration).",
+        ),
+    ] = None,
+    port: Annotated[
+        int | None,
+        typer.Option(
+            "--port",
+            metavar="N",
+            min=1,
+            max=65535,
+            help="The coordinator's port (default: a free one; with --print-commands "
+            f"{DEFAULT_PORT}, and the next ones for more robots on a host).",
+            show_default=False,
+        ),
+    ] = None,
+    print_commands: Annotated[
+        bool,
+        typer.Option(
+            "--print-commands",
+            help="Start nothing: print the command each robot's host runs (give --host for "
+            "every robot).",
+        ),
+    ] = False,
+    hosts: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--host",
+            metavar="NAME=ADDRESS",
+            help="With --print-commands: the address robot NAME's host is reached at (repeatable).",
+        ),
+    ] = None,
+    society_name: Annotated[str, option(SOCIETY)] = SOCIETY.default,
+    connect: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--connect",
+            metavar="ENDPOINT",
+            parser=parsed(endpoint),
+            help="Also connect every robot to ENDPOINT, e.g. an rmw_zenohd router at "
+            "tcp/localhost:7447 (repeatable).",
+        ),
+    ] = None,
+    zenoh_config: Annotated[Path | None, option(ZENOH_CONFIG)] = None,
+    lease: Annotated[float | None, option(LEASE)] = LEASE.default,
+    keys: Annotated[Path | None, option(KEYS)] = None,
+    rate: Annotated[float, option(RATE)] = RATE.default,
+    cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
+    duration: Annotated[float | None, option(DURATION)] = DURATION.default,
+    stale_periods: Annotated[float, option(STALE_PERIODS)] = STALE_PERIODS.default,
+    budget: Annotated[float, option(BUDGET)] = BUDGET.default,
+    max_value_bytes: Annotated[int, option(MAX_VALUE_BYTES)] = MAX_VALUE_BYTES.default,
+    trace: Annotated[Path | None, option(TRACE)] = None,
+    trace_max_bytes: Annotated[int, option(TRACE_MAX_BYTES)] = TRACE_MAX_BYTES.default,
+    force: Annotated[bool, option(FORCE)] = FORCE.default,
+    verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
+    inject: Annotated[list[str] | None, option(INJECT)] = None,
+    ros2: Annotated[
+        bool, typer.Option("--ros2", help="Every robot a ROS 2 node (as cfgplan run --ros2).")
+    ] = False,
+    ros2_map: Annotated[
+        Path | None,
+        typer.Option("--ros2-map", metavar="FILE", help="As cfgplan run's: given to every robot."),
+    ] = None,
+    ros_domain_id: Annotated[
+        int | None,
+        typer.Option(
+            "--ros-domain-id",
+            metavar="N",
+            min=0,
+            max=232,
+            help="As cfgplan run's.",
+            show_default=False,
+        ),
+    ] = None,
+    reconfigure: Annotated[
+        bool, typer.Option("--reconfigure/--no-reconfigure", help="As cfgplan run's.")
+    ] = True,
+    hold: Annotated[
+        float | None,
+        typer.Option(
+            "--hold", metavar="S", parser=number_of(0, above=True), help="As cfgplan run's."
+        ),
+    ] = None,
+    margin: Annotated[
+        float | None,
+        typer.Option("--margin", metavar="F", parser=number_of(0), help="As cfgplan run's."),
+    ] = None,
+) -> None:
+    """Start a whole society on this machine: every robot its own cfgplan run --robot
+    process, the coordinator (the goal's robot) first, on free loopback ports with
+    scouting off; each line of output prefixed with its robot.
+
+    Ctrl-C or SIGTERM stops every robot (SIGTERM, at most 10 s, then SIGKILL). When the
+    coordinator ends (--cycles, --duration, the task done), the others are stopped.
+    --cycles and --duration go to the coordinator, each --inject to the robot it aims at
+    (a change of facts to the coordinator), --trace FILE to every robot as FILE-NAME.
+    --print-commands starts nothing and prints the command of each robot's host
+    instead (--host NAME=ADDRESS for each). Exit codes: the coordinator's (0 ran, 3 no
+    configuration left), 1 invalid input or a robot that could not start or run its
+    part, 2 usage.
+    """
+    if ros2 and keys is not None:
+        usage_error("cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2")
+    if ros2_map is not None and keys is not None:
+        usage_error(
+            "cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2-map"
+        )
+    if ros_domain_id is not None and not (ros2 or ros2_map):
+        usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
+    if hosts and not print_commands:
+        usage_error("names the hosts of --print-commands: give --print-commands", "--host")
+    addresses = dict(_parse_hosts(hosts or ()))
+    problem = load_problem(
+        domain, state, goal, None if weights is None else parse_weights(weights), sequence=True
+    )
+    config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
+    from cfgplan.reconfigure.local import coordinator_of
+
+    lead = coordinator_of(problem.goal_call, config)
+    known = list(problem.task.agents) if reconfigure else list(config.agents)
+    for name in [*(only or ()), *addresses]:
+        if name not in problem.task.agents:
+            raise run_error(
+                RunError(f"no robot {name} in {state} (its robots: {', '.join(known)})")
+            )
+        if name not in known:
+            raise run_error(
+                RunError(f"{name} has no part in this configuration (--no-reconfigure)")
+            )
+    if ros2_map is not None:  # its mistakes said once, before any robot starts
+        from cfgplan.ros2.topics import load_map
+
+        try:
+            load_map(ros2_map, problem.domain, problem.task.agents)
+        except RunError as exc:
+            raise run_error(exc) from None
+    robots = [lead, *(r for r in known if r != lead)]
+    if only:
+        robots = [r for r in robots if r in only]
+    common = ["run", str(domain), str(state), "--impl", impl]
+    for g in goal or ():
+        common += ["--goal", g]
+    common += _flags(
+        rank=(rank, 1), weights=(weights, None), society=(society_name, SOCIETY.default),
+        lease=(lease, None), keys=(keys, None), rate=(rate, RATE.default),
+        stale_periods=(stale_periods, STALE_PERIODS.default), budget=(budget, BUDGET.default),
+        max_value_bytes=(max_value_bytes, MAX_VALUE_BYTES.default),
+        trace_max_bytes=(trace_max_bytes, TRACE_MAX_BYTES.default), hold=(hold, None),
+        margin=(margin, None), ros_domain_id=(ros_domain_id, None), ros2_map=(ros2_map, None),
+    )  # fmt: skip
+    for e in connect or ():
+        common += ["--connect", e]
+    common += [f for f, on in (("--force", force), ("--verbose", verbose), ("--ros2", ros2)) if on]
+    if not reconfigure:
+        common.append("--no-reconfigure")
+    extra: dict[str, list[str]] = {r: [] for r in robots}
+    extra[lead] += _flags(cycles=(cycles, 0), duration=(duration, None))
+    for text in inject or ():
+        aimed = parse_injection(text).robot
+        extra[aimed if aimed in extra else lead] += ["--inject", text]
+    if trace is not None:
+        for r in robots:
+            extra[r] += ["--trace", trace_of(str(trace), r)]
+    if print_commands:
+        _print_commands(robots, lead, common, extra, addresses, port, zenoh_config)
+        return
+    _launch(robots, lead, common, extra, port, zenoh_config)
+
+
+def _parse_hosts(texts: list[str] | tuple[str, ...]) -> list[tuple[str, str]]:
+    try:
+        return [_host(t) for t in texts]
+    except ValueError as exc:
+        usage_error(str(exc), "--host")
+
+
+def _flags(**given: tuple[Any, Any]) -> list[str]:
+    """``--name value`` for each option given a value other than its default."""
+    out: list[str] = []
+    for name, (value, default) in given.items():
+        if value is not None and value != default:
+            text = f"{value:g}" if isinstance(value, float) else str(value)
+            out += [f"--{name.replace('_', '-')}", text]
+    return out
+
+
+def _print_commands(
+    robots: list[str],
+    lead: str,
+    common: list[str],
+    extra: dict[str, list[str]],
+    addresses: dict[str, str],
+    port: int | None,
+    zenoh_config: Path | None,
+) -> None:
+    missing = [r for r in robots if r not in addresses]
+    if missing:
+        usage_error(f"give the host of {', '.join(missing)} (NAME=ADDRESS)", "--host")
+    ports: dict[str, int] = {}
+    base = port or DEFAULT_PORT
+    for r in robots:  # a second robot on a host takes the next port
+        ports[r] = base + sum(1 for o in ports if addresses[o] == addresses[r])
+    if zenoh_config is not None:
+        common = [*common, "--zenoh-config", str(zenoh_config)]
+    for command in commands(robots, common, extra, addresses, ports):
+        role = " (coordinator: start it first)" if command.robot == lead else ""
+        typer.echo(f"# {command.robot} on {command.host}{role}")
+        typer.echo(command.shell())
+
+
+def _launch(
+    robots: list[str],
+    lead: str,
+    common: list[str],
+    extra: dict[str, list[str]],
+    port: int | None,
+    zenoh_config: Path | None,
+) -> None:
+    host = "127.0.0.1"
+    ports = {r: free_port(host) for r in robots}
+    if port is not None:
+        ports[lead] = port
+    with tempfile.TemporaryDirectory(prefix="cfgplan-launch-") as folder:
+        if zenoh_config is None:
+            hermetic = Path(folder) / "zenoh-hermetic.json5"
+            hermetic.write_text(HERMETIC, "utf-8")
+            zenoh_config = hermetic
+        common = [*common, "--zenoh-config", str(zenoh_config)]
+        hosts = dict.fromkeys(robots, host)
+        launched = Launch(commands(robots, common, extra, hosts, ports))
+        try:
+            code = launched.run()
+        except RunError as exc:
+            sys.stdout.flush()
+            raise run_error(exc) from None
+    if code:
+        raise typer.Exit(code)

@@ -1,0 +1,384 @@
+"""A whole society started on this machine, one process per robot (``cfgplan launch``, issue 36).
+
+Each robot (and device) of a state runs its own ``cfgplan run --robot NAME``
+process, as each ran on its own body in the thesis (5.2.2), here side by side
+for development and demos (like ``ros2 launch`` or ``docker compose up``):
+
+* :func:`commands` writes the command of each robot, the coordinator (the
+  goal's robot, 5.5) first: robot *k* listens on its own endpoint and connects
+  to the endpoints of robots 1 to *k*-1, so every two robots share a link
+  without scouting (a full mesh; Zenoh peers do not route for each other);
+* :class:`Launch` starts them in that order, each once the previous one
+  listens (its port accepts a connection), prefixes every line of their
+  output with the robot's name (in colour on a terminal), and stops them all
+  by pid: SIGTERM, a bounded wait (:attr:`SpawnOptions.stop_wait`), then
+  SIGKILL.
+
+When the coordinator ends, the run is over: the others are stopped, and the
+launch's exit status is the coordinator's (0 ran, 1 a user error or a failing
+functionality, 3 no configuration left). A robot that exits with 1 or 2 (it
+could not start or run its part) stops the launch: exit status 1, with the
+robot's last lines. Any other end of a robot (a scripted ``kill``, a crash) is
+the society's business: the coordinator sees it lost and reconfigures.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shlex
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import IO, Any, TextIO
+
+from cfgplan.runtime.errors import RunError
+
+__all__ = [
+    "STYLES",
+    "Launch",
+    "RobotCommand",
+    "SpawnOptions",
+    "commands",
+    "free_port",
+    "in_use",
+    "status_text",
+]
+
+USER_ERRORS = (1, 2)
+"""Exit statuses of a robot that could not start or run its part (user error, usage)."""
+
+STYLES = ("cyan", "magenta", "green", "yellow", "blue", "red")
+"""The colours of the robots' prefixes on a terminal, in launch order (rich style names)."""
+
+
+@dataclass(frozen=True)
+class SpawnOptions:
+    """How robots are started and stopped."""
+
+    start_timeout: float = 60.0
+    """Seconds a robot may take to listen (an interpreter, the planner, a Zenoh session)."""
+    stop_wait: float = 10.0
+    """Seconds the robots have to stop after SIGTERM before they are killed."""
+    poll: float = 0.05
+    """Seconds between two looks at the processes."""
+    tail: int = 20
+    """Lines of a robot's output kept to say why it failed."""
+    colour: bool | None = None
+    """Colour the prefixes; ``None``: when the output is a terminal and NO_COLOR is unset."""
+
+
+@dataclass(frozen=True)
+class RobotCommand:
+    """One robot's process: ``cfgplan run ... --robot NAME`` with its endpoints."""
+
+    robot: str
+    args: tuple[str, ...]
+    """The command line after the program (``run DOMAIN STATE ...``)."""
+    host: str
+    port: int
+    coordinator: bool = False
+
+    def shell(self, program: Sequence[str] = ("cfgplan",)) -> str:
+        """The command as a shell line."""
+        return shlex.join([*program, *self.args])
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A TCP port on ``host`` that nobody listens on right now (bound to port 0)."""
+    with socket.socket() as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+def in_use(port: int, host: str = "127.0.0.1") -> bool:
+    """Whether ``port`` on ``host`` cannot be listened on now."""
+    with socket.socket() as s:
+        try:
+            s.bind((host, port))
+        except OSError:
+            return True
+    return False
+
+
+def endpoint(host: str, port: int) -> str:
+    """A Zenoh TCP endpoint; an IPv6 address in brackets."""
+    return f"tcp/[{host}]:{port}" if ":" in host else f"tcp/{host}:{port}"
+
+
+def commands(
+    robots: Sequence[str],
+    common: Sequence[str],
+    extra: Mapping[str, Sequence[str]],
+    hosts: Mapping[str, str],
+    ports: Mapping[str, int],
+) -> list[RobotCommand]:
+    """The command of each of ``robots`` (the coordinator first): ``common``
+    (``run DOMAIN STATE --impl ...``), then its ``extra`` options, ``--robot``,
+    ``--listen`` on its host and port, and ``--connect`` to every robot before it."""
+    out: list[RobotCommand] = []
+    for k, robot in enumerate(robots):
+        args = [*common, *extra.get(robot, ()), "--robot", robot]
+        args += ["--listen", endpoint(hosts[robot], ports[robot])]
+        for earlier in robots[:k]:
+            args += ["--connect", endpoint(hosts[earlier], ports[earlier])]
+        out.append(RobotCommand(robot, tuple(args), hosts[robot], ports[robot], k == 0))
+    return out
+
+
+def status_text(code: int) -> str:
+    """A process's exit status as a shell says it: a signal ``N`` is ``128+N``."""
+    if code < 0:
+        try:
+            name = signal.Signals(-code).name
+        except ValueError:
+            name = f"signal {-code}"
+        return f"{128 - code} ({name})"
+    return str(code)
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child, before exec
+    """Linux: the robot gets SIGTERM if the launch dies without stopping it (SIGKILL)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
+@dataclass
+class Started:
+    """One robot's running process, its output pump and its last lines."""
+
+    command: RobotCommand
+    process: subprocess.Popen[bytes]
+    pump: threading.Thread
+    tail: deque[str] = field(default_factory=deque)
+    reported: bool = False
+
+
+class Launch:
+    """The processes of a society on this machine (see the module)."""
+
+    def __init__(
+        self,
+        robots: Sequence[RobotCommand],
+        program: Sequence[str] = (sys.executable, "-m", "cfgplan"),
+        options: SpawnOptions | None = None,
+        out: TextIO | None = None,
+    ) -> None:
+        self.robots = list(robots)
+        self.program = tuple(program)
+        self.options = options or SpawnOptions()
+        self.out = out or sys.stdout
+        self.started: list[Started] = []
+        self.stop = threading.Event()
+        self._lock = threading.Lock()
+        self._closed = False
+        self._width = max((len(r.robot) for r in self.robots), default=0)
+        self._print = self._printer()
+
+    # -- output ------------------------------------------------------------------
+
+    def _printer(self) -> Callable[[str, str, str], None]:
+        """``print(robot, style, line)``: plain when piped, rich colours on a terminal."""
+        colour = self.options.colour
+        if colour is None:
+            colour = self.out.isatty() and not os.environ.get("NO_COLOR")
+        if not colour:
+
+            def plain(robot: str, style: str, line: str) -> None:
+                self.out.write(f"{robot.ljust(self._width)} | {line}\n")
+                self.out.flush()
+
+            return plain
+        from rich.console import Console
+        from rich.text import Text
+
+        console = Console(file=self.out, highlight=False, soft_wrap=True)
+
+        def coloured(robot: str, style: str, line: str) -> None:
+            text = Text(f"{robot.ljust(self._width)} | ", style=f"bold {style}")
+            text.append(line)
+            console.print(text)
+
+        return coloured
+
+    def say(self, robot: str, line: str) -> None:
+        """One line, prefixed with ``robot`` (a launched robot's colour, or none)."""
+        index = next((i for i, r in enumerate(self.robots) if r.robot == robot), None)
+        style = "white" if index is None else STYLES[index % len(STYLES)]
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                self._print(robot, style, line)
+            except (BrokenPipeError, ValueError, OSError):  # the reader went (| head): drain on
+                self._closed = True
+
+    def _pump(self, robot: str, stream: IO[bytes], tail: deque[str]) -> None:
+        for raw in iter(stream.readline, b""):
+            line = raw.decode("utf-8", errors="replace").rstrip("\r\n")
+            tail.append(line)
+            if len(tail) > self.options.tail:
+                tail.popleft()
+            self.say(robot, line)
+        stream.close()
+
+    # -- start -------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Start every robot in order, each once the previous one listens;
+        a robot that ends first, or does not listen in time, is a
+        :class:`RunError` (the caller stops the rest)."""
+        for command in self.robots:
+            if self.stop.is_set():
+                return
+            if in_use(command.port, command.host):
+                raise RunError(
+                    f"port {command.port} on {command.host} is in use: {command.robot} cannot "
+                    "listen on it",
+                    hint="give another --port, or none (a free port)",
+                )
+            process = subprocess.Popen(
+                [*self.program, *command.args],
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                start_new_session=True,  # Ctrl-C reaches the launch, which stops them in order
+                preexec_fn=_die_with_parent,
+            )
+            self.say(command.robot, f"(started: pid {process.pid})")
+            tail: deque[str] = deque()
+            assert process.stdout is not None
+            pump = threading.Thread(
+                target=self._pump,
+                args=(command.robot, process.stdout, tail),
+                name=f"launch-{command.robot}",
+                daemon=True,
+            )
+            pump.start()
+            started = Started(command, process, pump, tail)
+            self.started.append(started)
+            self._listening(started)
+
+    def _listening(self, started: Started) -> None:
+        """Wait until ``started`` accepts connections on its port (bounded)."""
+        command = started.command
+        deadline = time.monotonic() + self.options.start_timeout
+        while not self.stop.is_set():
+            code = started.process.poll()
+            if code is not None:
+                started.reported = True
+                raise self._failed(started, code, "did not start")
+            with socket.socket() as probe:
+                probe.settimeout(1.0)
+                if probe.connect_ex((command.host, command.port)) == 0:
+                    return
+            if time.monotonic() > deadline:
+                raise RunError(
+                    f"{command.robot} did not listen on port {command.port} within "
+                    f"{self.options.start_timeout:g} s"
+                )
+            time.sleep(self.options.poll)
+
+    def _failed(self, started: Started, code: int, what: str) -> RunError:
+        started.pump.join(timeout=2.0)  # its last lines, whole
+        lines = [line.strip() for line in started.tail if line.strip()]
+        said = [line for line in lines if "error:" in line] or lines  # not a caret or hint
+        last = said[-1].removeprefix("cfgplan: error: ") if said else ""
+        return RunError(
+            f"{started.command.robot} {what} (exit status {status_text(code)})"
+            + (f": {last}" if last else "")
+        )
+
+    # -- run ---------------------------------------------------------------------
+
+    def wait(self) -> int:
+        """Until the coordinator ends (its status), a robot fails (a
+        :class:`RunError`) or :attr:`stop` is set (the coordinator's status
+        once stopped)."""
+        while not self.stop.is_set():
+            for started in self.started:
+                code = started.process.poll()
+                if code is None or started.reported:
+                    continue
+                started.reported = True
+                if started.command.coordinator:
+                    started.pump.join(timeout=2.0)
+                    return code if code >= 0 else 128 - code
+                if code in USER_ERRORS:
+                    raise self._failed(started, code, "stopped")
+                self.say(started.command.robot, f"(ended, exit status {status_text(code)})")
+            time.sleep(self.options.poll)
+        return -1
+
+    def stop_all(self) -> int | None:
+        """Stop every robot still running by its pid, the coordinator first:
+        SIGTERM, at most :attr:`SpawnOptions.stop_wait` seconds, then SIGKILL.
+        The coordinator's exit status, if it ran."""
+        first = [s for s in self.started if s.command.coordinator]
+        rest = [s for s in self.started if not s.command.coordinator]
+        for group in (first, rest):
+            self._signal(group, signal.SIGTERM)
+            deadline = time.monotonic() + self.options.stop_wait
+            for started in group:
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    started.process.wait(max(0.0, deadline - time.monotonic()))
+            late = [s for s in group if s.process.poll() is None]
+            for started in late:
+                self.say(
+                    started.command.robot,
+                    f"(no end {self.options.stop_wait:g} s after SIGTERM: killed)",
+                )
+            self._signal(late, signal.SIGKILL)
+            for started in late:
+                started.process.wait(10.0)
+        for started in self.started:
+            started.pump.join(timeout=2.0)
+        if not first:
+            return None
+        code = first[0].process.returncode
+        return code if code >= 0 else 128 - code
+
+    @staticmethod
+    def _signal(group: Sequence[Started], signum: int) -> None:
+        for started in group:
+            if started.process.poll() is None:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(started.process.pid, signum)
+
+    def run(self) -> int:
+        """Start, wait and stop: the exit status (see the module). Ctrl-C or
+        SIGTERM stops every robot; a second Ctrl-C kills them at once."""
+        previous: dict[int, Any] = {}
+        main = threading.current_thread() is threading.main_thread()
+
+        def handler(signum: int, frame: object) -> None:
+            if self.stop.is_set() and signum == signal.SIGINT:
+                self._signal(self.started, signal.SIGKILL)
+            self.stop.set()
+
+        if main:
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                previous[signum] = signal.signal(signum, handler)
+        try:
+            status: int | None = None
+            try:
+                self.start()
+                status = self.wait()
+            finally:
+                stopped = self.stop_all()
+            if status == -1:  # stopped: the coordinator's status once stopped
+                return stopped if stopped is not None else 0
+            return status or 0
+        finally:
+            for s, h in previous.items():
+                signal.signal(s, h)

@@ -1,0 +1,254 @@
+"""``cfgplan launch``: a whole society in one command, one process per robot (issue 36).
+
+The slow tests launch cross-door step 2 (6.2.2) for real: the coordinator's
+compass fails, the society switches 44 -> 47 and Emil keeps crossing; a
+SIGTERM to the launch stops every robot; a robot that cannot start stops the
+launch with a clear message. Every test checks by pid that no robot process
+is left. Hermetic: loopback, free ports, scouting off (the launch's own
+configuration), every wait bounded.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from cfgplan.runtime.spawn import RobotCommand, commands, status_text
+from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
+from tests.runtime.netutil import read_trace
+
+STEP2 = [
+    str(DOMAINS / "cross-door/domain.lisp"),
+    str(DOMAINS / "cross-door/state-6.2.2-step2.lisp"),
+]
+LIMIT = 90.0  # seconds: three interpreters, Zenoh handshakes and a run, on a loaded machine
+
+
+def _launch(*args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "cfgplan", "launch", *STEP2, *args],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+
+
+def _pids(output: str) -> dict[str, int]:
+    """The robots' pids, as the launch says them (``Emil  | (started: pid 123)``)."""
+    return {
+        m[1]: int(m[2]) for m in re.finditer(r"^(\w+) +\| \(started: pid (\d+)\)", output, re.M)
+    }
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def _finish(process: subprocess.Popen[str]) -> tuple[int, str, str]:
+    try:
+        out, err = process.communicate(timeout=LIMIT)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        out, err = process.communicate(timeout=30)
+        raise AssertionError(f"launch did not end within {LIMIT} s:\n{out}\n{err}") from None
+    return process.returncode, out, err
+
+
+def test_each_robot_listens_and_connects_to_every_robot_before_it() -> None:
+    """The commands form a full mesh, the coordinator first and connected to nobody."""
+    hosts = {"Emil": "10.0.0.1", "Pippi": "10.0.0.2", "Iris": "10.0.0.2"}
+    ports = {"Emil": 7447, "Pippi": 7447, "Iris": 7448}
+    made = commands(
+        ["Emil", "Pippi", "Iris"], ["run", "d", "s"], {"Emil": ["--cycles", "9"]}, hosts, ports
+    )
+    assert [c.robot for c in made] == ["Emil", "Pippi", "Iris"]
+    assert made[0] == RobotCommand(
+        "Emil",
+        ("run", "d", "s", "--cycles", "9", "--robot", "Emil", "--listen", "tcp/10.0.0.1:7447"),
+        "10.0.0.1",
+        7447,
+        coordinator=True,
+    )
+    assert made[2].args[-6:] == (
+        "--listen",
+        "tcp/10.0.0.2:7448",
+        "--connect",
+        "tcp/10.0.0.1:7447",
+        "--connect",
+        "tcp/10.0.0.2:7447",
+    )
+    assert status_text(-9) == "137 (SIGKILL)" and status_text(3) == "3"
+
+
+def test_print_commands_writes_each_hosts_command(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """Nothing starts; each robot's line has its endpoints, its faults and its trace."""
+    done = cfgplan(
+        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands",
+        "--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2", "--duration", "5",
+        "--inject", "fail compass(Pippi) at cycle 9", "--trace", "run.jsonl",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == "# Emil on 10.0.0.1 (coordinator: start it first)"
+    assert lines[2] == "# Pippi on 10.0.0.2"
+    emil, pippi = lines[1], lines[3]
+    assert emil.startswith("cfgplan run ") and "--duration 5" in emil and "--inject" not in emil
+    assert "--robot Emil --listen tcp/10.0.0.1:7447" in emil and "--connect" not in emil
+    assert "--inject 'fail compass(Pippi) at cycle 9'" in pippi and "--duration" not in pippi
+    assert "--trace run-pippi.jsonl" in pippi
+    assert pippi.endswith("--robot Pippi --listen tcp/10.0.0.2:7447 --connect tcp/10.0.0.1:7447")
+
+
+def test_print_commands_needs_every_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    done = cfgplan(
+        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands", "--host", "Emil=a"
+    )
+    assert done.returncode == 2 and "give the host of Pippi" in done.stderr
+
+
+def test_an_unknown_robot_is_refused_before_anything_starts(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    done = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--robot", "Bob")
+    assert done.returncode == 1
+    assert "no robot Bob in" in done.stderr and "(its robots: Pippi, Emil)" in done.stderr
+    assert "Traceback" not in done.stderr and "started: pid" not in done.stdout
+
+
+def test_a_wrong_ros2_map_is_refused_before_anything_starts(cfgplan, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The map is checked once against the domain, with its file and line; no robot starts."""
+    pytest.importorskip("rosbags")
+    data = ROOT / "tests" / "ros2" / "data"
+    bad = tmp_path / "map.toml"
+    bad.write_text('[[bind]]\nfunctionality = "laser"\noutput = "scans"\ntopic = "/scan"\n'
+                   'type = "sensor_msgs/msg/LaserScan"\n')  # fmt: skip
+    done = cfgplan(
+        "launch", str(data / "drive.lisp"), str(data / "drive-state.lisp"),
+        "--impl", str(data / "drive_impl.py"), "--ros2-map", str(bad),
+    )  # fmt: skip
+    assert done.returncode == 1
+    assert f"{bad}:3:1: error: laser has no output 'scans'" in done.stderr
+    assert "started: pid" not in done.stdout
+
+
+def test_host_without_print_commands_is_a_usage_error(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    done = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--host", "Emil=10.0.0.1")
+    assert done.returncode == 2 and "give --print-commands" in done.stderr
+
+
+def test_a_port_in_use_is_refused(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """Someone listens on the coordinator's --port: a clear error, no robot started."""
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        done = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--port", str(port))
+    assert done.returncode == 1
+    assert f"port {port} on 127.0.0.1 is in use: Emil cannot listen on it" in done.stderr
+    assert "started: pid" not in done.stdout
+
+
+@pytest.mark.slow
+def test_launch_runs_cross_door_switches_and_leaves_no_process(tmp_path: Path) -> None:
+    """Step 2 launched in one command: Emil's compass fails at cycle 40, the society
+    switches 44 -> 47 across the two processes, cross-door runs again after it, the
+    launch exits 0 when Emil's --duration ends, and both pids are gone."""
+    trace = tmp_path / "run.jsonl"
+    launched = _launch(
+        "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--duration", "8",
+        "--inject", "fail compass(Emil) at cycle 40", "--trace", str(trace),
+    )  # fmt: skip
+    code, out, err = _finish(launched)
+    pids = _pids(out)
+    assert code == 0, f"{out}\n{err}"
+    assert list(pids) == ["Emil", "Pippi"], out  # the coordinator first
+    assert all(_gone(pid) for pid in pids.values()), out
+    mine = read_trace(tmp_path / "run-emil.jsonl")
+    theirs = read_trace(tmp_path / "run-pippi.jsonl")
+    switch = next(r for r in mine if r["event"] == "switch")
+    assert (switch["from_cost"], switch["to_cost"]) == (44, 47)
+    assert [r["id"] for r in theirs if r["event"] == "install"][-1] == switch["id"]
+    served = [
+        r
+        for r in mine
+        if r["event"] == "call"
+        and r["functionality"] == "cross-door"
+        and r["status"] == "ran"
+        and int(r["cycle"]) > int(switch["cycle"])  # type: ignore[call-overload]
+    ]
+    assert served, "cross-door never ran after the switch"
+    assert re.search(r"^Emil +\| .*switch 1 \(compass\(Emil\) failed\): cost 44 -> 47", out, re.M)
+    assert "Traceback" not in out + err
+
+
+@pytest.mark.slow
+def test_sigterm_to_launch_stops_every_robot() -> None:
+    """No limit given: the robots run until the launch gets SIGTERM; then it stops
+    them (coordinator first), exits 0 (Emil's status) and no pid is left."""
+    launched = _launch("--impl", str(EXAMPLE_IMPL), "--rate", "20")
+    assert launched.stdout is not None
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(launched.stdout), daemon=True)  # type: ignore[arg-type]
+    reader.start()
+    deadline = time.monotonic() + LIMIT
+    while "Emil: robot Pippi seen" not in "".join(lines) and time.monotonic() < deadline:
+        assert launched.poll() is None, "".join(lines)
+        time.sleep(0.05)
+    seen = "".join(lines)
+    if "Emil: robot Pippi seen" not in seen:
+        launched.kill()
+    assert "Emil: robot Pippi seen" in seen, seen
+    pids = _pids(seen)
+    assert sorted(pids) == ["Emil", "Pippi"]
+    launched.send_signal(signal.SIGTERM)
+    try:
+        launched.wait(LIMIT)
+    finally:
+        if launched.poll() is None:
+            launched.kill()
+    reader.join(10.0)
+    out, err = "".join(lines), launched.stderr.read() if launched.stderr else ""
+    assert launched.returncode == 0, f"{out}\n{err}"
+    assert all(_gone(pid) for pid in pids.values())
+    assert "Traceback" not in out + err
+
+
+@pytest.mark.slow
+def test_a_robot_that_cannot_start_stops_the_launch(tmp_path: Path) -> None:
+    """Pippi's implementations lack measure-door, which her part of 44 runs: she exits
+    1, the launch says why, stops Emil and exits 1; no pid is left."""
+    partial = tmp_path / "partial.py"
+    partial.write_text(
+        textwrap.dedent(
+            f"""
+            from pathlib import Path
+            from cfgplan.runtime import Implementation, load_module
+            _base = load_module(Path({str(EXAMPLE_IMPL)!r}))
+            globals().update(
+                {{k: v for k, v in vars(_base).items() if isinstance(v, Implementation)
+                  and v.name != "measure-door"}}
+            )
+            """
+        )
+    )
+    code, out, err = _finish(_launch("--impl", str(partial), "--rate", "20"))
+    pids = _pids(out)
+    assert code == 1, f"{out}\n{err}"
+    assert "Pippi did not start (exit status 1)" in err and "measure-door" in err, err
+    assert list(pids) == ["Emil", "Pippi"]
+    assert all(_gone(pid) for pid in pids.values())
+    assert "Traceback" not in out + err

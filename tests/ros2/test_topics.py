@@ -1,0 +1,212 @@
+"""The ROS 2 topic map (``--ros2-map FILE``): read, and checked against the domain (issue 36)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from cfgplan.problem import load
+from cfgplan.ros2.codec import cdr_of_value, value_of_cdr
+from cfgplan.ros2.topics import Binding, load_map, parse_map
+from cfgplan.runtime.errors import RunError
+from tests.backends.support import ROOT
+
+pytest.importorskip("rosbags")
+
+DATA = Path(__file__).parent / "data"
+DRIVE = load(DATA / "drive.lisp", DATA / "drive-state.lisp")
+
+
+def _parse(text: str) -> list[Binding]:
+    found = parse_map(textwrap.dedent(text), "map.toml", DRIVE.domain, DRIVE.task.agents)
+    return list(found.bindings)
+
+
+def _error(text: str) -> RunError:
+    with pytest.raises(RunError) as caught:
+        _parse(text)
+    return caught.value
+
+
+def test_the_example_map_binds_the_laser_and_the_drive() -> None:
+    """Each [[bind]] names its functionality, port (with its position), topic, type and line."""
+    found = load_map(DATA / "drive-map.toml", DRIVE.domain, DRIVE.task.agents)
+    laser, drive = found.bindings
+    assert (laser.functionality, laser.direction, laser.port, laser.index) == (
+        "laser",
+        "output",
+        "scan",
+        0,
+    )
+    assert (laser.topic, laser.msg_type, laser.timeout, laser.line) == (
+        "/scan",
+        "sensor_msgs/msg/LaserScan",
+        0.5,
+        2,
+    )
+    assert (drive.direction, drive.port, drive.objects, drive.inputs, drive.outputs) == (
+        "input",
+        "cmd",
+        0,
+        1,
+        0,
+    )
+    assert found.implements("laser", "Pippi") and found.implements("drive", "Pippi")
+    assert not found.implements("avoid", "Pippi")
+
+
+@pytest.mark.parametrize(
+    ("text", "message", "line"),
+    [
+        (
+            """
+            [[bind]]
+            functionality = "lidar"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            "no functionality lidar in the domain (its: avoid, drive, laser)",
+            3,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "image"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            "laser has no output 'image' (its outputs: scan)",
+            4,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScann"
+            """,
+            "unknown ROS 2 message type sensor_msgs/msg/LaserScann",
+            6,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "scan"
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            "'scan' is not an absolute ROS 2 topic name",
+            5,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            robot = "Emil"
+            """,
+            "no robot Emil in the state (its: Pippi)",
+            7,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            rate = 10
+            """,
+            "[[bind]] has no key rate",
+            7,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "avoid"
+            input = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            "avoid has outputs: only an action's inputs",
+            4,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan2"
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            "laser output scan is bound twice (first at line 2)",
+            8,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            'binds one port: give input = "..." or output = "..."',
+            2,
+        ),
+    ],
+)
+def test_a_wrong_binding_is_said_with_its_file_and_line(text: str, message: str, line: int) -> None:
+    """Every mistake names the map file and the line of the key at fault (or of its [[bind]])."""
+    error = _error(text)
+    assert message in error.message
+    assert (error.file, error.line) == ("map.toml", line)
+
+
+def test_a_map_that_is_not_toml_says_where() -> None:
+    error = _error('[[bind]]\nfunctionality = "laser\n')
+    assert error.message.startswith("the ROS 2 map is not TOML") and error.line == 2
+
+
+def test_the_cli_refuses_a_wrong_map_before_the_network(tmp_path: Path) -> None:
+    """cfgplan run: exit 1, compiler-style file:line, no traceback, no session opened."""
+    bad = tmp_path / "map.toml"
+    bad.write_text('[[bind]]\nfunctionality = "laser"\noutput = "scans"\ntopic = "/scan"\n'
+                   'type = "sensor_msgs/msg/LaserScan"\n')  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "run",
+         str(DATA / "drive.lisp"), str(DATA / "drive-state.lisp"),
+        "--impl", str(DATA / "drive_impl.py"), "--robot", "Pippi", "--ros2-map", str(bad)],
+        capture_output=True, text=True, timeout=120, cwd=ROOT,
+    )  # fmt: skip
+    assert done.returncode == 1
+    assert f"{bad}:3:1: error: laser has no output 'scans' (its outputs: scan)" in done.stderr
+    assert "Traceback" not in done.stderr and "without keys" not in done.stderr
+
+
+def test_values_and_cdr_round_trip_and_wrong_fields_are_named() -> None:
+    """A dict becomes CDR (header 00 01 00 00) and comes back; a field left out is zero."""
+    payload = cdr_of_value("geometry_msgs/msg/Twist", {"linear": {"x": 0.5}})
+    assert payload[:4] == b"\x00\x01\x00\x00"
+    assert value_of_cdr("geometry_msgs/msg/Twist", payload) == {
+        "linear": {"x": 0.5, "y": 0.0, "z": 0.0},
+        "angular": {"x": 0.0, "y": 0.0, "z": 0.0},
+    }
+    with pytest.raises(ValueError, match=r"Twist.linear.x: 'fast' is not a number"):
+        cdr_of_value("geometry_msgs/msg/Twist", {"linear": {"x": "fast"}})
+    with pytest.raises(ValueError, match="has no field speed"):
+        cdr_of_value("geometry_msgs/msg/Twist", {"speed": 1})
