@@ -94,6 +94,10 @@ def test_cli_time_limit_json(tmp_path: Path) -> None:
     assert "search stopped (time limit)" in out.stderr
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_returns_what_was_found(tmp_path: Path) -> None:
     """Listing every configuration of a huge instance never ends: after the
     progress line appears, Ctrl-C (SIGINT) stops it and the answer so far is printed."""
@@ -105,6 +109,9 @@ def test_ctrl_c_returns_what_was_found(tmp_path: Path) -> None:
         text=True,
         cwd=ROOT,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        # Python makes Ctrl-C a KeyboardInterrupt only where SIGINT is not ignored
+        # when it starts, and a test run started in the background ignores it.
+        preexec_fn=_default_sigint,
     )
     assert proc.stderr is not None
     deadline = time.monotonic() + 60
