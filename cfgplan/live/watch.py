@@ -38,8 +38,8 @@ def fallback_rows(reconfigurator: Reconfigurator) -> list[dict[str, Any]]:
         return []
     rows = []
     for resource in resources(running, reconfigurator.task.media):
-        # read-only: the fallbacks the coordinator keeps (Reconfigurator._fallback takes its lock)
-        known, config = reconfigurator._fallback(situation, resource)
+        # read-only: the fallbacks the coordinator keeps (Reconfigurator.fallback takes its lock)
+        known, config = reconfigurator.fallback(situation, resource)
         row: dict[str, Any] = {"resource": resource.text, "kind": resource.kind, "known": known}
         if config is not None:
             moved = change(running, config)

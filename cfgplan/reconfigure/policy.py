@@ -181,7 +181,7 @@ class Reconfigurator:
         with self.lock:
             return bool(self._pending)
 
-    def _fallback(
+    def fallback(
         self, situation: Situation, resource: Resource
     ) -> tuple[bool, Configuration | None]:
         """Whether the fallback for ``resource`` in ``situation`` is known, and what it is."""
@@ -213,7 +213,7 @@ class Reconfigurator:
         if self.goals or together:  # fallbacks are planned for one failure each
             known, best = False, None
         else:
-            known, best = self._fallback(before, resource)
+            known, best = self.fallback(before, resource)
         source: Literal["fallback", "search"] = "fallback" if known else "search"
         why: tuple[str, ...] = ()
         if not known or best is None:

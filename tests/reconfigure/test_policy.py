@@ -160,9 +160,9 @@ def test_a_search_cut_by_its_time_limit_keeps_no_fallback() -> None:
     _, r = _start(STEP2)
     assert r.running is not None
     r.compute(r.situation, r.running, COMPASS, time_limit=0.0)  # cut: a dive's guess
-    assert r._fallback(r.situation, COMPASS) == (False, None)
+    assert r.fallback(r.situation, COMPASS) == (False, None)
     r.compute(r.situation, r.running, COMPASS)
-    known, found = r._fallback(r.situation, COMPASS)
+    known, found = r.fallback(r.situation, COMPASS)
     assert known and found is not None and found.cost == 47
 
 
@@ -190,10 +190,10 @@ def test_it_keeps_the_fallbacks_of_the_last_few_situations_only() -> None:
     for situation in situations:
         r.compute(situation, r.running, COMPASS)
     assert len(r._fallbacks) == TASKS_KEPT
-    known, found = r._fallback(situations[-1], COMPASS)
+    known, found = r.fallback(situations[-1], COMPASS)
     assert known and found is not None and found.cost == 47
-    assert r._fallback(situations[-TASKS_KEPT], COMPASS)[0]
-    assert r._fallback(situations[-TASKS_KEPT - 1], COMPASS) == (False, None)
+    assert r.fallback(situations[-TASKS_KEPT], COMPASS)[0]
+    assert r.fallback(situations[-TASKS_KEPT - 1], COMPASS) == (False, None)
 
 
 def test_after_a_rollback_a_broken_configuration_is_left_at_the_next_chance() -> None:
