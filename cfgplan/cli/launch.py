@@ -33,6 +33,7 @@ from cfgplan.cli.run import option
 from cfgplan.cli.sequence import first_step
 from cfgplan.configuration.cost import parse_weights
 from cfgplan.diagnostics import run_error
+from cfgplan.live.address import parse_address
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.faults import parse_injection
 from cfgplan.runtime.options import (
@@ -46,6 +47,9 @@ from cfgplan.runtime.options import (
     LEASE,
     MAX_VALUE_BYTES,
     RATE,
+    RATE_ALLOWANCE,
+    RECORD,
+    RECORD_MAX_BYTES,
     SOCIETY,
     STALE_PERIODS,
     TRACE,
@@ -66,6 +70,11 @@ DEFAULT_PORT = 7447
 
 def _weights(text: str) -> str:
     parse_weights(text)  # its error, said as --weights's
+    return text
+
+
+def _address(text: str) -> str:
+    parse_address(text)  # its error, said as the option's
     return text
 
 
@@ -151,6 +160,7 @@ def launch(
     lease: Annotated[float | None, option(LEASE)] = LEASE.default,
     keys: Annotated[Path | None, option(KEYS)] = None,
     rate: Annotated[float, option(RATE)] = RATE.default,
+    rate_allowance: Annotated[float, option(RATE_ALLOWANCE)] = RATE_ALLOWANCE.default,
     cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
     duration: Annotated[float | None, option(DURATION)] = DURATION.default,
     stale_periods: Annotated[float, option(STALE_PERIODS)] = STALE_PERIODS.default,
@@ -158,6 +168,29 @@ def launch(
     max_value_bytes: Annotated[int, option(MAX_VALUE_BYTES)] = MAX_VALUE_BYTES.default,
     trace: Annotated[Path | None, option(TRACE)] = None,
     trace_max_bytes: Annotated[int, option(TRACE_MAX_BYTES)] = TRACE_MAX_BYTES.default,
+    record: Annotated[Path | None, option(RECORD)] = None,
+    record_max_bytes: Annotated[int, option(RECORD_MAX_BYTES)] = RECORD_MAX_BYTES.default,
+    live: Annotated[
+        str | None,
+        typer.Option(
+            "--live",
+            metavar="[HOST:]PORT",
+            parser=parsed(_address),
+            help="The coordinator's live page, as cfgplan run's (port 0: any free one, its URL "
+            "printed).",
+            show_default=False,
+        ),
+    ] = None,
+    foxglove: Annotated[
+        str | None,
+        typer.Option(
+            "--foxglove",
+            metavar="[HOST:]PORT",
+            parser=parsed(_address),
+            help="The coordinator served to Foxglove live, as cfgplan run's.",
+            show_default=False,
+        ),
+    ] = None,
     force: Annotated[bool, option(FORCE)] = FORCE.default,
     verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
     inject: Annotated[list[str] | None, option(INJECT)] = None,
@@ -199,8 +232,9 @@ def launch(
 
     Ctrl-C or SIGTERM stops every robot (SIGTERM, at most 10 s, then SIGKILL). When the
     coordinator ends (--cycles, --duration, the task done), the others are stopped.
-    --cycles and --duration go to the coordinator, each --inject to the robot it aims at
-    (a change of facts to the coordinator), --trace FILE to every robot as FILE-NAME.
+    --cycles, --duration, --live and --foxglove go to the coordinator, each --inject to
+    the robot it aims at (a change of facts to the coordinator), --trace FILE and
+    --record FILE to every robot as FILE-NAME.
     --print-commands starts nothing and prints the command of each robot's host
     instead (--host NAME=ADDRESS for each). Exit codes: the coordinator's (0 ran, 3 no
     configuration left), 1 invalid input or a robot that could not start or run its
@@ -250,6 +284,8 @@ def launch(
     common += _flags(
         rank=(rank, 1), weights=(weights, None), society=(society_name, SOCIETY.default),
         lease=(lease, None), keys=(keys, None), rate=(rate, RATE.default),
+        rate_allowance=(rate_allowance, RATE_ALLOWANCE.default),
+        record_max_bytes=(record_max_bytes, RECORD_MAX_BYTES.default),
         stale_periods=(stale_periods, STALE_PERIODS.default), budget=(budget, BUDGET.default),
         max_value_bytes=(max_value_bytes, MAX_VALUE_BYTES.default),
         trace_max_bytes=(trace_max_bytes, TRACE_MAX_BYTES.default), hold=(hold, None),
@@ -261,13 +297,16 @@ def launch(
     if not reconfigure:
         common.append("--no-reconfigure")
     extra: dict[str, list[str]] = {r: [] for r in robots}
-    extra[lead] += _flags(cycles=(cycles, 0), duration=(duration, None))
+    extra[lead] += _flags(
+        cycles=(cycles, 0), duration=(duration, None), live=(live, None), foxglove=(foxglove, None)
+    )
     for text in inject or ():
         aimed = parse_injection(text).robot
         extra[aimed if aimed in extra else lead] += ["--inject", text]
-    if trace is not None:
-        for r in robots:
-            extra[r] += ["--trace", trace_of(str(trace), r)]
+    for flag, path in (("--trace", trace), ("--record", record)):
+        if path is not None:
+            for r in robots:
+                extra[r] += [flag, trace_of(str(path), r)]
     if print_commands:
         _print_commands(robots, lead, common, extra, addresses, port, zenoh_config)
         return

@@ -115,6 +115,25 @@ def test_print_commands_writes_each_hosts_command(cfgplan) -> None:  # type: ign
     assert pippi.endswith("--robot Pippi --listen tcp/10.0.0.2:7447 --connect tcp/10.0.0.1:7447")
 
 
+def test_the_coordinator_serves_the_live_page_and_every_robot_records(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """--live and --foxglove go to the coordinator only, --record FILE to every
+    robot as FILE-NAME, --rate-allowance to every robot; a bad address is a
+    usage error naming the option."""
+    done = cfgplan(
+        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands",
+        "--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2", "--live", "0",
+        "--foxglove", "127.0.0.1:8765", "--record", "run.mcap", "--rate-allowance", "3",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    emil, pippi = done.stdout.splitlines()[1], done.stdout.splitlines()[3]
+    assert "--live 0" in emil and "--foxglove 127.0.0.1:8765" in emil
+    assert "--live" not in pippi and "--foxglove" not in pippi
+    assert "--record run-emil.mcap" in emil and "--record run-pippi.mcap" in pippi
+    assert "--rate-allowance 3" in emil and "--rate-allowance 3" in pippi
+    bad = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--live", "host:port")
+    assert bad.returncode == 2 and "--live" in bad.stderr
+
+
 def test_print_commands_needs_every_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
     done = cfgplan(
         "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands", "--host", "Emil=a"
