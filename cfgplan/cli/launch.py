@@ -297,12 +297,19 @@ def launch(
     if not reconfigure:
         common.append("--no-reconfigure")
     extra: dict[str, list[str]] = {r: [] for r in robots}
-    extra[lead] += _flags(
+    led = _flags(
         cycles=(cycles, 0), duration=(duration, None), live=(live, None), foxglove=(foxglove, None)
     )
+    if led and lead not in extra:
+        usage_error(f"goes to the coordinator, {lead}, which --robot leaves out", led[0])
+    if led:
+        extra[lead] += led
     for text in inject or ():
         aimed = parse_injection(text).robot
-        extra[aimed if aimed in extra else lead] += ["--inject", text]
+        target = aimed if aimed in problem.task.agents else lead
+        if target not in extra:
+            usage_error(f"aims at {target}, which --robot leaves out", "--inject")
+        extra[target] += ["--inject", text]
     for flag, path in (("--trace", trace), ("--record", record)):
         if path is not None:
             for r in robots:
@@ -325,7 +332,9 @@ def _flags(**given: tuple[Any, Any]) -> list[str]:
     out: list[str] = []
     for name, (value, default) in given.items():
         if value is not None and value != default:
-            text = f"{value:g}" if isinstance(value, float) else str(value)
+            text = str(value)  # a float exactly as given (repr), without a trailing .0
+            if isinstance(value, float) and text.endswith(".0"):
+                text = text[:-2]
             out += [f"--{name.replace('_', '-')}", text]
     return out
 
@@ -348,7 +357,7 @@ def _print_commands(
         ports[r] = base + sum(1 for o in ports if addresses[o] == addresses[r])
     if zenoh_config is not None:
         common = [*common, "--zenoh-config", str(zenoh_config)]
-    for command in commands(robots, common, extra, addresses, ports):
+    for command in commands(robots, common, extra, addresses, ports, lead):
         role = " (coordinator: start it first)" if command.robot == lead else ""
         typer.echo(f"# {command.robot} on {command.host}{role}")
         typer.echo(command.shell())
@@ -373,7 +382,7 @@ def _launch(
             zenoh_config = hermetic
         common = [*common, "--zenoh-config", str(zenoh_config)]
         hosts = dict.fromkeys(robots, host)
-        launched = Launch(commands(robots, common, extra, hosts, ports))
+        launched = Launch(commands(robots, common, extra, hosts, ports, lead))
         try:
             code = launched.run()
         except RunError as exc:

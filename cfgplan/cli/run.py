@@ -299,7 +299,8 @@ def run(
             if topics is not None:  # bound functionalities read and publish ROS 2 topics
                 from cfgplan.ros2.bindings import open_bindings
 
-                registry = open_bindings(opened, robot, topics, ros_domain_id).registry(registry)
+                bound = open_bindings(opened, robot, topics, ros_domain_id, max_value_bytes)
+                registry = bound.registry(registry)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
             if ros2:  # its Adaptation events on /cfgplan/events (cfgplan.ros2)

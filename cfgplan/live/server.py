@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import ipaddress
 import json
+import logging
 import socket
 import threading
 from dataclasses import dataclass
@@ -73,10 +75,20 @@ class LiveOptions:
     """Seconds a stream may take to accept a message before it is dropped."""
     stop_timeout: float = 2.0
     """Seconds the server may take to stop when the run ends."""
+    start_timeout: float = 10.0
+    """Seconds the server may take to start serving."""
 
 
 def _loopback(host: str) -> bool:
-    return host in LOOPBACK_NAMES or host.startswith("127.")
+    """Whether ``host`` (from a Host header) names this machine: ``localhost``
+    or a loopback address, not a name that merely starts like one
+    (``127.evil.example`` may be rebound to anything)."""
+    if host in LOOPBACK_NAMES:
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
 
 
 def _hostname(header: str) -> str:
@@ -114,7 +126,12 @@ class Hub:
             newest = self.watch.seq
             if newest != seq or now - last >= self.options.state_every:
                 last = now
-                state = self.watch.state()
+                try:
+                    state = self.watch.state()
+                except Exception:  # the page goes on with what it showed; said once a pass
+                    logging.getLogger(__name__).exception("the live page could not be updated")
+                    await asyncio.sleep(self.options.poll)
+                    continue
                 if newest != seq or state != self.state:
                     seq = newest
                     self.state = state
@@ -168,7 +185,10 @@ class LiveServer:
             target=self._serve, args=(sock,), name="cfgplan live page", daemon=True
         )
         self._thread.start()
-        self._ready.wait(self.options.stop_timeout + 5)
+        if not self._ready.wait(self.options.start_timeout):
+            raise OSError(
+                f"the live page's server did not start within {self.options.start_timeout:g} s"
+            )
         if self._failed is not None:
             raise OSError(f"the live page's server did not start: {self._failed}")
         return self.address.url(self.port)

@@ -15,12 +15,14 @@ configurations stay distinct across windows.
 
 The first pass is one window over every cost, priced only by whether a node
 can complete: most instances are listed in this one walk. Only when it has
-taken :data:`ONE_PASS` nodes without meeting a configuration of the cheapest
-cost is it given up, for windows pruned by the bounds — the cheapest cost
-first, the rest after — so that the first configurations come soon.
+taken :attr:`~cfgplan.planner.options.SearchOptions.one_pass` nodes without
+meeting a configuration of the cheapest cost is it given up, for windows
+pruned by the bounds — the cheapest cost first, the rest after — so that the
+first configurations come soon.
 
-When a window holds more than :data:`MOST_HELD` configurations, its upper
-edge is lowered to keep the cheaper half and the next window starts there,
+When a window holds more than
+:attr:`~cfgplan.planner.options.SearchOptions.most_held` configurations, its
+upper edge is lowered to keep the cheaper half and the next window starts there,
 so memory stays bounded whatever the instance; the configurations listed
 are remembered (distinct mode) as 128-bit digests of their label-free form.
 """
@@ -42,16 +44,11 @@ from cfgplan.planner.report import DeadEnd, Report, StopReason
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground
 
-MOST_HELD = 250_000
-"""Configurations one window may hold before its upper edge comes down."""
-
-ONE_PASS = 5_000
-"""Nodes the first walk, over every cost at once, may take before it has
-listed anything."""
-
 
 class _TooBig(Exception):
-    """The first walk took :data:`ONE_PASS` nodes and listed nothing yet."""
+    """The first walk took its
+    :attr:`~cfgplan.planner.options.SearchOptions.one_pass` nodes and listed
+    nothing yet."""
 
 
 @dataclass
@@ -125,7 +122,7 @@ class Windows:
         grower.heuristic, grower.refine = self.feasible, None
         window = Window(low, float("inf"))
         try:
-            yield from self._walk(start, window, budget=ONE_PASS)
+            yield from self._walk(start, window, budget=self.grower.options.one_pass)
         except _TooBig:
             # The cheapest lie deep: look for them first, pruned by the bounds.
             grower.heuristic, grower.refine = bounds
@@ -185,7 +182,7 @@ class Windows:
                     yield from self._list([self._found(node, priority, index, listed)])
                     continue
                 found.append(self._found(node, priority, index, held))
-                if len(found) > MOST_HELD:
+                if len(found) > self.grower.options.most_held:
                     found, window.high = _halve(found)
                     window.cut(window.high)  # what it dropped, a later window lists
                 continue

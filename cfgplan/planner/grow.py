@@ -19,6 +19,7 @@ from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.finish import Models, admissible, build, fingerprint
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.report import DeadEnd, Report
 from cfgplan.planner.split import Split
@@ -30,30 +31,6 @@ Heuristic = Callable[[Partial], float | None]
 Splitter = Callable[[Partial], tuple[float | None, Split | None]]
 """The stronger bound, with the node's bound taken apart at its top item
 (:mod:`cfgplan.planner.split`)."""
-
-WARM = 32
-"""Nodes a search prices (settles) before it tries the stronger bound at
-all: a small search (the thesis's instances) is over before it could pay
-for itself. Counted in nodes priced, not taken: where every expansion has
-many children (fusion) the bound is soon worth its cost."""
-
-TRIAL = 4
-"""Refinements by the stronger bound a search tries before it may give that
-bound up: from then on, when fewer than one refinement in :data:`PAYS` paid
-(pruned a node, raised its priority past the next node's, so that another
-node is taken first, or priced some of its children above their own bound,
-:mod:`cfgplan.planner.split`), the bound is dropped for the rest of the search. Where
-it seldom pays (build-wall, the wall and relay families) it only costs time;
-where it helps (ecology, fusion, media-tight, chain) most of its raises pay.
-Dropping an admissible bound never changes the answer, only how many nodes
-are taken (tests/planner/test_grow.py)."""
-PAYS = 4
-
-RELY = 32
-"""Refinements after which, if the stronger bound was at least the first one
-every time, the first one is no longer computed (only whether a node can
-complete is: :attr:`Grower.feasible`): where the stronger bound always
-dominates (fusion), the first adds only its cost."""
 
 
 class Reprice(Enum):
@@ -99,6 +76,9 @@ class Grower:
     report: Report = field(default_factory=Report)
     seen: set[bytes] = field(default_factory=set)  # fingerprints listed (distinct)
     models: Models = field(default_factory=Models)
+    options: SearchOptions = field(default_factory=SearchOptions)
+    """When the stronger bound is tried, given up and relied on (and the
+    strategies' settings)."""
 
     def __post_init__(self) -> None:
         self.levels = self.grounder.task.levels
@@ -192,7 +172,7 @@ class Grower:
         """The node's priority under the larger of both bounds; None: pruned.
         ``beaten``: the priority a raised node must pass for the raise to pay
         (best-first: the next node's; else any raise pays)."""
-        if self.refine is None or self.settled < WARM:
+        if self.refine is None or self.settled < self.options.warm:
             return priority
         if self.split is not None:
             rest, split = self.split(node)
@@ -211,14 +191,15 @@ class Grower:
             self.dominated += 1
         if raised > priority and (beaten is None or raised > beaten):
             self.raised += 1
-        elif self.tried >= TRIAL and self.raised * PAYS < self.tried:
+        elif self.tried >= self.options.trial and self.raised * self.options.pays < self.tried:
             self.refine = self.split = None  # it seldom helps here: give it up for this search
             self.splits.clear()
             # Nodes priced by the first bound stay right; the others are re-priced.
             refined_only = self.heuristic is self.first
             self.repriced = Reprice.REFINED if refined_only else Reprice.ALL
             self.heuristic = self.first
-        if self.tried == RELY and self.dominated == RELY and self.feasible is not None:
+        rely = self.options.rely
+        if self.tried == rely and self.dominated == rely and self.feasible is not None:
             # The stronger bound is all that counts here.
             self.heuristic, self.repriced = self.feasible, Reprice.ALL
         return max(priority, raised)

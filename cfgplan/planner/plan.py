@@ -29,6 +29,7 @@ from cfgplan.planner.dive import dive
 from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.grow import Grower, Heuristic, Splitter, Stats
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.prefix import Prefix
@@ -36,13 +37,6 @@ from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
-
-GRACE = 0.35
-"""Seconds past the time limit the greedy dive may take when nothing was proven
-(the run ends within the limit plus half a second)."""
-
-EXPLAIN_SECONDS = 2.0
-"""The least time the search for "why nothing" may take (more if planning took more)."""
 
 
 def parts(task: Task) -> tuple[Grounder, Bound, Partition]:
@@ -126,15 +120,14 @@ class Run:
     progress: Progress | None = None
     started: float | None = None
     """When the time limit started counting (perf_counter; default: now)."""
-    components: bool = True
-    """Search the goal's independent parts apart when it has some
-    (:mod:`cfgplan.planner.combine`; the ``limit`` cheapest only)."""
     ahead: bool = False
     """Once ``limit`` configurations are listed, look for one more (not
     listed) to say whether more exist (:attr:`more`), with bounded work
     (:mod:`cfgplan.planner.prefix`): ``-k 1`` never runs to the end of a
     search to prove there is no second configuration."""
-    ahead_least: int = 10_000
+    options: SearchOptions = field(default_factory=SearchOptions)
+    """The strategies' settings and switches (parts apart, the look-ahead's
+    least work, ...), given to every grower of the run."""
     more: bool | None = field(init=False, default=False)
     """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
     strategy: BestFirst | Combined | Windows = field(init=False)
@@ -156,7 +149,7 @@ class Run:
     def _divide(self) -> None:
         """Search the goal's independent parts apart, if it has some (found
         under the time limit: should it pass, the search stops at once)."""
-        if not self.components or not isinstance(self.strategy, BestFirst):
+        if not self.options.components or not isinstance(self.strategy, BestFirst):
             return
         try:
             found = divided(self.task, self.goal)
@@ -170,7 +163,9 @@ class Run:
         """A grower with the task's bounds, its children priced from splits."""
         grounder, bound, partition = parts(self.task)
         refine = partitioned(bound, partition)
-        grower = Grower(grounder, bound.estimate, refine, self.distinct, bound.feasible)
+        grower = Grower(
+            grounder, bound.estimate, refine, self.distinct, bound.feasible, options=self.options
+        )
         grower.split = splitting(bound, partition)
         return grower
 
@@ -189,7 +184,7 @@ class Run:
     def __iter__(self) -> Iterator[Configuration]:
         started = time.perf_counter() if self.started is None else self.started
         deadline = None if self.time_limit is None else started + self.time_limit
-        prefix: Prefix[Configuration] = Prefix(self.limit, self.ahead, self.ahead_least)
+        prefix: Prefix[Configuration] = Prefix(self.limit, self.ahead, self.options.ahead_least)
         listed = 0
         try:
             with clock.limit(deadline):
@@ -214,7 +209,8 @@ class Run:
 
     def _dive(self, deadline: float | None) -> Configuration | None:
         """Stopped before anything was proven: dive for any configuration."""
-        end = time.perf_counter() + GRACE if deadline is None else deadline + GRACE
+        grace = self.options.grace
+        end = time.perf_counter() + grace if deadline is None else deadline + grace
         grower = self.strategy.grower
         try:
             with clock.limit(end):
@@ -232,9 +228,9 @@ class Run:
         grounder = parts(self.task)[0]
         explaining = BestFirst(Grower(grounder, _no_bound, None, self.distinct), self.goal)
         spent = time.perf_counter() - started
-        end = time.perf_counter() + max(EXPLAIN_SECONDS, 2 * spent)
+        end = time.perf_counter() + max(self.options.explain_seconds, 2 * spent)
         if deadline is not None:
-            end = min(end, deadline + GRACE)
+            end = min(end, deadline + self.options.grace)
         with clock.limit(end):
             for _ in explaining:
                 break
@@ -252,8 +248,9 @@ def plan(
     distinct: bool = True,
     time_limit: float | None = None,
     progress: Progress | None = None,
+    options: SearchOptions | None = None,
 ) -> tuple[list[Configuration], Run]:
     """The ``limit`` cheapest admissible configurations (all when None), and
     the run that found them (its stats, report and stop reason)."""
-    run = Run(task, goal, limit, distinct, time_limit, progress)
+    run = Run(task, goal, limit, distinct, time_limit, progress, options=options or SearchOptions())
     return list(run), run

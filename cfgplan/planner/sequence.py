@@ -42,6 +42,7 @@ from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.levels import Levels
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, partitioned, parts
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.report import Report, StopReason
@@ -100,6 +101,7 @@ class Ranked:
 
     task: Task
     goal: Ground
+    options: SearchOptions = field(default_factory=SearchOptions)
     found: list[Configuration] = field(default_factory=list)
     search: BestFirst = field(init=False)
     _more: Iterator[Configuration] = field(init=False)
@@ -107,7 +109,11 @@ class Ranked:
     def __post_init__(self) -> None:
         grounder, bound, partition = parts(self.task)
         grower = Grower(
-            grounder, bound.estimate, partitioned(bound, partition), feasible=bound.feasible
+            grounder,
+            bound.estimate,
+            partitioned(bound, partition),
+            feasible=bound.feasible,
+            options=self.options,
         )
         self.search = BestFirst(grower, self.goal)
         self._more = iter(self.search)
@@ -146,7 +152,8 @@ class SequenceSearch:
     ahead: bool = False
     """Once :attr:`limit` are listed, look for one more with bounded work
     (:mod:`cfgplan.planner.prefix`), to say whether more exist (:attr:`more`)."""
-    ahead_least: int = 10_000
+    options: SearchOptions = field(default_factory=SearchOptions)
+    """The settings of every step's search, and the look-ahead's least work."""
     more: bool | None = field(init=False, default=False)
     """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
     stopped: StopReason | None = None
@@ -161,7 +168,7 @@ class SequenceSearch:
         found = self._ranked.get(key)
         if found is None:
             task = self.task if facts == self.task.facts else with_facts(self.task, facts)
-            found = self._ranked[key] = Ranked(task, self.goals[step])
+            found = self._ranked[key] = Ranked(task, self.goals[step], self.options)
         return found
 
     def state_after(self, prefix: tuple[int, ...]) -> tuple[Facts, tuple[str, ...]]:
@@ -185,7 +192,7 @@ class SequenceSearch:
 
     def __iter__(self) -> Iterator[PlannedSequence]:
         deadline = None if self.time_limit is None else time.perf_counter() + self.time_limit
-        prefix: Prefix[PlannedSequence] = Prefix(self.limit, self.ahead, self.ahead_least)
+        prefix: Prefix[PlannedSequence] = Prefix(self.limit, self.ahead, self.options.ahead_least)
         try:
             with clock.limit(deadline):
                 yield from prefix.take(self._search())

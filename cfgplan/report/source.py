@@ -31,6 +31,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.tracefile import rotated_path
 
 __all__ = ["MCAP_MAGIC", "Source", "read_run"]
 
@@ -92,7 +93,7 @@ def _event(obj: object, file: str, line: int) -> dict[str, Any]:
 
 def _lines(path: Path) -> list[dict[str, Any]]:
     out = []
-    rotated = path.with_name(path.name + ".1")
+    rotated = rotated_path(path)
     for part in [rotated, path] if rotated.is_file() else [path]:
         _check_file(part)
         try:
@@ -117,7 +118,6 @@ def _lines(path: Path) -> list[dict[str, Any]]:
 
 def _mcap(path: Path, source: Source) -> None:
     try:
-        from mcap.exceptions import McapError
         from mcap.reader import make_reader
     except ModuleNotFoundError:
         raise RunError(
@@ -139,10 +139,12 @@ def _mcap(path: Path, source: Source) -> None:
                 except (UnicodeDecodeError, json.JSONDecodeError):
                     raise RunError(f"{path}: message {number} on {topic} is not JSON") from None
                 source.records.append(_event(obj, f"{path} ({topic})", number))
-    except (McapError, EOFError, ValueError, KeyError) as exc:  # a damaged recording
-        raise RunError(f"{path} is not a readable MCAP recording: {exc}") from None
+    except RunError:
+        raise
     except OSError as exc:  # a seek past the end of a truncated file, too
         raise RunError(f"{path} is not a readable MCAP recording: {exc.strerror}") from None
+    except Exception as exc:  # a damaged recording: mcap's own errors, and its decompressors'
+        raise RunError(f"{path} is not a readable MCAP recording: {exc}") from None
 
 
 def _summary(folder: Path) -> dict[str, Any] | None:

@@ -38,6 +38,7 @@ from cfgplan.ros2.topics import Binding, TopicMap
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.faults import ResourceFailure
 from cfgplan.runtime.registry import Implementation, Registry
+from cfgplan.runtime.values import MAX_VALUE_BYTES
 
 __all__ = ["Latest", "TopicBindings", "open_bindings"]
 
@@ -50,14 +51,20 @@ class Latest:
     """The newest message of a subscribed topic, and when it came."""
 
     since: float = field(default_factory=time.monotonic)
-    value: Any = None
+    raw: bytes | None = None
+    """The newest payload, kept as it came: decoded only when read (a flood of
+    messages costs a copy each, not a decoding)."""
     at: float | None = None
     received: int = 0
     undecodable: int = 0
+    oversized: int = 0
+    _decoded: tuple[bytes, Any] | None = None  # the last payload decoded, and its value
+    _bad: bytes | None = None  # the last payload that could not be
 
     def read(self, binding: Binding, now: float | None = None) -> Any:
-        """The newest message, ``None`` while none came within the timeout of
-        the start, :class:`ResourceFailure` once the topic is silent for longer."""
+        """The newest message, ``None`` while none came (or none could be
+        decoded) within the timeout of the start, :class:`ResourceFailure` once
+        the topic is silent for longer."""
         now = time.monotonic() if now is None else now
         last = self.since if self.at is None else self.at
         if now - last > binding.timeout:
@@ -66,13 +73,34 @@ class Latest:
                 f"topic {binding.topic} ({binding.msg_type}): {what} for {now - last:.1f} s "
                 f"(timeout {binding.timeout:g} s)"
             )
-        return None if self.at is None else self.value
+        raw = self.raw
+        kept = None if self._decoded is None else self._decoded[1]
+        if raw is None or raw is self._bad:
+            return kept
+        if self._decoded is not None and self._decoded[0] is raw:
+            return kept
+        try:
+            self._decoded = (raw, codec.value_of_cdr(binding.msg_type, raw))
+        except Exception:  # a payload of another type or layout: counted, not kept
+            self.undecodable += 1
+            self._bad = raw
+            return kept
+        return self._decoded[1]
 
 
 class TopicBindings:
     """One robot's bound topics on its Zenoh session (see the module)."""
 
-    def __init__(self, session: Any, robot: str, bindings: TopicMap, domain_id: int = 0) -> None:
+    def __init__(
+        self,
+        session: Any,
+        robot: str,
+        bindings: TopicMap,
+        domain_id: int = 0,
+        max_bytes: int = MAX_VALUE_BYTES,
+    ) -> None:
+        self.max_bytes = max_bytes
+        """A bound topic's message over this many bytes is dropped unread (0: no limit)."""
         self.robot = robot
         self.bindings = bindings.of(robot)
         self.node = wire.node_name_of(f"cfgplan_{robot}_topics")
@@ -115,13 +143,12 @@ class TopicBindings:
         self._declared.append(self._session.liveliness().declare_token(token))
 
     def _receiver(self, binding: Binding, latest: Latest) -> Callable[[Any], None]:
-        def receive(sample: Any) -> None:
-            try:
-                value = codec.value_of_cdr(binding.msg_type, sample.payload.to_bytes())
-            except Exception:  # a payload of another type or layout: counted, not kept
-                latest.undecodable += 1
+        def receive(sample: Any) -> None:  # on Zenoh's thread: no decoding here
+            payload = sample.payload
+            if self.max_bytes and len(payload) > self.max_bytes:
+                latest.oversized += 1
                 return
-            latest.value, latest.at = value, time.monotonic()
+            latest.raw, latest.at = payload.to_bytes(), time.monotonic()
             latest.received += 1
 
         return receive
@@ -194,14 +221,19 @@ class TopicBindings:
 
 
 def open_bindings(
-    transport: object, robot: str, bindings: TopicMap, domain_id: int | None = None
+    transport: object,
+    robot: str,
+    bindings: TopicMap,
+    domain_id: int | None = None,
+    max_bytes: int = MAX_VALUE_BYTES,
 ) -> TopicBindings:
     """The bindings of ``robot`` on its Zenoh transport's session (``cfgplan run
     --robot NAME --ros2-map FILE``), in the ROS domain of
-    :func:`cfgplan.ros2.bridge.domain_id_of`."""
+    :func:`cfgplan.ros2.bridge.domain_id_of`; a message over ``max_bytes``
+    (``--max-value-bytes``; 0: no limit) is dropped unread."""
     from cfgplan.ros2.bridge import domain_id_of
 
     session = getattr(transport, "session", None)
     if session is None:
         raise RunError("--ros2-map binds topics on the robot's Zenoh session: give --robot NAME")
-    return TopicBindings(session, robot, bindings, domain_id_of(domain_id))
+    return TopicBindings(session, robot, bindings, domain_id_of(domain_id), max_bytes)

@@ -26,6 +26,7 @@ error naming the file and the line of its ``[[bind]]`` (or of the key).
 
 from __future__ import annotations
 
+import math
 import re
 import tomllib
 from collections.abc import Sequence
@@ -143,6 +144,13 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
             line = start if key is None else _key_line(text, start, key)
             return RunError(message, hint=hint, file=source, line=line, column=1)
 
+        if not isinstance(table, dict):  # bind = [1]: no [[bind]] header to point at
+            raise RunError(
+                f"[[bind]] entry {k + 1} is {table!r}, not a table of keys",
+                file=source,
+                line=_key_line(text, 0, "bind"),
+                column=1,
+            )
         unknown = sorted(set(table) - set(KEYS))
         if unknown:
             raise fail(
@@ -188,7 +196,12 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
         if robot is not None and (not isinstance(robot, str) or robot not in agents):
             raise fail(f"no robot {robot} in the state (its: {', '.join(agents)})", "robot")
         timeout = table.get("timeout", DEFAULT_TIMEOUT)
-        if isinstance(timeout, bool) or not isinstance(timeout, int | float) or timeout <= 0:
+        if (
+            isinstance(timeout, bool)
+            or not isinstance(timeout, int | float)
+            or not math.isfinite(timeout)
+            or timeout <= 0
+        ):
             raise fail(f"timeout {timeout!r} is not a number of seconds above 0", "timeout")
         bound = (name, direction, port, robot)
         if bound in seen:

@@ -118,17 +118,21 @@ def commands(
     extra: Mapping[str, Sequence[str]],
     hosts: Mapping[str, str],
     ports: Mapping[str, int],
+    coordinator: str | None = None,
 ) -> list[RobotCommand]:
-    """The command of each of ``robots`` (the coordinator first): ``common``
-    (``run DOMAIN STATE --impl ...``), then its ``extra`` options, ``--robot``,
-    ``--listen`` on its host and port, and ``--connect`` to every robot before it."""
+    """The command of each of ``robots`` (the ``coordinator`` first, if it is
+    one of them): ``common`` (``run DOMAIN STATE --impl ...``), then its
+    ``extra`` options, ``--robot``, ``--listen`` on its host and port, and
+    ``--connect`` to every robot before it."""
     out: list[RobotCommand] = []
     for k, robot in enumerate(robots):
         args = [*common, *extra.get(robot, ()), "--robot", robot]
         args += ["--listen", endpoint(hosts[robot], ports[robot])]
         for earlier in robots[:k]:
             args += ["--connect", endpoint(hosts[earlier], ports[earlier])]
-        out.append(RobotCommand(robot, tuple(args), hosts[robot], ports[robot], k == 0))
+        out.append(
+            RobotCommand(robot, tuple(args), hosts[robot], ports[robot], robot == coordinator)
+        )
     return out
 
 
@@ -143,13 +147,24 @@ def status_text(code: int) -> str:
     return str(code)
 
 
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child, before exec
-    """Linux: the robot gets SIGTERM if the launch dies without stopping it (SIGKILL)."""
-    if sys.platform.startswith("linux"):
-        import ctypes
+def _death_signal() -> Callable[[], None] | None:
+    """Linux: what a robot's process calls before its program starts so that it
+    gets SIGTERM if the launch dies without stopping it (SIGKILL). Looked up
+    here, in the launch: the child, forked while the output pumps run, only
+    calls it (importing or loading a library there could deadlock)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    import ctypes
 
-        with contextlib.suppress(OSError, AttributeError):
-            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    try:
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+
+    def die_with_parent() -> None:  # pragma: no cover - runs in the child, before exec
+        prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+    return die_with_parent
 
 
 @dataclass
@@ -179,6 +194,7 @@ class Launch:
         self.out = out or sys.stdout
         self.started: list[Started] = []
         self.stop = threading.Event()
+        self._death = _death_signal()
         self._lock = threading.Lock()
         self._closed = False
         self._width = max((len(r.robot) for r in self.robots), default=0)
@@ -253,7 +269,7 @@ class Launch:
                 stderr=subprocess.STDOUT,
                 env={**os.environ, "PYTHONUNBUFFERED": "1"},
                 start_new_session=True,  # Ctrl-C reaches the launch, which stops them in order
-                preexec_fn=_die_with_parent,
+                preexec_fn=self._death,
             )
             self.say(command.robot, f"(started: pid {process.pid})")
             tail: deque[str] = deque()
@@ -317,6 +333,8 @@ class Launch:
                 if code in USER_ERRORS:
                     raise self._failed(started, code, "stopped")
                 self.say(started.command.robot, f"(ended, exit status {status_text(code)})")
+            if all(s.reported for s in self.started):  # no coordinator here, all ended
+                return 0
             time.sleep(self.options.poll)
         return -1
 
@@ -340,7 +358,8 @@ class Launch:
                 )
             self._signal(late, signal.SIGKILL)
             for started in late:
-                started.process.wait(10.0)
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    started.process.wait(10.0)
         for started in self.started:
             started.pump.join(timeout=2.0)
         if not first:

@@ -184,7 +184,7 @@ class TraceFile:
         if self.failed is not None:
             return
         try:
-            os.replace(self.path, self.path.with_name(self.path.name + ".1"))
+            os.replace(self.path, rotated_path(self.path))
             self._stream = _text(create(self.path, force=False))
         except OSError as exc:
             self.failed = (

@@ -43,6 +43,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from cfgplan.notation import call_text
+
 if TYPE_CHECKING:
     from cfgplan.problem import Problem
 
@@ -84,22 +86,17 @@ def canonical_text(problem: Problem) -> str:
     from cfgplan.syntax.printer import print_domain, print_state
 
     state = problem.state.model_copy(update={"goal": None, "sequence": ()})
-    goals = "\n".join(call_text(g.call.predicate, *g.call.args) for g in problem.goals)
+    goals = "\n".join(call_text((g.call.predicate, *map(str, g.call.args))) for g in problem.goals)
     return f"{print_domain(problem.domain)}\f\n{print_state(state)}\f\n{goals}\n"
 
 
 def problem_id(problem: Problem, domain: Path | str, state: Path | str) -> ProblemId:
     """The fingerprint and description of ``problem``, read from ``domain`` and ``state``."""
     digest = hashlib.sha256(canonical_text(problem).encode()).hexdigest()[:16]
-    calls = [call_text(g.call.predicate, *g.call.args) for g in problem.goals]
+    calls = [call_text((g.call.predicate, *map(str, g.call.args))) for g in problem.goals]
     goal = calls[0] + (f" (then {len(calls) - 1} more)" if len(calls) > 1 else "")
     about = f"{Path(domain).name} with {Path(state).name}, goal {goal}"
     return ProblemId(digest, about)
-
-
-def call_text(*words: object) -> str:
-    """``do-cross-door(Emil, Door1)``: a goal as the thesis prints it."""
-    return f"{words[0]}({', '.join(str(w) for w in words[1:])})"
 
 
 def conflict_message(society: str, mine: ProblemId, robot: str, theirs: ProblemId) -> str:

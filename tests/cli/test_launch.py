@@ -75,7 +75,12 @@ def test_each_robot_listens_and_connects_to_every_robot_before_it() -> None:
     hosts = {"Emil": "10.0.0.1", "Pippi": "10.0.0.2", "Iris": "10.0.0.2"}
     ports = {"Emil": 7447, "Pippi": 7447, "Iris": 7448}
     made = commands(
-        ["Emil", "Pippi", "Iris"], ["run", "d", "s"], {"Emil": ["--cycles", "9"]}, hosts, ports
+        ["Emil", "Pippi", "Iris"],
+        ["run", "d", "s"],
+        {"Emil": ["--cycles", "9"]},
+        hosts,
+        ports,
+        "Emil",
     )
     assert [c.robot for c in made] == ["Emil", "Pippi", "Iris"]
     assert made[0] == RobotCommand(
@@ -132,6 +137,24 @@ def test_the_coordinator_serves_the_live_page_and_every_robot_records(cfgplan) -
     assert "--rate-allowance 3" in emil and "--rate-allowance 3" in pippi
     bad = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--live", "host:port")
     assert bad.returncode == 2 and "--live" in bad.stderr
+
+
+def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """--robot Pippi alone (the coordinator, Emil, runs elsewhere): Pippi's
+    command, marked as no coordinator's; options that go to the coordinator,
+    or a fault aimed at a robot left out, are usage errors naming it (before:
+    a KeyError traceback). Floats go on exactly as given."""
+    base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--robot", "Pippi"]
+    shown = ["--print-commands", "--host", "Pippi=10.0.0.2"]
+    done = cfgplan(*base, *shown, "--hold", "0.0000123456789", "--rate", "20.25")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0] == "# Pippi on 10.0.0.2"
+    assert "--hold 1.23456789e-05" in done.stdout and "--rate 20.25" in done.stdout
+    late = cfgplan(*base, *shown, "--duration", "86400.25")
+    assert late.returncode == 2 and "the coordinator, Emil" in late.stderr
+    assert "Traceback" not in late.stderr
+    aimed = cfgplan(*base, *shown, "--inject", "fail compass(Emil) at cycle 9")
+    assert aimed.returncode == 2 and "aims at Emil" in aimed.stderr
 
 
 def test_print_commands_needs_every_host(cfgplan) -> None:  # type: ignore[no-untyped-def]

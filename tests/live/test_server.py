@@ -74,6 +74,10 @@ def test_nothing_but_reading_is_allowed(served: tuple[Watch, LiveServer]) -> Non
     assert _get(server, "/events", "POST")[0] == 405
     assert _get(server, "/", "PUT")[0] == 405
     assert _get(server, "/", host="attacker.example")[0] == 403
+    # names that only start like a loopback address may be rebound to anything
+    assert _get(server, "/", host="127.evil.example")[0] == 403
+    assert _get(server, "/", host=f"127.0.0.1.nip.io:{server.port}")[0] == 403
+    assert _get(server, "/", host=f"127.0.0.1:{server.port}")[0] == 200
     assert _get(server, "/", host=f"localhost:{server.port}")[0] == 200
 
 

@@ -18,6 +18,7 @@ from cfgplan.diagnostics import CfgplanError
 from cfgplan.ir.model import Domain
 from cfgplan.planner import plan
 from cfgplan.planner.compile import compile_task
+from cfgplan.planner.options import SearchOptions
 from cfgplan.problem import Problem, load
 from cfgplan.syntax.reader import SourceFile, parse, state_from
 
@@ -69,8 +70,22 @@ def solve(example: Generated) -> Problem:
     return Problem(domain, state, state.goal, task)
 
 
-def run(problem: Problem, *, limit: int | None = None, distinct: bool) -> list[Configuration]:
-    configs, _ = plan(problem.task, problem.goal_call, limit=limit, distinct=distinct)
+FIRST_NODE = SearchOptions(warm=0, trial=10**9)
+"""The partitioned bound (and its media test) tried from the first node and
+never given up: left to itself, a search this small never computes it
+(:attr:`cfgplan.planner.options.SearchOptions.warm`)."""
+
+
+def run(
+    problem: Problem,
+    *,
+    limit: int | None = None,
+    distinct: bool,
+    options: SearchOptions | None = None,
+) -> list[Configuration]:
+    configs, _ = plan(
+        problem.task, problem.goal_call, limit=limit, distinct=distinct, options=options
+    )
     return configs
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from benchmarks.families.delegation import delegation
 from cfgplan.cli.formats import more_note
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, plan
 from tests.planner.problems import load_text
 from tests.planner.test_reproducers import REUSED_SENSOR
@@ -20,7 +21,9 @@ from tests.planner.test_reproducers import REUSED_SENSOR
 
 def _listed(domain: str, state: str, least: int) -> tuple[Run, list[object]]:
     problem = load_text(domain, state)
-    search = Run(problem.task, problem.goal_call, 1, ahead=True, ahead_least=least)
+    search = Run(
+        problem.task, problem.goal_call, 1, ahead=True, options=SearchOptions(ahead_least=least)
+    )
     return search, list(search)
 
 

@@ -22,8 +22,7 @@ from cfgplan.planner.room import Load
 from cfgplan.planner.task import Ground
 from cfgplan.problem import Problem
 from tests.planner.oracle import depth_first
-from tests.planner.problems import PROPERTY, Generated, load_text, run, solve
-from tests.planner.test_properties import bounds_from_the_first_node
+from tests.planner.problems import FIRST_NODE, PROPERTY, Generated, load_text, run, solve
 
 
 @contextmanager
@@ -97,8 +96,8 @@ def test_one_view_for_all_is_not_capped() -> None:
       (device C2) (camera C2) (medium wire C1 Hub 40) (medium wire C2 Hub 40)
       (medium wifi Hub R1 100) (medium wifi Hub R2 100)) (goal (watch-all))"""
     problem = load_text(SHARED_VIEW, state)
-    with bounds_from_the_first_node(), lowered() as seen:
-        cheapest = run(problem, limit=1, distinct=False)[0]
+    with lowered() as seen:
+        cheapest = run(problem, limit=1, distinct=False, options=FIRST_NODE)[0]
     assert seen == []
     assert {f.robot for f in cheapest.functionalities if f.name == "camera"} == {"C1"}
 
@@ -130,8 +129,7 @@ def test_a_bandwidth_too_small_to_count_caps_nothing() -> None:
 (make-config-method :name '(both) :body '((?a (see R1 H)) (?b (see R2 H))))"""
     state = "(state (robot H) (device C) (camera C) (medium wire C H 1000000000)) (goal (both))"
     problem = load_text(domain, state)
-    with bounds_from_the_first_node():
-        found = run(problem, limit=1, distinct=False)
+    found = run(problem, limit=1, distinct=False, options=FIRST_NODE)
     assert [f.name for f in found[0].functionalities].count("cam") == 1  # one camera for both
 
 
@@ -210,8 +208,7 @@ def test_with_the_cap_the_cheapest_are_the_oracles(example: Generated, k: int) -
     """The ``k`` cheapest derivations, best first with the partitioned bound
     (capped) on every node, are the depth-first planner's first ``k``."""
     problem = solve(example)
-    with bounds_from_the_first_node():
-        found = run(problem, limit=k, distinct=False)
+    found = run(problem, limit=k, distinct=False, options=FIRST_NODE)
     oracle = depth_first(problem, example.weights)
     assert [(c.cost, c.identity()) for c in found] == oracle[:k]
 
@@ -226,8 +223,8 @@ def test_the_generator_exercises_the_cap() -> None:
     @given(crowded())
     def collect(example: Generated) -> None:
         problem = solve(example)
-        with bounds_from_the_first_node(), lowered() as seen:
-            found = run(problem, limit=3, distinct=False)
+        with lowered() as seen:
+            found = run(problem, limit=3, distinct=False, options=FIRST_NODE)
         capped.append(bool(seen))
         solvable.append(bool(found))
 

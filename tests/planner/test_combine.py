@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from benchmarks.families import ecology, media_tight
 from cfgplan.planner.combine import Combined
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, divided
 from cfgplan.planner.search import BestFirst
 from tests.planner.generated import generated
@@ -60,7 +61,9 @@ def _listing(run: Run) -> list[str]:
 def _both(texts: tuple[str, str], limit: int, distinct: bool = True) -> tuple[Run, list[str]]:
     """The run with parts, having checked it lists what the plain search does."""
     problem = problem_of(texts)
-    plain = Run(problem.task, problem.goal_call, limit, distinct, components=False)
+    plain = Run(
+        problem.task, problem.goal_call, limit, distinct, options=SearchOptions(components=False)
+    )
     expected = _listing(plain)
     assert isinstance(plain.strategy, BestFirst)
     run = Run(problem.task, problem.goal_call, limit, distinct)
@@ -193,7 +196,7 @@ def test_twins_list_as_depth_first(example: Generated, k: int) -> None:
     derivations = run(problem, limit=k, distinct=False)
     oracle = depth_first(problem, example.weights)
     assert [(c.cost, c.identity()) for c in derivations] == oracle[:k]
-    plain = Run(problem.task, problem.goal_call, k, components=False)
+    plain = Run(problem.task, problem.goal_call, k, options=SearchOptions(components=False))
     assert run(problem, limit=k, distinct=True) == list(plain)
 
 

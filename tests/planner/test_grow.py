@@ -8,29 +8,27 @@ from pathlib import Path
 import pytest
 
 from benchmarks.families import chain, ecology, wall
-from cfgplan.planner import grow
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run
 from cfgplan.problem import load
 from tests.planner.test_scale import problem_of
 
 
-def _run(texts: tuple[str, str], limit: int) -> tuple[list[tuple[float, str]], Run]:
+def _run(texts: tuple[str, str], limit: int, **tuned: int) -> tuple[list[tuple[float, str]], Run]:
     problem = problem_of(texts)  # the plain search, whose bounds these tests watch
-    run = Run(problem.task, problem.goal_call, limit=limit, components=False)
+    options = SearchOptions(components=False, **tuned)
+    run = Run(problem.task, problem.goal_call, limit=limit, options=options)
     found = [(c.cost, str(sorted(map(str, c.functionalities)))) for c in run]
     return found, run
 
 
-def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """On wall K=6 N=20 L=8 it never raises a priority: dropped after TRIAL
+def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains() -> None:
+    """On wall K=6 N=20 L=8 it never raises a priority: dropped after ``trial``
     refinements; on chain D=8 it raises every one: kept (both tried from the
     first node). (On wall K=3 N=4 L=3 it pays since it prices channels with
     one end open by that end: issue 11.)"""
-    monkeypatch.setattr(grow, "WARM", 0)
-    _, on_wall = _run(wall(6, 20, 8), 1)
-    _, on_chain = _run(chain(8), 1)
+    _, on_wall = _run(wall(6, 20, 8), 1, warm=0)
+    _, on_chain = _run(chain(8), 1, warm=0)
     assert on_wall.strategy.grower.refine is None
     assert on_chain.strategy.grower.refine is not None
 
@@ -38,15 +36,11 @@ def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains(
 @pytest.mark.parametrize(
     "texts", [wall(3, 4, 3), chain(8), ecology(6, 2, 1)], ids=["wall", "chain", "ecology"]
 )
-def test_giving_the_bound_up_changes_nothing_found(
-    texts: tuple[str, str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """The ten cheapest, with the bound kept throughout (TRIAL never reached)
+def test_giving_the_bound_up_changes_nothing_found(texts: tuple[str, str]) -> None:
+    """The ten cheapest, with the bound kept throughout (``trial`` never reached)
     and with the usual rule, are the same configurations at the same costs."""
-    monkeypatch.setattr(grow, "WARM", 0)
-    usual, _ = _run(texts, 10)
-    monkeypatch.setattr(grow, "TRIAL", 10**9)
-    kept, run = _run(texts, 10)
+    usual, _ = _run(texts, 10, warm=0)
+    kept, run = _run(texts, 10, warm=0, trial=10**9)
     assert run.strategy.grower.refine is not None
     assert [cost for cost, _ in usual] == [cost for cost, _ in kept]
     last = usual[-1][0]  # ties at the last cost may be cut differently
@@ -55,14 +49,14 @@ def test_giving_the_bound_up_changes_nothing_found(
 
 def test_a_small_search_never_tries_the_stronger_bound() -> None:
     """Build-wall (6.4) finds its cheapest configuration having priced fewer
-    than WARM nodes: the partition bound is not computed once; ecology N=18,
+    than ``warm`` nodes: the partition bound is not computed once; ecology N=18,
     larger, tries it."""
     domains = Path(__file__).resolve().parents[2] / "domains" / "build-wall"
     problem = load(domains / "domain.lisp", domains / "state-6.4.lisp")
     small = Run(problem.task, problem.goal_call, limit=1)
     assert [c.cost for c in small] == [53]
-    assert small.strategy.grower.settled < grow.WARM
+    assert small.strategy.grower.settled < SearchOptions().warm
     assert small.strategy.grower.tried == 0
     _, large = _run(ecology(18, 3, 3), 1)
-    assert large.strategy.grower.settled > grow.WARM
+    assert large.strategy.grower.settled > SearchOptions().warm
     assert large.strategy.grower.tried > 0

@@ -26,9 +26,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
-from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import pairwise
 from random import Random
 from unittest.mock import patch
@@ -39,14 +37,13 @@ from hypothesis import strategies as st
 
 from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner import enumerate as windows
-from cfgplan.planner import grow, plan
+from cfgplan.planner import plan
 from cfgplan.planner.plan import Run, parts
 from cfgplan.planner.report import Condition
 from cfgplan.planner.room import Load, Need, Room
 from tests.planner.generated import generated
 from tests.planner.oracle import depth_first
-from tests.planner.problems import PROPERTY, Generated, load_generated, run, solve
+from tests.planner.problems import FIRST_NODE, PROPERTY, Generated, load_generated, run, solve
 
 
 @pytest.mark.quick(20)
@@ -136,18 +133,8 @@ def test_reliability_ranks_as_depth_first(example: Generated, k: int) -> None:
     oracle = depth_first(problem, example.weights)
     derivations = run(problem, distinct=False)
     assert [(c.cost, c.identity()) for c in derivations] == oracle
-    with bounds_from_the_first_node():
-        first = run(problem, limit=k, distinct=False)
+    first = run(problem, limit=k, distinct=False, options=FIRST_NODE)
     assert [(c.cost, c.identity()) for c in first] == oracle[:k]
-
-
-@contextmanager
-def bounds_from_the_first_node() -> Iterator[None]:
-    """The partitioned bound (and its media test) tried from the first node and
-    never given up: left to itself, a search this small never computes it
-    (:data:`cfgplan.planner.grow.WARM`)."""
-    with patch.object(grow, "WARM", 0), patch.object(grow, "TRIAL", 10**9):
-        yield
 
 
 @pytest.mark.quick(20)
@@ -158,9 +145,8 @@ def test_the_bounds_change_nothing_found(example: Generated, k: int) -> None:
     first ``k`` of the depth-first planner (derivations), and of the distinct
     list planned without them."""
     problem = solve(example)
-    with bounds_from_the_first_node():
-        derivations = run(problem, limit=k, distinct=False)
-        distinct = run(problem, limit=k, distinct=True)
+    derivations = run(problem, limit=k, distinct=False, options=FIRST_NODE)
+    distinct = run(problem, limit=k, distinct=True, options=FIRST_NODE)
     oracle = depth_first(problem, example.weights)
     assert [(c.cost, c.identity()) for c in derivations] == oracle[:k]
     assert distinct == run(problem, distinct=True)[:k]
@@ -178,13 +164,9 @@ def test_all_in_windows_lists_everything(example: Generated, held: int) -> None:
     halved were never listed again.)"""
     problem = solve(example)
     whole = run(problem, distinct=True)
-    with (
-        bounds_from_the_first_node(),
-        patch.object(windows, "ONE_PASS", 0),
-        patch.object(windows, "MOST_HELD", held),
-    ):
-        derivations = run(problem, distinct=False)
-        distinct = run(problem, distinct=True)
+    halved = replace(FIRST_NODE, one_pass=0, most_held=held)
+    derivations = run(problem, distinct=False, options=halved)
+    distinct = run(problem, distinct=True, options=halved)
     assert [(c.cost, c.identity()) for c in derivations] == depth_first(problem, example.weights)
     assert distinct == whole
 
@@ -260,8 +242,8 @@ def _coverage(example: Generated) -> Coverage:
         cut.append(not Room.fits(room, needs, load))
         return not cut[-1]
 
-    with bounds_from_the_first_node(), patch.object(room, "fits", fits):
-        bounded = Run(problem.task, problem.goal_call, limit=3, distinct=False)
+    with patch.object(room, "fits", fits):
+        bounded = Run(problem.task, problem.goal_call, limit=3, distinct=False, options=FIRST_NODE)
         list(bounded)
     return Coverage(
         derivations=len(derivations),

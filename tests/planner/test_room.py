@@ -16,6 +16,7 @@ from cfgplan.planner import Run, plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import ChannelSpec, Grounder
 from cfgplan.planner.numbering import Numbering
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Channel, Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.room import Room
@@ -146,12 +147,12 @@ def test_leaving_out_what_the_media_cannot_carry_changes_no_ranked_list(
     order at equal cost) with the media test on and off; with it on, a
     best-first search takes fewer nodes."""
     problem = problem_of(texts)  # the plain search: parts would hide its nodes
-    run = Run(problem.task, problem.goal_call, limit, components=False)
+    run = Run(problem.task, problem.goal_call, limit, options=SearchOptions(components=False))
     configs = list(run)
     nodes_with = run.stats.nodes
     monkeypatch.setattr(Room, "active", property(lambda self: False))
     problem = problem_of(texts)  # a new task: its bounds are made anew
-    run = Run(problem.task, problem.goal_call, limit, components=False)
+    run = Run(problem.task, problem.goal_call, limit, options=SearchOptions(components=False))
     blind = list(run)
     assert len(configs) >= 10
     assert [(c.cost, c.identity(), c.derivation) for c in configs] == [

@@ -31,11 +31,11 @@ from benchmarks.families import (
     wall,
 )
 from cfgplan.configuration.admissible import problems
-from cfgplan.planner import enumerate as windows
 from cfgplan.planner import plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.finish import finish
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.plan import Run
 from cfgplan.planner.successors import successors
@@ -106,15 +106,13 @@ def test_the_cheapest_agrees_with_branch_and_bound(texts: tuple[str, str]) -> No
 
 
 @pytest.mark.slow
-def test_listing_in_small_windows_gives_what_best_first_gives(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_listing_in_small_windows_gives_what_best_first_gives() -> None:
     """With room for only 50 configurations a window, --all lowers each
     window's upper edge again and again; the list is the best-first list."""
     problem = problem_of(wall(3, 4, 3))
     configs, _ = plan(problem.task, problem.goal_call, limit=400)
-    monkeypatch.setattr(windows, "MOST_HELD", 50)
-    listed, _ = plan(problem.task, problem.goal_call, limit=None)
+    small = SearchOptions(most_held=50)
+    listed, _ = plan(problem.task, problem.goal_call, limit=None, options=small)
     assert [(c.cost, c.identity(), c.derivation) for c in listed[:400]] == [
         (c.cost, c.identity(), c.derivation) for c in configs
     ]
@@ -122,17 +120,14 @@ def test_listing_in_small_windows_gives_what_best_first_gives(
 
 
 @pytest.mark.parametrize("held", [1, 2, 3])
-def test_windows_halved_after_the_first_walk_is_given_up_lose_nothing(
-    held: int, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_windows_halved_after_the_first_walk_is_given_up_lose_nothing(held: int) -> None:
     """The first walk given up at once, and room for ``held`` configurations a
     window: what a window drops when its upper edge comes down is listed by
     the next one. Before, media-tight(4, 2, 1) lost 2 of its 36 (held 1)."""
     problem = problem_of(media_tight(4, 2, 1))
     whole, _ = plan(problem.task, problem.goal_call, limit=None)
-    monkeypatch.setattr(windows, "ONE_PASS", 0)
-    monkeypatch.setattr(windows, "MOST_HELD", held)
-    halved, _ = plan(problem.task, problem.goal_call, limit=None)
+    halving = SearchOptions(one_pass=0, most_held=held)
+    halved, _ = plan(problem.task, problem.goal_call, limit=None, options=halving)
     assert len(whole) == 36
     assert [(c.cost, c.identity(), c.derivation) for c in halved] == [
         (c.cost, c.identity(), c.derivation) for c in whole
@@ -189,18 +184,16 @@ CYCLES = (
     ],
     ids=["wall-3-4-3", "media-tight-4", "relay-4", "cycles"],
 )
-def test_giving_up_the_first_walk_lists_the_same(
-    texts: tuple[str, str], one_pass: int, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_giving_up_the_first_walk_lists_the_same(texts: tuple[str, str], one_pass: int) -> None:
     """--all walks every cost at once; when that walk is given up for the
-    windows (after ONE_PASS nodes with nothing listed yet), the list, its
+    windows (after ``one_pass`` nodes with nothing listed yet), the list, its
     derivation numbers and the counts of repeats (wall) and rejections
     (cycles) are those of one whole walk."""
     problem = problem_of(texts)
-    monkeypatch.setattr(windows, "ONE_PASS", 10**9)
-    whole, run = plan(problem.task, problem.goal_call, limit=None)
-    monkeypatch.setattr(windows, "ONE_PASS", one_pass)
-    parts, again = plan(problem.task, problem.goal_call, limit=None)
+    one_walk = SearchOptions(one_pass=10**9)
+    whole, run = plan(problem.task, problem.goal_call, limit=None, options=one_walk)
+    walks = SearchOptions(one_pass=one_pass)
+    parts, again = plan(problem.task, problem.goal_call, limit=None, options=walks)
     assert [(c.cost, c.identity(), c.derivation) for c in parts] == [
         (c.cost, c.identity(), c.derivation) for c in whole
     ]

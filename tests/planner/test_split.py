@@ -15,6 +15,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan, search
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.plan import Run
@@ -71,12 +72,16 @@ def test_pricing_children_from_splits_changes_no_ranked_list(
     children priced from their parents' splits and without: the same, with
     fewer refinements (the plain search, not the parts')."""
     problem = problem_of(texts)
-    with_splits = Run(problem.task, problem.goal_call, limit=20, components=False)
+    with_splits = Run(
+        problem.task, problem.goal_call, limit=20, options=SearchOptions(components=False)
+    )
     configs = list(with_splits)
     module = sys.modules["cfgplan.planner.plan"]  # the package exports the function plan
     monkeypatch.setattr(module, "splitting", lambda bound, partition: None)
     problem = problem_of(texts)  # a new task: its bounds are made anew
-    without = Run(problem.task, problem.goal_call, limit=20, components=False)
+    without = Run(
+        problem.task, problem.goal_call, limit=20, options=SearchOptions(components=False)
+    )
     assert [(c.cost, c.identity(), c.derivation) for c in configs] == [
         (c.cost, c.identity(), c.derivation) for c in without
     ]

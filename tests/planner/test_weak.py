@@ -10,8 +10,7 @@ import pytest
 from benchmarks.families import weak
 from cfgplan.configuration.cost import Weights
 from tests.planner.oracle import depth_first
-from tests.planner.problems import load_text, run
-from tests.planner.test_properties import bounds_from_the_first_node
+from tests.planner.problems import FIRST_NODE, load_text, run
 
 
 @pytest.mark.parametrize(
@@ -23,7 +22,6 @@ def test_the_ten_cheapest_are_the_oracles(texts: tuple[str, str]) -> None:
     problem = load_text(*texts)
     oracle = depth_first(problem, Weights())
     assert len(oracle) >= 10  # enough to rank
-    with bounds_from_the_first_node():
-        found = run(problem, limit=10, distinct=False)
+    found = run(problem, limit=10, distinct=False, options=FIRST_NODE)
     assert [(c.cost, c.identity()) for c in found] == oracle[:10]
     assert [(c.cost, c.identity()) for c in run(problem, limit=10, distinct=False)] == oracle[:10]

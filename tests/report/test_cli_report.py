@@ -160,6 +160,15 @@ def test_a_run_trace_and_its_recording_are_reported(tmp_path: Path) -> None:
     assert code == 0, text
     other = from_records(read_run([recording]).records)
     assert other.spans == story.spans and other.marks == story.marks
+    # A chunk damaged inside (its compressed bytes flipped): its decompressor
+    # fails, said as a clear error (before: a zstandard traceback).
+    data = bytearray(recording.read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 8] = bytes(b ^ 0xFF for b in data[middle : middle + 8])
+    damaged = tmp_path / "damaged.mcap"
+    damaged.write_bytes(bytes(data))
+    code, text = _report(str(damaged), "-o", str(tmp_path / "none"))
+    assert code == 1 and "is not a readable MCAP recording" in text, text
     assert (again / "timeline.png").read_bytes() == (out / "timeline.png").read_bytes()
 
 

@@ -29,6 +29,7 @@ import numpy
 import pytest
 
 from cfgplan.problem import load
+from cfgplan.ros2 import codec
 from cfgplan.ros2.bindings import Latest, TopicBindings
 from cfgplan.ros2.topics import load_map
 from cfgplan.runtime.faults import ResourceFailure
@@ -199,8 +200,11 @@ def test_a_silent_topic_is_a_failing_sensor() -> None:
     assert latest.read(laser, now=100.4) is None
     with pytest.raises(ResourceFailure, match=r"topic /scan .*no message yet for 0.6 s"):
         latest.read(laser, now=100.6)
-    latest.value, latest.at = {"ranges": []}, 101.0
-    assert latest.read(laser, now=101.2) == {"ranges": []}
+    scan = codec.cdr_of_value(laser.msg_type, {"ranges": [1.5]})
+    latest.raw, latest.at = scan, 101.0  # kept as it came, decoded when read
+    assert latest.read(laser, now=101.2)["ranges"] == [1.5]
+    latest.raw = b"\x00\x01\x00\x00 not a scan"  # the newest undecodable: the last good one
+    assert latest.read(laser, now=101.3)["ranges"] == [1.5] and latest.undecodable == 1
     with pytest.raises(ResourceFailure, match=r"no message for 0.7 s \(timeout 0.5 s\)"):
         latest.read(laser, now=101.7)
 

@@ -168,6 +168,19 @@ def test_the_example_map_binds_the_laser_and_the_drive() -> None:
             'binds one port: give input = "..." or output = "..."',
             2,
         ),
+        ("bind = [1]", "[[bind]] entry 1 is 1, not a table of keys", 1),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            timeout = nan
+            """,
+            "timeout nan is not a number of seconds above 0",
+            7,
+        ),
     ],
 )
 def test_a_wrong_binding_is_said_with_its_file_and_line(text: str, message: str, line: int) -> None:

@@ -1,0 +1,63 @@
+"""Every tuning constant and strategy switch of the planner, in one frozen
+object (issue 35): a search is given a :class:`SearchOptions`, and tests pass
+one instead of patching module constants. None of them changes what is found
+or its order, only how much work finding it takes (the property tests of
+``tests/planner`` check that with the extreme settings)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class SearchOptions:
+    """How a search works; the defaults are the measured ones (benchmarks)."""
+
+    warm: int = 32
+    """Nodes a search prices (settles) before it tries the stronger bound at
+    all: a small search (the thesis's instances) is over before it could pay
+    for itself. Counted in nodes priced, not taken: where every expansion has
+    many children (fusion) the bound is soon worth its cost."""
+
+    trial: int = 4
+    """Refinements by the stronger bound a search tries before it may give that
+    bound up: from then on, when fewer than one refinement in :attr:`pays` paid
+    (pruned a node, raised its priority past the next node's, so that another
+    node is taken first, or priced some of its children above their own bound,
+    :mod:`cfgplan.planner.split`), the bound is dropped for the rest of the
+    search. Where it seldom pays (build-wall, the wall and relay families) it
+    only costs time; where it helps (ecology, fusion, media-tight, chain) most
+    of its raises pay. Dropping an admissible bound never changes the answer,
+    only how many nodes are taken (tests/planner/test_grow.py)."""
+
+    pays: int = 4
+    """See :attr:`trial`."""
+
+    rely: int = 32
+    """Refinements after which, if the stronger bound was at least the first
+    one every time, the first one is no longer computed (only whether a node
+    can complete is: :attr:`cfgplan.planner.grow.Grower.feasible`): where the
+    stronger bound always dominates (fusion), the first adds only its cost."""
+
+    one_pass: int = 5_000
+    """Nodes the first walk of ``--all``, over every cost at once, may take
+    before it has listed anything (:mod:`cfgplan.planner.enumerate`)."""
+
+    most_held: int = 250_000
+    """Configurations one window of ``--all`` may hold before its upper edge
+    comes down."""
+
+    components: bool = True
+    """Search the goal's independent parts apart when it has some
+    (:mod:`cfgplan.planner.combine`; the ``limit`` cheapest only)."""
+
+    ahead_least: int = 10_000
+    """The least work the look-ahead of ``-k N`` may do (:mod:`cfgplan.planner.prefix`)."""
+
+    grace: float = 0.35
+    """Seconds past the time limit the greedy dive may take when nothing was
+    proven (the run ends within the limit plus half a second)."""
+
+    explain_seconds: float = 2.0
+    """The least time the search for "why nothing" may take (more if
+    planning took more)."""
