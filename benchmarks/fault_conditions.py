@@ -36,7 +36,7 @@ from typing import Literal
 
 from benchmarks.lossy_link import Link, NetnsLink, ProxyLink
 from benchmarks.reconfigure import DOMAINS, HERMETIC, IMPL, ROOT, free_port
-from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE
+from cfgplan.runtime.zenoh_config import DEFAULT_LEASE
 
 Record = dict[str, object]
 Kind = Literal["kill", "freeze", "loss", "cut"]

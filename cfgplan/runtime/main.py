@@ -46,7 +46,7 @@ from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import Society, assemble
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
-from cfgplan.runtime.zenoh_transport import ZenohOptions
+from cfgplan.runtime.zenoh_config import ZenohOptions
 from cfgplan.security.identity import ProblemId
 from cfgplan.security.rates import RateLimits
 

@@ -23,7 +23,7 @@ from cfgplan.runtime.executor import DEFAULT_BUDGET
 from cfgplan.runtime.faults import SYNTAX, parse_injection
 from cfgplan.runtime.tracefile import MAX_BYTES as TRACE_LIMIT
 from cfgplan.runtime.values import MAX_VALUE_BYTES as VALUE_LIMIT
-from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, DEFAULT_SOCIETY, endpoint_problem
+from cfgplan.runtime.zenoh_config import DEFAULT_LEASE, DEFAULT_SOCIETY, endpoint_problem
 from cfgplan.security.rates import RateLimits
 
 __all__ = [

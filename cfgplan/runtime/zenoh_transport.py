@@ -15,22 +15,23 @@ each robot program opens one Zenoh session in *peer* mode (no router) and:
   reports each one that appears or is lost. A robot whose process dies is
   lost as soon as its connection closes; one that freezes (a stopped process,
   a hung machine, a cut cable) when the *lease* runs out without a word from
-  it: :data:`DEFAULT_LEASE` seconds unless set.
+  it: :data:`~cfgplan.runtime.zenoh_config.DEFAULT_LEASE` seconds unless set.
 
-Addressing (:class:`ZenohOptions`): ``--listen`` and ``--connect`` endpoints
-(``tcp/192.168.1.7:7447``); without them, robots find each other by
-multicast scouting on the local network, with them multicast scouting is off.
-``--society`` keeps societies on one network apart. A robot given only
-``--connect`` listens nowhere (Zenoh would listen on every interface): it
-reaches out and cannot be reached — peers do not route for one another, so
-in a society of three or more a robot that others must reach is given
-``--listen``. A Zenoh configuration file (JSON5, Zenoh's own format) sets
-anything else: it goes on top of cfgplan's defaults (:data:`DEFAULTS`: peer
-mode, the connection retry, the lease, the time to open a link), which it
-keeps unless it sets them, and the options given on the command line go on
-top of it. With ``--keys
-DIR`` (the society's keys, made by ``cfgplan keys new``) every link is TLS
-with mutual authentication and Zenoh's access control by certificate name
+Addressing (:class:`~cfgplan.runtime.zenoh_config.ZenohOptions`): ``--listen``
+and ``--connect`` endpoints (``tcp/192.168.1.7:7447``); without them, robots
+find each other by multicast scouting on the local network, with them
+multicast scouting is off. ``--society`` keeps societies on one network
+apart. A robot given only ``--connect`` listens nowhere (Zenoh would listen
+on every interface): it reaches out and cannot be reached — peers do not
+route for one another, so in a society of three or more a robot that others
+must reach is given ``--listen``. A Zenoh configuration file (JSON5, Zenoh's
+own format) sets anything else: it goes on top of cfgplan's defaults
+(:data:`~cfgplan.runtime.zenoh_config.DEFAULTS`: peer mode, the connection
+retry, the lease, the time to open a link), which it keeps unless it sets
+them, and the options given on the command line go on top of it
+(:mod:`cfgplan.runtime.zenoh_config`). With ``--keys DIR`` (the society's
+keys, made by ``cfgplan keys new``) every link is TLS with mutual
+authentication and Zenoh's access control by certificate name
 (:mod:`cfgplan.security.zenoh_tls`).
 
 :mod:`zenoh` is imported only when a :class:`ZenohTransport` is made, so
@@ -41,12 +42,9 @@ from __future__ import annotations
 
 import json
 import queue
-import re
 import threading
 import time
 from collections.abc import Callable, Collection
-from dataclasses import dataclass, field
-from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from cfgplan.runtime.errors import RunError, printable
@@ -63,173 +61,31 @@ from cfgplan.runtime.keys import (
     unchunk,
 )
 from cfgplan.runtime.transport import ChannelKey, Presence, Receiver
+from cfgplan.runtime.zenoh_config import (
+    DEFAULT_LEASE,
+    DEFAULT_SOCIETY,
+    OPEN_TIMEOUT_MS,
+    ZenohOptions,
+    endpoint_problem,
+    load_zenoh,
+    reason,
+    zenoh_config,
+)
 from cfgplan.security.identity import ProblemId, conflict_message
-from cfgplan.security.rates import Buckets, RateLimits
+from cfgplan.security.rates import Buckets
 
 if TYPE_CHECKING:
-    import zenoh
+    pass
 
-__all__ = [
+__all__ = [  # the configuration's names too, where the transport's users have found them
     "DEFAULT_LEASE",
     "DEFAULT_SOCIETY",
+    "OPEN_TIMEOUT_MS",
     "ZenohOptions",
     "ZenohTransport",
     "endpoint_problem",
     "zenoh_config",
 ]
-
-DEFAULT_LEASE = 2.0
-"""Seconds without a word after which a frozen robot is reported lost (Zenoh's lease).
-
-Long enough to ride out a TCP stall on a lossy link: the kernel resends a lost
-segment after 200 ms, 400 ms, 800 ms, ..., so three losses of one segment
-stall a link 1.4 s. With a 1 s lease that happened in one of three 30 s runs at
-10 % loss (the robot reported lost, the society stopped 0.4 s); with 2 s, four
-losses in a row are needed. A robot that dies is seen at once all the same
-(its connection closes); only a frozen robot or a cut link waits for the lease
-(issue 33; ``python -m benchmarks.faults``)."""
-
-DEFAULT_SOCIETY = "default"
-RETRY = '{"period_init_ms": 250, "period_max_ms": 500, "period_increase_factor": 2}'
-"""Connecting to a robot that is not up yet (or not reachable) is retried every
-half second at most."""
-
-OPEN_TIMEOUT_MS = 1500
-"""Milliseconds one attempt to open a link may take before it is given up and
-retried. Zenoh's default, 10 s, bounds the TCP connect as well, and a connect
-whose SYN was lost to a bad link waits for the kernel's resends (after 1 s, then
-2 s, 4 s, ...) however long ago the link came back (issue 33: 2.8 s to reconnect
-after 50 % loss cleared). Given up after 1.5 s (past the first resend), and
-retried :data:`RETRY` 0.5 s later, an attempt goes out on the link at least
-every second. A link that needs longer to open (a TLS handshake over a link of
-300 ms round trips) needs a longer one: a ``--zenoh-config`` file's
-``transport/unicast/open_timeout``."""
-
-ENDPOINT = re.compile(r"^[A-Za-z0-9+.-]+/\S+$")
-ENDPOINT_HINT = "e.g. tcp/127.0.0.1:7447, tcp/[::1]:7447 or tcp/robot-1.local:7447"
-
-
-def endpoint_problem(text: str) -> str | None:
-    """What is wrong with an endpoint's form (``None``: nothing Zenoh would not check)."""
-    if ENDPOINT.match(text):
-        return None
-    return f"{text!r}: an endpoint is PROTOCOL/ADDRESS ({ENDPOINT_HINT})"
-
-
-@dataclass(frozen=True)
-class ZenohOptions:
-    """How a robot program reaches the others."""
-
-    society: str = DEFAULT_SOCIETY
-    listen: tuple[str, ...] = ()
-    connect: tuple[str, ...] = ()
-    config_file: str | None = None
-    lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
-    keys: str | None = None  # a folder of society keys: TLS, mTLS, access control
-    backlog: int = 10_000
-    """Switch-protocol messages that may wait for the robot's loop; past it,
-    more are dropped and counted (:attr:`ZenohTransport.dropped`): a robot
-    that floods the coordinator cannot grow its memory without bound."""
-    rates: RateLimits = field(default_factory=RateLimits)
-    """How many messages per channel and sender are taken (:mod:`cfgplan.security.rates`)."""
-    problem: ProblemId | None = None
-    """The problem the robot runs, announced and checked against the society's
-    (:mod:`cfgplan.security.identity`); ``None``: not known, not checked."""
-
-    def __post_init__(self) -> None:
-        if not self.society:
-            raise RunError("the society name is empty")
-        for option, endpoints in (("--listen", self.listen), ("--connect", self.connect)):
-            for endpoint in endpoints:
-                problem = endpoint_problem(endpoint)
-                if problem:
-                    raise RunError(f"{option} {problem}", hint=ENDPOINT_HINT)
-        if self.lease is not None and not self.lease > 0:
-            raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")
-
-
-def _zenoh() -> ModuleType:
-    try:
-        import zenoh
-    except ImportError:
-        raise RunError(
-            "the Zenoh transport needs the eclipse-zenoh package, which is not installed",
-            hint="pip install eclipse-zenoh",
-        ) from None
-    return zenoh
-
-
-def _reason(exc: BaseException) -> str:
-    """Zenoh's message without the Rust source location it appends."""
-    text = str(exc)
-    inner = re.search(r'msg: "(.*?)"', text)
-    if inner:
-        text = inner.group(1)
-    return re.sub(r" at \S+\.rs:\d+\.?", "", text).strip()
-
-
-DEFAULTS: tuple[tuple[str, str, str], ...] = (
-    ("mode", '"peer"', "peer mode"),
-    ("connect/retry", RETRY, "the connection retry"),
-    ("transport/link/tx/lease", str(round(DEFAULT_LEASE * 1000)), "the lease"),
-    ("transport/unicast/open_timeout", str(OPEN_TIMEOUT_MS), "the time to open a link"),
-)
-"""cfgplan's settings under anything a ``--zenoh-config`` file sets: (key, JSON5, what)."""
-
-
-def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Config:
-    """The session configuration of a robot program: cfgplan's :data:`DEFAULTS`
-    (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s, an
-    :data:`OPEN_TIMEOUT_MS` to open a link), then a configuration file's
-    settings, then the options.
-
-    A file is read whole by Zenoh, which fills in its own default for every
-    key the file leaves out; so a key whose value in the file is Zenoh's own
-    default counts as not set, and gets cfgplan's (``--lease 10`` asks for
-    Zenoh's 10 s lease)."""
-    z = _zenoh()
-    config: zenoh.Config
-    if options.config_file is not None:
-        try:
-            config = z.Config.from_file(options.config_file)
-        except z.ZError as exc:
-            raise RunError(
-                f"cannot read the Zenoh configuration {options.config_file}: {_reason(exc)}"
-            ) from None
-        zenohs = z.Config()
-        for key, value, what in DEFAULTS:
-            if config.get_json(key) == zenohs.get_json(key):  # the file leaves it
-                _set(config, key, value, what)
-    else:
-        config = z.Config()
-        for key, value, what in DEFAULTS:
-            _set(config, key, value, what)
-    if options.listen:
-        _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
-    elif options.connect and config.get_json("listen/endpoints") == z.Config().get_json(
-        "listen/endpoints"
-    ):  # it reaches out; Zenoh's default would listen on every interface
-        _set(config, "listen/endpoints", "[]", "--connect (listens nowhere)")
-    if options.connect:
-        _set(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
-    if options.listen or options.connect:
-        _set(config, "scouting/multicast/enabled", "false", "scouting")
-    if options.lease is not None:
-        _set(config, "transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease")
-    if options.keys is not None:  # last: every endpoint, the file's too, becomes TLS
-        from cfgplan.security.zenoh_tls import secure
-
-        if robot is None:
-            raise RunError("--keys: whose keys? (no robot named)")
-        secure(config, options.keys, robot, options.society, _set)
-    return config
-
-
-def _set(config: Any, key: str, value: str, option: str) -> None:
-    try:
-        config.insert_json5(key, value)
-    except Exception as exc:  # zenoh.ZError; zenoh is imported lazily
-        raise RunError(f"{option}: Zenoh refuses {value}: {_reason(exc)}") from None
 
 
 class ZenohTransport:
@@ -239,19 +95,19 @@ class ZenohTransport:
         self.robot = robot
         self.options = options or ZenohOptions()
         self.society = self.options.society
-        z = self._z = _zenoh()
+        z = self._z = load_zenoh()
         config = zenoh_config(self.options, robot)
         self.lease = float(json.loads(config.get_json("transport/link/tx/lease"))) / 1000
         """Seconds of silence after which a robot is lost (the session's lease)."""
         try:
             self._session = z.open(config)
         except z.ZError as exc:
-            raise RunError(f"cannot open the Zenoh session: {_reason(exc)}") from None
+            raise RunError(f"cannot open the Zenoh session: {reason(exc)}") from None
         try:
             self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
         except z.ZError as exc:
             self._session.close()
-            raise RunError(f"cannot declare {robot} alive: {_reason(exc)}") from None
+            raise RunError(f"cannot declare {robot} alive: {reason(exc)}") from None
         self._subscribers: list[Any] = []
         self._channels: Any = None  # the subscriber of cfgplan/<society>/<robot>/ch/**
         self._receivers: dict[str, Receiver] = {}  # by key expression (with the sender)
@@ -273,9 +129,9 @@ class ZenohTransport:
         self.sent = 0
         self._buckets = Buckets(self.options.rates)
         self.notices: list[Callable[[str, str], None]] = []
-        """Told ``(message, channel)`` of the messages a flood cost, once per interval
-        (:attr:`RateLimits.report_every`): the robot's :class:`~cfgplan.runtime.member.Member`
-        records them."""
+        """Told ``(message, channel)`` of the messages a flood cost, once per
+        interval (:attr:`~cfgplan.security.rates.RateLimits.report_every`): the
+        robot's :class:`~cfgplan.runtime.member.Member` records them."""
         self.conflict: str | None = None
         """Set when a robot of the society runs another problem: the run ends."""
         self.conflict_handled = False
@@ -382,7 +238,7 @@ class ZenohTransport:
             self._problem_token = liveliness.declare_token(key)
         except self._z.ZError as exc:
             self.close()
-            raise RunError(f"cannot announce {self.robot}'s problem: {_reason(exc)}") from None
+            raise RunError(f"cannot announce {self.robot}'s problem: {reason(exc)}") from None
 
     def _on_problem(self, sample: Any) -> None:
         """On a Zenoh thread: a robot of the society says which problem it runs."""

@@ -4,7 +4,7 @@ access control by certificate name (``--keys DIR``).
 From a folder made by ``cfgplan keys new`` (:mod:`cfgplan.security.keys`)
 and the name of a robot (or operator tool), :func:`secure_settings` gives the
 settings put on top of the session's configuration
-(:func:`cfgplan.runtime.zenoh_transport.zenoh_config`), with the keys of the
+(:func:`cfgplan.runtime.zenoh_config.zenoh_config`), with the keys of the
 Zenoh configuration schema (``DEFAULT_CONFIG.json5`` of eclipse-zenoh,
 ``transport/link/tls`` and ``access_control``; checked against the installed
 eclipse-zenoh by tests/security/test_zenoh_tls.py):

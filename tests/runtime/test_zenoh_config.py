@@ -131,7 +131,7 @@ def test_a_session_whose_token_is_refused_is_closed(monkeypatch: pytest.MonkeyPa
             closed.append(True)
 
     fake = SimpleNamespace(ZError=zenoh.ZError, Config=zenoh.Config, open=lambda _: Session())
-    monkeypatch.setattr("cfgplan.runtime.zenoh_transport._zenoh", lambda: fake)
+    monkeypatch.setattr("cfgplan.runtime.zenoh_transport.load_zenoh", lambda: fake)
     with pytest.raises(RunError, match="cannot declare Emil alive: refused"):
         ZenohTransport("Emil", ZenohOptions(listen=("tcp/127.0.0.1:7447",)))
     assert closed == [True]

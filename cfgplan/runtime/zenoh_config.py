@@ -1,0 +1,190 @@
+"""A robot's Zenoh session configuration: cfgplan's defaults, a file's, the
+command line's options (5.2.2; issue 33's timing, issue 34's keys).
+
+:func:`zenoh_config` builds it in layers: cfgplan's :data:`DEFAULTS` (peer
+mode, the connection retry, the lease, the time to open a link), then a
+``--zenoh-config`` file's settings (it keeps cfgplan's unless it sets them),
+then the options of :class:`ZenohOptions` (endpoints, scouting, lease, keys).
+:mod:`zenoh` is imported only when a configuration is made.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+from cfgplan.runtime.errors import RunError
+from cfgplan.security.identity import ProblemId
+from cfgplan.security.rates import RateLimits
+
+if TYPE_CHECKING:
+    import zenoh
+
+__all__ = [
+    "DEFAULTS",
+    "DEFAULT_LEASE",
+    "DEFAULT_SOCIETY",
+    "OPEN_TIMEOUT_MS",
+    "RETRY",
+    "ZenohOptions",
+    "endpoint_problem",
+    "load_zenoh",
+    "reason",
+    "zenoh_config",
+]
+
+DEFAULT_LEASE = 2.0
+"""Seconds without a word after which a frozen robot is reported lost (Zenoh's lease).
+
+Long enough to ride out a TCP stall on a lossy link: the kernel resends a lost
+segment after 200 ms, 400 ms, 800 ms, ..., so three losses of one segment
+stall a link 1.4 s. With a 1 s lease that happened in one of three 30 s runs at
+10 % loss (the robot reported lost, the society stopped 0.4 s); with 2 s, four
+losses in a row are needed. A robot that dies is seen at once all the same
+(its connection closes); only a frozen robot or a cut link waits for the lease
+(issue 33; ``python -m benchmarks.faults``)."""
+
+DEFAULT_SOCIETY = "default"
+RETRY = '{"period_init_ms": 250, "period_max_ms": 500, "period_increase_factor": 2}'
+"""Connecting to a robot that is not up yet (or not reachable) is retried every
+half second at most."""
+
+OPEN_TIMEOUT_MS = 1500
+"""Milliseconds one attempt to open a link may take before it is given up and
+retried. Zenoh's default, 10 s, bounds the TCP connect as well, and a connect
+whose SYN was lost to a bad link waits for the kernel's resends (after 1 s, then
+2 s, 4 s, ...) however long ago the link came back (issue 33: 2.8 s to reconnect
+after 50 % loss cleared). Given up after 1.5 s (past the first resend), and
+retried :data:`RETRY` 0.5 s later, an attempt goes out on the link at least
+every second. A link that needs longer to open (a TLS handshake over a link of
+300 ms round trips) needs a longer one: a ``--zenoh-config`` file's
+``transport/unicast/open_timeout``."""
+
+ENDPOINT = re.compile(r"^[A-Za-z0-9+.-]+/\S+$")
+ENDPOINT_HINT = "e.g. tcp/127.0.0.1:7447, tcp/[::1]:7447 or tcp/robot-1.local:7447"
+
+
+def endpoint_problem(text: str) -> str | None:
+    """What is wrong with an endpoint's form (``None``: nothing Zenoh would not check)."""
+    if ENDPOINT.match(text):
+        return None
+    return f"{text!r}: an endpoint is PROTOCOL/ADDRESS ({ENDPOINT_HINT})"
+
+
+@dataclass(frozen=True)
+class ZenohOptions:
+    """How a robot program reaches the others."""
+
+    society: str = DEFAULT_SOCIETY
+    listen: tuple[str, ...] = ()
+    connect: tuple[str, ...] = ()
+    config_file: str | None = None
+    lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
+    keys: str | None = None  # a folder of society keys: TLS, mTLS, access control
+    backlog: int = 10_000
+    """Switch-protocol messages that may wait for the robot's loop; past it,
+    more are dropped and counted (:attr:`ZenohTransport.dropped`): a robot
+    that floods the coordinator cannot grow its memory without bound."""
+    rates: RateLimits = field(default_factory=RateLimits)
+    """How many messages per channel and sender are taken (:mod:`cfgplan.security.rates`)."""
+    problem: ProblemId | None = None
+    """The problem the robot runs, announced and checked against the society's
+    (:mod:`cfgplan.security.identity`); ``None``: not known, not checked."""
+
+    def __post_init__(self) -> None:
+        if not self.society:
+            raise RunError("the society name is empty")
+        for option, endpoints in (("--listen", self.listen), ("--connect", self.connect)):
+            for endpoint in endpoints:
+                problem = endpoint_problem(endpoint)
+                if problem:
+                    raise RunError(f"{option} {problem}", hint=ENDPOINT_HINT)
+        if self.lease is not None and not self.lease > 0:
+            raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")
+
+
+def load_zenoh() -> ModuleType:
+    try:
+        import zenoh
+    except ImportError:
+        raise RunError(
+            "the Zenoh transport needs the eclipse-zenoh package, which is not installed",
+            hint="pip install eclipse-zenoh",
+        ) from None
+    return zenoh
+
+
+def reason(exc: BaseException) -> str:
+    """Zenoh's message without the Rust source location it appends."""
+    text = str(exc)
+    inner = re.search(r'msg: "(.*?)"', text)
+    if inner:
+        text = inner.group(1)
+    return re.sub(r" at \S+\.rs:\d+\.?", "", text).strip()
+
+
+DEFAULTS: tuple[tuple[str, str, str], ...] = (
+    ("mode", '"peer"', "peer mode"),
+    ("connect/retry", RETRY, "the connection retry"),
+    ("transport/link/tx/lease", str(round(DEFAULT_LEASE * 1000)), "the lease"),
+    ("transport/unicast/open_timeout", str(OPEN_TIMEOUT_MS), "the time to open a link"),
+)
+"""cfgplan's settings under anything a ``--zenoh-config`` file sets: (key, JSON5, what)."""
+
+
+def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Config:
+    """The session configuration of a robot program: cfgplan's :data:`DEFAULTS`
+    (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s, an
+    :data:`OPEN_TIMEOUT_MS` to open a link), then a configuration file's
+    settings, then the options.
+
+    A file is read whole by Zenoh, which fills in its own default for every
+    key the file leaves out; so a key whose value in the file is Zenoh's own
+    default counts as not set, and gets cfgplan's (``--lease 10`` asks for
+    Zenoh's 10 s lease)."""
+    z = load_zenoh()
+    config: zenoh.Config
+    if options.config_file is not None:
+        try:
+            config = z.Config.from_file(options.config_file)
+        except z.ZError as exc:
+            raise RunError(
+                f"cannot read the Zenoh configuration {options.config_file}: {reason(exc)}"
+            ) from None
+        zenohs = z.Config()
+        for key, value, what in DEFAULTS:
+            if config.get_json(key) == zenohs.get_json(key):  # the file leaves it
+                _set(config, key, value, what)
+    else:
+        config = z.Config()
+        for key, value, what in DEFAULTS:
+            _set(config, key, value, what)
+    if options.listen:
+        _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
+    elif options.connect and config.get_json("listen/endpoints") == z.Config().get_json(
+        "listen/endpoints"
+    ):  # it reaches out; Zenoh's default would listen on every interface
+        _set(config, "listen/endpoints", "[]", "--connect (listens nowhere)")
+    if options.connect:
+        _set(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
+    if options.listen or options.connect:
+        _set(config, "scouting/multicast/enabled", "false", "scouting")
+    if options.lease is not None:
+        _set(config, "transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease")
+    if options.keys is not None:  # last: every endpoint, the file's too, becomes TLS
+        from cfgplan.security.zenoh_tls import secure
+
+        if robot is None:
+            raise RunError("--keys: whose keys? (no robot named)")
+        secure(config, options.keys, robot, options.society, _set)
+    return config
+
+
+def _set(config: Any, key: str, value: str, option: str) -> None:
+    try:
+        config.insert_json5(key, value)
+    except Exception as exc:  # zenoh.ZError; zenoh is imported lazily
+        raise RunError(f"{option}: Zenoh refuses {value}: {reason(exc)}") from None
