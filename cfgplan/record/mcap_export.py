@@ -46,6 +46,7 @@ from cfgplan.record.channels import (
     segment,
 )
 from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.tracefile import trace_files
 
 __all__ = [
     "COMPRESSION",
@@ -98,14 +99,6 @@ class Recording:
     @property
     def total(self) -> int:
         return sum(self.messages.values())
-
-
-def trace_files(path: Path) -> list[Path]:
-    """The files of the trace ``path``: ``path.1`` first when a capped trace
-    rotated (:mod:`cfgplan.runtime.tracefile`: it holds the events just before
-    those in ``path``), then ``path``."""
-    rotated = path.with_name(path.name + ".1")
-    return [rotated, path] if rotated.is_file() else [path]
 
 
 def read_lines(paths: Sequence[Path]) -> Iterator[TraceLine]:

@@ -31,7 +31,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.tracefile import rotated_path
+from cfgplan.runtime.tracefile import trace_files
 
 __all__ = ["MCAP_MAGIC", "Source", "read_run"]
 
@@ -93,8 +93,7 @@ def _event(obj: object, file: str, line: int) -> dict[str, Any]:
 
 def _lines(path: Path) -> list[dict[str, Any]]:
     out = []
-    rotated = rotated_path(path)
-    for part in [rotated, path] if rotated.is_file() else [path]:
+    for part in trace_files(path):
         _check_file(part)
         try:
             raw = part.read_bytes()

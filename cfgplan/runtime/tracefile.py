@@ -46,6 +46,7 @@ __all__ = [
     "open_output",
     "open_trace",
     "rotated_path",
+    "trace_files",
 ]
 
 ELIDE = 4096
@@ -127,6 +128,14 @@ def open_output(p: Path, force: bool, *, what: str, rotates: bool) -> int:
 def rotated_path(p: Path) -> Path:
     """Where an output file capped in size rotates to: FILE.1."""
     return p.with_name(p.name + ".1")
+
+
+def trace_files(path: Path) -> list[Path]:
+    """The files of the trace (or recording) ``path``, in the order written:
+    ``path``.1 first when a capped one rotated (it holds the events just
+    before those in ``path``), then ``path``."""
+    rotated = rotated_path(path)
+    return [rotated, path] if rotated.is_file() else [path]
 
 
 def create(p: Path, force: bool) -> int:
