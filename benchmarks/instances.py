@@ -56,10 +56,14 @@ INSTANCES = [
     Instance("fusion M=4 V=3 P=4 H=3", "fusion", (4, 3, 4, 3)),
     _big("fusion M=14 V=3 P=6 H=6", "fusion", 14, 3, 6, 6),
     _big("fusion M=30 V=3 P=6 H=6", "fusion", 30, 3, 6, 6),
+    _big("fusion M=60 V=3 P=6 H=6", "fusion", 60, 3, 6, 6),  # issue 35's CP-SAT anchor: 2.0 s
     Instance("chain D=8", "chain", (8,)),
     _big("chain D=30", "chain", 30),
     _big("chain D=100", "chain", 100),
+    _big("chain D=150", "chain", 150),
+    _big("chain D=200", "chain", 200),
     Instance("delegation N=4", "delegation", (4,)),
+    Instance("delegation N=5", "delegation", (5,), baseline=False),
     Instance("delegation N=6", "delegation", (6,), baseline=False),
     # Shared and recursive sub-derivations (issue 35; benchmarks/families/shared.py).
     # The issue's CP-SAT anchor, process start to exit: dag D=18 0.9 s, D=24 2.2 s,
@@ -72,6 +76,7 @@ INSTANCES = [
     _big("conversion D=12", "conversion", 12),
     _big("conversion D=20", "conversion", 20),
     _big("conversion D=28", "conversion", 28),
+    _big("conversion D=40", "conversion", 40),
     Instance("gateway N=4 D=4", "gateway", (4, 4)),
     _big("gateway N=8 D=8", "gateway", 8, 8),
     _big("gateway N=8 D=5", "gateway", 8, 5),

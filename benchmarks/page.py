@@ -49,8 +49,10 @@ The instances (`benchmarks/instances.py`; families in `benchmarks/families/`):
   built on board over media of little capacity, so the derivations cheapest on
   functionalities are communication-inadmissible;
 - **fusion M V P H**: one robot fuses M pieces, each from V versions using one
-  or two of P sensor kinds, processed on itself or on any of H helpers;
-- **chain D**: D levels of 3 versions with equal costs (long plateaus);
+  or two of P sensor kinds, processed on itself or on any of H helpers
+  (issue 35's CP-SAT anchor, process start to exit: M=60 2.0 s);
+- **chain D**: D levels of 3 versions with equal costs (long plateaus; issue 35
+  asks for D=150 and D=200 under 1 s, process start to exit);
 - **delegation N**: `get` on one robot may delegate to `get` on any other:
   the derivations grow much faster than N!;
 - **gateway N D**: N robots each watch a view cropped from one of D ceiling

@@ -31,7 +31,7 @@ The pending items are read through their static summaries
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Hashable, Iterable, Set
 from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import Grounder
@@ -108,55 +108,120 @@ class Bound:
         # every pending item, and without the items that repeat a method
         # instance already being expanded in this node (see _repeats).
         repeats = _repeats(node, task)
-        deepest = self._deepest(node, pending)
-        widest = self._widest(pending, future, resolved)
+        alone = self._alone(node, pending, future)
+        deepest = self._deepest(node, pending, alone)
+        widest = self._widest(pending, future, resolved, alone)
         if repeats:
             kept = {label: entry for label, entry in pending.items() if label not in repeats}
-            deepest = max(deepest, self._deepest(node, kept))
-            widest = max(widest, self._widest(kept, future, resolved))
+            deepest = max(deepest, self._deepest(node, kept, alone))
+            widest = max(widest, self._widest(kept, future, resolved, alone))
         total = max(mandatory, deepest)
         total += sum(task.agent_cost(agent) for agent in new_robots - node.robots)
         return total + widest
 
-    def _deepest(self, node: Partial, pending: dict[int, tuple[Ground, Summary]]) -> float:
+    def _alone(
+        self, node: Partial, pending: dict[int, tuple[Ground, Summary]], future: set[ChannelId]
+    ) -> frozenset[Key]:
+        """Pending functionality instances (and ends of channels waiting for
+        an end) that no pending method item can derive, as only its
+        ancestors call them (:meth:`Summaries.beyond`): each is a part of its
+        own, which shares with nothing else pending. On a recursive path (a
+        conversion graph, issue 35) the path's own functionalities wait on
+        the stack below the method deriving their inputs; named by their
+        names, they would all count as one with it."""
+        if not self.task.recursive:
+            return frozenset()
+        task, beyond = self.task, self.summaries.beyond
+        above = [item.ancestors for item in node.stack if task.is_method(item.call)]
+        keys = {call for call, _ in pending.values() if not task.is_method(call)}
+        keys |= {end for _, _, sender, receiver in future for end in (sender, receiver) if end}
+        return frozenset(k for k in keys if all(beyond(k, ancestors) for ancestors in above))
+
+    def _deepest(
+        self, node: Partial, pending: dict[int, tuple[Ground, Summary]], alone: frozenset[Key]
+    ) -> float:
         """What the pending items must still add in functionalities, by their
         minimums: items that can reach no common functionality name add up
-        (less what C already has of those names); the others count once."""
+        (less what C already has of those names); the others count once.
+        A functionality in ``alone`` is a part of its own."""
         have: dict[str, float] = {}
         for p in node.placed:
             cost = self.task.functionality_cost(p.schema, p.call)
             have[p.call[0]] = have.get(p.call[0], 0.0) + cost
-        parts = []
-        for call, sub in pending.values():
+        guarded = self._guarded(node, pending)
+        parts: list[tuple[Set[Hashable], float]] = []
+        for label, (call, sub) in pending.items():
+            if call in alone:
+                parts.append((_own_part(call), 0.0 if call in node.labels else sub.minimum))
+                continue
             names = self.summaries.names(call)
             reusable = sum(cost for name, cost in have.items() if name in names)
+            reusable -= guarded.get(label, 0.0)
             parts.append((names, max(0.0, sub.minimum - reusable)))
         return least(parts)
+
+    def _guarded(
+        self, node: Partial, pending: dict[int, tuple[Ground, Summary]]
+    ) -> dict[int, float]:
+        """Per pending method item, the cost of the functionalities in C that
+        its expansion cannot reuse, as only its ancestors call them
+        (:meth:`Summaries.beyond`): on a recursive path (a conversion graph,
+        issue 35) C holds the path's own functionalities, which would
+        otherwise each lower the item's least cost."""
+        if not self.task.recursive:
+            return {}
+        summaries, task = self.summaries, self.task
+        guarded: dict[int, float] = {}
+        for item in node.stack:
+            if item.label not in pending or not task.is_method(item.call):
+                continue
+            names = summaries.names(item.call)
+            total = 0.0
+            for p in node.placed:
+                if p.call[0] in names and summaries.beyond(p.call, item.ancestors):
+                    total += task.functionality_cost(p.schema, p.call)
+            if total:
+                guarded[item.label] = total
+        return guarded
 
     def _widest(
         self,
         pending: dict[int, tuple[Ground, Summary]],
         future: set[ChannelId],
         resolved: set[tuple[str, Ground, Key, Key]],
+        alone: frozenset[Key],
     ) -> float:
         """What must still be added in channels: the channels already waiting
         for their ends (``future``), and each pending item's least wiring (less
         the resolved channels with data it can carry); parts whose data
-        predicates differ cannot merge, so they add up."""
+        predicates differ cannot merge, so they add up. A channel from or
+        into a functionality in ``alone`` can merge with none a pending item
+        makes (those have both ends inside its expansion): they are a part of
+        their own."""
         have: dict[str, float] = {}
         for kind, data, _, _ in resolved:
             have[data[0]] = have.get(data[0], 0.0) + self.task.channel_cost(kind)
-        parts = [
+        apart = {c for c in future if c[2] in alone or c[3] in alone}
+        rest = future - apart if apart else future
+        parts: list[tuple[Set[Hashable], float]] = [
             (
-                frozenset(data[0] for _, data, _, _ in future),
-                _channel_bound(future, resolved, self.task),
+                frozenset(data[0] for _, data, _, _ in rest),
+                _channel_bound(rest, resolved, self.task),
             )
         ]
+        if apart:
+            parts.append((_own_part("channels"), _channel_bound(apart, resolved, self.task)))
         for call, sub in pending.values():
             names = self.summaries.data_names(call)
             reusable = sum(cost for name, cost in have.items() if name in names)
             parts.append((names, max(0.0, sub.wiring - reusable)))
         return least(parts)
+
+
+def _own_part(thing: Hashable) -> frozenset[Hashable]:
+    """A name no functionality or data predicate has (those are strings): a
+    part of its own."""
+    return frozenset({("own", thing)})
 
 
 def _repeats(node: Partial, task: Task) -> set[int]:

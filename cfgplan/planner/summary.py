@@ -13,8 +13,8 @@ stack.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator, Iterable, Set
-from dataclasses import dataclass, field
+from collections.abc import Callable, Generator, Hashable, Iterable, Set
+from dataclasses import dataclass, field, replace
 
 from cfgplan.planner import clock
 from cfgplan.planner.ground import Grounder, channel_kind
@@ -91,6 +91,10 @@ class Summaries:
     each ground instance is matched once; None: a memo of its own."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
     _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(default_factory=dict)
+    _parents: dict[Ground, set[Ground]] = field(default_factory=dict)
+    """Functionality instance -> the method instances whose bodies call it,
+    over every ground instance reachable from a summarised call."""
+    _walked: set[Ground] = field(default_factory=set)
 
     def __post_init__(self) -> None:
         self._bind = self.binder or Grounder(self.task).method_bindings
@@ -100,8 +104,11 @@ class Summaries:
         found = self._memo.get(call)
         if found is not None:
             return found
+        self._walk(call)
         frames: list[tuple[Ground, Summarising]] = [(call, self._summarise(call))]
         active = {call}
+        guessed: set[Ground] = set()  # frames that were told UNKNOWN, or built on one that was
+        recursive: list[Ground] = []  # the summaries built on UNKNOWN, in the order made
         reply: Summary | None = None
         while frames:
             clock.check()
@@ -113,15 +120,114 @@ class Summaries:
                 active.discard(current)
                 frames.pop()
                 reply = made.value
+                if current in guessed:
+                    recursive.append(current)
+                    if frames:
+                        guessed.add(frames[-1][0])
                 continue
             reply = self._memo.get(need)
             if reply is None:
                 if need in active:
                     reply = UNKNOWN  # see UNKNOWN: recursion is summarised as unknown
+                    guessed.add(current)
                 else:
                     active.add(need)
                     frames.append((need, self._summarise(need)))
+        if recursive:
+            self._raise_least_costs(recursive)
         return self._memo[call]
+
+    def _raise_least_costs(self, recursive: list[Ground]) -> None:
+        """Raise the least costs of summaries built on :data:`UNKNOWN` towards
+        the cheapest derivation's, ignoring the recursion guard.
+
+        Priced at 0, a recursive call makes every instance of its cycle look
+        almost free (a conversion graph's root bound was 13 against an
+        optimum of 27). The least costs of the instances of one cycle are
+        the least fixpoint of their equations (``minimum`` is a min over
+        expansions of sums and maxima of their parts' minimums, and so is
+        ``wiring``): the cost of the lightest derivation tree (Knuth's
+        lightest derivation). Iterating the equations from the costs made
+        with UNKNOWN's 0 stays below that fixpoint at every round, as the
+        equations are monotone; and the fixpoint is at most what any
+        derivation the search can make costs, since the recursion guard of
+        4.5 only removes derivations. So every round is admissible, and the
+        rounds stop when nothing changes or after a number of rounds that
+        bounds the work on long cycles. The contents (functionalities,
+        robots, channels) keep their first, weaker values: they are
+        intersections, and raising them needs another argument.
+        """
+        limit = 2 * len(recursive) + 8
+        for _ in range(limit):
+            changed = False
+            for call in recursive:
+                clock.check()
+                old = self._memo[call]
+                making = self._summarise(call)
+                reply: Summary | None = None
+                try:
+                    while True:
+                        need = making.send(reply)  # type: ignore[arg-type]
+                        reply = self._memo[need]
+                except StopIteration as made:
+                    new: Summary = made.value
+                if not new.feasible:
+                    continue  # its expansions all lead to infeasible parts: keep the first
+                minimum, wiring = max(old.minimum, new.minimum), max(old.wiring, new.wiring)
+                if (minimum, wiring) != (old.minimum, old.wiring):
+                    self._memo[call] = replace(old, minimum=minimum, wiring=wiring)
+                    changed = True
+            if not changed:
+                return
+
+    def _walk(self, root: Ground) -> None:
+        """Note the callers of every functionality instance reachable from
+        ``root`` (see :meth:`_own`)."""
+        if root in self._walked:
+            return
+        self._walked.add(root)
+        todo = [root]
+        while todo:
+            clock.check()
+            call = todo.pop()
+            for method in self.task.versions(call):
+                for env in self._bind(method, call):
+                    for _, pattern in method.body:
+                        child = substitute(pattern, env)
+                        if not is_ground(child):
+                            continue
+                        if not self.task.is_method(child):
+                            self._parents.setdefault(child, set()).add(call)
+                        elif child not in self._walked:
+                            self._walked.add(child)
+                            todo.append(child)
+
+    def beyond(self, functionality: Ground, ancestors: frozenset[Ground]) -> bool:
+        """Whether no expansion of an item below ``ancestors`` can derive
+        ``functionality``: every method instance whose body calls it is one of
+        the ancestors, which the recursion guard of 4.5 prunes there.
+
+        Only callers whose signatures can recur are trusted to be ancestors
+        (:attr:`Task.recursive`): those are the ancestors the canonical form
+        keeps (:mod:`cfgplan.planner.canonical`), so two nodes of one form
+        agree. The callers are those of the instances reachable from every
+        call summarised so far: all those reachable from the item, once its
+        own summary was asked for."""
+        callers = self._parents.get(functionality)
+        if not callers or not callers <= ancestors:
+            return False
+        recursive = self.task.recursive
+        return all((c[0], len(c) - 1) in recursive for c in callers)
+
+    def _own(self, functionality: Ground, caller: Ground) -> bool:
+        """Whether only ``caller``'s bodies call ``functionality``.
+
+        Then no part of ``caller``'s body derives it: every derivation of it
+        passes through ``caller``, which the recursion guard of 4.5 prunes
+        below ``caller`` itself. So it cannot be shared with another part of
+        the body, nor can a channel into it (a channel made inside a part
+        ends inside that part)."""
+        return self._parents.get(functionality, set()) == {caller}
 
     def _summarise(self, call: Ground) -> Summarising:
         schema = self.task.functionality(call)
@@ -137,7 +243,7 @@ class Summaries:
         expansions: list[Expanded] = []
         for method in self.task.versions(call):
             for env in self._bind(method, call):
-                expansion = yield from self._expansion(method, env)
+                expansion = yield from self._expansion(call, method, env)
                 if expansion is not None:
                     expansions.append(expansion)
         if not expansions:
@@ -155,7 +261,7 @@ class Summaries:
         return Summary(True, funcs, robots, channels, producers, minimum, wiring)
 
     def _expansion(
-        self, method: MethodSchema, env: Bindings
+        self, caller: Ground, method: MethodSchema, env: Bindings
     ) -> Generator[Ground, Summary, Expanded | None]:
         body: dict[str, tuple[Ground, Summary, bool]] = {}
         funcs: set[Key] = set()
@@ -173,15 +279,19 @@ class Summaries:
             robots |= sub.robots
             channels |= sub.channels
         own: set[tuple[str, Ground]] = set()
+        into_own: set[tuple[str, Ground, Ground]] = set()  # channels into an own functionality
         for spec in method.channels:
             data = substitute(spec.data, env)
             ends = substitute(("robots", *spec.robots), env)
             if not is_ground(data) or not is_ground(ends):
                 return None
             kind = channel_kind(spec.kind, ends[1:])[0]
-            own.add((kind, data))
             src_call, src_sum, src_func = body[spec.source]
             dst_call, _, dst_func = body[spec.target]
+            if dst_func and self._own(dst_call, caller):
+                into_own.add((kind, data, dst_call))
+            else:
+                own.add((kind, data))
             sender = src_call if src_func else src_sum.producer(data)
             receiver = dst_call if dst_func else None
             channels.add((kind, data, sender, receiver))
@@ -190,9 +300,15 @@ class Summaries:
             data = substitute(port.data, env)
             call, sub, is_functionality = body[port.label]
             producers.setdefault(data, call if is_functionality else sub.producer(data))
-        parts = [(self.names(call), sub.minimum) for call, sub, _ in body.values()]
+        # A part is named by what it can reach; an own functionality (and a
+        # channel into one) by itself alone: it shares with no other part.
+        parts = [
+            (_alone(call) if func and self._own(call, caller) else self.names(call), sub.minimum)
+            for call, sub, func in body.values()
+        ]
         own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
-        wires: list[tuple[Set[str], float]] = [({data[0] for _, data in own}, own_cost)]
+        wires: list[tuple[Set[Hashable], float]] = [({data[0] for _, data in own}, own_cost)]
+        wires += [(_alone(c), self.task.channel_cost(c[0])) for c in into_own]
         wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
         return Expanded(
             frozenset(funcs),
@@ -237,24 +353,43 @@ class Summaries:
         return result
 
 
-def least(parts: Iterable[tuple[Set[str], float]]) -> float:
+def _alone(thing: Hashable) -> frozenset[Hashable]:
+    """A name no functionality or data predicate has (those are strings):
+    the part it names shares with no part named otherwise."""
+    return frozenset({("own", thing)})
+
+
+def least(parts: Iterable[tuple[Set[Hashable], float]]) -> float:
     """The least a set of parts can cost together, each part given by the
     names it can reach (functionality names, or channel data predicates) and
     its own least cost: parts whose names are disjoint cannot share an
     instance, so their costs add; parts that may share count as the largest
-    of them."""
-    groups: list[tuple[set[str], float]] = []
-    for names, cost in parts:
-        merged_names, merged_cost = set(names), cost
-        rest = []
-        for group_names, group_cost in groups:
-            if group_names & merged_names:
-                merged_names |= group_names
-                merged_cost = max(merged_cost, group_cost)
-            else:
-                rest.append((group_names, group_cost))
-        groups = [*rest, (merged_names, merged_cost)]
-    return sum(cost for _, cost in groups)
+    of them. The groups of parts linked by shared names are found with a
+    union-find over the parts (a deep recursive path has hundreds of parts of
+    their own)."""
+    owner: dict[Hashable, int] = {}  # name -> a part that reaches it
+    parent: list[int] = []
+    cost: list[float] = []
+
+    def root(part: int) -> int:
+        while parent[part] != part:
+            parent[part] = parent[parent[part]]
+            part = parent[part]
+        return part
+
+    for names, part_cost in parts:
+        part = len(parent)
+        parent.append(part)
+        cost.append(part_cost)
+        for name in names:
+            other = owner.setdefault(name, part)
+            if other == part:
+                continue
+            a, b = root(other), root(part)
+            if a != b:
+                parent[b] = a
+                cost[a] = max(cost[a], cost[b])
+    return sum(c for i, c in enumerate(cost) if parent[i] == i)
 
 
 def common_channels(sets: list[frozenset[ChannelId]]) -> frozenset[ChannelId]:

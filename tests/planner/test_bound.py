@@ -137,3 +137,33 @@ def test_a_repeated_method_instance_does_not_join_the_parts_of_its_twin() -> Non
             seen = True
             assert (rest, best) == (28.0, 30.0)
     assert seen
+
+
+def test_a_recursive_path_is_priced_at_its_cheapest_completion() -> None:
+    """Issue 35, recursion over a conversion graph (benchmarks/families/shared.py
+    ``conversion``): ``(get T6)`` derives type 6 from any type it converts
+    from, with the recursion guard of 4.5. The bound was 13 at the root
+    against an optimum of 27 on the issue's instance: a recursive call was
+    priced 0, the converters waiting on the stack (named like the call's
+    own) counted as one part with it, and so did the converters already in
+    C. Now a recursive call is priced at its lightest derivation
+    (summary.py) and what only the path's own ancestors call is a part of
+    its own (``Summaries.beyond``): on the first nodes of the search, the
+    bound never exceeds the cheapest completion and, once a converter waits
+    on the stack, equals it."""
+    from benchmarks.families import conversion
+
+    problem = load_text(*conversion(6))
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    exact = 0
+    for node in some_nodes(grounder, problem.goal_call):
+        rest = bound.estimate(node)
+        best = least_completion(grounder, node)
+        assert rest is not None
+        if best is None:
+            continue
+        assert node.cost + rest <= best
+        if len(node.stack) >= 3:
+            assert node.cost + rest == best, [item.call for item in node.stack]
+            exact += 1
+    assert exact >= 15

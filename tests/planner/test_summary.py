@@ -73,3 +73,23 @@ def test_the_grounding_memo_s_bindings_give_the_same_summaries() -> None:
             assert shared.summary(call) == own.summary(call)
         with_helper = problem.task.versions(("get", "A"))[1]
         assert len(grounder.method_bindings(with_helper, ("get", "A"))) == helpers
+
+
+def test_a_recursive_instance_costs_its_lightest_derivation() -> None:
+    """Issue 35: in a conversion graph (benchmarks/families/shared.py) every
+    ``(get ?t)`` can reach itself. Met again inside its own summary, a call
+    was summarised as UNKNOWN, costing nothing, and the instances of its
+    cycle came out almost free (type 12: 2 and 1, for the converter on top).
+    Raised to the least fixpoint of their equations (Knuth's lightest
+    derivation, the recursion guard ignored): type 12 costs at least six
+    skips from the sensed type 0 (6 x 4) and its sensor (1), over six
+    channels; type 11 five skips to type 10 and one forward step (2), over
+    six channels."""
+    from benchmarks.families import conversion
+
+    problem = load_text(*conversion(12))
+    summaries = Summaries(problem.task)
+    top = summaries.summary(("get", "T12", "R"))
+    assert (top.minimum, top.wiring) == (25.0, 6.0)
+    below = summaries.summary(("get", "T11", "R"))
+    assert (below.minimum, below.wiring) == (23.0, 6.0)
