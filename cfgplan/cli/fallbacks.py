@@ -9,9 +9,9 @@ as comment lines in the ``lisp`` format, and as ``"fallbacks"`` in JSON
 
 from __future__ import annotations
 
-import io
 from typing import TYPE_CHECKING
 
+from cfgplan.cli.formats import plain
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text
@@ -41,8 +41,7 @@ def _single_points(found: list[Fallback]) -> str:
 
 def fallback_table(config: Configuration, found: list[Fallback], rank: int = 1) -> str:
     """The report on ``config`` (of ``rank``) as a table, then the single points of failure."""
-    from rich.console import Console  # loaded for tables only (issue 32: start-up)
-    from rich.table import Table
+    from rich.table import Table  # loaded for tables only (issue 32: start-up)
 
     title = f"Fallbacks of rank {rank} (cost {fmt(config.cost)}): if one resource fails"
     table = Table(title=title)
@@ -62,12 +61,10 @@ def fallback_table(config: Configuration, found: list[Fallback], rank: int = 1) 
             "-" if c is None else ", ".join([*c.robots, *c.devices]),
             _switch(fb),
         )
-    buffer = io.StringIO()
-    Console(file=buffer, width=150, force_terminal=False, color_system=None).print(table)
-    buffer.write(_single_points(found))
+    text = plain(table, 150) + _single_points(found)
     if not all(fb.proven for fb in found):
-        buffer.write("* not proven: the time limit cut that search\n")
-    return buffer.getvalue()
+        text += "* not proven: the time limit cut that search\n"
+    return text
 
 
 def fallback_lisp(config: Configuration, found: list[Fallback], rank: int = 1) -> str:

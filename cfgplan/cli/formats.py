@@ -12,6 +12,7 @@ from __future__ import annotations
 import io
 import json
 import shutil
+from typing import TYPE_CHECKING
 
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import channel_text, to_dict, to_text
@@ -21,7 +22,10 @@ from cfgplan.notation import call_text
 from cfgplan.planner import Run
 from cfgplan.problem import Problem
 
-__all__ = ["jsonl", "lisp", "more_note", "stats", "streamed", "summary", "table"]
+if TYPE_CHECKING:  # rich is loaded for tables only (issue 32: start-up)
+    from rich.table import Table
+
+__all__ = ["jsonl", "lisp", "more_note", "plain", "stats", "streamed", "summary", "table"]
 
 NO_MEDIA = "the state declares no media: communication admissibility not checked"
 
@@ -57,6 +61,21 @@ def stats(search: Run, more: bool | None = False) -> dict[str, object]:
     }
 
 
+def plain(shown: Table, width: int) -> str:
+    """A rich table as text ``width`` columns wide, without colour or styles;
+    every cell and the title as written, neither rich markup nor emoji codes
+    read in them (a name ``[b]x`` or ``x:smile:`` prints as itself), which
+    also spares loading rich's table of emoji (issue 32: start-up)."""
+    from rich.console import Console
+
+    buffer = io.StringIO()
+    console = Console(
+        file=buffer, width=width, force_terminal=False, color_system=None, markup=False, emoji=False
+    )
+    console.print(shown)
+    return buffer.getvalue()
+
+
 def table(
     problem: Problem,
     configs: list[Configuration],
@@ -66,8 +85,7 @@ def table(
 ) -> str:
     """The table for people: names with control characters escaped (a name
     holding ESC cannot drive the terminal)."""
-    from rich.console import Console  # loaded for tables only (issue 32: start-up)
-    from rich.table import Table
+    from rich.table import Table  # loaded for tables only (issue 32: start-up)
 
     shown = Table(title=printable(f"Configurations for {call_text(problem.goal_call)}"))
     shown.add_column("rank", justify="right")
@@ -96,17 +114,16 @@ def table(
             row.append("\n".join(str(f) for f in c.functionalities))
             row.append("\n".join(channel_text(ch) for ch in c.channels))
         shown.add_row(*(printable(cell, keep="\n") for cell in row))
-    buffer = io.StringIO()
     # With --details the table is as wide as the terminal (200 when not one).
     width = shutil.get_terminal_size((200, 24)).columns if details else 100
-    Console(file=buffer, width=width, force_terminal=False, color_system=None).print(shown)
+    text = plain(shown, width)
     if more or more is None:
-        buffer.write(more_note(len(configs), more=more))
+        text += more_note(len(configs), more=more)
     if not problem.state.media:
-        buffer.write(f"note: {NO_MEDIA}\n")
+        text += f"note: {NO_MEDIA}\n"
     if any(not c.proven for c in configs):
-        buffer.write("* not proven optimal: the search was stopped before it could prove it\n")
-    return buffer.getvalue()
+        text += "* not proven optimal: the search was stopped before it could prove it\n"
+    return text
 
 
 def streamed(

@@ -10,7 +10,6 @@ it makes; JSON holds ``{"sequences": [{"rank", "total_cost", "steps":
 
 from __future__ import annotations
 
-import io
 import json
 from dataclasses import dataclass
 from itertools import islice
@@ -19,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from cfgplan.cli.app import EXIT_NONE, say
-from cfgplan.cli.formats import more_note
+from cfgplan.cli.formats import more_note, plain
 from cfgplan.cli.options import no_rank
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_dict, to_text
@@ -173,8 +172,7 @@ def _lisp(problem: Problem, found: list[PlannedSequence], first: int) -> str:
 
 
 def _table(problem: Problem, found: list[PlannedSequence], details: bool, first: int) -> str:
-    from rich.console import Console  # loaded for tables only (issue 32: start-up)
-    from rich.table import Table
+    from rich.table import Table  # loaded for tables only (issue 32: start-up)
 
     table = Table(title=f"Sequences for {_goals(problem)}")
     table.add_column("rank", justify="right")
@@ -201,7 +199,4 @@ def _table(problem: Problem, found: list[PlannedSequence], details: bool, first:
             if details:
                 row.append("\n".join(str(f) for f in config.functionalities))
             table.add_row(*row, end_section=i == len(planned.steps))
-    buffer = io.StringIO()
-    width = 200 if details else 120
-    Console(file=buffer, width=width, force_terminal=False, color_system=None).print(table)
-    return buffer.getvalue()
+    return plain(table, 200 if details else 120)
