@@ -140,8 +140,8 @@ def run(
         typer.Option(
             "--ros2",
             help="Announce the robot as a ROS 2 node over rmw_zenoh and publish its switches, "
-            "failures and recoveries on /cfgplan/events (needs --robot; pip install "
-            "'cfgplan[ros2]').",
+            "failures and recoveries on /cfgplan/events, and each global channel it sends on "
+            "/cfgplan/channel/... (needs --robot; pip install 'cfgplan[ros2]').",
         ),
     ] = False,
     ros2_map: Annotated[
@@ -264,6 +264,7 @@ def run(
     )
     settings = Settings(tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin)
     opened: Transport | None = None
+    bound = None  # --ros2-map's TopicBindings
     written: TraceFile | None = None
     recording = None
     fox = None
@@ -350,6 +351,8 @@ def run(
                 fox.stop()
             if recording is not None:
                 recording.close()
+        for line in [] if bound is None else bound.summary():  # after the run's own
+            print(f"ros2: {line}")
         if recording is not None and recording.failed:
             print(f"cfgplan: error: {recording.failed}", file=sys.stderr)
             code = code or 1

@@ -16,7 +16,17 @@ that apply on one robot on that robot's Zenoh session, as one ROS 2 node,
 * a bound **input** of an action is a publisher (an ``MP`` token) on the
   topic's key expression with the type's RIHS01 hash; every call publishes the
   value the action receives there, encoded as the message type, with
-  rmw_zenoh's attachment.
+  rmw_zenoh's attachment;
+* a **published output** (``mode = "publish"``) is a publisher too: every
+  call that computes the output (not "no data") publishes it, and the value
+  goes on to the functionality's channels as usual;
+* a **subscribed input** (``mode = "subscribe"``) is a subscriber: the
+  functionality receives the topic's newest message there instead of its
+  channel's value; no message yet, the call does nothing (no data to act
+  on); a topic silent for longer than the timeout fails the call, as for
+  an output.
+
+Several ports may share one message (:mod:`cfgplan.ros2.fields`).
 
 :meth:`TopicBindings.registry` returns the implementations with the bound
 functionalities wrapped: a functionality whose every output is bound needs no
@@ -28,15 +38,17 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from cfgplan.ros2 import codec
 from cfgplan.ros2 import rmw_zenoh as wire
+from cfgplan.ros2.fields import message_of_ports, ports_of_message
 from cfgplan.ros2.topics import Binding, TopicMap
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.faults import ResourceFailure
+from cfgplan.runtime.outputs import split
 from cfgplan.runtime.registry import Implementation, Registry
 from cfgplan.runtime.values import MAX_VALUE_BYTES
 
@@ -107,6 +119,8 @@ class TopicBindings:
         self.domain_id = domain_id
         self.latest: dict[Binding, Latest] = {}
         self.published: dict[Binding, int] = {}
+        self.delivered: dict[Binding, int] = {}
+        """Per subscribed input: the calls that received the topic's message."""
         self._session = session
         self._lock = threading.Lock()
         self._declared: list[Any] = []
@@ -119,10 +133,11 @@ class TopicBindings:
                 type_name = wire.dds_type_name(binding.msg_type)
                 hash_ = wire.type_hash(binding.msg_type)
                 fields = (domain_id, zid, NODE_ID, entity, self.node, binding.topic, type_name)
-                if binding.direction == "output":
+                if binding.mode == "subscribe":
                     self._token(wire.subscriber_token(*fields, hash_))
                     key = wire.topic_key_expr(domain_id, binding.topic, type_name, "*")
                     latest = self.latest[binding] = Latest()
+                    self.delivered[binding] = 0
                     self._declared.append(
                         session.declare_subscriber(key, self._receiver(binding, latest))
                     )
@@ -153,10 +168,17 @@ class TopicBindings:
 
         return receive
 
-    def publish(self, binding: Binding, value: Any) -> None:
-        """Put ``value`` on the binding's topic as its message type (``ValueError``
-        if it does not fit the type: the action's call fails, saying why)."""
-        payload = codec.cdr_of_value(binding.msg_type, value)
+    def publish(self, binding: Binding, values: Sequence[Any]) -> None:
+        """Put the binding's port ``values`` on its topic as its message type
+        (``ValueError`` if they do not fit the type: the call fails, saying why)."""
+        if binding.fields is None:
+            message = values[0]
+        else:
+            stamp = time.time_ns()
+            message = message_of_ports(
+                binding.msg_type, binding.fields, values, stamp, binding.frame_id
+            )
+        payload = codec.cdr_of_value(binding.msg_type, message)
         publisher, gid = self._publishers[binding]
         with self._lock:
             number = self._sequence
@@ -164,35 +186,59 @@ class TopicBindings:
         publisher.put(payload, attachment=wire.attachment(number, time.time_ns(), gid))
         self.published[binding] += 1
 
+    def read(self, binding: Binding) -> list[Any] | None:
+        """The binding's port values in the topic's newest message (``None``: no
+        message yet; :class:`ResourceFailure`: the topic silent too long)."""
+        message = self.latest[binding].read(binding)
+        if message is None:
+            return None
+        if binding.fields is None:
+            return [message]
+        return ports_of_message(binding.fields, message)
+
     def implementation(self, name: str, base: Implementation | None) -> Implementation | None:
         """``base`` with this robot's bindings of functionality ``name`` (``None``
         when it has none: ``base`` as it is)."""
         mine = [b for b in self.bindings if b.functionality == name]
         if not mine:
             return base
-        outputs = [b for b in mine if b.direction == "output"]
-        inputs = [b for b in mine if b.direction == "input"]
-        first = mine[0]
-        if base is None and len(outputs) < first.outputs:
-            return None  # some outputs need an implementation: the registry says which
-        count = first.outputs
 
-        def bound(*args: Any) -> Any:
+        def of(direction: str, mode: str) -> list[Binding]:
+            return [b for b in mine if (b.direction, b.mode) == (direction, mode)]
+
+        read, computed = of("output", "subscribe"), of("output", "publish")
+        sent, taken = of("input", "publish"), of("input", "subscribe")
+        first = mine[0]
+        count = first.outputs
+        if base is None and (
+            len({i for b in read for i in b.indices}) < count or (not count and not sent)
+        ):
+            return None  # some outputs need an implementation: the registry says which
+
+        def bound(*given: Any) -> Any:
+            args = list(given)
+            for binding in taken:
+                got = self.read(binding)
+                if got is None:
+                    return None  # no message yet: nothing to act on
+                for index, value in zip(binding.indices, got, strict=True):
+                    args[first.objects + index] = value
+                self.delivered[binding] += 1
             values = args[first.objects :]
-            for binding in inputs:
-                self.publish(binding, values[binding.index])
+            for binding in sent:
+                self.publish(binding, [values[i] for i in binding.indices])
             result = None if base is None else base(*args)
             if not count:
                 return result
-            outs: list[Any]
-            if count == 1:
-                outs = [result]
-            elif result is None:
-                outs = [None] * count
-            else:
-                outs = list(result)  # type: ignore[call-overload]
-            for binding in outputs:
-                outs[binding.index] = self.latest[binding].read(binding)
+            outs: list[Any] = split(result, count)  # a RunError for a wrong shape
+            for binding in computed:
+                port_values = [outs[i] for i in binding.indices]
+                if all(v is not None for v in port_values):
+                    self.publish(binding, port_values)
+            for binding in read:
+                got = self.read(binding) or [None] * len(binding.indices)
+                for index, value in zip(binding.indices, got, strict=True):
+                    outs[index] = value
             return outs[0] if count == 1 else tuple(outs)
 
         return Implementation(
@@ -201,6 +247,20 @@ class TopicBindings:
             None if base is None else base.precondition,
             None if base is None else base.stop,
         )
+
+    def summary(self) -> list[str]:
+        """One line per binding: the messages it received or published."""
+        lines = []
+        for b in self.bindings:
+            what = f"{self.robot} {b.topic} ({b.msg_type}), {b.functionality} {', '.join(b.ports)}"
+            if b.mode == "publish":
+                lines.append(f"{what}: {self.published[b]} messages published")
+                continue
+            got = f"{what}: {self.latest[b].received} messages received"
+            if b.direction == "input":
+                got += f", given to {self.delivered[b]} calls"
+            lines.append(got)
+        return lines
 
     def registry(self, base: Registry) -> Registry:
         """``base``'s implementations, the bound functionalities wrapped."""

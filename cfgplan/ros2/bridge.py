@@ -12,6 +12,14 @@ line (JSON, :meth:`~cfgplan.runtime.events.Event.record`), with rmw_zenoh's
 CDR payload and attachment. ``ros2 topic echo /cfgplan/events`` on a machine
 whose rmw_zenoh reaches the robot's session shows them.
 
+Each global channel the robot writes (5.2: a value sent to a functionality of
+another robot) is also a topic, ``/cfgplan/channel/<predicate>/<object>...``
+of its data (``pos(Pippi, Door1)``: ``/cfgplan/channel/pos/Pippi/Door1``;
+characters a ROS 2 name cannot hold become ``_``), a ``std_msgs/msg/String``
+whose ``data`` is the send's trace line (JSON: channel, seq, to, value), one
+message per send: :func:`channel_topic`. Its publisher and ``MP`` token are
+declared at the channel's first send, and stay for the run.
+
 The session is the robot's own (:attr:`ZenohTransport.session
 <cfgplan.runtime.zenoh_transport.ZenohTransport.session>`); it closes with
 the robot, and its tokens go with it.
@@ -29,11 +37,21 @@ from typing import Any
 
 from cfgplan.ros2 import rmw_zenoh as wire
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.events import Adaptation, Event
+from cfgplan.runtime.events import Adaptation, Event, Transfer
 
-__all__ = ["EVENTS_TOPIC", "BridgeOptions", "EventBridge", "domain_id_of", "open_bridge"]
+__all__ = [
+    "CHANNELS_TOPIC",
+    "EVENTS_TOPIC",
+    "BridgeOptions",
+    "EventBridge",
+    "channel_topic",
+    "domain_id_of",
+    "open_bridge",
+]
 
 EVENTS_TOPIC = "/cfgplan/events"
+CHANNELS_TOPIC = "/cfgplan/channel"
+"""The namespace of the global channels' topics."""
 DOMAIN_ENV = "ROS_DOMAIN_ID"
 MAX_DOMAIN_ID = 232
 """The largest ROS_DOMAIN_ID ROS 2 documents (its DDS port arithmetic); rmw_zenoh keeps the rule."""
@@ -58,6 +76,13 @@ def domain_id_of(given: int | None, env: Mapping[str, str] | None = None) -> int
     return value
 
 
+def channel_topic(data: tuple[str, ...] | list[str], prefix: str = CHANNELS_TOPIC) -> str:
+    """The topic of a global channel carrying ``data`` (``("pos", "Pippi",
+    "Door1")``: ``/cfgplan/channel/pos/Pippi/Door1``), each part a valid ROS 2
+    name token (:func:`cfgplan.ros2.rmw_zenoh.node_name_of`)."""
+    return "/".join((prefix, *(wire.node_name_of(part) for part in data)))
+
+
 @dataclass(frozen=True)
 class BridgeOptions:
     """What the bridge announces and publishes."""
@@ -68,6 +93,8 @@ class BridgeOptions:
     topic: str = EVENTS_TOPIC
     events: frozenset[str] = frozenset({"switch", "failure", "recovery", "no-configuration"})
     qos: wire.QoS = wire.PUBLISHER_QOS
+    channels: str | None = CHANNELS_TOPIC
+    """The namespace of the global channels' topics (``None``: not published)."""
 
 
 class EventBridge:
@@ -91,7 +118,9 @@ class EventBridge:
         type_name = wire.dds_type_name(wire.STRING)
         type_hash = wire.type_hash(wire.STRING)
         self.key_expr = wire.topic_key_expr(options.domain_id, options.topic, type_name, type_hash)
-        zid = str(session.zid())
+        self._zid = zid = str(session.zid())
+        self.channels: dict[str, tuple[Any, bytes, int]] = {}
+        """Each global channel's topic: its publisher, GID and next sequence number."""
         domain, space = options.domain_id, options.namespace
         self.node_token = wire.node_token(domain, zid, 0, self.node, namespace=space)
         self.publisher_token = wire.publisher_token(
@@ -114,23 +143,66 @@ class EventBridge:
             raise RunError(f"cannot declare the ROS 2 node {self.node}: {exc}") from None
 
     def __call__(self, event: Event) -> None:
-        """A robot listener: publish ``event`` if it is one of the chosen Adaptation events."""
+        """A robot listener: publish ``event`` if it is one of the chosen
+        Adaptation events, or a send on a global channel."""
         if isinstance(event, Adaptation) and event.what in self.options.events:
             self.publish(json.dumps(event.record(), sort_keys=True))
+        elif (
+            isinstance(event, Transfer)
+            and event.direction == "send"
+            and self.options.channels is not None
+        ):
+            self.publish_channel(event)
 
     def publish(self, text: str) -> None:
-        """Put ``text`` as a ``std_msgs/msg/String`` on the topic, with its attachment."""
-        payload = wire.string_cdr(text)
+        """Put ``text`` as a ``std_msgs/msg/String`` on the events topic, with its attachment."""
         with self._lock:
             number = self.sequence_number
             self.sequence_number += 1
-            extra = wire.attachment(number, time.time_ns(), self.gid)
-            try:
-                self._publisher.put(payload, attachment=extra)
-            except Exception:  # a closed session (the run is ending): counted, not raised
-                self.failed += 1
-                return
-            self.published += 1
+            self._put(self._publisher, self.gid, number, text)
+
+    def _put(self, publisher: Any, gid: bytes, number: int, text: str) -> None:
+        """With the lock held: ``text`` on ``publisher``, sequence number ``number``."""
+        payload = wire.string_cdr(text)
+        extra = wire.attachment(number, time.time_ns(), gid)
+        try:
+            publisher.put(payload, attachment=extra)
+        except Exception:  # a closed session (the run is ending): counted, not raised
+            self.failed += 1
+            return
+        self.published += 1
+
+    def publish_channel(self, event: Transfer) -> None:
+        """A send on a global channel as a message of the channel's topic
+        (its publisher declared at the first)."""
+        assert self.options.channels is not None
+        topic = channel_topic(event.channel.data, self.options.channels)
+        with self._lock:
+            if topic not in self.channels:
+                try:
+                    self.channels[topic] = self._declare(topic)
+                except Exception:  # a closed session, or a name zenoh refuses: counted
+                    self.failed += 1
+                    return
+            publisher, gid, number = self.channels[topic]
+            self.channels[topic] = (publisher, gid, number + 1)  # from 1 per publisher
+            self._put(publisher, gid, number, json.dumps(event.record(), sort_keys=True))
+
+    def _declare(self, topic: str) -> tuple[Any, bytes, int]:
+        """The publisher of ``topic``, its GID and first sequence number, its
+        ``MP`` token declared."""
+        options, session = self.options, self._session
+        wire.check_name(topic, "topic name")
+        type_name, type_hash = wire.dds_type_name(wire.STRING), wire.type_hash(wire.STRING)
+        token = wire.publisher_token(
+            options.domain_id, self._zid, 0, 2 + len(self.channels), self.node, topic,
+            type_name, type_hash, options.qos, namespace=options.namespace,
+        )  # fmt: skip
+        self._tokens.append(session.liveliness().declare_token(token))
+        key = wire.topic_key_expr(options.domain_id, topic, type_name, type_hash)
+        publisher = session.declare_publisher(key)
+        self._tokens.append(publisher)
+        return publisher, wire.gid(token), 1
 
     def close(self) -> None:
         """Withdraw the tokens and the publisher (closing the session does it too)."""

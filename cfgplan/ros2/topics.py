@@ -13,12 +13,21 @@ to a ROS 2 topic and message type::
     timeout = 1.0                      # optional (an output): seconds without a
                                        # message before the sensor has failed
 
-* an **output** is read from the topic: the value the functionality outputs
-  there is the newest message, as a dict (:mod:`cfgplan.ros2.codec`);
-* an **input** is published on the topic: each call puts the value the
-  functionality receives there, a dict of the message's fields.
+* an **output** is read from the topic (``mode = "subscribe"``, its
+  default): the value the functionality outputs there is the newest message,
+  as a dict (:mod:`cfgplan.ros2.codec`); with ``mode = "publish"`` the value
+  the functionality computes there is also published on the topic;
+* an **input** is published on the topic (``mode = "publish"``, its
+  default): each call puts the value the functionality receives there, a
+  dict of the message's fields; with ``mode = "subscribe"`` the
+  functionality receives the topic's newest message there instead of what
+  its channel holds.
 
 A port is named by its descriptor's predicate (``(image ?r)`` is ``image``).
+Several ports of one functionality may share one message: ``output = ["pos",
+"orient"]`` with ``fields = {pos = [...], orient = "..."}`` mapping each port
+to fields of the message (:mod:`cfgplan.ros2.fields`); ``frame_id`` is the
+``header.frame_id`` of the messages published.
 :func:`load_map` checks the file against the domain and the state before
 anything runs: an unknown functionality, port, robot, type or key is an
 error naming the file and the line of its ``[[bind]]`` (or of the key).
@@ -34,6 +43,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from cfgplan.ros2.fields import FieldMap, check_path
 from cfgplan.runtime.errors import RunError
 
 __all__ = ["DEFAULT_TIMEOUT", "Binding", "TopicMap", "load_map", "parse_map"]
@@ -41,7 +51,11 @@ __all__ = ["DEFAULT_TIMEOUT", "Binding", "TopicMap", "load_map", "parse_map"]
 DEFAULT_TIMEOUT = 1.0
 """Seconds a bound output's topic may be silent before its functionality has failed."""
 
-KEYS = ("functionality", "input", "output", "topic", "type", "robot", "timeout")
+KEYS = (
+    "functionality", "input", "output", "mode", "topic", "type", "fields", "frame_id", "robot",
+    "timeout",
+)  # fmt: skip
+MODES = ("subscribe", "publish")
 
 
 @dataclass(frozen=True)
@@ -50,9 +64,9 @@ class Binding:
 
     functionality: str
     direction: Literal["input", "output"]
-    port: str
-    index: int
-    """The port's position among the functionality's inputs (or outputs)."""
+    ports: tuple[str, ...]
+    indices: tuple[int, ...]
+    """The ports' positions among the functionality's inputs (or outputs)."""
     topic: str
     msg_type: str
     robot: str | None = None
@@ -62,6 +76,20 @@ class Binding:
     inputs: int = 0
     outputs: int = 0
     line: int | None = None
+    mode: Literal["subscribe", "publish"] = "subscribe"
+    """``subscribe``: the ports' values come from the topic; ``publish``: they go out on it."""
+    fields: FieldMap | None = None
+    """Which fields of the message each port is (``None``: one port, the whole message)."""
+    frame_id: str = ""
+
+    @property
+    def port(self) -> str:
+        """The first (often only) port."""
+        return self.ports[0]
+
+    @property
+    def index(self) -> int:
+        return self.indices[0]
 
     def on(self, robot: str) -> bool:
         """Whether it applies where ``robot`` runs the functionality."""
@@ -84,8 +112,14 @@ class TopicMap:
         bound there and every one of its outputs is (an action's inputs
         published, a sensor's outputs read), so it needs no Python of its own."""
         mine = [b for b in self.of(robot) if b.functionality == functionality]
-        outputs = {b.index for b in mine if b.direction == "output"}
-        return bool(mine) and len(outputs) == mine[0].outputs
+        if not mine:
+            return False
+        if mine[0].outputs == 0:  # an action: implemented if it publishes something
+            return any(b.mode == "publish" for b in mine)
+        read = {
+            i for b in mine if (b.direction, b.mode) == ("output", "subscribe") for i in b.indices
+        }
+        return len(read) == mine[0].outputs
 
 
 def _lines(text: str) -> list[int]:
@@ -168,13 +202,27 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
         if len(given) != 1:
             raise fail('[[bind]] binds one port: give input = "..." or output = "..."')
         direction: Literal["input", "output"] = "input" if given[0] == "input" else "output"
-        port = table[direction]
+        named = table[direction]
+        chosen = [named] if isinstance(named, str) else named
+        if (
+            not isinstance(chosen, list)
+            or not chosen
+            or not all(isinstance(p, str) and p for p in chosen)
+            or len(set(chosen)) != len(chosen)
+        ):
+            raise fail(f"{direction} is a port's name or a list of them: {named!r}", direction)
         ports = schema.inputs if direction == "input" else schema.outputs
         names = [p.predicate for p in ports]
-        if port not in names:
-            have = ", ".join(names) or "none"
-            raise fail(f"{name} has no {direction} {port!r} (its {direction}s: {have})", direction)
-        if direction == "input" and schema.outputs:
+        for port in chosen:
+            if port not in names:
+                have = ", ".join(names) or "none"
+                raise fail(
+                    f"{name} has no {direction} {port!r} (its {direction}s: {have})", direction
+                )
+        mode = table.get("mode", "publish" if direction == "input" else "subscribe")
+        if mode not in MODES:
+            raise fail(f"mode {mode!r} is not one of: {', '.join(MODES)}", "mode")
+        if direction == "input" and mode == "publish" and schema.outputs:
             raise fail(
                 f"{name} has outputs: only an action's inputs (a functionality without "
                 "outputs) are published",
@@ -192,6 +240,13 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
             raise fail(
                 f"unknown ROS 2 message type {msg_type} (rosbags's ROS 2 Jazzy types)", "type"
             )
+        try:
+            fields = _fields(table.get("fields"), tuple(chosen), msg_type)
+        except ValueError as exc:
+            raise fail(str(exc), "fields" if "fields" in table else direction) from None
+        frame_id = table.get("frame_id", "")
+        if not isinstance(frame_id, str):
+            raise fail(f"frame_id {frame_id!r} is not a string", "frame_id")
         robot = table.get("robot")
         if robot is not None and (not isinstance(robot, str) or robot not in agents):
             raise fail(f"no robot {robot} in the state (its: {', '.join(agents)})", "robot")
@@ -203,16 +258,19 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
             or timeout <= 0
         ):
             raise fail(f"timeout {timeout!r} is not a number of seconds above 0", "timeout")
-        bound = (name, direction, port, robot)
-        if bound in seen:
-            raise fail(f"{name} {direction} {port} is bound twice (first at line {seen[bound]})")
-        seen[bound] = start
+        for port in chosen:
+            bound = (name, direction, port, robot)
+            if bound in seen:
+                raise fail(
+                    f"{name} {direction} {port} is bound twice (first at line {seen[bound]})"
+                )
+            seen[bound] = start
         out.append(
             Binding(
                 name,
                 direction,
-                port,
-                names.index(port),
+                tuple(chosen),
+                tuple(names.index(p) for p in chosen),
                 topic,
                 msg_type,
                 robot,
@@ -221,9 +279,40 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
                 len(schema.inputs),
                 len(schema.outputs),
                 start,
+                mode,
+                fields,
+                frame_id,
             )
         )
     return TopicMap(tuple(out), source)
+
+
+def _fields(given: Any, ports: tuple[str, ...], msg_type: str) -> FieldMap | None:
+    """The ``fields`` table of a binding of ``ports``, checked (``ValueError``)."""
+    if given is None:
+        if len(ports) > 1:
+            raise ValueError(
+                f"{len(ports)} ports in one {msg_type}: give fields = {{{ports[0]} = "
+                '"field.path", ...}, the field of the message each port is'
+            )
+        return None
+    if not isinstance(given, dict):
+        raise ValueError(f'fields is a table {{port = "field.path", ...}}, not {given!r}')
+    if set(given) != set(ports):
+        raise ValueError(
+            f"fields names the ports {', '.join(sorted(given)) or 'none'}: give exactly "
+            f"{', '.join(ports)}"
+        )
+    paths: list[tuple[str, ...] | str] = []
+    for port in ports:
+        path = given[port]
+        if isinstance(path, str):
+            paths.append(check_path(msg_type, path))
+        elif isinstance(path, list) and path and all(isinstance(p, str) for p in path):
+            paths.append(tuple(check_path(msg_type, p) for p in path))
+        else:
+            raise ValueError(f"fields.{port} is a field path or a list of them, not {path!r}")
+    return FieldMap(ports, tuple(paths))
 
 
 def load_map(path: str | Path, domain: Any, agents: Sequence[str] = ()) -> TopicMap:
