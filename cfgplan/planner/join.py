@@ -36,7 +36,7 @@ class Join:
 def join(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
     """The matching order of ``tests`` when ``bound`` are bound at the start,
     made once per tests and bound variables. A task in another state
-    (:func:`~cfgplan.planner.task.with_facts`) keeps the orders made for
+    (:func:`~cfgplan.planner.task.derive`) keeps the orders made for
     the one it comes from: an order changes how fast bindings are found,
     never which, nor in what order they are given."""
     joins: dict[tuple[int, frozenset[str]], tuple[tuple[Test, ...], Join]]

@@ -51,6 +51,16 @@ class SearchOptions:
     """Search the goal's independent parts apart when it has some
     (:mod:`cfgplan.planner.combine`; the ``limit`` cheapest only)."""
 
+    splits: bool = True
+    """Price the children of a node the stronger bound refined from that
+    node's split, so that most are never refined themselves
+    (:mod:`cfgplan.planner.split`); False prices each child alone."""
+
+    dive: bool = True
+    """When a limit stops the search before anything was proven, dive greedily
+    from the open nodes for a configuration (:mod:`cfgplan.planner.dive`,
+    shown with ``*``); False reports that nothing was found."""
+
     ahead_least: int = 10_000
     """The least work the look-ahead of ``-k N`` may do (:mod:`cfgplan.planner.prefix`)."""
 

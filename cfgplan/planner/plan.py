@@ -166,7 +166,7 @@ class Run:
         grower = Grower(
             grounder, bound.estimate, refine, self.distinct, bound.feasible, options=self.options
         )
-        grower.split = splitting(bound, partition)
+        grower.split = splitting(bound, partition) if self.options.splits else None
         return grower
 
     @property
@@ -208,7 +208,10 @@ class Run:
             self._explain(started, deadline)
 
     def _dive(self, deadline: float | None) -> Configuration | None:
-        """Stopped before anything was proven: dive for any configuration."""
+        """Stopped before anything was proven: dive for any configuration
+        (unless :attr:`SearchOptions.dive` is off)."""
+        if not self.options.dive:
+            return None
         grace = self.options.grace
         end = time.perf_counter() + grace if deadline is None else deadline + grace
         grower = self.strategy.grower

@@ -47,7 +47,7 @@ from cfgplan.planner.plan import Run, partitioned, parts
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
-from cfgplan.planner.task import Ground, Task, with_facts
+from cfgplan.planner.task import Ground, Task, derive
 
 Facts = tuple[Ground, ...]
 
@@ -167,7 +167,7 @@ class SequenceSearch:
         key = (step, facts)
         found = self._ranked.get(key)
         if found is None:
-            task = self.task if facts == self.task.facts else with_facts(self.task, facts)
+            task = self.task if facts == self.task.facts else derive(self.task, facts)
             found = self._ranked[key] = Ranked(task, self.goals[step], self.options)
         return found
 

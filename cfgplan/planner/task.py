@@ -278,13 +278,33 @@ def links_of(media: Sequence[Medium]) -> dict[tuple[str, str], float]:
     return links
 
 
-def with_facts(task: Task, facts: Sequence[Ground]) -> Task:
-    """``task`` in another world state: the same compiled schemas, weights,
-    media and reliabilities, ``facts`` (each once, in order) re-indexed. No
-    domain is read, checked or compiled: a sequence's later steps, or a
-    running society's changed state, are planned from it."""
+def derive(
+    task: Task,
+    facts: Sequence[Ground],
+    *,
+    functionalities: Mapping[Signature, FunctionalitySchema] | None = None,
+    media: tuple[Medium, ...] | None = None,
+    reliability: Mapping[Ground, float] | None = None,
+) -> Task:
+    """``task`` in another world state, the one way a task is derived: the
+    same compiled methods and weights, ``facts`` (each once, in order)
+    re-indexed, and, where given, other functionality schemas (a running
+    society's guards, :mod:`cfgplan.reconfigure.situation`), media and
+    reliabilities (7.2). No domain is read, checked or compiled: a sequence's
+    later steps, or a running society's changed state, are planned from it.
+    What the planner worked out for ``task`` (:attr:`Task.memo`) is not
+    carried, but for the matching orders (:mod:`cfgplan.planner.join`),
+    valid in any state while the schemas are the same."""
     unique = tuple(dict.fromkeys(facts))
     by_pred, by_arg = index_facts(unique)
+    changes: dict[str, Any] = {}
+    if functionalities is not None:
+        changes["functionalities"] = functionalities
+    if media is not None:
+        changes["media"] = media
+        changes["links"] = MappingProxyType(links_of(media))
+    if reliability is not None:
+        changes["reliability"] = MappingProxyType(dict(reliability))
     derived = dataclasses.replace(
         task,
         facts=unique,
@@ -292,7 +312,8 @@ def with_facts(task: Task, facts: Sequence[Ground]) -> Task:
         facts_by_argument=by_arg,
         devices=devices_of(unique),
         state_names=frozenset(t for fact in unique for t in fact),
+        **changes,
     )
-    if "joins" in task.memo:  # matching orders (planner/join.py): valid in any state
+    if "joins" in task.memo and functionalities is None:
         derived.memo["joins"] = task.memo["joins"]
     return derived

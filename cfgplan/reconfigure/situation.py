@@ -34,16 +34,8 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 from cfgplan.configuration.model import Configuration
-from cfgplan.planner.task import (
-    FunctionalitySchema,
-    Ground,
-    Task,
-    Test,
-    TestKind,
-    devices_of,
-    index_facts,
-    links_of,
-)
+from cfgplan.planner.task import FunctionalitySchema, Ground, Task, Test, TestKind
+from cfgplan.planner.task import derive as derive_task
 from cfgplan.reconfigure.withdraw import withdrawn_by_failure, withdrawn_by_loss
 
 __all__ = ["LOST", "OUT_OF_SERVICE", "Situation", "derive"]
@@ -177,16 +169,5 @@ def derive(base: Task, situation: Situation) -> Task:
     media = tuple(m for i, m in enumerate(base.media) if i not in situation.media_down)
     reliability = dict(base.reliability)
     reliability.update(situation.reliability)
-    by_pred, by_arg = index_facts(facts)
-    return dataclasses.replace(
-        base,
-        functionalities=functionalities,
-        facts=facts,
-        facts_by_predicate=by_pred,
-        facts_by_argument=by_arg,
-        media=media,
-        devices=devices_of(facts),
-        reliability=MappingProxyType(reliability),
-        links=MappingProxyType(links_of(media)),
-        state_names=frozenset(t for f in facts for t in f),
-    )
+    changed = functionalities if functionalities is not base.functionalities else None
+    return derive_task(base, facts, functionalities=changed, media=media, reliability=reliability)

@@ -10,13 +10,11 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
-
 from benchmarks.families import wall
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain, explanation
-from cfgplan.planner.plan import Run
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.report import StopReason
 from cfgplan.problem import load
 
@@ -40,16 +38,15 @@ def test_time_limit_returns_a_configuration_marked_not_proven(tmp_path: Path) ->
     assert problems(configs[0], p.domain, p.state) == []
 
 
-def test_stopped_with_nothing_found_says_nothing_is_proved(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_stopped_with_nothing_found_says_nothing_is_proved(tmp_path: Path) -> None:
     """Stopped before the first expansion ended, and the dive found nothing
     in its grace (a goal with thousands of bindings, 80 robots triangulating
     one): the report said the goal's method had no version, with
     ``complete: true``. Nothing is proved: it says so."""
     p = load(*big(tmp_path))
-    monkeypatch.setattr(Run, "_dive", lambda self, deadline: None)
-    configs, search = plan(p.task, p.goal_call, limit=1, time_limit=0)
+    configs, search = plan(
+        p.task, p.goal_call, limit=1, time_limit=0, options=SearchOptions(dive=False)
+    )
     assert configs == [] and search.stopped is StopReason.TIME_LIMIT
     lines = explain(search.report, "do-build-wall")
     assert lines == [

@@ -5,7 +5,6 @@ form were taken out of depth-first order."""
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Iterator
 
 import pytest
@@ -65,22 +64,22 @@ def test_a_child_priced_from_its_parents_split_costs_at_least_that(
     [ecology(18, 3, 3), fusion(4, 3, 4, 3), chain(8), media_tight(6, 4, 4)],
     ids=["ecology-18", "fusion-4", "chain-8", "media-tight-6"],
 )
-def test_pricing_children_from_splits_changes_no_ranked_list(
-    texts: tuple[str, str], monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_pricing_children_from_splits_changes_no_ranked_list(texts: tuple[str, str]) -> None:
     """The 20 cheapest, costs, identities and derivation numbers, with the
-    children priced from their parents' splits and without: the same, with
-    fewer refinements (the plain search, not the parts')."""
+    children priced from their parents' splits and without
+    (``SearchOptions.splits``): the same, with fewer refinements (the plain
+    search, not the parts')."""
     problem = problem_of(texts)
     with_splits = Run(
         problem.task, problem.goal_call, limit=20, options=SearchOptions(components=False)
     )
     configs = list(with_splits)
-    module = sys.modules["cfgplan.planner.plan"]  # the package exports the function plan
-    monkeypatch.setattr(module, "splitting", lambda bound, partition: None)
     problem = problem_of(texts)  # a new task: its bounds are made anew
     without = Run(
-        problem.task, problem.goal_call, limit=20, options=SearchOptions(components=False)
+        problem.task,
+        problem.goal_call,
+        limit=20,
+        options=SearchOptions(components=False, splits=False),
     )
     assert [(c.cost, c.identity(), c.derivation) for c in configs] == [
         (c.cost, c.identity(), c.derivation) for c in without
