@@ -51,8 +51,16 @@ class Option(NamedTuple):
     (a named tuple: a frozen dataclass takes four times as long to define)."""
 
     keyword: str
-    span: Span
+    where: Sx
+    """The keyword as read: its span is made only when an error asks for it
+    (:class:`~cfgplan.syntax.sx.Sx`; a Span made at once for each of a big
+    domain's 4,800 keywords went unused)."""
     value: Sx
+
+    @property
+    def span(self) -> Span:
+        """Where the keyword stands."""
+        return self.where.span
 
 
 def _options(

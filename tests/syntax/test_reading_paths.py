@@ -1,0 +1,213 @@
+"""The reader's shortcuts build what the long way builds (issue 35: reading a
+big domain faster, cfgplan/syntax/reader.py).
+
+- Lark's inlined rules (``_expr``, ``_item``, the repetitions) are passed up
+  as a bare list of children (``_Run``), not a positioned ``Tree``: the IR is
+  the one the same transformer makes of the tree Lark builds itself.
+- A symbol's or number's span is made when asked for, from its token: every
+  span the IR keeps covers the text it was read from, and an error at a
+  symbol is placed on it.
+- The cycle collector is paused while a file is parsed, and restored.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from lark import Lark
+from pydantic import BaseModel
+
+from benchmarks import families
+from cfgplan.diagnostics import CfgplanError
+from cfgplan.ir.model import Atom, Functionality, Goal, Method, Span, State
+from cfgplan.syntax import reader
+
+ROOT = Path(__file__).resolve().parents[2]
+
+GENERATED = [
+    ("chain", (12,)),
+    ("fusion", (4, 3, 4, 3)),
+    ("wall", (3, 4, 3)),
+    ("relay", (4, 4, 3)),
+    ("ecology", (6, 2, 1)),
+    ("media_tight", (4, 2, 1)),
+    ("delegation", (3,)),
+    ("gateway", (4,)),
+    ("dag", (4,)),
+    ("conversion", (5,)),
+    ("deliveries", (3, 2)),
+]
+"""Generated domains and states, small: each family's forms once or more."""
+
+
+def _texts() -> Iterator[tuple[str, str]]:
+    """(name, text) of every file under domains/ and of generated ones."""
+    for path in sorted((ROOT / "domains").rglob("*.lisp")):
+        yield str(path.relative_to(ROOT)), path.read_text("utf-8")
+    for name, args in GENERATED:
+        domain, state = getattr(families, name)(*args)
+        yield f"{name}{args}-domain", domain
+        yield f"{name}{args}-state", state
+
+
+TEXTS = list(_texts())
+
+
+def _canon(value: Any) -> Any:
+    """A value with every field, spans and fields-set included, and types."""
+    if isinstance(value, BaseModel):
+        fields = tuple((k, _canon(getattr(value, k))) for k in type(value).model_fields)
+        return (type(value).__name__, fields, tuple(sorted(value.model_fields_set)))
+    if isinstance(value, (tuple, list)):
+        return (type(value).__name__, tuple(_canon(v) for v in value))
+    return (type(value).__name__, value)
+
+
+def _forms(source: reader.SourceFile) -> Any:
+    return _canon(
+        (source.functionalities, source.methods, source.states, source.goals, source.sequences)
+    )
+
+
+def _by_tree(text: str, filename: str) -> reader.SourceFile:
+    """The long way: Lark builds its positioned tree (inlined rules spliced by
+    Lark itself), then the reader's transformer maps it, afterwards."""
+    parser = Lark(reader.grammar_text(), **reader.OPTIONS)
+    transformer = reader._ToIR()
+    transformer.begin(filename)
+    items = transformer.transform(parser.parse(reader.normalize(text))).children
+    assert transformer.failed is None
+    source = reader.SourceFile(filename, text)
+    for item in items:
+        if isinstance(item, Functionality):
+            source.functionalities.append(item)
+        elif isinstance(item, Method):
+            source.methods.append(item)
+        elif isinstance(item, State):
+            source.states.append(item)
+        elif isinstance(item, Goal):
+            source.goals.append(item)
+        elif isinstance(item, reader.GoalSequence):
+            source.sequences.append(item.goals)
+    return source
+
+
+@pytest.mark.parametrize(("name", "text"), TEXTS, ids=[n for n, _ in TEXTS])
+def test_inside_the_parser_reads_as_a_tree_transformed(name: str, text: str) -> None:
+    """The IR (spans, field sets, types) read inside the parser, inlined rules
+    as bare lists, equals the IR of Lark's own tree transformed afterwards."""
+    fast = reader.parse(text, name)
+    assert fast.functionalities or fast.states  # something was read
+    assert _forms(fast) == _forms(_by_tree(text, name))
+
+
+def _spans(value: Any) -> Iterator[tuple[BaseModel, Span]]:
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, BaseModel):
+            span = getattr(item, "span", None)
+            if isinstance(span, Span) and item is not span:
+                yield item, span
+            stack.extend(getattr(item, k) for k in type(item).model_fields if k != "span")
+        elif isinstance(item, (tuple, list)):
+            stack.extend(item)
+
+
+def _slice(lines: list[str], span: Span) -> str:
+    if span.line == span.end_line:
+        return lines[span.line - 1][span.column - 1 : span.end_column - 1]
+    first = lines[span.line - 1][span.column - 1 :]
+    middle = lines[span.line : span.end_line - 1]
+    return "\n".join([first, *middle, lines[span.end_line - 1][: span.end_column - 1]])
+
+
+@pytest.mark.parametrize(("name", "text"), TEXTS, ids=[n for n, _ in TEXTS])
+def test_every_span_covers_its_text(name: str, text: str) -> None:
+    """Each node's span, cut out of the file, is the text it was read from:
+    a form or an atom from its "(" (or its name, ``robot(Pippi)``) to its ")",
+    holding the atom's name and arguments."""
+    source = reader.parse(text, name)
+    lines = reader.normalize(text).split("\n")
+    seen = 0
+    for node, span in _spans(_forms_of(source)):
+        assert span.file == name
+        cut = _slice(lines, span)
+        assert cut.endswith(")"), (node, span, cut)
+        assert cut[0] == "(" or cut[0].isalpha() or cut[0] in "'’‘", (node, span, cut)
+        if isinstance(node, Atom):
+            assert node.predicate in cut and all(a in cut for a in node.args), (node, cut)
+        if isinstance(node, (Functionality, Method)):
+            assert cut.startswith("(make-"), cut
+        seen += 1
+    assert seen
+
+
+def _forms_of(source: reader.SourceFile) -> list[Any]:
+    return [source.functionalities, source.methods, source.states, source.goals, source.sequences]
+
+
+def test_an_error_at_a_symbol_is_placed_on_it() -> None:
+    """A symbol's span, made only when an error asks for it, is its token's."""
+    text = "(make-functionality :name '(f ?r)\n   :cost  abc)"
+    with pytest.raises(CfgplanError) as caught:
+        reader.parse(text, "x.lisp")
+    span = caught.value.diagnostics[0].span
+    assert span is not None
+    assert (span.file, span.line, span.column, span.end_line, span.end_column) == (
+        "x.lisp",
+        2,
+        11,
+        2,
+        14,  # "abc": columns 11 to 13, the end just past it
+    )
+    assert "found abc" in str(caught.value)
+
+
+def test_an_error_at_a_keyword_is_placed_on_it() -> None:
+    """A keyword's span, made only when an error asks for it, is its token's."""
+    text = "(make-functionality :name '(f ?r)\n :Cost 3)"
+    with pytest.raises(CfgplanError) as caught:
+        reader.parse(text, "k.lisp")
+    span = caught.value.diagnostics[0].span
+    assert span is not None
+    assert (span.line, span.column, span.end_line, span.end_column) == (2, 2, 2, 7)
+    assert str(caught.value) == "unknown keyword :Cost in make-functionality"
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+@pytest.mark.parametrize("text", ["(state (robot Pippi))", "(state (robot Pippi)"])
+def test_the_collector_is_restored(enabled: bool, text: str) -> None:
+    """The cycle collector is as it was after a read, a failed one too."""
+    was = gc.isenabled()
+    try:
+        (gc.enable if enabled else gc.disable)()
+        with contextlib.suppress(CfgplanError):  # the second text is cut short
+            reader.parse(text, "s.lisp")
+        assert gc.isenabled() is enabled
+    finally:
+        (gc.enable if was else gc.disable)()
+
+
+def test_reading_a_file_pauses_the_collector(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """While the parser runs, the collector is off (the point of the pause)."""
+    seen: list[bool] = []
+    _, transformer = reader._parser()
+    real = transformer.begin
+
+    def begin(filename: str) -> None:
+        seen.append(gc.isenabled())
+        real(filename)
+
+    monkeypatch.setattr(transformer, "begin", begin)
+    path = tmp_path / "s.lisp"
+    path.write_text("(state (robot Pippi))")
+    reader.read_state(path)
+    assert seen == [False]
