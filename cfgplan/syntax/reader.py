@@ -94,7 +94,7 @@ class _ToIR(Transformer[Token, Any]):
 
     def __default__(self, data: str, children: list[Any], meta: Any) -> _Run:
         """Every rule without a method of its own: ``start`` and the inlined
-        ones (``_expr``, ``_item``, ``_quoted``, ``_form`` and the repetitions
+        ones (``_expr``, ``_quoted``, ``_form`` and the repetitions
         Lark makes of ``(...)*``), whose children the rule above splices
         into its own (Lark reads only their ``children``).
 
@@ -108,10 +108,11 @@ class _ToIR(Transformer[Token, Any]):
     def _expr(self, children: list[Any]) -> _Run:
         """As :meth:`__default__`, called straight (Lark calls a method named
         like the rule, not through ``__default__``): the inlined rules reduced
-        most often, two for each item of a list."""
+        most often (a form's and a call's items; a list names its items'
+        rules itself, grammar/cfgplan.lark)."""
         return _Run(children)
 
-    _item = _quoted = _form = _expr
+    _quoted = _form = _expr
 
     def begin(self, filename: str) -> None:
         self.filename, self.failed = filename, None
