@@ -97,11 +97,13 @@ class Capacity:
     _occurs: dict[int, Counts] = field(default_factory=dict)
     _stacks: dict[tuple[Ground, ...], tuple[Capped, ...]] = field(default_factory=dict)
 
-    def lower(self, totals: Counts, calls: tuple[Ground, ...], load: Load) -> None:
+    def lower(self, totals: Counts, calls: tuple[Ground, ...], load: Load) -> list[int]:
         """Lower the occurrence counts ``totals`` of the pending items ``calls``
-        to what the media let occur at a node that loads them with ``load``."""
+        to what the media let occur at a node that loads them with ``load``;
+        the keys lowered."""
+        lowered: list[int] = []
         if not self.room.active:
-            return
+            return lowered
         if len(self.instances) != self._made:
             self._make()
         for capped in self._capped(calls):
@@ -111,6 +113,8 @@ class Capacity:
             allowed = min(self._most(limit, load) for limit in capped.limits) + capped.direct
             if allowed < now:
                 totals[capped.key] = max(allowed, 1)
+                lowered.append(capped.key)
+        return lowered
 
     def _most(self, limit: Limit, load: Load) -> int:
         """How many carriers of ``limit`` a completion of a node with ``load`` uses at most."""

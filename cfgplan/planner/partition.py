@@ -51,16 +51,41 @@ from cfgplan.planner.capacity import Capacity
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
-from cfgplan.planner.prices import Counts, Prices, Wire, add, most, wire_keys
+from cfgplan.planner.prices import (
+    Counts,
+    Evaluation,
+    Least,
+    Prices,
+    Wire,
+    add,
+    most,
+    wire_keys,
+)
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.room import Need, Room
 from cfgplan.planner.split import Split, split_at
 from cfgplan.planner.task import Ground
 
 STACKS = 64
-"""Stacks of pending items whose summed counts are kept, then forgotten all
-at once: siblings are refined soon after each other (the search takes them
-at nearly the same priority), so a few suffice, and memory stays bounded."""
+"""Stacks of pending items whose summed counts (and last evaluation) are
+kept, then forgotten all at once: siblings are refined soon after each other
+(the search takes them at nearly the same priority), so a few suffice, and
+memory stays bounded."""
+
+
+@dataclass(slots=True)
+class Kept:
+    """What is kept for one stack of pending items: their summed counts
+    (None: the bound is off), and the last node with them evaluated
+    (:class:`cfgplan.planner.prices.Least`: the next starts from it)."""
+
+    pending: Counts | None
+    items: tuple[tuple[int, str | None], ...] = ()
+    """Each pending item's instance number, and the agent it runs on when
+    it is a functionality (None: a method)."""
+    last: Evaluation | None = None
+    evaluated: int = 0  # nodes with them evaluated from scratch (the first two are)
+    reuse: bool = True  # False: their nodes differ too much to start from another's
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,12 +125,13 @@ class Partition:
     """The small integers that stand for keys in counts and totals."""
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
-    _stacks: dict[tuple[Ground, ...], Counts | None] = field(default_factory=dict)
+    _stacks: dict[tuple[Ground, ...], Kept] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         task = self.grounder.task
         self.room = Room(task, self.number)
         self.capacity = Capacity(task, self.room, self.number, self._instances, self.order)
+        self.least = Least(self.room, self.number)
 
     def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
         """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
@@ -140,6 +166,7 @@ class Partition:
                         choice += 1
                 found = Instance(call, False, tuple(options), key=self.number(("f", call)))
             self._instances[call] = found
+            self.least.add(found)
         return found
 
     def counts(self, call: Ground) -> Counts | None:
@@ -160,7 +187,8 @@ class Partition:
 
     def order(self, call: Ground) -> tuple[Instance, ...]:
         """Every instance below ``call`` (itself last), children before
-        parents: the order :meth:`_least` evaluates them in, made once."""
+        parents: the order :meth:`cfgplan.planner.prices.Least.full` evaluates
+        them in, made once."""
         found = self.reach(call)
         assert found is not None  # counts() found no recursion below the pending items
         return found
@@ -255,41 +283,81 @@ class Partition:
             return 0.0, None
         task = self.grounder.task
         calls = tuple(item.call for item in node.stack)
-        pending = self._pending(calls)
-        if pending is None:
+        kept = self._pending(calls)
+        if kept.pending is None:
             return 0.0, None
-        totals = dict(pending)
+        totals = dict(kept.pending)
         get = totals.get
         present, future = self._channels(node)
+        raised: list[int] = []
         for waiting in future:
+            raised.extend(waiting.counted)
             for key in waiting.counted:
                 totals[key] = get(key, 0) + 1
         load = self.room.load(node.channels)
-        self.capacity.lower(totals, calls, load)
+        raised.extend(self.capacity.lower(totals, calls, load))
         prices = Prices(task, node, certain, totals, present, self.number, load)
-        total = sum(prices.channel(waiting) for waiting in future)
+        memo, costs = self._evaluate(kept, calls, prices, raised)
+        total = sum(map(prices.channel, future))
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
-        memo: dict[int, float] = {}
-        for item in node.stack:
-            total += self._least(item.call, memo, prices)
-            if not task.is_method(item.call):
-                total += prices.agent(item.call[1])
+        agent = prices.agent
+        for key, on in kept.items:
+            total += memo[key]
+            if on is not None:  # a pending functionality, on agent ``on``
+                total += agent(on)
         if total == float("inf"):
             return None, None
         if not apart:
             return total, None
-        top = self.instance(node.stack[0].call)  # its cheapest is in the memo
-        return total, split_at(top, total - memo[top.key], memo, prices, self.room.fits)
+        top = self._instances[node.stack[0].call]
+        if top.functionality:
+            return total, None
+        found = costs.get(top.key) if costs is not None else None
+        priced = self.least.priced(top, memo, prices) if found is None else found
+        return total, split_at(top, total - memo[top.key], priced)
 
-    def _pending(self, calls: tuple[Ground, ...]) -> Counts | None:
+    def _evaluate(
+        self, kept: Kept, calls: tuple[Ground, ...], prices: Prices, raised: list[int]
+    ) -> tuple[dict[int, float], dict[int, tuple[float, ...]] | None]:
+        """The cheapest derivation of each instance below the pending items
+        ``calls`` at ``prices`` (and each expansion's price, when kept): from
+        the last node with these pending items evaluated, when there is one
+        and it pays; recorded for the next from the third node on (a stack
+        met once or twice, as on a chain, is priced as cheaply as can be). ``raised``:
+        the keys whose totals differ from the pending items' counts."""
+        least = self.least
+        orders = (self.order(call) for call in dict.fromkeys(calls))
+        if not kept.reuse or kept.evaluated < 2:
+            kept.evaluated += 1
+            memo = least.full(orders, prices)
+            kept.reuse = len(memo) >= least.smallest
+            return memo, None
+        totals = prices.totals
+        touched = dict(zip(raised, map(totals.__getitem__, raised), strict=True))
+        if kept.last is None:
+            kept.last = least.record(orders, prices, touched)
+        else:
+            evaluation = least.again(kept.last, prices, touched)
+            if evaluation is None:  # too much changes between these nodes
+                kept.last, kept.reuse = None, False
+                return least.full(orders, prices), None
+            kept.last = evaluation
+        return kept.last.memo, kept.last.costs
+
+    def _pending(self, calls: tuple[Ground, ...]) -> Kept:
         """The summed counts of the pending items ``calls`` (None: off, some
         can recur), made once per stack: the children of an expansion whose
         body is all functionalities share one (fusion: every sibling)."""
-        if calls in self._stacks:
-            return self._stacks[calls]
-        if len(self._stacks) >= STACKS:
-            self._stacks.clear()
-        found = self._stacks[calls] = self._sum(calls)
+        found = self._stacks.get(calls)
+        if found is None:
+            if len(self._stacks) >= STACKS:
+                self._stacks.clear()
+            found = self._stacks[calls] = Kept(self._sum(calls))
+            if found.pending is not None:
+                method = self.grounder.task.is_method
+                found.items = tuple(
+                    (self._instances[call].key, None if method(call) else call[1]) for call in calls
+                )
         return found
 
     def _sum(self, calls: tuple[Ground, ...]) -> Counts | None:
@@ -327,44 +395,3 @@ class Partition:
                 receiver = None
             future.append(self.wire(ch.kind, ch.data, sender, receiver))
         return present, future
-
-    def _least(self, call: Ground, memo: dict[int, float], prices: Prices) -> float:
-        """The cheapest derivation of ``call`` at ``prices`` (bottom-up); ``memo``
-        by instance number."""
-        key = self.instance(call).key
-        found = memo.get(key)
-        if found is not None:
-            return found
-        # The hot loop of the search: prices inlined (the rules: module docstring, Prices).
-        agent_price, agent_prices = prices.agent, prices.agents
-        totals, present, placed = prices.totals, prices.present, prices.node.labels
-        count = totals.get
-        fits, load = self.room.fits, prices.load
-        for instance in self.order(call):
-            if instance.key in memo:
-                continue
-            if instance.functionality:
-                memo[instance.key] = (
-                    0.0 if instance.call in placed else instance.weight / totals[instance.key]
-                )
-                continue
-            best = float("inf")
-            for option in instance.options:
-                if option.needs and not fits(option.needs, load):
-                    continue  # communication-inadmissible below this node
-                cost = 0.0
-                for child in option.child_keys:
-                    cost += memo[child]
-                for own in option.channels:
-                    if own.free not in present:
-                        share = 0
-                        for counted in own.shares:
-                            share += count(counted, 0)
-                        cost += own.weight / share
-                for agent in option.agents:
-                    price = agent_prices.get(agent)
-                    cost += agent_price(agent) if price is None else price
-                if cost < best:
-                    best = cost
-            memo[instance.key] = best
-        return memo[key]

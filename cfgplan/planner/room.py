@@ -56,6 +56,7 @@ class Room:
     number: Callable[[Hashable], int]
 
     def __post_init__(self) -> None:
+        self._groups: dict[tuple[str, tuple[str, ...], object], tuple[int, int] | None] = {}
         self.total: dict[int, float] = {}
         self.largest: dict[int, float] = {}
         for medium in self.task.media:
@@ -76,10 +77,19 @@ class Room:
         return self.number(("<>", robots[0], robots[1]))
 
     def _group(self, kind: str, robots: Sequence[str], data: object) -> tuple[int, int] | None:
+        """The numbers of a channel's group and robot pair (None: it needs no
+        medium), made once per (kind, robots, data)."""
+        ident = (kind, tuple(robots), data)
+        try:
+            return self._groups[ident]
+        except KeyError:
+            pass
         pair = self.pair(kind, robots)
-        if pair is None:
-            return None
-        return self.number(("<>", robots[0], robots[1], kind, data)), pair
+        found = None
+        if pair is not None:
+            found = self.number(("<>", robots[0], robots[1], kind, data)), pair
+        self._groups[ident] = found
+        return found
 
     def needs(self, specs: Sequence[ChannelSpec]) -> tuple[Need, ...]:
         """The needs of an expansion's own channels, one per group."""

@@ -20,17 +20,12 @@ apart; :class:`cfgplan.planner.search.BestFirst` watches for that.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from cfgplan.planner.room import Load, Need
-
 if TYPE_CHECKING:
-    from cfgplan.planner.partition import Instance, Option
-    from cfgplan.planner.prices import Prices
-
-Fits = Callable[[tuple[Need, ...], Load], bool]
+    from cfgplan.planner.partition import Instance
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,27 +39,10 @@ class Split:
     prices: dict[int, float]
 
 
-def split_at(
-    top: Instance, rest: float, memo: dict[int, float], prices: Prices, fits: Fits
-) -> Split | None:
-    """The split of a node whose top item is ``top`` (None: a functionality),
-    from the memo of its refinement."""
-    if top.functionality:
-        return None
-    return Split(rest, {option.choice: price(option, memo, prices, fits) for option in top.options})
-
-
-def price(option: Option, memo: dict[int, float], prices: Prices, fits: Fits) -> float:
-    """What ``option`` costs at ``prices``, added up in the order
-    :meth:`cfgplan.planner.partition.Partition._least` adds it (the same
-    float, so that the child's bound is never above a completion's cost)."""
-    if option.needs and not fits(option.needs, prices.load):
-        return float("inf")
-    cost = 0.0
-    for child in option.child_keys:
-        cost += memo[child]
-    for own in option.channels:
-        cost += prices.channel(own)
-    for agent in option.agents:
-        cost += prices.agent(agent)
-    return cost
+def split_at(top: Instance, rest: float, priced: Sequence[float]) -> Split:
+    """The split of a node whose top item is the method instance ``top``,
+    its expansions ``priced`` in option order by its refinement
+    (:class:`cfgplan.planner.prices.Least`: each price the one the
+    refinement took the cheapest of, so that a child's bound is never above
+    a completion's cost)."""
+    return Split(rest, {option.choice: priced[n] for n, option in enumerate(top.options)})

@@ -31,11 +31,13 @@ def lowered() -> Iterator[list[int]]:
     seen: list[int] = []
     original = Capacity.lower
 
-    def lower(self: Capacity, totals: Counts, calls: tuple[Ground, ...], load: Load) -> None:
+    def lower(self: Capacity, totals: Counts, calls: tuple[Ground, ...], load: Load) -> list[int]:
         before = dict(totals)
-        original(self, totals, calls, load)
+        keys = original(self, totals, calls, load)
         if totals != before:
             seen.append(1)
+        assert sorted(keys) == sorted(k for k in totals if totals[k] != before[k])
+        return keys
 
     with patch.object(Capacity, "lower", lower):
         yield seen
@@ -56,7 +58,7 @@ def test_each_robot_pays_for_a_camera_of_its_own() -> None:
     cheapest = run(problem, limit=1, distinct=False)[0]
     assert len({f.robot for f in cheapest.functionalities if f.name == "camera"}) == 5
     assert root_bound(problem) == cheapest.cost
-    with patch.object(Capacity, "lower", lambda *_: None):
+    with patch.object(Capacity, "lower", lambda *_: []):
         uncapped = root_bound(problem)
     assert uncapped == cheapest.cost - 44
 
