@@ -126,7 +126,9 @@ class Summaries:
                         guessed.add(frames[-1][0])
                 continue
             reply = self._memo.get(need)
-            if reply is None:
+            if reply is not None and need in guessed:
+                guessed.add(current)  # built on a summary the fixpoint will raise
+            elif reply is None:
                 if need in active:
                     reply = UNKNOWN  # see UNKNOWN: recursion is summarised as unknown
                     guessed.add(current)
