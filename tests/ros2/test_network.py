@@ -125,8 +125,14 @@ def test_a_ros_node_sees_the_robot_and_receives_its_switch(
         switch = wait_for("the switch on /cfgplan/events", switched, LIMIT)
 
         def announced() -> dict[str, Any] | None:
+            # The events' publisher: each global channel Emil sends on has an
+            # MP token of its own too (/cfgplan/channel/...).
             with node.lock:
-                kinds = {t.split("/")[5]: t for t in node.tokens if "/cfgplan_Emil" in t}
+                kinds = {
+                    t.split("/")[5]: t
+                    for t in node.tokens
+                    if "/cfgplan_Emil" in t and ("/MP/" not in t or "/%cfgplan%events/" in t)
+                }
             return kinds if {"NN", "MP"} <= set(kinds) else None
 
         tokens = wait_for("Emil's node and publisher tokens", announced, 10.0)
