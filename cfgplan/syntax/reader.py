@@ -65,6 +65,20 @@ class SourceFile:
     goals: list[Goal] = field(default_factory=list)
     sequences: list[tuple[Goal, ...]] = field(default_factory=list)
 
+    def add(self, items: Sequence[Any]) -> None:
+        """File the forms the parser read, each under its kind, in file order."""
+        for item in items:
+            if isinstance(item, Functionality):
+                self.functionalities.append(item)
+            elif isinstance(item, Method):
+                self.methods.append(item)
+            elif isinstance(item, State):
+                self.states.append(item)
+            elif isinstance(item, Goal):
+                self.goals.append(item)
+            elif isinstance(item, GoalSequence):
+                self.sequences.append(item.goals)
+
 
 class _Run:
     """The children of an inlined rule, passed up to the rule that splices them in."""
@@ -335,17 +349,7 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
         raise error("input too deeply nested") from None
     if failed is not None:
         raise failed
-    for item in items:
-        if isinstance(item, Functionality):
-            source.functionalities.append(item)
-        elif isinstance(item, Method):
-            source.methods.append(item)
-        elif isinstance(item, State):
-            source.states.append(item)
-        elif isinstance(item, Goal):
-            source.goals.append(item)
-        elif isinstance(item, GoalSequence):
-            source.sequences.append(item.goals)
+    source.add(items)
     return source
 
 

@@ -24,7 +24,7 @@ from pydantic import BaseModel
 
 from benchmarks import families
 from cfgplan.diagnostics import CfgplanError
-from cfgplan.ir.model import Atom, Functionality, Goal, Method, Span, State
+from cfgplan.ir.model import Atom, Functionality, Method, Span
 from cfgplan.syntax import reader
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -83,17 +83,7 @@ def _by_tree(text: str, filename: str) -> reader.SourceFile:
     items = transformer.transform(parser.parse(reader.normalize(text))).children
     assert transformer.failed is None
     source = reader.SourceFile(filename, text)
-    for item in items:
-        if isinstance(item, Functionality):
-            source.functionalities.append(item)
-        elif isinstance(item, Method):
-            source.methods.append(item)
-        elif isinstance(item, State):
-            source.states.append(item)
-        elif isinstance(item, Goal):
-            source.goals.append(item)
-        elif isinstance(item, reader.GoalSequence):
-            source.sequences.append(item.goals)
+    source.add(items)
     return source
 
 
