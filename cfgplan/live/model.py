@@ -31,29 +31,22 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from cfgplan.notation import call_text
-from cfgplan.runtime.events import Adaptation, Call, Data, Event, Lifecycle, Presence, Staleness
+from cfgplan.runtime.events import (
+    STORY_KINDS,
+    Adaptation,
+    Call,
+    Data,
+    Event,
+    Lifecycle,
+    Presence,
+    Staleness,
+)
 from cfgplan.runtime.events import Transfer as TransferEvent
 from cfgplan.runtime.trace import notice
 
 __all__ = ["TIMELINE_KINDS", "Limits", "Page", "Setup", "input_key", "model"]
 
-TIMELINE_KINDS = frozenset(
-    {
-        "inject",
-        "failure",
-        "recovery",
-        "facts",
-        "switch",
-        "no-configuration",
-        "abort",
-        "achieved",
-        "finish",
-        "robot-seen",
-        "robot-lost",
-        "stop",
-        "error",
-    }
-)
+TIMELINE_KINDS = frozenset({*STORY_KINDS, "finish", "robot-seen", "robot-lost", "stop", "error"})
 """Events the timeline shows (``install`` too, on a robot that is not the coordinator)."""
 
 

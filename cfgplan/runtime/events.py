@@ -29,6 +29,7 @@ from cfgplan.runtime.transport import ChannelKey
 from cfgplan.runtime.values import jsonable
 
 __all__ = [
+    "STORY_KINDS",
     "Adaptation",
     "Call",
     "Data",
@@ -225,6 +226,22 @@ class Lifecycle(Event):
         out = Event.record(self)
         out.update({k: jsonable(v) for k, v in self.info})
         return out
+
+
+STORY_KINDS = (
+    "inject",
+    "failure",
+    "recovery",
+    "facts",
+    "switch",
+    "no-configuration",
+    "abort",
+    "achieved",
+)
+"""The adaptations a run's story tells, in no particular order: what a
+simulation's recording keeps (:mod:`cfgplan.sim.record`) and the live
+page's timeline shows (:mod:`cfgplan.live.model`); ``install`` is told
+apart, by who installed."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -23,7 +23,7 @@ from typing import IO, Any
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.task import Ground
-from cfgplan.runtime.events import Adaptation, Call, Event
+from cfgplan.runtime.events import STORY_KINDS, Adaptation, Call, Event
 from cfgplan.runtime.tracefile import elided
 from cfgplan.sim.world import World
 
@@ -33,16 +33,6 @@ ELIDE = 400
 """Characters of JSON beyond which a value is elided in the trace."""
 
 _WALL_CLOCK = ("duration", "plan_ms", "latency", "sent")
-NOTABLE = (
-    "inject",
-    "failure",
-    "recovery",
-    "facts",
-    "switch",
-    "no-configuration",
-    "abort",
-    "achieved",
-)
 
 
 @dataclass(frozen=True)
@@ -88,7 +78,7 @@ class Recorder:
         if self.trace is not None:
             self.trace.write(json.dumps(record, separators=(",", ":"), sort_keys=False) + "\n")
             self.lines += 1
-        if isinstance(event, Adaptation) and event.what in NOTABLE:
+        if isinstance(event, Adaptation) and event.what in STORY_KINDS:
             self.notable.append(Notable(now, event.what, record))
             if self.echo is not None:
                 self.echo(_line(record))
