@@ -203,15 +203,7 @@ def summary(run: Run, diagrams: dict[int, str] | None = None) -> dict[str, Any]:
         "why": reasons,
         "ended": run.ended,
         "time": _r(world.time, 4),
-        "steps": [
-            {
-                "goal": st.goal,
-                "achieved": st.achieved is not None,
-                "started": st.started,
-                "time": st.achieved,
-            }
-            for st in run.steps
-        ],
+        "steps": [st.summary() for st in run.steps],
         "configurations": configs,
         "switches": switches,
         "faults": faults,

@@ -93,6 +93,15 @@ class Step:
     started: float | None = None
     achieved: float | None = None
 
+    def summary(self) -> dict[str, object]:
+        """The step as the report (``report.json``) and the story give it."""
+        return {
+            "goal": self.goal,
+            "achieved": self.achieved is not None,
+            "started": self.started,
+            "time": self.achieved,
+        }
+
 
 @dataclass
 class Run:

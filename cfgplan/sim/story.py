@@ -24,15 +24,7 @@ def story_of(run: Run) -> Story:
     world = run.world
     summary: dict[str, Any] = {
         "title": run.loaded.scenario.title or run.loaded.scenario.name,
-        "steps": [
-            {
-                "goal": st.goal,
-                "achieved": st.achieved is not None,
-                "started": st.started,
-                "time": st.achieved,
-            }
-            for st in run.steps
-        ],
+        "steps": [st.summary() for st in run.steps],
         "world_changes": [{"time": t, "what": w} for t, w in world.changes],
     }
     if world.bar_dropped is not None:
