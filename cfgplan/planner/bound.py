@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Key, Partial
-from cfgplan.planner.summary import ChannelId, Summaries, Summary, least
+from cfgplan.planner.summary import ChannelId, Summaries, Summary, least, own_part
 from cfgplan.planner.task import Ground, Task
 
 
@@ -152,7 +152,7 @@ class Bound:
         parts: list[tuple[Set[Hashable], float]] = []
         for label, (call, sub) in pending.items():
             if call in alone:
-                parts.append((_own_part(call), 0.0 if call in node.labels else sub.minimum))
+                parts.append((own_part(call), 0.0 if call in node.labels else sub.minimum))
                 continue
             names = self.summaries.names(call)
             reusable = sum(cost for name, cost in have.items() if name in names)
@@ -210,18 +210,12 @@ class Bound:
             )
         ]
         if apart:
-            parts.append((_own_part("channels"), _channel_bound(apart, resolved, self.task)))
+            parts.append((own_part("channels"), _channel_bound(apart, resolved, self.task)))
         for call, sub in pending.values():
             names = self.summaries.data_names(call)
             reusable = sum(cost for name, cost in have.items() if name in names)
             parts.append((names, max(0.0, sub.wiring - reusable)))
         return least(parts)
-
-
-def _own_part(thing: Hashable) -> frozenset[Hashable]:
-    """A name no functionality or data predicate has (those are strings): a
-    part of its own."""
-    return frozenset({("own", thing)})
 
 
 def _repeats(node: Partial, task: Task) -> set[int]:

@@ -305,12 +305,12 @@ class Summaries:
         # A part is named by what it can reach; an own functionality (and a
         # channel into one) by itself alone: it shares with no other part.
         parts = [
-            (_alone(call) if func and self._own(call, caller) else self.names(call), sub.minimum)
+            (own_part(call) if func and self._own(call, caller) else self.names(call), sub.minimum)
             for call, sub, func in body.values()
         ]
         own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
         wires: list[tuple[Set[Hashable], float]] = [({data[0] for _, data in own}, own_cost)]
-        wires += [(_alone(c), self.task.channel_cost(c[0])) for c in into_own]
+        wires += [(own_part(c), self.task.channel_cost(c[0])) for c in into_own]
         wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
         return Expanded(
             frozenset(funcs),
@@ -355,9 +355,9 @@ class Summaries:
         return result
 
 
-def _alone(thing: Hashable) -> frozenset[Hashable]:
-    """A name no functionality or data predicate has (those are strings):
-    the part it names shares with no part named otherwise."""
+def own_part(thing: Hashable) -> frozenset[Hashable]:
+    """The names of a part that shares with no other in :func:`least`: a name
+    no functionality or data predicate has (those are strings)."""
     return frozenset({("own", thing)})
 
 
