@@ -17,7 +17,12 @@ never overestimates (and the first configuration found is the cheapest):
   less what C already has under the names that item can reach. Items that can
   reach no common functionality name (or channel data predicate) cannot share
   an instance, so their parts add up; items that can share count once (the
-  largest). This is what sees the cost of a deep hierarchy below a method.
+  largest). This is what sees the cost of a deep hierarchy below a method;
+- or else, the least any expansion of each pending item creates in
+  functionalities and channels together (its ``together``), grouped alike by
+  both kinds of name: where one version has the cheaper functionalities and
+  another the cheaper channels (a deep chain), the sum of the two leasts is
+  below what every version costs.
 
 Sharing is accounted for by working with sets of concrete instances or of
 names: two pending items needing ``camera(Emil)`` count it once, and nothing
@@ -36,7 +41,8 @@ from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Key, Partial
-from cfgplan.planner.summary import ChannelId, Summaries, Summary, least, own_part
+from cfgplan.planner.parts import Part, least, own_part
+from cfgplan.planner.summary import ChannelId, Summaries, Summary
 from cfgplan.planner.task import Ground, Task
 
 
@@ -103,21 +109,24 @@ class Bound:
         # Two lower bounds on the functionalities still to add, counted two ways
         # (certain instances; least cost per group of items that cannot share).
         # Either may be the larger, and both may count the same instance, so
-        # they cannot be added up: their max is a lower bound.
-        # Each of the two least costs is taken twice, the larger counting: over
-        # every pending item, and without the items that repeat a method
-        # instance already being expanded in this node (see _repeats).
-        repeats = _repeats(node, task)
+        # they cannot be added up: their max is a lower bound. A third counts
+        # functionalities and channels together, by each item's least total (a
+        # least of sums beats a sum of leasts where an item's cheaper
+        # functionalities and cheaper channels come from different versions).
+        # Each least cost is taken twice, the larger counting: over every
+        # pending item, and without the items that repeat a method instance
+        # already being expanded in this node (see _repeats).
         alone = self._alone(node, pending, future)
-        deepest = self._deepest(node, pending, alone)
-        widest = self._widest(pending, future, resolved, alone)
+        parts = self._parts(node, pending, alone, _Have.of(node, resolved, task))
+        waiting = self._waiting(future, resolved, alone)
+        deepest, widest, together = parts.least(waiting)
+        repeats = _repeats(node, task)
         if repeats:
-            kept = {label: entry for label, entry in pending.items() if label not in repeats}
-            deepest = max(deepest, self._deepest(node, kept, alone))
-            widest = max(widest, self._widest(kept, future, resolved, alone))
-        total = max(mandatory, deepest)
-        total += sum(task.agent_cost(agent) for agent in new_robots - node.robots)
-        return total + widest
+            again = parts.least(waiting, repeats)
+            deepest, widest = max(deepest, again[0]), max(widest, again[1])
+            together = max(together, again[2])
+        total = max(max(mandatory, deepest) + widest, together)
+        return total + sum(task.agent_cost(agent) for agent in new_robots - node.robots)
 
     def _alone(
         self, node: Partial, pending: dict[int, tuple[Ground, Summary]], future: set[ChannelId]
@@ -137,28 +146,44 @@ class Bound:
         keys |= {end for _, _, sender, receiver in future for end in (sender, receiver) if end}
         return frozenset(k for k in keys if all(beyond(k, ancestors) for ancestors in above))
 
-    def _deepest(
-        self, node: Partial, pending: dict[int, tuple[Ground, Summary]], alone: frozenset[Key]
-    ) -> float:
-        """What the pending items must still add in functionalities, by their
-        minimums: items that can reach no common functionality name add up
-        (less what C already has of those names); the others count once.
-        A functionality in ``alone`` is a part of its own."""
-        have: dict[str, float] = {}
-        for p in node.placed:
-            cost = self.task.functionality_cost(p.schema, p.call)
-            have[p.call[0]] = have.get(p.call[0], 0.0) + cost
+    def _parts(
+        self,
+        node: Partial,
+        pending: dict[int, tuple[Ground, Summary]],
+        alone: frozenset[Key],
+        have: _Have,
+    ) -> _Parts:
+        """Each pending item as a part of the three least costs.
+
+        Functionalities: an item's ``minimum``, less what C already has of the
+        functionality names it can reach (those it could reuse). Channels: its
+        ``wiring``, less C's resolved channels with the data predicates it can
+        make (those it could merge with). Together: its ``together``, less
+        both, named by both kinds of name; only when some item has
+        :attr:`Summary.slack` (else, item by item, the together least cost is
+        at most the two others' sum: every group it makes holds whole groups
+        of the two others, each of its items costs at most its two parts).
+        A functionality in ``alone`` is a part of its own (it shares with
+        nothing pending)."""
         guarded = self._guarded(node, pending)
-        parts: list[tuple[Set[Hashable], float]] = []
+        reach = self.summaries.reach
+        parts = _Parts(slack=any(sub.slack for _, sub in pending.values()))
         for label, (call, sub) in pending.items():
+            names, data, both = reach(call)
+            wired = have.channels_in(data)
+            parts.channels.append((label, data, max(0.0, sub.wiring - wired)))
             if call in alone:
-                parts.append((own_part(call), 0.0 if call in node.labels else sub.minimum))
+                new = call not in node.labels
+                own = own_part(call)
+                parts.functionalities.append((label, own, sub.minimum if new else 0.0))
+                if parts.slack:
+                    parts.together.append((label, own, sub.together if new else 0.0))
                 continue
-            names = self.summaries.names(call)
-            reusable = sum(cost for name, cost in have.items() if name in names)
-            reusable -= guarded.get(label, 0.0)
-            parts.append((names, max(0.0, sub.minimum - reusable)))
-        return least(parts)
+            reusable = have.functionalities_in(names) - guarded.get(label, 0.0)
+            parts.functionalities.append((label, names, max(0.0, sub.minimum - reusable)))
+            if parts.slack:
+                parts.together.append((label, both, max(0.0, sub.together - reusable - wired)))
+        return parts
 
     def _guarded(
         self, node: Partial, pending: dict[int, tuple[Ground, Summary]]
@@ -184,26 +209,21 @@ class Bound:
                 guarded[item.label] = total
         return guarded
 
-    def _widest(
+    def _waiting(
         self,
-        pending: dict[int, tuple[Ground, Summary]],
         future: set[ChannelId],
         resolved: set[tuple[str, Ground, Key, Key]],
         alone: frozenset[Key],
-    ) -> float:
-        """What must still be added in channels: the channels already waiting
-        for their ends (``future``), and each pending item's least wiring (less
-        the resolved channels with data it can carry); parts whose data
-        predicates differ cannot merge, so they add up. A channel from or
-        into a functionality in ``alone`` can merge with none a pending item
-        makes (those have both ends inside its expansion): they are a part of
-        their own."""
-        have: dict[str, float] = {}
-        for kind, data, _, _ in resolved:
-            have[data[0]] = have.get(data[0], 0.0) + self.task.channel_cost(kind)
+    ) -> list[Part]:
+        """The channels waiting for an end (``future``) as parts of
+        :func:`least`, in the channels' and the together least costs: named
+        by their data predicates (parts whose data predicates differ cannot
+        merge, so they add up). A channel from or into a functionality in
+        ``alone`` can merge with none a pending item makes (those have both
+        ends inside its expansion): they are a part of their own."""
         apart = {c for c in future if c[2] in alone or c[3] in alone}
         rest = future - apart if apart else future
-        parts: list[tuple[Set[Hashable], float]] = [
+        parts: list[Part] = [
             (
                 frozenset(data[0] for _, data, _, _ in rest),
                 _channel_bound(rest, resolved, self.task),
@@ -211,11 +231,66 @@ class Bound:
         ]
         if apart:
             parts.append((own_part("channels"), _channel_bound(apart, resolved, self.task)))
-        for call, sub in pending.values():
-            names = self.summaries.data_names(call)
-            reusable = sum(cost for name, cost in have.items() if name in names)
-            parts.append((names, max(0.0, sub.wiring - reusable)))
-        return least(parts)
+        return parts
+
+
+@dataclass
+class _Parts:
+    """The pending items as parts of the three least costs of
+    :meth:`Bound.estimate`, each with its item's label."""
+
+    slack: bool
+    """Whether the together least cost is counted (0 when not)."""
+    functionalities: list[tuple[int, Set[Hashable], float]] = field(default_factory=list)
+    channels: list[tuple[int, Set[Hashable], float]] = field(default_factory=list)
+    together: list[tuple[int, Set[Hashable], float]] = field(default_factory=list)
+
+    def least(
+        self, waiting: list[Part], leave_out: Set[int] = frozenset()
+    ) -> tuple[float, float, float]:
+        """The three least costs, the items ``leave_out`` left out (any subset
+        of the pending items gives a lower bound)."""
+
+        def kept(parts: list[tuple[int, Set[Hashable], float]]) -> list[Part]:
+            return [(names, cost) for label, names, cost in parts if label not in leave_out]
+
+        together = least(waiting + kept(self.together)) if self.slack else 0.0
+        return least(kept(self.functionalities)), least(waiting + kept(self.channels)), together
+
+
+@dataclass(frozen=True)
+class _Have:
+    """What C already holds, per name: the cost of its functionalities by
+    functionality name, of its resolved channels by data predicate."""
+
+    functionalities: dict[str, float]
+    channels: dict[str, float]
+
+    @classmethod
+    def of(cls, node: Partial, resolved: set[tuple[str, Ground, Key, Key]], task: Task) -> _Have:
+        functionalities: dict[str, float] = {}
+        for p in node.placed:
+            cost = task.functionality_cost(p.schema, p.call)
+            functionalities[p.call[0]] = functionalities.get(p.call[0], 0.0) + cost
+        channels: dict[str, float] = {}
+        for kind, data, _, _ in resolved:
+            channels[data[0]] = channels.get(data[0], 0.0) + task.channel_cost(kind)
+        return cls(functionalities, channels)
+
+    def functionalities_in(self, names: Set[str]) -> float:
+        return _within(self.functionalities, names)
+
+    def channels_in(self, names: Set[str]) -> float:
+        return _within(self.channels, names)
+
+
+def _within(costs: dict[str, float], names: Set[str]) -> float:
+    """The costs of ``names`` (walking the smaller side: a pending
+    functionality reaches one name, C may hold hundreds)."""
+    if len(names) < len(costs):
+        get = costs.get
+        return sum(get(name, 0.0) for name in names)
+    return sum(cost for name, cost in costs.items() if name in names)
 
 
 def _repeats(node: Partial, task: Task) -> set[int]:

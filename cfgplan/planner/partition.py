@@ -44,6 +44,7 @@ itself) have no finite occurrence count: for such tasks this bound is off.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Container
 from dataclasses import dataclass, field
 
@@ -118,6 +119,9 @@ class Partition:
     """The partitioned bound for one task; :meth:`estimate` on each node."""
 
     grounder: Grounder
+    media: bool = True
+    """Whether expansions the media cannot carry are priced as impossible
+    (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
     _instances: dict[Ground, Instance] = field(default_factory=dict)
     _counts: dict[Ground, Counts] = field(default_factory=dict)
     _orders: dict[Ground, tuple[Instance, ...]] = field(default_factory=dict)
@@ -129,7 +133,7 @@ class Partition:
 
     def __post_init__(self) -> None:
         task = self.grounder.task
-        self.room = Room(task, self.number)
+        self.room = Room(task, self.number, self.media)
         self.capacity = Capacity(task, self.room, self.number, self._instances, self.order)
         self.least = Least(self.room, self.number)
 
@@ -231,14 +235,38 @@ class Partition:
         return order
 
     def _count(self, instance: Instance) -> Counts:
+        """The most occurrences below ``instance``: over its options, the most
+        of each option's. A child every option has is taken out first and
+        added once, ``most(c + o for o) == c + most(o for o)`` key by key:
+        the same integers, but a level of a deep chain, whose every version
+        calls the level below, copies that level's counts once instead of
+        walking them per version."""
         if instance.functionality:
             return {instance.key: 1}
-        return most(self._option_count(option) for option in instance.options)
-
-    def _option_count(self, option: Option) -> Counts:
-        """The occurrences in a derivation through ``option``, its children's most."""
+        options = instance.options
+        if not options:
+            return {}
+        shared = Counter(options[0].children)
+        for option in options[1:]:
+            shared &= Counter(option.children)
         total: Counts = {}
+        for child in shared.elements():
+            if total:
+                add(total, self._counts[child])
+            else:
+                total = dict(self._counts[child])
+        add(total, most(self._option_count(option, shared) for option in options))
+        return total
+
+    def _option_count(self, option: Option, shared: Counter[Ground]) -> Counts:
+        """The occurrences in a derivation through ``option``, its children's
+        most, less the ``shared`` children (counted by the caller)."""
+        total: Counts = {}
+        skip = shared.copy()
         for child in option.children:
+            if skip[child] > 0:
+                skip[child] -= 1
+                continue
             add(total, self._counts[child])
         for own in option.channels:
             for key in own.counted:

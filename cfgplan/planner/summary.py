@@ -13,13 +13,14 @@ stack.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator, Hashable, Iterable, Set
+from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass, field, replace
 
 from cfgplan.planner import clock
 from cfgplan.planner.ground import Grounder, channel_kind
 from cfgplan.planner.match import exists
 from cfgplan.planner.partial import Key
+from cfgplan.planner.parts import Part, least, own_part
 from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
 from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
 
@@ -38,6 +39,18 @@ class Summary:
     producers: tuple[tuple[Ground, Key | None], ...] = ()  # :out data -> certain producer
     minimum: float = 0.0  # the least its functionalities can cost, if none is in C yet
     wiring: float = 0.0  # the least the channels of its expansions can cost, likewise
+    together: float = 0.0
+    """The least its functionalities and channels can cost together: the
+    least over expansions of their sum, which may be more than ``minimum +
+    wiring`` (those two may come from different expansions: on a chain one
+    version has the cheaper functionalities, another the cheaper channels)."""
+
+    @property
+    def slack(self) -> bool:
+        """Whether ``together`` says more than ``minimum + wiring``: else the
+        bound counting them apart is at least the one counting them together
+        (:meth:`cfgplan.planner.bound.Bound.estimate`)."""
+        return self.together > self.minimum + self.wiring + 1e-9
 
     def producer(self, data: Ground) -> Key | None:
         for d, key in self.producers:
@@ -56,6 +69,7 @@ class Expanded:
     producers: dict[Ground, Key | None]
     minimum: float
     wiring: float
+    together: float
 
 
 INFEASIBLE = Summary(False)
@@ -90,7 +104,12 @@ class Summaries:
     memo's (:meth:`cfgplan.planner.ground.Grounder.method_bindings`), so that
     each ground instance is matched once; None: a memo of its own."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
-    _reached: dict[Signature, tuple[frozenset[str], frozenset[str]]] = field(default_factory=dict)
+    _reached: dict[Signature, tuple[frozenset[str], frozenset[str], frozenset[str]]] = field(
+        default_factory=dict
+    )
+    _reached_by_call: dict[Ground, tuple[frozenset[str], frozenset[str], frozenset[str]]] = field(
+        default_factory=dict
+    )
     _parents: dict[Ground, set[Ground]] = field(default_factory=dict)
     """Functionality instance -> the method instances whose bodies call it,
     over every ground instance reachable from a summarised call."""
@@ -148,7 +167,7 @@ class Summaries:
         optimum of 27). The least costs of the instances of one cycle are
         the least fixpoint of their equations (``minimum`` is a min over
         expansions of sums and maxima of their parts' minimums, and so is
-        ``wiring``): the cost of the lightest derivation tree (Knuth's
+        ``wiring`` and ``together``): the cost of the lightest derivation tree (Knuth's
         lightest derivation). Iterating the equations from the costs made
         with UNKNOWN's 0 stays below that fixpoint at every round, as the
         equations are monotone; and the fixpoint is at most what any
@@ -175,9 +194,14 @@ class Summaries:
                     new: Summary = made.value
                 if not new.feasible:
                     continue  # its expansions all lead to infeasible parts: keep the first
-                minimum, wiring = max(old.minimum, new.minimum), max(old.wiring, new.wiring)
-                if (minimum, wiring) != (old.minimum, old.wiring):
-                    self._memo[call] = replace(old, minimum=minimum, wiring=wiring)
+                raised = replace(
+                    old,
+                    minimum=max(old.minimum, new.minimum),
+                    wiring=max(old.wiring, new.wiring),
+                    together=max(old.together, new.together),
+                )
+                if raised != old:
+                    self._memo[call] = raised
                     changed = True
             if not changed:
                 return
@@ -241,7 +265,9 @@ class Summaries:
             # (not ground), so they name no certain producer: weaker, still a bound.
             outs = tuple((substitute(o, env), call) for o in schema.outputs)
             cost = self.task.functionality_cost(schema, call)
-            return Summary(True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost)
+            return Summary(
+                True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost, 0.0, cost
+            )
         expansions: list[Expanded] = []
         for method in self.task.versions(call):
             for env in self._bind(method, call):
@@ -260,7 +286,8 @@ class Summaries:
         )
         minimum = min(e.minimum for e in expansions)
         wiring = min(e.wiring for e in expansions)
-        return Summary(True, funcs, robots, channels, producers, minimum, wiring)
+        together = min(e.together for e in expansions)
+        return Summary(True, funcs, robots, channels, producers, minimum, wiring, together)
 
     def _expansion(
         self, caller: Ground, method: MethodSchema, env: Bindings
@@ -304,14 +331,24 @@ class Summaries:
             producers.setdefault(data, call if is_functionality else sub.producer(data))
         # A part is named by what it can reach; an own functionality (and a
         # channel into one) by itself alone: it shares with no other part.
-        parts = [
-            (own_part(call) if func and self._own(call, caller) else self.names(call), sub.minimum)
-            for call, sub, func in body.values()
-        ]
+        parts: list[Part] = []
+        whole: list[Part] = []  # the parts of ``together``
+        for call, sub, func in body.values():
+            if func and self._own(call, caller):
+                parts.append((own_part(call), sub.minimum))
+                whole.append((own_part(call), sub.together))
+            else:
+                names, _, both = self.reach(call)
+                parts.append((names, sub.minimum))
+                whole.append((both, sub.together))
         own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
-        wires: list[tuple[Set[Hashable], float]] = [({data[0] for _, data in own}, own_cost)]
+        wires: list[Part] = [({data[0] for _, data in own}, own_cost)]
         wires += [(own_part(c), self.task.channel_cost(c[0])) for c in into_own]
         wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
+        # Together: a part is named by both kinds of name (a functionality name
+        # and a data predicate never mean one thing, so at worst two parts are
+        # taken as sharing that cannot: weaker, still a bound).
+        whole += wires[: 1 + len(into_own)]
         return Expanded(
             frozenset(funcs),
             frozenset(robots),
@@ -319,22 +356,33 @@ class Summaries:
             producers,
             least(parts),
             least(wires),
+            least(whole),
         )
 
     # -- what a signature can reach ---------------------------------------------
     def names(self, call: Ground) -> frozenset[str]:
         """The functionality names an instance can reach through method bodies."""
-        return self._reach(call)[0]
+        return self.reach(call)[0]
 
     def data_names(self, call: Ground) -> frozenset[str]:
         """The data predicates of the channels its expansions can create."""
-        return self._reach(call)[1]
+        return self.reach(call)[1]
 
-    def _reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str]]:
-        sig = (call[0], len(call) - 1)
+    def reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
+        """:meth:`names`, :meth:`data_names`, and the two together."""
+        found = self._reached_by_call.get(call)
+        if found is None:
+            found = self._reached_by_call[call] = self._reach_signature((call[0], len(call) - 1))
+        return found
+
+    def _reach_signature(
+        self, sig: Signature
+    ) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
         found = self._reached.get(sig)
         if found is not None:
             return found
+        if not self.task.recursive:
+            return self._reach_below(sig)
         names: set[str] = set()
         data: set[str] = set()
         seen = {sig}
@@ -351,47 +399,37 @@ class Summaries:
                     if child not in seen:
                         seen.add(child)
                         todo.append(child)
-        result = self._reached[sig] = (frozenset(names), frozenset(data))
+        result = self._reached[sig] = (frozenset(names), frozenset(data), frozenset(names | data))
         return result
 
-
-def own_part(thing: Hashable) -> frozenset[Hashable]:
-    """The names of a part that shares with no other in :func:`least`: a name
-    no functionality or data predicate has (those are strings)."""
-    return frozenset({("own", thing)})
-
-
-def least(parts: Iterable[tuple[Set[Hashable], float]]) -> float:
-    """The least a set of parts can cost together, each part given by the
-    names it can reach (functionality names, or channel data predicates) and
-    its own least cost: parts whose names are disjoint cannot share an
-    instance, so their costs add; parts that may share count as the largest
-    of them. The groups of parts linked by shared names are found with a
-    union-find over the parts (a deep recursive path has hundreds of parts of
-    their own)."""
-    owner: dict[Hashable, int] = {}  # name -> a part that reaches it
-    parent: list[int] = []
-    cost: list[float] = []
-
-    def root(part: int) -> int:
-        while parent[part] != part:
-            parent[part] = parent[parent[part]]
-            part = parent[part]
-        return part
-
-    for names, part_cost in parts:
-        part = len(parent)
-        parent.append(part)
-        cost.append(part_cost)
-        for name in names:
-            other = owner.setdefault(name, part)
-            if other == part:
+    def _reach_below(self, sig: Signature) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
+        """:meth:`_reach_signature` where no signature reaches itself: each
+        from the signatures its bodies call, children first (no walk below
+        every level of a deep hierarchy again)."""
+        task, reached = self.task, self._reached
+        stack: list[tuple[Signature, bool]] = [(sig, False)]
+        while stack:
+            current, ready = stack.pop()
+            if current in reached:
                 continue
-            a, b = root(other), root(part)
-            if a != b:
-                parent[b] = a
-                cost[a] = max(cost[a], cost[b])
-    return sum(c for i, c in enumerate(cost) if parent[i] == i)
+            if current in task.functionalities:
+                reached[current] = (frozenset({current[0]}), frozenset(), frozenset({current[0]}))
+                continue
+            versions = task.methods.get(current, ())
+            children = [(p[0], len(p) - 1) for m in versions for _, p in m.body]
+            if not ready:
+                stack.append((current, True))
+                stack.extend((child, False) for child in children if child not in reached)
+                continue
+            names: set[str] = set()
+            data = {c.data[0] for m in versions for c in m.channels}
+            for child in children:
+                below = reached.get(child)
+                if below is not None:  # None: a name neither method nor functionality
+                    names |= below[0]
+                    data |= below[1]
+            reached[current] = (frozenset(names), frozenset(data), frozenset(names | data))
+        return reached[sig]
 
 
 def common_channels(sets: list[frozenset[ChannelId]]) -> frozenset[ChannelId]:

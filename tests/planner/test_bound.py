@@ -167,3 +167,24 @@ def test_a_recursive_path_is_priced_at_its_cheapest_completion() -> None:
             assert node.cost + rest == best, [item.call for item in node.stack]
             exact += 1
     assert exact >= 15
+
+
+def test_a_chain_is_priced_at_its_cheapest_completion() -> None:
+    """Issue 35, deep chain (benchmarks/families/chain.py): each level has a
+    version with one functionality of cost 3 and one channel, and one with
+    two of cost 1 and two channels, both 4 in all. Its least functionalities
+    (2) and least channels (1) come from different versions, so their sum
+    was 3 a level: the root bound of chain(5) was 28 against an optimum of
+    33 (chain(8): 37 against 45), and every tie below was explored, one
+    level's worth of slack after another. Counted by each level's least
+    total (``Summary.together``), the bound equals the cheapest completion
+    on every one of the first nodes of the search."""
+    from benchmarks.families import chain
+
+    problem = load_text(*chain(5))
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    for node in some_nodes(grounder, problem.goal_call):
+        rest = bound.estimate(node)
+        best = least_completion(grounder, node)
+        assert rest is not None and best is not None
+        assert node.cost + rest == best, [item.call for item in node.stack]

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.families import chain, ecology, wall
+from benchmarks.families import chain, ecology, fusion, wall
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run
 from cfgplan.problem import load
@@ -22,15 +22,19 @@ def _run(texts: tuple[str, str], limit: int, **tuned: int) -> tuple[list[tuple[f
     return found, run
 
 
-def test_the_partition_bound_is_given_up_on_the_wall_family_and_kept_on_chains() -> None:
+def test_the_partition_bound_is_given_up_where_it_never_pays_and_kept_where_it_does() -> None:
     """On wall K=6 N=20 L=8 it never raises a priority: dropped after ``trial``
-    refinements; on chain D=8 it raises every one: kept (both tried from the
-    first node). (On wall K=3 N=4 L=3 it pays since it prices channels with
-    one end open by that end: issue 11.)"""
+    refinements; so on chain D=8, where the first bound is exact (it counts
+    each level's least total, ``Summary.together``: test_bound.py); on
+    fusion M=8 it raises nearly every one: kept (all tried from the first
+    node). (On wall K=3 N=4 L=3 it pays since it prices channels with one
+    end open by that end: issue 11.)"""
     _, on_wall = _run(wall(6, 20, 8), 1, warm=0)
     _, on_chain = _run(chain(8), 1, warm=0)
+    _, on_fusion = _run(fusion(8, 3, 6, 6), 1, warm=0)
     assert on_wall.strategy.grower.refine is None
-    assert on_chain.strategy.grower.refine is not None
+    assert on_chain.strategy.grower.refine is None
+    assert on_fusion.strategy.grower.refine is not None
 
 
 @pytest.mark.parametrize(

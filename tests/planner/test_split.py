@@ -9,7 +9,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from benchmarks.families import chain, ecology, fusion, media_tight, wall
+from benchmarks.families import ecology, fusion, media_tight, wall
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan, search
 from cfgplan.planner.bound import Bound
@@ -61,8 +61,8 @@ def test_a_child_priced_from_its_parents_split_costs_at_least_that(
 
 @pytest.mark.parametrize(
     "texts",
-    [ecology(18, 3, 3), fusion(4, 3, 4, 3), chain(8), media_tight(6, 4, 4)],
-    ids=["ecology-18", "fusion-4", "chain-8", "media-tight-6"],
+    [ecology(18, 3, 3), fusion(4, 3, 4, 3), fusion(8, 3, 6, 6), media_tight(6, 4, 4)],
+    ids=["ecology-18", "fusion-4", "fusion-8", "media-tight-6"],
 )
 def test_pricing_children_from_splits_changes_no_ranked_list(texts: tuple[str, str]) -> None:
     """The 20 cheapest, costs, identities and derivation numbers, with the

@@ -1,0 +1,74 @@
+"""Parts that may share: the least a set of pending items (or of one
+expansion's body items) can cost together, when each is known only by the
+names it can reach and its own least cost (:mod:`cfgplan.planner.summary`,
+:mod:`cfgplan.planner.bound`)."""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Iterable, Set
+
+Part = tuple[Set[Hashable], float]
+"""A part of :func:`least`: the names it can reach, its least cost."""
+
+
+def own_part(thing: Hashable) -> frozenset[Hashable]:
+    """The names of a part that shares with no other in :func:`least`: a name
+    no functionality or data predicate has (those are strings)."""
+    return frozenset({("own", thing)})
+
+
+WIDE = 16
+"""A part reaching more names than this is *wide* (a method deep in a
+hierarchy reaches every name below it): :func:`least` does not file its names
+one by one, but meets it with the others as sets."""
+
+
+def least(parts: Iterable[Part]) -> float:
+    """The least a set of parts can cost together, each part given by the
+    names it can reach (functionality names, or channel data predicates) and
+    its own least cost: parts whose names are disjoint cannot share an
+    instance, so their costs add; parts that may share count as the largest
+    of them. The groups of parts linked by shared names are found with a
+    union-find over the parts (a deep recursive path has hundreds of parts of
+    their own). A narrow part's names are filed (name -> a part reaching it);
+    a wide one is met with the filed names and with the other wide parts by
+    set intersections, so that the work grows with the narrow names, not the
+    wide ones (a chain of D levels: D names a level, D levels)."""
+    owner: dict[Hashable, int] = {}  # a narrow part's name -> a part that reaches it
+    wide: list[tuple[int, Set[Hashable]]] = []
+    parent: list[int] = []
+    cost: list[float] = []
+
+    def root(part: int) -> int:
+        while parent[part] != part:
+            parent[part] = parent[parent[part]]
+            part = parent[part]
+        return part
+
+    def join(a: int, b: int) -> None:
+        a, b = root(a), root(b)
+        if a != b:
+            parent[b] = a
+            cost[a] = max(cost[a], cost[b])
+
+    alone = 0.0  # parts that reach no name: they share with nothing
+    for names, part_cost in parts:
+        if not names:
+            alone += part_cost
+            continue
+        part = len(parent)
+        parent.append(part)
+        cost.append(part_cost)
+        for other, reached in wide:
+            if not reached.isdisjoint(names):
+                join(other, part)
+        if len(names) > WIDE:
+            for name in owner.keys() & names:
+                join(owner[name], part)
+            wide.append((part, names))
+            continue
+        for name in names:
+            other = owner.setdefault(name, part)
+            if other != part:
+                join(other, part)
+    return alone + sum(c for i, c in enumerate(cost) if parent[i] == i)
