@@ -26,7 +26,7 @@ class SearchOptions:
     node is taken first, or priced some of its children above their own bound,
     :mod:`cfgplan.planner.split`), the bound is dropped for the rest of the
     search. Where it seldom pays (build-wall, the wall and relay families) it
-    only costs time; where it helps (ecology, fusion, media-tight, chain) most
+    only costs time; where it helps (ecology, fusion, media-tight) most
     of its raises pay. Dropping an admissible bound never changes the answer,
     only how many nodes are taken (tests/planner/test_grow.py)."""
 
@@ -46,6 +46,13 @@ class SearchOptions:
     most_held: int = 250_000
     """Configurations one window of ``--all`` may hold before its upper edge
     comes down."""
+
+    media: bool = True
+    """Price as impossible an expansion whose own global channels the media
+    cannot carry on top of a node's (:mod:`cfgplan.planner.room`, in the
+    partitioned bound); False prices it as if the media carried anything.
+    The configurations found are the same (a completion always fits the
+    media: step 4 checks it), only the work to find them differs."""
 
     components: bool = True
     """Search the goal's independent parts apart when it has some

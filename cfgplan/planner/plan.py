@@ -39,27 +39,31 @@ from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
 
 
-def parts(task: Task) -> tuple[Grounder, Bound, Partition]:
+def parts(task: Task, media: bool = True) -> tuple[Grounder, Bound, Partition]:
     """The grounding memo and the bounds of ``task``, made once per task and
     kept on it (:attr:`Task.memo`): they are freed with the task, as a run that
-    reconfigures plans on one derived task after another."""
-    found: tuple[Grounder, Bound, Partition] | None = task.memo.get("parts")
+    reconfigures plans on one derived task after another. ``media``:
+    :attr:`SearchOptions.media` (a partitioned bound each way)."""
+    key = "parts" if media else "parts-without-media"
+    found: tuple[Grounder, Bound, Partition] | None = task.memo.get(key)
     if found is None:
         grounder = Grounder(task)
-        found = task.memo["parts"] = (grounder, Bound(task, grounder), Partition(grounder))
+        partition = Partition(grounder, media)
+        found = task.memo[key] = (grounder, Bound(task, grounder), partition)
     return found
 
 
-def divided(task: Task, goal: Ground) -> Parts | None:
+def divided(task: Task, goal: Ground, media: bool = True) -> Parts | None:
     """The goal's independent parts (:mod:`cfgplan.planner.components`), made
     once per task and goal; None when there are not two, or when costs have
     no unit (:mod:`cfgplan.planner.levels`: then sums of parts may not rank
-    as whole configurations do)."""
-    made: dict[Ground, Parts | None] = task.memo.setdefault("components", {})
+    as whole configurations do). ``media``: as :func:`parts`."""
+    key = "components" if media else "components-without-media"
+    made: dict[Ground, Parts | None] = task.memo.setdefault(key, {})
     if goal not in made:
         found = None
         if task.levels.unit is not None:
-            grounder, _, partition = parts(task)
+            grounder, _, partition = parts(task, media)
             unrolled = unroll(grounder, goal)
             if unrolled is not None:
                 found = divide(grounder, partition, *unrolled)
@@ -135,7 +139,7 @@ class Run:
     def __post_init__(self) -> None:
         grower = self._grower()
         if self.limit is None:
-            bound = parts(self.task)[1]
+            bound = parts(self.task, self.options.media)[1]
             grower.split = None
             self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
         else:
@@ -152,7 +156,7 @@ class Run:
         if not self.options.components or not isinstance(self.strategy, BestFirst):
             return
         try:
-            found = divided(self.task, self.goal)
+            found = divided(self.task, self.goal, self.options.media)
         except clock.OutOfTime:
             return
         if found is not None:
@@ -161,7 +165,7 @@ class Run:
 
     def _grower(self) -> Grower:
         """A grower with the task's bounds, its children priced from splits."""
-        grounder, bound, partition = parts(self.task)
+        grounder, bound, partition = parts(self.task, self.options.media)
         refine = partitioned(bound, partition)
         grower = Grower(
             grounder, bound.estimate, refine, self.distinct, bound.feasible, options=self.options
@@ -228,7 +232,7 @@ class Run:
     def _explain(self, started: float, deadline: float | None) -> None:
         """The bounds cut branches before their dead ends were met: search them
         without the bounds, so the report can say why nothing is admissible."""
-        grounder = parts(self.task)[0]
+        grounder = parts(self.task, self.options.media)[0]
         explaining = BestFirst(Grower(grounder, _no_bound, None, self.distinct), self.goal)
         spent = time.perf_counter() - started
         end = time.perf_counter() + max(self.options.explain_seconds, 2 * spent)

@@ -54,6 +54,9 @@ class Room:
 
     task: Task
     number: Callable[[Hashable], int]
+    media: bool = True
+    """False: ask nothing of the media (:attr:`SearchOptions.media
+    <cfgplan.planner.options.SearchOptions.media>`)."""
 
     def __post_init__(self) -> None:
         self._groups: dict[tuple[str, tuple[str, ...], object], tuple[int, int] | None] = {}
@@ -67,7 +70,7 @@ class Room:
     @property
     def active(self) -> bool:
         """Without media every channel fits (4.6 applies only when declared)."""
-        return bool(self.task.media)
+        return self.media and bool(self.task.media)
 
     def pair(self, kind: str, robots: Sequence[str]) -> int | None:
         """The number of the robot pair a channel of ``kind`` declared

@@ -107,7 +107,7 @@ class Ranked:
     _more: Iterator[Configuration] = field(init=False)
 
     def __post_init__(self) -> None:
-        grounder, bound, partition = parts(self.task)
+        grounder, bound, partition = parts(self.task, self.options.media)
         grower = Grower(
             grounder,
             bound.estimate,

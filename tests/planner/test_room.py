@@ -105,9 +105,7 @@ def search_tree(problem: Problem, most: int) -> list[Partial]:
     return out
 
 
-def test_the_media_raise_the_bound_but_never_past_the_cheapest_completion(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_the_media_raise_the_bound_but_never_past_the_cheapest_completion() -> None:
     """Below each of the first 150 nodes, the partitioned bound is at most the
     cheapest completion (a completion always fits the media: a node whose
     channels overflow them is a dead end, partial.py), at least the bound
@@ -117,8 +115,7 @@ def test_the_media_raise_the_bound_but_never_past_the_cheapest_completion(
     partition = Partition(grounder)
     nodes = search_tree(problem, 150)
     with_room = [partition.estimate(node, bound.certain_agents(node)) for node in nodes]
-    monkeypatch.setattr(Room, "active", property(lambda self: False))
-    blind = Partition(grounder)
+    blind = Partition(grounder, media=False)
     raised = 0
     for node, estimate in zip(nodes, with_room, strict=True):
         truth = least_completion(grounder, node)
@@ -141,7 +138,7 @@ def test_the_media_raise_the_bound_but_never_past_the_cheapest_completion(
     ids=["media-tight-5-all", "media-tight-5-top10", "media-tight-6-top20"],
 )
 def test_leaving_out_what_the_media_cannot_carry_changes_no_ranked_list(
-    texts: tuple[str, str], limit: int | None, fewer: bool, monkeypatch: pytest.MonkeyPatch
+    texts: tuple[str, str], limit: int | None, fewer: bool
 ) -> None:
     """The same configurations in the same order (costs, identities, thesis
     order at equal cost) with the media test on and off; with it on, a
@@ -150,9 +147,9 @@ def test_leaving_out_what_the_media_cannot_carry_changes_no_ranked_list(
     run = Run(problem.task, problem.goal_call, limit, options=SearchOptions(components=False))
     configs = list(run)
     nodes_with = run.stats.nodes
-    monkeypatch.setattr(Room, "active", property(lambda self: False))
     problem = problem_of(texts)  # a new task: its bounds are made anew
-    run = Run(problem.task, problem.goal_call, limit, options=SearchOptions(components=False))
+    blind_options = SearchOptions(components=False, media=False)
+    run = Run(problem.task, problem.goal_call, limit, options=blind_options)
     blind = list(run)
     assert len(configs) >= 10
     assert [(c.cost, c.identity(), c.derivation) for c in configs] == [
@@ -188,13 +185,8 @@ def test_with_any_media_the_cheapest_is_branch_and_bounds_and_the_list_unchanged
     found, _ = plan(problem.task, problem.goal_call, limit=5)
     least = branch_and_bound(problem)
     assert [c.cost for c in found[:1]] == ([] if least is None else [least])
-    active = Room.active
-    try:
-        Room.active = property(lambda self: False)  # type: ignore[method-assign, assignment]
-        problem = problem_of(texts)
-        blind, _ = plan(problem.task, problem.goal_call, limit=5)
-    finally:
-        Room.active = active  # type: ignore[method-assign]
+    problem = problem_of(texts)
+    blind, _ = plan(problem.task, problem.goal_call, limit=5, options=SearchOptions(media=False))
     assert [(c.cost, c.identity(), c.derivation) for c in found] == [
         (c.cost, c.identity(), c.derivation) for c in blind
     ]
