@@ -20,6 +20,7 @@ import gc
 import importlib
 import os
 import sys
+from contextvars import ContextVar
 
 TYPE_CHECKING = False  # as typing.TYPE_CHECKING, without importing typing (3 ms)
 if TYPE_CHECKING:
@@ -253,9 +254,17 @@ def _answer(args: list[str]) -> int | str | None:
         return EXIT_INPUT
 
 
+ONE_COMMAND: ContextVar[bool] = ContextVar("one_command", default=False)
+"""Whether this process runs one command and exits (the console script,
+:func:`main`), not many in a row (tests, a program that embeds the app):
+then :func:`cfgplan.cli.options.load_problem` freezes what it read out of
+the cycle collector's sight (:func:`gc.freeze`)."""
+
+
 def main() -> None:
     """Entry point of the console script."""
     sys.unraisablehook = _unraisable
+    ONE_COMMAND.set(True)
     try:
         status = _answer(sys.argv[1:])
     except KeyboardInterrupt:

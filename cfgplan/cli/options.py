@@ -10,6 +10,7 @@ wording of the libraries underneath.
 
 from __future__ import annotations
 
+import gc
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -19,7 +20,7 @@ from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 
-from cfgplan.cli.app import EXIT_NONE, remember_source, report, say
+from cfgplan.cli.app import EXIT_NONE, ONE_COMMAND, remember_source, report, say
 from cfgplan.configuration.cost import Weights, parse_weights
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic
@@ -152,6 +153,13 @@ def load_problem(
     if goals:
         remember_source(GOAL_SOURCE, "\n".join(f"(goal {g})" for g in goals))
     problem = load(domain, state, goals, weights)
+    if ONE_COMMAND.get():
+        # What was read (and every module imported) lives as long as the
+        # process: out of the cycle collector's sight, a search that makes
+        # many nodes is not slowed by collections walking it again and again
+        # (13 % of planning chain D=200). Frozen objects are never collected,
+        # so only where one command is the whole process.
+        gc.freeze()
     report(problem.warnings)
     if len(problem.goals) > 1 and not sequence:
         raise CfgplanError(

@@ -117,3 +117,26 @@ def test_what_a_command_loads_is_frozen_once() -> None:
     assert again[0] == again[1]  # the second command line froze nothing more
     off = _gc_after("gc.disable()\napp._load(['plan'])\nprint(json.dumps([gc.isenabled()]))")
     assert off == [False]
+
+
+def test_what_one_command_reads_is_frozen_and_many_commands_freeze_nothing() -> None:
+    """The console script (one command, then exit: ``app.ONE_COMMAND``)
+    freezes the problem it read (:func:`cfgplan.cli.options.load_problem`),
+    so that the search's collections do not walk it; a process running
+    several commands (a test, a program embedding the app) freezes nothing
+    there, as frozen objects are never collected."""
+    read = (
+        "from cfgplan.cli.options import load_problem\n"
+        "from pathlib import Path\n"
+        "app._load(['plan'])\n"
+        "d = Path('domains/cross-door')\n"
+        "before = gc.get_freeze_count()\n"
+        "{set}load_problem(d / 'domain.lisp', d / 'state-6.2.2-step1.lisp', None, None)\n"
+        "print(json.dumps([before, gc.get_freeze_count()]))"
+    )
+    one = _gc_after(read.format(set="app.ONE_COMMAND.set(True)\n"))
+    many = _gc_after(read.format(set=""))
+    assert isinstance(one[0], int) and isinstance(one[1], int)
+    assert isinstance(many[0], int) and isinstance(many[1], int)
+    assert one[1] - one[0] > 1_000  # the IR, the task, the parser's work
+    assert abs(many[1] - many[0]) < 100  # (frozen objects die, a few move)
