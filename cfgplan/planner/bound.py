@@ -36,8 +36,9 @@ The pending items are read through their static summaries
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Set
+from collections.abc import Iterable, Set
 from dataclasses import dataclass, field
+from itertools import compress
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Key, Partial
@@ -171,18 +172,19 @@ class Bound:
         for label, (call, sub) in pending.items():
             names, data, both = reach(call)
             wired = have.channels_in(data)
-            parts.channels.append((label, data, max(0.0, sub.wiring - wired)))
+            parts.labels.append(label)
+            parts.channels.append((data, max(0.0, sub.wiring - wired)))
             if call in alone:
                 new = call not in node.labels
                 own = own_part(call)
-                parts.functionalities.append((label, own, sub.minimum if new else 0.0))
+                parts.functionalities.append((own, sub.minimum if new else 0.0))
                 if parts.slack:
-                    parts.together.append((label, own, sub.together if new else 0.0))
+                    parts.together.append((own, sub.together if new else 0.0))
                 continue
             reusable = have.functionalities_in(names) - guarded.get(label, 0.0)
-            parts.functionalities.append((label, names, max(0.0, sub.minimum - reusable)))
+            parts.functionalities.append((names, max(0.0, sub.minimum - reusable)))
             if parts.slack:
-                parts.together.append((label, both, max(0.0, sub.together - reusable - wired)))
+                parts.together.append((both, max(0.0, sub.together - reusable - wired)))
         return parts
 
     def _guarded(
@@ -234,31 +236,35 @@ class Bound:
         return parts
 
 
-@dataclass
+@dataclass(slots=True)
 class _Parts:
     """The pending items as parts of the three least costs of
-    :meth:`Bound.estimate`, each with its item's label."""
+    :meth:`Bound.estimate`: one part per item in each list, the items'
+    labels in :attr:`labels`, in the same order."""
 
     slack: bool
     """Whether the together least cost is counted (0 when not)."""
-    functionalities: list[tuple[int, Set[Hashable], float]] = field(default_factory=list)
-    channels: list[tuple[int, Set[Hashable], float]] = field(default_factory=list)
-    together: list[tuple[int, Set[Hashable], float]] = field(default_factory=list)
+    labels: list[int] = field(default_factory=list)
+    functionalities: list[Part] = field(default_factory=list)
+    channels: list[Part] = field(default_factory=list)
+    together: list[Part] = field(default_factory=list)
 
     def least(
         self, waiting: list[Part], leave_out: Set[int] = frozenset()
     ) -> tuple[float, float, float]:
         """The three least costs, the items ``leave_out`` left out (any subset
         of the pending items gives a lower bound)."""
+        functionalities, channels, together = self.functionalities, self.channels, self.together
+        if leave_out:
+            kept = [label not in leave_out for label in self.labels]
+            functionalities = list(compress(functionalities, kept))
+            channels = list(compress(channels, kept))
+            together = list(compress(together, kept))
+        whole = least(waiting + together) if self.slack else 0.0
+        return least(functionalities), least(waiting + channels), whole
 
-        def kept(parts: list[tuple[int, Set[Hashable], float]]) -> list[Part]:
-            return [(names, cost) for label, names, cost in parts if label not in leave_out]
 
-        together = least(waiting + kept(self.together)) if self.slack else 0.0
-        return least(kept(self.functionalities)), least(waiting + kept(self.channels)), together
-
-
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _Have:
     """What C already holds, per name: the cost of its functionalities by
     functionality name, of its resolved channels by data predicate."""
@@ -287,10 +293,12 @@ class _Have:
 def _within(costs: dict[str, float], names: Set[str]) -> float:
     """The costs of ``names`` (walking the smaller side: a pending
     functionality reaches one name, C may hold hundreds)."""
+    if not costs or not names:
+        return 0.0
     if len(names) < len(costs):
         get = costs.get
-        return sum(get(name, 0.0) for name in names)
-    return sum(cost for name, cost in costs.items() if name in names)
+        return sum([get(name, 0.0) for name in names])
+    return sum([cost for name, cost in costs.items() if name in names])
 
 
 def _repeats(node: Partial, task: Task) -> set[int]:

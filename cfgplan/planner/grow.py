@@ -191,7 +191,11 @@ class Grower:
             self.dominated += 1
         if raised > priority and (beaten is None or raised > beaten):
             self.raised += 1
-        elif self.tried >= self.options.trial and self.raised * self.options.pays < self.tried:
+        elif (
+            self.tried >= self.options.trial
+            and self.raised * self.options.pays < self.tried
+            and self.dominated < self.tried
+        ):
             self.refine = self.split = None  # it seldom helps here: give it up for this search
             self.splits.clear()
             # Nodes priced by the first bound stay right; the others are re-priced.

@@ -25,9 +25,12 @@ class SearchOptions:
     (pruned a node, raised its priority past the next node's, so that another
     node is taken first, or priced some of its children above their own bound,
     :mod:`cfgplan.planner.split`), the bound is dropped for the rest of the
-    search. Where it seldom pays (build-wall, the wall and relay families) it
-    only costs time; where it helps (ecology, fusion, media-tight) most
-    of its raises pay. Dropping an admissible bound never changes the answer,
+    search, unless it was at least the first bound every time: then it is
+    kept, for :attr:`rely` to drop the first instead (where both are exact, a
+    deep chain, the stronger one priced from its last evaluation is the
+    cheaper). Where it seldom pays (build-wall, the wall and relay families)
+    it only costs time; where it helps (ecology, fusion, media-tight) most of
+    its raises pay. Dropping an admissible bound never changes the answer,
     only how many nodes are taken (tests/planner/test_grow.py)."""
 
     pays: int = 4

@@ -17,10 +17,13 @@ def own_part(thing: Hashable) -> frozenset[Hashable]:
     return frozenset({("own", thing)})
 
 
-WIDE = 16
+WIDE = 64
 """A part reaching more names than this is *wide* (a method deep in a
 hierarchy reaches every name below it): :func:`least` does not file its names
-one by one, but meets it with the others as sets."""
+one by one, but meets it with the others as sets; the first :data:`MOST_WIDE`
+such parts only, as every part is met with each of them."""
+
+MOST_WIDE = 8
 
 
 def least(parts: Iterable[Part]) -> float:
@@ -62,13 +65,20 @@ def least(parts: Iterable[Part]) -> float:
         for other, reached in wide:
             if not reached.isdisjoint(names):
                 join(other, part)
-        if len(names) > WIDE:
+        if len(names) > WIDE and len(wide) < MOST_WIDE:
             for name in owner.keys() & names:
                 join(owner[name], part)
             wide.append((part, names))
             continue
-        for name in names:
+        for name in names:  # the hot loop: join() written out
             other = owner.setdefault(name, part)
-            if other != part:
-                join(other, part)
-    return alone + sum(c for i, c in enumerate(cost) if parent[i] == i)
+            if other == part:
+                continue
+            a, b = root(other), root(part)
+            if a != b:
+                parent[b] = a
+                cost[a] = max(cost[a], cost[b])
+    # Which part ends up a group's root depends on the order names are met
+    # in (a set's, which differs from one process to the next): summed in
+    # order of size, the groups' costs give one float whatever it was.
+    return alone + sum(sorted(c for i, c in enumerate(cost) if parent[i] == i))

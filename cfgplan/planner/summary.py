@@ -45,12 +45,13 @@ class Summary:
     wiring`` (those two may come from different expansions: on a chain one
     version has the cheaper functionalities, another the cheaper channels)."""
 
-    @property
-    def slack(self) -> bool:
-        """Whether ``together`` says more than ``minimum + wiring``: else the
-        bound counting them apart is at least the one counting them together
-        (:meth:`cfgplan.planner.bound.Bound.estimate`)."""
-        return self.together > self.minimum + self.wiring + 1e-9
+    slack: bool = field(init=False)
+    """Whether ``together`` says more than ``minimum + wiring``: else the
+    bound counting them apart is at least the one counting them together
+    (:meth:`cfgplan.planner.bound.Bound.estimate`)."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "slack", self.together > self.minimum + self.wiring + 1e-9)
 
     def producer(self, data: Ground) -> Key | None:
         for d, key in self.producers:
