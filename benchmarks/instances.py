@@ -87,6 +87,15 @@ INSTANCES = [
 ]
 
 
+def by_name(name: str) -> Instance:
+    """The instance of :data:`INSTANCES` named ``name`` (exit with a message
+    when there is none)."""
+    for instance in INSTANCES:
+        if instance.name == name:
+            return instance
+    raise SystemExit(f"no benchmark instance named {name!r}")
+
+
 def problem_files(instance: Instance, folder: Path) -> tuple[Path, Path]:
     """The domain and state files of an instance (generated ones into ``folder``)."""
     if instance.kind == "file":

@@ -29,7 +29,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks.instances import INSTANCES, ROOT, Instance, problem_files
+from benchmarks.instances import Instance, by_name, problem_files
 
 __all__ = ["NAMES", "Options", "count", "main", "plan_runs"]
 
@@ -59,13 +59,6 @@ class Options:
     timeout: float = 1800.0
 
 
-def _instance(name: str) -> Instance:
-    for instance in INSTANCES:
-        if instance.name == name:
-            return instance
-    raise SystemExit(f"no benchmark instance named {name!r}")
-
-
 def plan_runs(instance: Instance, runs: int) -> None:
     """In this process: read ``instance``, plan its cheapest configuration
     once, then ``runs`` times more (what callgrind counts)."""
@@ -80,19 +73,9 @@ def plan_runs(instance: Instance, runs: int) -> None:
 
 def _callgrind(name: str, runs: int, options: Options, against: Path | None) -> int:
     """The instructions of one process running :func:`plan_runs`."""
-    args = ["--one", name, str(runs)]
-    command = [sys.executable, "-m", "benchmarks.instructions", *args]
-    cwd = ROOT
-    if against is not None:
-        # The harness first, then the old tree: `benchmarks` from here,
-        # `cfgplan` from there (as benchmarks.run).
-        code = (
-            f"import sys; sys.path[:0] = [{str(against / 'harness')!r}, "
-            f"{str(against / 'tree')!r}]; sys.argv[0] = 'benchmarks.instructions'; "
-            "from benchmarks.instructions import main; main()"
-        )
-        command = [sys.executable, "-c", code, *args]
-        cwd = against
+    from benchmarks.run import harness_command
+
+    command, cwd = harness_command("instructions", ["--one", name, str(runs)], against)
     valgrind = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null"]
     out = subprocess.run(
         [*valgrind, *command],
@@ -138,7 +121,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.one:
         name, runs = args.one
-        plan_runs(_instance(name), int(runs))
+        plan_runs(by_name(name), int(runs))
         return
     if args.runs < 1:
         parser.error("--runs takes a number >= 1")
@@ -148,7 +131,7 @@ def main() -> None:
         raise SystemExit(1)
     names = tuple(args.only or NAMES)
     for name in names:
-        _instance(name)
+        by_name(name)
     from benchmarks.run import checkout, machine
 
     options = Options(runs=args.runs)

@@ -25,7 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks.instances import INSTANCES, ROOT, Instance, problem_files
+from benchmarks.instances import Instance, by_name, problem_files
 
 __all__ = ["NAMES", "Options", "main", "measure", "run_one"]
 
@@ -45,13 +45,6 @@ class Options:
 
     repeat: int = 5
     timeout: float = 300.0
-
-
-def _instance(name: str) -> Instance:
-    for instance in INSTANCES:
-        if instance.name == name:
-            return instance
-    raise SystemExit(f"no benchmark instance named {name!r}")
 
 
 def _best(read: Callable[[], object], repeat: int) -> float:
@@ -81,19 +74,9 @@ def measure(instance: Instance, repeat: int) -> dict[str, float | int]:
 def run_one(name: str, options: Options, against: Path | None = None) -> dict[str, float | int]:
     """:func:`measure` in a fresh subprocess; with ``against`` (a folder made by
     :func:`benchmarks.run.checkout`), with the cfgplan of that tree."""
-    args = ["--one", name, str(options.repeat)]
-    command = [sys.executable, "-m", "benchmarks.reading", *args]
-    cwd = ROOT
-    if against is not None:
-        # The harness alone in one folder, then the old tree: `benchmarks`
-        # is imported from here, `cfgplan` from there (as benchmarks.run).
-        code = (
-            f"import sys; sys.path[:0] = [{str(against / 'harness')!r}, "
-            f"{str(against / 'tree')!r}]; sys.argv[0] = 'benchmarks.reading'; "
-            "from benchmarks.reading import main; main()"
-        )
-        command = [sys.executable, "-c", code, *args]
-        cwd = against
+    from benchmarks.run import harness_command
+
+    command, cwd = harness_command("reading", ["--one", name, str(options.repeat)], against)
     out = subprocess.run(
         command, cwd=cwd, capture_output=True, text=True, check=True, timeout=options.timeout
     )
@@ -137,7 +120,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.one:
         name, repeat = args.one
-        print(json.dumps(measure(_instance(name), int(repeat))))
+        print(json.dumps(measure(by_name(name), int(repeat))))
         return
     if args.repeat < 1:
         parser.error("--repeat takes a number >= 1")
@@ -157,7 +140,7 @@ def main() -> None:
         for line in _header(args.against):
             print(line, flush=True)
         for name in NAMES:
-            _instance(name)
+            by_name(name)
             then = run_one(name, options, against) if against is not None else None
             now = run_one(name, options)
             print(_row(name, now, then), flush=True)

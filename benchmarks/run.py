@@ -109,20 +109,25 @@ def run_one(
     """Measure in a fresh subprocess; with ``against`` (a folder made by
     :func:`checkout`), the cfgplan of that older version runs under this harness."""
     index = INSTANCES.index(instance)
-    command = [sys.executable, "-m", "benchmarks.run", "--one", str(index), mode, str(repeat)]
-    cwd = ROOT
-    if against is not None:
-        # The harness alone in one folder, then the old tree: `benchmarks`
-        # is imported from here, `cfgplan` from there.
-        code = (
-            f"import sys; sys.path[:0] = [{str(against / 'harness')!r}, "
-            f"{str(against / 'tree')!r}]; sys.argv[0] = 'benchmarks.run'; "
-            "from benchmarks.run import main; main()"
-        )
-        command = [sys.executable, "-c", code, "--one", str(index), mode, str(repeat)]
-        cwd = against
+    command, cwd = harness_command("run", ["--one", str(index), mode, str(repeat)], against)
     out = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=True)
     return json.loads(out.stdout)  # type: ignore[no-any-return]
+
+
+def harness_command(module: str, args: list[str], against: Path | None) -> tuple[list[str], Path]:
+    """The command (and its folder) that runs ``benchmarks.<module>``'s
+    ``main()`` with ``args`` in a fresh interpreter: with this cfgplan, or with
+    ``against``'s (a folder made by :func:`checkout`) under this harness."""
+    if against is None:
+        return [sys.executable, "-m", f"benchmarks.{module}", *args], ROOT
+    # The harness alone in one folder, then the old tree: `benchmarks` is
+    # imported from here, `cfgplan` from there.
+    code = (
+        f"import sys; sys.path[:0] = [{str(against / 'harness')!r}, "
+        f"{str(against / 'tree')!r}]; sys.argv[0] = 'benchmarks.{module}'; "
+        f"from benchmarks.{module} import main; main()"
+    )
+    return [sys.executable, "-c", code, *args], against
 
 
 def checkout(rev: str, folder: Path) -> Path:
