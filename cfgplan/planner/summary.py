@@ -332,24 +332,23 @@ class Summaries:
             producers.setdefault(data, call if is_functionality else sub.producer(data))
         # A part is named by what it can reach; an own functionality (and a
         # channel into one) by itself alone: it shares with no other part.
+        own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
+        wires: list[Part] = [({data[0] for _, data in own}, own_cost)]
+        wires += [(own_part(c), self.task.channel_cost(c[0])) for c in into_own]
+        # Together: a part is named by both kinds of name (a functionality name
+        # and a data predicate never mean one thing, so at worst two parts are
+        # taken as sharing that cannot: weaker, still a bound).
+        whole = list(wires)
         parts: list[Part] = []
-        whole: list[Part] = []  # the parts of ``together``
         for call, sub, func in body.values():
+            reached, carried, both = self.reach(call)
+            wires.append((carried, sub.wiring))
             if func and self._own(call, caller):
                 parts.append((own_part(call), sub.minimum))
                 whole.append((own_part(call), sub.together))
             else:
-                names, _, both = self.reach(call)
-                parts.append((names, sub.minimum))
+                parts.append((reached, sub.minimum))
                 whole.append((both, sub.together))
-        own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
-        wires: list[Part] = [({data[0] for _, data in own}, own_cost)]
-        wires += [(own_part(c), self.task.channel_cost(c[0])) for c in into_own]
-        wires += [(self.data_names(call), sub.wiring) for call, sub, _ in body.values()]
-        # Together: a part is named by both kinds of name (a functionality name
-        # and a data predicate never mean one thing, so at worst two parts are
-        # taken as sharing that cannot: weaker, still a bound).
-        whole += wires[: 1 + len(into_own)]
         return Expanded(
             frozenset(funcs),
             frozenset(robots),
@@ -365,12 +364,9 @@ class Summaries:
         """The functionality names an instance can reach through method bodies."""
         return self.reach(call)[0]
 
-    def data_names(self, call: Ground) -> frozenset[str]:
-        """The data predicates of the channels its expansions can create."""
-        return self.reach(call)[1]
-
     def reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
-        """:meth:`names`, :meth:`data_names`, and the two together."""
+        """:meth:`names`; the data predicates of the channels its expansions
+        can create; and the two together."""
         found = self._reached_by_call.get(call)
         if found is None:
             found = self._reached_by_call[call] = self._reach_signature((call[0], len(call) - 1))
