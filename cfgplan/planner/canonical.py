@@ -2,9 +2,11 @@
 digest (thesis 4.5 builds the same partial configuration along different
 orders of choices; the search expands each form once, :mod:`cfgplan.planner.search`).
 
-Nodes share most of their items, placed instances and channels: each one's
-number (for :func:`canonical` and :func:`cfgplan.planner.finish.fingerprint`)
-is found once and kept on it; they are never changed.
+Nodes share most of their items, placed instances and channels: each one is
+numbered when it is made (:class:`cfgplan.planner.ground.Expansion` carries
+the numbers), so these functions only read nodes, never write them. The root
+item, and items or channels built by hand (tests), have no number (-1): it
+is looked up here each time.
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> 
     for ch in node.channels:
         n = ch.number
         if n < 0:
-            n = ch.number = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
-        key = (n, names[ch.source], names[ch.target])
+            n = number((ch.kind, ch.robots, ch.data))
+        key = (n, ch.bandwidth, names[ch.source], names[ch.target])
         found = get(key)
         out.append(number(key) if found is None else found)
     return out
@@ -47,9 +49,9 @@ def canonical(node: Partial, grounder: Grounder) -> bytes:
     """The node up to labels — placed instances, channels, stack and P — as a
     128-bit :func:`digest`. Two nodes with the same canonical form have the
     same completions (up to labels). An item's ancestors count only where they
-    can matter: those whose method can recur (:attr:`Task.recursive`); in a
-    domain without recursion the order in which items were reached is
-    forgotten. It takes 16 bytes where the form takes kilobytes, so every
+    can matter: those whose method can recur (:attr:`Task.recursive`,
+    :attr:`cfgplan.planner.partial.Item.relevant`); in a domain without recursion the order in which
+    items were reached is forgotten. It takes 16 bytes where the form takes kilobytes, so every
     expanded node can be remembered."""
     number = grounder.numbering
     names = placed_names(node)
@@ -58,13 +60,10 @@ def canonical(node: Partial, grounder: Grounder) -> bytes:
         names[item.label] = -1 - index
     channels = channel_numbers(node, names, number)
     channels.sort()
-    stack = []
-    for item in node.stack:
-        if item.number < 0:
-            recursive = grounder.task.recursive
-            relevant = sorted(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)
-            item.number = number((item.call, tuple(relevant)))
-        stack.append(item.number)
+    stack = [
+        item.number if item.number >= 0 else number((item.call, item.relevant))
+        for item in node.stack
+    ]
     get = number.numbers.get
     effects = []
     for effect in node.effects:

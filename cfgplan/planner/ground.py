@@ -46,7 +46,13 @@ ChannelSpec = tuple[str, Ground, int, int, Ground, float | None]
 @dataclass(frozen=True, slots=True)
 class Expansion:
     """A method version instantiated with one binding, labels as offsets from
-    the first fresh label; the same for every node that expands it."""
+    the first fresh label; the same for every node that expands it.
+
+    It carries the numbers the canonical form names what it creates by
+    (:mod:`cfgplan.planner.canonical`), so that items and channels are
+    numbered when they are made, never afterwards: each channel's kind, robots
+    and data, and each body item's call with no recursive ancestor. An item
+    below a recursive method is numbered with those ancestors (``number``)."""
 
     size: int
     channels: tuple[ChannelSpec, ...]
@@ -55,6 +61,10 @@ class Expansion:
     inputs: dict[Ground, tuple[int, ...]]  # data -> offsets
     effects: Effects
     where: str = ""  # "CALL, version N": where a dead end met expanding it is
+    channel_numbers: tuple[int, ...] = ()  # per channel: (kind, robots, data), numbered
+    body_numbers: tuple[int, ...] = ()  # per body item: (call, frozenset()), numbered
+    recursive: bool = False  # the method can recur: it is a relevant ancestor of its body
+    number: Numbering | None = None  # the numbering all of these come from
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,8 +110,12 @@ def channel_kind(declared: str, robots: Ground) -> tuple[str, Ground]:
     return ("local", robots[:1]) if robots[0] == robots[1] else ("global", robots)
 
 
-def instantiate(method: MethodSchema, env: Bindings, where: str) -> Expansion | DeadEnd:
-    """Instantiate a method version under ``env`` (step 3a of 4.5)."""
+def instantiate(
+    method: MethodSchema, env: Bindings, where: str, number: Numbering, recursive: bool
+) -> Expansion | DeadEnd:
+    """Instantiate a method version under ``env`` (step 3a of 4.5), numbered
+    by ``number``; ``recursive``: whether the method's signature can recur
+    (:attr:`Task.recursive`)."""
     offset = {body_label: i for i, (body_label, _) in enumerate(method.body)}
     channels: list[ChannelSpec] = []
     for spec in method.channels:
@@ -130,7 +144,17 @@ def instantiate(method: MethodSchema, env: Bindings, where: str) -> Expansion | 
         inputs[data] = (*inputs.get(data, ()), offset[port.label])
     effects = tuple((eff.positive, substitute(eff.pattern, env)) for eff in method.effects)
     return Expansion(
-        len(method.body), tuple(channels), tuple(body), outputs, inputs, effects, where
+        len(method.body),
+        tuple(channels),
+        tuple(body),
+        outputs,
+        inputs,
+        effects,
+        where,
+        tuple(number((kind, ends, data)) for kind, ends, _, _, data, _ in channels),
+        tuple(number((call, frozenset())) for call in body),
+        recursive,
+        number,
     )
 
 
@@ -183,8 +207,10 @@ class Grounder:
         found = self._expansions.get(memo)
         if found is None:
             where = f"{call_text(call)}, version {method.version}"
+            recursive = (method.name, len(method.params)) in self.task.recursive
             found = self._expansions[memo] = tuple(
-                instantiate(method, env, where) for env in self.method_bindings(method, call)
+                instantiate(method, env, where, self.numbering, recursive)
+                for env in self.method_bindings(method, call)
             )
         return found
 

@@ -39,7 +39,8 @@ class Item:
     label: int
     call: Ground  # (name, *args)
     ancestors: frozenset[Ground]  # method instances above it: the recursion guard
-    number: int = -1  # its part of canonical(), numbered once
+    relevant: frozenset[Ground] = frozenset()  # those whose method can recur
+    number: int = -1  # its part of canonical(): (call, relevant) numbered when made; -1: the root
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -52,7 +53,7 @@ class Channel:
     target: int
     data: Ground
     bandwidth: float | None
-    number: int = -1  # its label-free part of canonical(), numbered once
+    number: int = -1  # (kind, robots, data) numbered when made (Expansion.channel_numbers)
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -120,9 +121,10 @@ def expand_method(
     with *both* ends at the instance is re-wired at both; if that makes a
     functionality feed itself, the cycle check of step 4 rejects it."""
     first = node.next_label
+    numbered = expansion.channel_numbers
     block = [
-        Channel(kind, robots, first + src, first + dst, data, bandwidth)
-        for kind, robots, src, dst, data, bandwidth in expansion.channels
+        Channel(kind, robots, first + src, first + dst, data, bandwidth, numbered[i])
+        for i, (kind, robots, src, dst, data, bandwidth) in enumerate(expansion.channels)
     ]
     rewired: list[Channel] = []
     expanded = item.label
@@ -147,9 +149,23 @@ def expand_method(
                 missing = f"no :in entry consumes {atom_text(ch.data)}"
                 return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
             targets = tuple(first + k for k in offsets)  # an :in may feed several
-        rewired.extend(Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth) for t in targets)
+        rewired.extend(
+            Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth, ch.number) for t in targets
+        )
     ancestors = item.ancestors | {item.call}
-    pushed = tuple(Item(first + i, call, ancestors) for i, call in enumerate(expansion.body))
+    relevant = item.relevant
+    if expansion.recursive:  # every ancestor recurs, in a domain of one recursive method
+        relevant = ancestors if len(relevant) == len(item.ancestors) else relevant | {item.call}
+    numbers = expansion.body_numbers
+    if relevant:
+        assert expansion.number is not None  # the grounder numbers every expansion it makes
+        numbers = expansion.number.items(expansion.body, numbers, relevant)
+    pushed = tuple(
+        [
+            Item(first + i, call, ancestors, relevant, numbers[i])
+            for i, call in enumerate(expansion.body)
+        ]
+    )
     # Fresh labels are not placed yet: no channel got resolved, nothing to settle.
     return Partial(
         stack=(*pushed, *node.stack[1:]),
@@ -186,6 +202,7 @@ def reuse_functionality(node: Partial, item: Item, existing: int, task: Task) ->
                 existing if ch.target == old else ch.target,
                 ch.data,
                 ch.bandwidth,
+                ch.number,
             )
     settled = _settle(tuple(relabelled), node.located, touching, node.resolved, task)
     if isinstance(settled, DeadEnd):
@@ -298,7 +315,13 @@ def _settle(
         kept = out[j]
         if ch.bandwidth is not None and (kept.bandwidth is None or ch.bandwidth > kept.bandwidth):
             out[j] = Channel(
-                kept.kind, kept.robots, kept.source, kept.target, kept.data, ch.bandwidth
+                kept.kind,
+                kept.robots,
+                kept.source,
+                kept.target,
+                kept.data,
+                ch.bandwidth,
+                kept.number,
             )
         dropped.append(i)
     if dropped:

@@ -2,9 +2,16 @@
 
 Like pyperplan's task model, this is what search works on: tuples and dicts,
 no pydantic on the hot path. Built once from the IR
-(:func:`cfgplan.planner.compile.compile_task`) and frozen: the search, the
-grounding memo and the bound keep their own caches
-(:mod:`cfgplan.planner.ground`, :mod:`cfgplan.planner.bound`), never here.
+(:func:`cfgplan.planner.compile.compile_task`), derived in one way
+(:func:`derive`), and frozen: no field of it ever changes. What is worked out
+from those fields is kept with the task, so that it goes when the task goes
+(a running society plans on one derived task after another): its own derived
+values as cached properties (:attr:`Task.recursive`, :attr:`Task.levels`),
+and what the planner makes once per task (the grounding memo and the bounds,
+:func:`cfgplan.planner.plan.parts`; the matching orders,
+:mod:`cfgplan.planner.join`) in :attr:`Task.memo`. Nothing kept there ever
+changes what the task says. (A table beside the task, keyed weakly by it,
+would never let it go: what the planner keeps refers to the task.)
 
 The world state is a *set* of facts (4.4): a fact written twice is one fact,
 so it gives one binding, one derivation. State order (first occurrence) is
@@ -146,7 +153,8 @@ class Task:
     """Every symbol of the state: for "differs only in case" hints."""
     memo: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
     """What the planner works out once per task (:func:`cfgplan.planner.plan.parts`),
-    kept here so that it goes when the task goes; a derived task starts empty."""
+    by kind: a cache, the one slot written after the task is built (see the
+    module's docstring); a derived task starts empty."""
 
     @cached_property
     def agents(self) -> tuple[str, ...]:

@@ -2,9 +2,18 @@
 
 from __future__ import annotations
 
+import copy
+from pathlib import Path
+
+import pytest
+
+from benchmarks.families import conversion
 from cfgplan.planner.canonical import canonical
+from cfgplan.planner.finish import fingerprint
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.partial import Item, root
+from cfgplan.planner.partial import Item, Partial, root
+from cfgplan.planner.successors import successors
+from tests.planner.problems import load_text
 from tests.planner.test_partial import local, task, with_channels
 
 
@@ -18,3 +27,51 @@ def test_canonical_forgets_labels() -> None:
     assert canonical(one, g) == canonical(other, g)
     swapped = with_channels(root(("x",)), local(5, 7, img), stack=relabelled)
     assert canonical(one, g) != canonical(swapped, g)
+
+
+def _reached(domain: str, state: str, most: int) -> tuple[Grounder, list[Partial]]:
+    """The first ``most`` nodes the planner's step reaches from the goal, breadth first."""
+    problem = load_text(domain, state)
+    grounder = Grounder(problem.task)
+    found: list[Partial] = []
+    todo = [root(problem.goal_call)]
+    while todo and len(found) < most:
+        node = todo.pop(0)
+        found.append(node)
+        if not node.done:
+            todo += [c for c in successors(grounder, node) if isinstance(c, Partial)]
+    return grounder, found
+
+
+@pytest.mark.parametrize("family", ["cross-door", "conversion"])
+def test_items_are_numbered_when_made_and_canonical_only_reads_nodes(family: str) -> None:
+    """Nodes are never written after they are made (issue 35): canonical() and
+    fingerprint() leave every node as it was, and each item's number, given
+    when its method was expanded, is its call with the ancestors whose method
+    can recur, as the canonical form defines it. The conversion graph
+    recurses, so there the ancestors count."""
+    domain, state = conversion(4) if family == "conversion" else _cross_door()
+    grounder, nodes = _reached(domain, state, 300)
+    recursive = grounder.task.recursive
+    before = copy.deepcopy(nodes)
+    for node in nodes:
+        canonical(node, grounder)
+        if node.done:
+            fingerprint(node, grounder.numbering)
+    assert nodes == before
+    number = grounder.numbering
+    checked = 0
+    for node in nodes:
+        for item in node.stack:
+            relevant = frozenset(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)
+            assert item.relevant == relevant
+            if item.label != 1:  # the goal: made by root(), with no numbering
+                assert item.number == number((item.call, relevant))
+                checked += 1 if relevant else 0
+    assert checked > 0 or family != "conversion"  # some items had recursive ancestors
+
+
+def _cross_door() -> tuple[str, str]:
+    """Thesis 6.2.2, step 1."""
+    folder = Path(__file__).resolve().parents[2] / "domains" / "cross-door"
+    return (folder / "domain.lisp").read_text(), (folder / "state-6.2.2-step1.lisp").read_text()

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from cfgplan.planner.ground import Expansion, Grounder
+from cfgplan.planner.ground import ChannelSpec, Effects, Expansion, Grounder
+from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import (
     Channel,
     Item,
@@ -30,6 +31,29 @@ def task() -> Task:
     return load_text(DOMAIN, "(state (robot A) (robot B)) (goal (go A))").task
 
 
+def made(
+    size: int,
+    channels: tuple[ChannelSpec, ...],
+    body: tuple[tuple[str, ...], ...],
+    outputs: dict[tuple[str, ...], tuple[int, float | None]],
+    inputs: dict[tuple[str, ...], tuple[int, ...]],
+    effects: Effects = (),
+) -> Expansion:
+    """An expansion built by hand, numbered as the grounder numbers one."""
+    number = Numbering()
+    return Expansion(
+        size,
+        channels,
+        body,
+        outputs,
+        inputs,
+        effects,
+        channel_numbers=tuple(number((k, r, d)) for k, r, _, _, d, _ in channels),
+        body_numbers=tuple(number((call, frozenset())) for call in body),
+        number=number,
+    )
+
+
 def with_channels(node: Partial, *channels: Channel, stack: tuple[Item, ...] = ()) -> Partial:
     return replace(node, channels=channels, stack=stack or node.stack)
 
@@ -46,13 +70,12 @@ def test_rewiring_moves_both_ends_of_a_channel_at_the_expanded_instance() -> Non
     node = root(("m", "A"))
     d = ("d", "A")
     node = with_channels(node, local(9, 1, d), local(1, 1, d), local(1, 8, d))
-    expansion = Expansion(
+    expansion = made(
         size=2,
         channels=(),
         body=(("flt", "A"), ("mon", "A")),
         outputs={d: (0, None)},
         inputs={d: (0, 1)},
-        effects=(),
     )
     child = expand_method(node, node.stack[0], expansion, None, 0)
     assert isinstance(child, Partial)
@@ -65,7 +88,7 @@ def test_rewiring_a_global_channel_takes_the_bandwidth_of_the_out_entry() -> Non
     node = root(("m", "A"))
     d = ("d", "A")
     node = with_channels(node, Channel("global", ("A", "B"), 1, 7, d, None))
-    expansion = Expansion(1, (), (("flt", "A"),), {d: (0, 20.0)}, {}, ())
+    expansion = made(1, (), (("flt", "A"),), {d: (0, 20.0)}, {}, ())
     child = expand_method(node, node.stack[0], expansion, None, 0)
     assert isinstance(child, Partial)
     assert child.channels[0].bandwidth == 20.0
@@ -73,7 +96,7 @@ def test_rewiring_a_global_channel_takes_the_bandwidth_of_the_out_entry() -> Non
 
 def test_a_channel_no_out_entry_produces_is_a_dead_end() -> None:
     node = with_channels(root(("m", "A")), local(1, 7, ("d", "A")))
-    expansion = Expansion(1, (), (("flt", "A"),), {}, {}, ())
+    expansion = made(1, (), (("flt", "A"),), {}, {}, ())
     dead = expand_method(node, node.stack[0], expansion, None, 0)
     assert isinstance(dead, DeadEnd)
     assert dead.condition is Condition.INFORMATION
