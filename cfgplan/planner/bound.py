@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from itertools import compress
 
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Key, Partial
 from cfgplan.planner.parts import Part, least, own_part
 from cfgplan.planner.summary import ChannelId, Summaries, Summary
@@ -76,8 +77,16 @@ class Bound:
             agents |= self.summaries.summary(item.call).robots
         return frozenset(agents)
 
-    def estimate(self, node: Partial) -> float | None:
-        """A lower bound on the cost still to come, or None when no completion exists."""
+    def estimator(self, options: SearchOptions) -> Estimator:
+        """:meth:`estimate` for one search, which stops counting the together
+        least cost when it has not raised the bound in
+        :attr:`SearchOptions.together` estimates (:class:`Together`)."""
+        return Estimator(self, Together(options.together))
+
+    def estimate(self, node: Partial, together: Together | None = None) -> float | None:
+        """A lower bound on the cost still to come, or None when no completion
+        exists. ``together``: one search's :class:`Together` (None: the
+        together least cost is always counted where some item has slack)."""
         task = self.task
         placed = node.labels
         needed: set[Key] = set()
@@ -117,16 +126,21 @@ class Bound:
         # Each least cost is taken twice, the larger counting: over every
         # pending item, and without the items that repeat a method instance
         # already being expanded in this node (see _repeats).
+        counted = together is None or together.counted
         alone = self._alone(node, pending, future)
-        parts = self._parts(node, pending, alone, _Have.of(node, resolved, task))
+        parts = self._parts(node, pending, alone, _Have.of(node, resolved, task), counted)
         waiting = self._waiting(future, resolved, alone)
-        deepest, widest, together = parts.least(waiting)
+        deepest, widest, whole = parts.least(waiting)
         repeats = _repeats(node, task)
         if repeats:
             again = parts.least(waiting, repeats)
             deepest, widest = max(deepest, again[0]), max(widest, again[1])
-            together = max(together, again[2])
-        total = max(max(mandatory, deepest) + widest, together)
+            whole = max(whole, again[2])
+        total = max(mandatory, deepest) + widest
+        if parts.slack:
+            if together is not None:
+                together.met(whole > total)
+            total = max(total, whole)
         return total + sum(task.agent_cost(agent) for agent in new_robots - node.robots)
 
     def _alone(
@@ -153,6 +167,7 @@ class Bound:
         pending: dict[int, tuple[Ground, Summary]],
         alone: frozenset[Key],
         have: _Have,
+        counted: bool = True,
     ) -> _Parts:
         """Each pending item as a part of the three least costs.
 
@@ -163,12 +178,13 @@ class Bound:
         both, named by both kinds of name; only when some item has
         :attr:`Summary.slack` (else, item by item, the together least cost is
         at most the two others' sum: every group it makes holds whole groups
-        of the two others, each of its items costs at most its two parts).
+        of the two others, each of its items costs at most its two parts),
+        and while the search still ``counted`` it (:class:`Together`).
         A functionality in ``alone`` is a part of its own (it shares with
         nothing pending)."""
         guarded = self._guarded(node, pending)
         reach = self.summaries.reach
-        parts = _Parts(slack=any(sub.slack for _, sub in pending.values()))
+        parts = _Parts(slack=counted and any(sub.slack for _, sub in pending.values()))
         for label, (call, sub) in pending.items():
             names, data, both = reach(call)
             wired = have.channels_in(data)
@@ -234,6 +250,45 @@ class Bound:
         if apart:
             parts.append((own_part("channels"), _channel_bound(apart, resolved, self.task)))
         return parts
+
+
+@dataclass(slots=True)
+class Together:
+    """One search's use of the together least cost of :meth:`Bound.estimate`.
+
+    It costs a third grouping of the pending items, and on some shapes
+    (gateway) it never raises the bound. A search counts it until it has
+    failed to raise the bound in ``left`` estimates, then stops, unless it
+    raised one before: then it is counted to the end. Stopping changes no
+    priority already given (every one was what it is without it), so no open
+    node needs pricing again and two nodes of one canonical form still get
+    one priority (:mod:`cfgplan.planner.search`)."""
+
+    left: int
+    raised: bool = False
+
+    @property
+    def counted(self) -> bool:
+        return self.raised or self.left > 0
+
+    def met(self, raised: bool) -> None:
+        """One estimate counted it; ``raised``: it made the bound larger."""
+        if raised:
+            self.raised = True
+        else:
+            self.left -= 1
+
+
+@dataclass(frozen=True, slots=True)
+class Estimator:
+    """The first bound as one search prices with it: :meth:`Bound.estimate`
+    with the search's :class:`Together`."""
+
+    bound: Bound
+    together: Together
+
+    def __call__(self, node: Partial) -> float | None:
+        return self.bound.estimate(node, self.together)
 
 
 @dataclass(slots=True)

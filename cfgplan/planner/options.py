@@ -42,6 +42,14 @@ class SearchOptions:
     can complete is: :attr:`cfgplan.planner.grow.Grower.feasible`): where the
     stronger bound always dominates (fusion), the first adds only its cost."""
 
+    together: int = 8
+    """Estimates in which the first bound's together least cost (an item's
+    least functionalities and channels as one sum,
+    :class:`cfgplan.planner.bound.Together`) may fail to raise the bound
+    before a search stops counting it; once it has raised one, it is counted
+    to the end. Exact on a deep chain at once; on the gateway family it
+    never raises the bound and costs only its time."""
+
     one_pass: int = 5_000
     """Nodes the first walk of ``--all``, over every cost at once, may take
     before it has listed anything (:mod:`cfgplan.planner.enumerate`)."""

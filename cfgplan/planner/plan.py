@@ -168,7 +168,12 @@ class Run:
         grounder, bound, partition = parts(self.task, self.options.media)
         refine = partitioned(bound, partition)
         grower = Grower(
-            grounder, bound.estimate, refine, self.distinct, bound.feasible, options=self.options
+            grounder,
+            bound.estimator(self.options),
+            refine,
+            self.distinct,
+            bound.feasible,
+            options=self.options,
         )
         grower.split = splitting(bound, partition) if self.options.splits else None
         return grower

@@ -110,7 +110,7 @@ class Ranked:
         grounder, bound, partition = parts(self.task, self.options.media)
         grower = Grower(
             grounder,
-            bound.estimate,
+            bound.estimator(self.options),
             partitioned(bound, partition),
             feasible=bound.feasible,
             options=self.options,

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.families import chain, ecology, fusion, wall
+from benchmarks.families import chain, ecology, fusion, gateway, wall
+from cfgplan.planner.bound import Estimator, Together
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run
 from cfgplan.problem import load
@@ -69,3 +70,48 @@ def test_a_small_search_never_tries_the_stronger_bound() -> None:
     _, large = _run(ecology(18, 3, 3), 1)
     assert large.strategy.grower.settled > SearchOptions().warm
     assert large.strategy.grower.tried > 0
+
+
+def _together(run: Run) -> Together:
+    first = run.strategy.grower.first
+    assert isinstance(first, Estimator)
+    return first.together
+
+
+def test_the_together_least_cost_is_given_up_where_it_never_raises_the_first_bound() -> None:
+    """The first bound's third least cost (functionalities and channels as
+    one sum per item, ``Summary.together``) makes the bound exact on a deep
+    chain: it raises the first estimates, so it is counted to the end, and
+    without it the chain takes more nodes. On the gateway family it never
+    raises the bound: the search stops counting it after
+    ``SearchOptions.together`` estimates (bound.py, ``Together``)."""
+    _, on_chain = _run(chain(8), 1)
+    _, without = _run(chain(8), 1, together=0)
+    _, on_gateway = _run(gateway(4, 4), 1)
+    chain_together = _together(on_chain)
+    assert chain_together.raised and chain_together.counted
+    assert _together(without).counted is False
+    assert on_chain.stats.nodes < without.stats.nodes
+    gateway_together = _together(on_gateway)
+    assert not gateway_together.raised and not gateway_together.counted
+    assert gateway_together.left == 0
+
+
+@pytest.mark.parametrize(
+    "texts",
+    [chain(8), gateway(4, 4), fusion(4, 3, 4, 3)],
+    ids=["chain", "gateway", "fusion"],
+)
+def test_counting_the_together_least_cost_or_not_changes_nothing_found(
+    texts: tuple[str, str],
+) -> None:
+    """The ten cheapest, the together least cost never counted and always
+    counted, are the same configurations at the same costs (an admissible
+    bound the more or the less changes only the work)."""
+    never, _ = _run(texts, 10, together=0)
+    always, _ = _run(texts, 10, together=10**9)
+    usual, _ = _run(texts, 10)
+    assert [cost for cost, _ in never] == [cost for cost, _ in always] == [c for c, _ in usual]
+    last = usual[-1][0]  # ties at the last cost may be cut differently
+    for other in (never, always):
+        assert sorted(c for c in usual if c[0] < last) == sorted(c for c in other if c[0] < last)
