@@ -70,8 +70,9 @@ class Combined:
     """The plain search's: for the greedy dive and for handing over."""
     goal: Ground
     parts: Parts
-    make: Callable[[], Grower]
-    """A fresh grower for each part's search."""
+    make: Callable[[frozenset[int]], Grower]
+    """A fresh grower for each part's search, given the labels of the
+    functionalities the forced steps placed (:attr:`Grower.given`)."""
     progress: Progress | None = None
     stopped: StopReason | None = None
     stats: Stats = field(default_factory=Stats)
@@ -116,8 +117,7 @@ class Combined:
     def _combine(self) -> Iterator[Configuration]:
         parts = self.parts
         for p in range(len(parts.parts)):
-            grower = self.make()
-            grower.given = frozenset(parts.node.located)
+            grower = self.make(frozenset(parts.node.located))
             self._starts.append((parts.start(p), parts.owners(p)))
             search = BestFirst(grower, self.goal, self._progress, origin=self._starts[p][0])
             self._searches.append(search)

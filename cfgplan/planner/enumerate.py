@@ -119,19 +119,18 @@ class Windows:
             return
         low = min(p for p, _ in start)
         bounds = grower.heuristic, grower.refine
-        grower.heuristic, grower.refine = self.feasible, None
-        window = Window(low, float("inf"))
-        try:
-            yield from self._walk(start, window, budget=self.grower.options.one_pass)
-        except _TooBig:
-            # The cheapest lie deep: look for them first, pruned by the bounds.
-            grower.heuristic, grower.refine = bounds
-            window = Window(low, grower.levels.above(low))
-            yield from self._walk(start, window)
-            grower.heuristic, grower.refine = self.feasible, None
-        while window.beyond is not None:  # something was cut: the costs above
-            window = Window(max(window.high, window.beyond), float("inf"))
-            yield from self._walk(start, window)
+        with grower.priced_by(self.feasible):
+            window = Window(low, float("inf"))
+            try:
+                yield from self._walk(start, window, budget=self.grower.options.one_pass)
+            except _TooBig:
+                # The cheapest lie deep: look for them first, pruned by the bounds.
+                with grower.priced_by(*bounds):
+                    window = Window(low, grower.levels.above(low))
+                    yield from self._walk(start, window)
+            while window.beyond is not None:  # something was cut: the costs above
+                window = Window(max(window.high, window.beyond), float("inf"))
+                yield from self._walk(start, window)
 
     def _walk(
         self,

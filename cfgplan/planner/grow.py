@@ -12,6 +12,7 @@ already listed (distinct mode) and the result models.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -90,6 +91,38 @@ class Grower:
         self.repriced: Reprice | None = None  # the bounds in use changed: what to re-price
         self.splits: dict[tuple[int, ...], Split] = {}  # refined nodes not yet expanded, by path
         self.lifted = 0  # children priced above their own bound by their parent's split
+
+    @contextmanager
+    def priced_by(self, heuristic: Heuristic, refine: Heuristic | None = None) -> Iterator[None]:
+        """Price nodes with ``heuristic`` (and ``refine``) inside the block,
+        with the bounds before it after: ``--all``'s walks, which need only
+        whether a node can complete except where they look for the cheapest
+        first (:mod:`cfgplan.planner.enumerate`)."""
+        kept = self.heuristic, self.refine
+        self.heuristic, self.refine = heuristic, refine
+        try:
+            yield
+        finally:
+            self.heuristic, self.refine = kept
+
+    def start_over(self) -> None:
+        """Forget the splits and what was met and listed, for a strategy that
+        starts over with each child priced by its own bounds
+        (:meth:`cfgplan.planner.search.BestFirst._again`): the statistics
+        of the listing count again from nothing; nodes and expansions go on."""
+        self.split = None
+        self.splits.clear()
+        self.lifted = 0
+        self.seen.clear()
+        self.report = Report()
+        stats = self.stats
+        stats.derivations = stats.duplicates = stats.rejected = 0
+
+    def take_repriced(self) -> Reprice | None:
+        """Which open nodes the strategy must price again since the bounds in
+        use changed (:meth:`refined`), once: None when they did not."""
+        which, self.repriced = self.repriced, None
+        return which
 
     def children(self, node: Partial) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children with

@@ -137,13 +137,12 @@ class Run:
     strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
-        grower = self._grower()
         if self.limit is None:
             bound = parts(self.task, self.options.media)[1]
-            grower.split = None
+            grower = self._grower(splits=False)
             self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
         else:
-            self.strategy = BestFirst(grower, self.goal, self.progress)
+            self.strategy = BestFirst(self._grower(), self.goal, self.progress)
 
     def _search(self) -> Iterator[Configuration]:
         """The configurations, cheapest first: the goal's parts apart, if it has some."""
@@ -163,20 +162,21 @@ class Run:
             grower = self.strategy.grower
             self.strategy = Combined(grower, self.goal, found, self._grower, self.progress)
 
-    def _grower(self) -> Grower:
-        """A grower with the task's bounds, its children priced from splits."""
+    def _grower(self, given: frozenset[int] = frozenset(), splits: bool = True) -> Grower:
+        """A grower with the task's bounds, its children priced from splits
+        (unless ``splits`` is False, or :attr:`SearchOptions.splits` is);
+        ``given``: :attr:`Grower.given`."""
         grounder, bound, partition = parts(self.task, self.options.media)
-        refine = partitioned(bound, partition)
-        grower = Grower(
+        return Grower(
             grounder,
             bound.estimator(self.options),
-            refine,
+            partitioned(bound, partition),
             self.distinct,
             bound.feasible,
+            split=splitting(bound, partition) if splits and self.options.splits else None,
+            given=given,
             options=self.options,
         )
-        grower.split = splitting(bound, partition) if self.options.splits else None
-        return grower
 
     @property
     def stats(self) -> Stats:

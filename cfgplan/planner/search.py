@@ -114,9 +114,9 @@ class BestFirst:
                 # changes no order, only how many nodes are refined.
                 beaten = self._heap[0][0] if self._heap else None
                 raised = grower.refined(node, total, beaten)
-                if grower.repriced is not None:
-                    self._reprice(node, raised is None, grower.repriced)
-                    grower.repriced = None
+                repriced = grower.take_repriced()
+                if repriced is not None:
+                    self._reprice(node, raised is None, repriced)
                     continue
                 if raised is None:
                     continue
@@ -154,14 +154,7 @@ class BestFirst:
         after it at that cost), and what was listed before is listed again,
         numbered alike, and skipped."""
         self._restarted = True
-        grower = self.grower
-        grower.split = None
-        grower.splits.clear()
-        grower.lifted = 0
-        grower.seen.clear()
-        grower.report = Report()
-        for counted in ("derivations", "duplicates", "rejected"):
-            setattr(grower.stats, counted, 0)
+        self.grower.start_over()
         self._heap, self._closed = [], {}
 
     def _reprice(self, taken: Partial, pruned: bool, which: Reprice) -> None:
