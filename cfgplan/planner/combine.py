@@ -106,9 +106,12 @@ class Combined:
             try:
                 for config in self._combine():
                     listed += 1
+                    self.stats.seconds = time.perf_counter() - start  # the caller may stop here
                     yield config
             except _Irregular:
-                yield from self._hand_over(listed)
+                for config in self._hand_over(listed):
+                    self.stats.seconds = time.perf_counter() - start
+                    yield config
         except clock.OutOfTime:
             self.stats.complete = False
             self.stopped = StopReason.TIME_LIMIT

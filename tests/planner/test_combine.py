@@ -213,3 +213,13 @@ def test_twins_are_often_parts() -> None:
 
     collect()
     assert sum(split) >= 20
+
+
+def test_a_search_in_parts_stopped_by_its_limit_says_how_long_it_took() -> None:
+    """``plan -v`` said "0.0 ms" for a search in parts that ``-k`` stopped:
+    the time was written only when the listing ran to its end."""
+    problem = problem_of(ecology(6, 2, 1))
+    run = Run(problem.task, problem.goal_call, limit=2)
+    found = list(run)
+    assert isinstance(run.strategy, Combined) and len(found) == 2
+    assert run.stats.seconds > 0.0
