@@ -104,6 +104,54 @@ def splitting(bound: Bound, partition: Partition) -> Splitter:
     return split
 
 
+def grower(
+    task: Task,
+    options: SearchOptions,
+    distinct: bool = True,
+    given: frozenset[int] = frozenset(),
+    splits: bool = True,
+) -> Grower:
+    """A grower with the task's bounds (:func:`parts`), its children priced
+    from splits (unless ``splits`` is False, or :attr:`SearchOptions.splits`
+    is); ``given``: :attr:`Grower.given`. Every strategy's grower is made here."""
+    grounder, bound, partition = parts(task, options.media)
+    return Grower(
+        grounder,
+        bound.estimator(options),
+        partitioned(bound, partition),
+        distinct,
+        bound.feasible,
+        split=splitting(bound, partition) if splits and options.splits else None,
+        given=given,
+        options=options,
+    )
+
+
+def in_parts(
+    search: BestFirst, task: Task, options: SearchOptions, progress: Progress | None = None
+) -> BestFirst | Combined:
+    """``search``, or, when its goal has independent parts
+    (:func:`divided`; :attr:`SearchOptions.components`), those parts searched
+    apart and combined, with ``search``'s grower for the dive and the hand-over.
+    Found under the time limit: should it pass, ``search`` is kept, and stops
+    at once. Every ranked listing (a run's ``-k``, a sequence's steps) is
+    assembled so."""
+    if not options.components:
+        return search
+    try:
+        found = divided(task, search.goal, options.media)
+    except clock.OutOfTime:
+        return search
+    if found is None:
+        return search
+    distinct = search.grower.distinct
+
+    def make(given: frozenset[int]) -> Grower:
+        return grower(task, options, distinct, given)
+
+    return Combined(search.grower, search.goal, found, make, progress)
+
+
 def _no_bound(node: Partial) -> float:
     return 0.0
 
@@ -137,12 +185,12 @@ class Run:
     strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
+        made = grower(self.task, self.options, self.distinct, splits=self.limit is not None)
         if self.limit is None:
             bound = parts(self.task, self.options.media)[1]
-            grower = self._grower(splits=False)
-            self.strategy = Windows(grower, self.goal, bound.feasible, self.progress)
+            self.strategy = Windows(made, self.goal, bound.feasible, self.progress)
         else:
-            self.strategy = BestFirst(self._grower(), self.goal, self.progress)
+            self.strategy = BestFirst(made, self.goal, self.progress)
 
     def _search(self) -> Iterator[Configuration]:
         """The configurations, cheapest first: the goal's parts apart, if it has some."""
@@ -150,33 +198,9 @@ class Run:
         yield from self.strategy
 
     def _divide(self) -> None:
-        """Search the goal's independent parts apart, if it has some (found
-        under the time limit: should it pass, the search stops at once)."""
-        if not self.options.components or not isinstance(self.strategy, BestFirst):
-            return
-        try:
-            found = divided(self.task, self.goal, self.options.media)
-        except clock.OutOfTime:
-            return
-        if found is not None:
-            grower = self.strategy.grower
-            self.strategy = Combined(grower, self.goal, found, self._grower, self.progress)
-
-    def _grower(self, given: frozenset[int] = frozenset(), splits: bool = True) -> Grower:
-        """A grower with the task's bounds, its children priced from splits
-        (unless ``splits`` is False, or :attr:`SearchOptions.splits` is);
-        ``given``: :attr:`Grower.given`."""
-        grounder, bound, partition = parts(self.task, self.options.media)
-        return Grower(
-            grounder,
-            bound.estimator(self.options),
-            partitioned(bound, partition),
-            self.distinct,
-            bound.feasible,
-            split=splitting(bound, partition) if splits and self.options.splits else None,
-            given=given,
-            options=self.options,
-        )
+        """Search the goal's independent parts apart, if it has some (:func:`in_parts`)."""
+        if isinstance(self.strategy, BestFirst):
+            self.strategy = in_parts(self.strategy, self.task, self.options, self.progress)
 
     @property
     def stats(self) -> Stats:

@@ -40,10 +40,10 @@ from typing import cast
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
-from cfgplan.planner.grow import Grower
+from cfgplan.planner.combine import Combined
 from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.plan import Run, partitioned, parts
+from cfgplan.planner.plan import Run, grower, in_parts
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
@@ -97,25 +97,20 @@ def switching(before: Configuration, after: Configuration) -> int:
 @dataclass
 class Ranked:
     """The configurations of one goal in one state, in cost order, planned as
-    far as they are asked for (best-first search continued, never restarted)."""
+    far as they are asked for (best-first search continued, never restarted),
+    assembled as a run's ``-k`` is (:func:`cfgplan.planner.plan.in_parts`:
+    children priced from splits, independent parts searched apart)."""
 
     task: Task
     goal: Ground
     options: SearchOptions = field(default_factory=SearchOptions)
     found: list[Configuration] = field(default_factory=list)
-    search: BestFirst = field(init=False)
+    search: BestFirst | Combined = field(init=False)
     _more: Iterator[Configuration] = field(init=False)
 
     def __post_init__(self) -> None:
-        grounder, bound, partition = parts(self.task, self.options.media)
-        grower = Grower(
-            grounder,
-            bound.estimator(self.options),
-            partitioned(bound, partition),
-            feasible=bound.feasible,
-            options=self.options,
-        )
-        self.search = BestFirst(grower, self.goal)
+        plain = BestFirst(grower(self.task, self.options), self.goal)
+        self.search = in_parts(plain, self.task, self.options)
         self._more = iter(self.search)
 
     def get(self, j: int) -> Configuration | None:

@@ -11,12 +11,15 @@ from pathlib import Path
 import pytest
 from hypothesis import example, given
 
+from benchmarks.families import ecology
 from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import Atom
 from cfgplan.notation import atom_text
 from cfgplan.planner import plan
+from cfgplan.planner.combine import Combined
 from cfgplan.planner.levels import level
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.problem import Problem, load
 from tests.planner.generated import generated
@@ -291,3 +294,17 @@ def test_goals_given_on_the_command_line_make_a_sequence() -> None:
     # step1's door is only in Room1: Emil's helper in Room2 cannot see it
     assert out.returncode == 3, out.stderr
     assert "step 2, do-cross-door(Emil, Door1), has no configuration" in out.stderr
+
+
+def test_a_step_with_independent_parts_is_searched_in_parts_as_a_run_is() -> None:
+    """A sequence's steps are assembled as ``plan -k`` is (plan.in_parts):
+    a convoy's rooms are searched apart for a step too, and the step lists
+    what the plain search lists, labels and order included."""
+    problem = load_text(*ecology(6, 2, 1))
+    sequences = SequenceSearch((problem.goal_call,), problem.task, limit=5)
+    listed = list(sequences)
+    assert isinstance(sequences.ranked(0, problem.task.facts).search, Combined)
+    plain, _ = plan(
+        problem.task, problem.goal_call, limit=5, options=SearchOptions(components=False)
+    )
+    assert [s.steps[0].configuration for s in listed] == plain
