@@ -49,10 +49,11 @@ def canonical(node: Partial, grounder: Grounder) -> bytes:
     """The node up to labels — placed instances, channels, stack and P — as a
     128-bit :func:`digest`. Two nodes with the same canonical form have the
     same completions (up to labels). An item's ancestors count only where they
-    can matter: those whose method can recur (:attr:`Task.recursive`,
-    :attr:`cfgplan.planner.partial.Item.relevant`); in a domain without recursion the order in which
-    items were reached is forgotten. It takes 16 bytes where the form takes kilobytes, so every
-    expanded node can be remembered."""
+    can matter: those whose method can recur (:attr:`Task.recursive`, kept as
+    :attr:`cfgplan.planner.partial.Item.relevant`); in a domain without
+    recursion the order in which items were reached is forgotten. It takes 16
+    bytes where the form takes kilobytes, so every expanded node can be
+    remembered."""
     number = grounder.numbering
     names = placed_names(node)
     placed = sorted(p.number for p in node.placed)

@@ -39,7 +39,7 @@ class Item:
     label: int
     call: Ground  # (name, *args)
     ancestors: frozenset[Ground]  # method instances above it: the recursion guard
-    relevant: frozenset[Ground] = frozenset()  # those whose method can recur
+    relevant: frozenset[Ground] = frozenset()  # its ancestors whose method can recur
     number: int = -1  # its part of canonical(): (call, relevant) numbered when made; -1: the root
 
 
@@ -153,8 +153,11 @@ def expand_method(
             Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth, ch.number) for t in targets
         )
     ancestors = item.ancestors | {item.call}
+    # The body's relevant ancestors: the item's, and the item when its method
+    # can recur; when every ancestor is one (a domain of one recursive
+    # method, a conversion graph), they are the ancestors themselves, shared.
     relevant = item.relevant
-    if expansion.recursive:  # every ancestor recurs, in a domain of one recursive method
+    if expansion.recursive:
         relevant = ancestors if len(relevant) == len(item.ancestors) else relevant | {item.call}
     numbers = expansion.body_numbers
     if relevant:
