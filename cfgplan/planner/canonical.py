@@ -5,8 +5,9 @@ orders of choices; the search expands each form once, :mod:`cfgplan.planner.sear
 Nodes share most of their items, placed instances and channels: each one is
 numbered when it is made (:class:`cfgplan.planner.ground.Expansion` carries
 the numbers), so these functions only read nodes, never write them. The root
-item, and items or channels built by hand (tests), have no number (-1): it
-is looked up here each time.
+item, an item below a recursive method (its number depends on those
+ancestors, and most children made are never taken), and items or channels
+built by hand (tests) have none (-1): it is looked up here each time.
 """
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> 
     for ch in node.channels:
         n = ch.number
         if n < 0:
-            n = number((ch.kind, ch.robots, ch.data))
-        key = (n, ch.bandwidth, names[ch.source], names[ch.target])
+            n = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
+        key = (n, names[ch.source], names[ch.target])
         found = get(key)
         out.append(number(key) if found is None else found)
     return out

@@ -50,9 +50,11 @@ class Expansion:
 
     It carries the numbers the canonical form names what it creates by
     (:mod:`cfgplan.planner.canonical`), so that items and channels are
-    numbered when they are made, never afterwards: each channel's kind, robots
-    and data, and each body item's call with no recursive ancestor. An item
-    below a recursive method is numbered with those ancestors (``number``)."""
+    numbered when they are made, never afterwards: each channel's kind, robots,
+    data and bandwidth, and each body item's call with no recursive ancestor
+    (an item below a recursive method is numbered with those ancestors by
+    :func:`~cfgplan.planner.canonical.canonical`). ``number`` numbers a
+    channel whose bandwidth its re-wiring sets."""
 
     size: int
     channels: tuple[ChannelSpec, ...]
@@ -61,7 +63,7 @@ class Expansion:
     inputs: dict[Ground, tuple[int, ...]]  # data -> offsets
     effects: Effects
     where: str = ""  # "CALL, version N": where a dead end met expanding it is
-    channel_numbers: tuple[int, ...] = ()  # per channel: (kind, robots, data), numbered
+    channel_numbers: tuple[int, ...] = ()  # per channel: (kind, robots, data, bandwidth), numbered
     body_numbers: tuple[int, ...] = ()  # per body item: (call, frozenset()), numbered
     recursive: bool = False  # the method can recur: it is a relevant ancestor of its body
     number: Numbering | None = None  # the numbering all of these come from
@@ -151,7 +153,7 @@ def instantiate(
         inputs,
         effects,
         where,
-        tuple(number((kind, ends, data)) for kind, ends, _, _, data, _ in channels),
+        tuple(number((kind, ends, data, bw)) for kind, ends, _, _, data, bw in channels),
         tuple(number((call, frozenset())) for call in body),
         recursive,
         number,

@@ -23,7 +23,6 @@ class Numbering:
 
     numbers: dict[Hashable, int] = field(default_factory=dict)
     _written: dict[Callable[[Any], str], dict[Hashable, int]] = field(default_factory=dict)
-    _items: dict[tuple[tuple[int, ...], Hashable], tuple[int, ...]] = field(default_factory=dict)
 
     def __call__(self, value: Hashable) -> int:
         found = self.numbers.get(value)
@@ -40,17 +39,4 @@ class Numbering:
         found = memo.get(value)
         if found is None:
             found = memo[value] = self(write(value))
-        return found
-
-    def items(
-        self, calls: tuple[Hashable, ...], plain: tuple[int, ...], relevant: Hashable
-    ) -> tuple[int, ...]:
-        """The numbers of ``(call, relevant)`` for each of ``calls`` (a method
-        body's items under one set of ancestors), found once per body and set;
-        ``plain``: the calls' own numbers, the body's key (small integers hash
-        fast; ``relevant``, a frozenset, keeps its hash)."""
-        key = (plain, relevant)
-        found = self._items.get(key)
-        if found is None:
-            found = self._items[key] = tuple(self((call, relevant)) for call in calls)
         return found

@@ -40,7 +40,8 @@ class Item:
     call: Ground  # (name, *args)
     ancestors: frozenset[Ground]  # method instances above it: the recursion guard
     relevant: frozenset[Ground] = frozenset()  # its ancestors whose method can recur
-    number: int = -1  # its part of canonical(): (call, relevant) numbered when made; -1: the root
+    number: int = -1  # (call, relevant) numbered when made; -1: canonical() numbers it
+    # (the root, and an item with relevant ancestors: numbering every child made costs more)
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -53,7 +54,7 @@ class Channel:
     target: int
     data: Ground
     bandwidth: float | None
-    number: int = -1  # (kind, robots, data) numbered when made (Expansion.channel_numbers)
+    number: int = -1  # (kind, robots, data, bandwidth) numbered when made
 
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
@@ -133,15 +134,17 @@ def expand_method(
         if not (at_source or at_target):
             rewired.append(ch)
             continue
-        source, bandwidth = ch.source, ch.bandwidth
+        source, bandwidth, number = ch.source, ch.bandwidth, ch.number
         if at_source:
             port = expansion.outputs.get(ch.data)
             if port is None:
                 missing = f"no :out entry produces {atom_text(ch.data)}"
                 return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
             source = first + port[0]
-            if bandwidth is None and ch.kind == "global":
+            if bandwidth is None and ch.kind == "global" and port[1] is not None:
                 bandwidth = port[1]  # a global channel allocates the :out's bandwidth
+                assert expansion.number is not None  # the grounder numbers what it makes
+                number = expansion.number((ch.kind, ch.robots, ch.data, bandwidth))
         targets: tuple[int, ...] = (ch.target,)
         if at_target:
             offsets = expansion.inputs.get(ch.data)
@@ -150,7 +153,7 @@ def expand_method(
                 return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
             targets = tuple(first + k for k in offsets)  # an :in may feed several
         rewired.extend(
-            Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth, ch.number) for t in targets
+            Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth, number) for t in targets
         )
     ancestors = item.ancestors | {item.call}
     # The body's relevant ancestors: the item's, and the item when its method
@@ -159,16 +162,18 @@ def expand_method(
     relevant = item.relevant
     if expansion.recursive:
         relevant = ancestors if len(relevant) == len(item.ancestors) else relevant | {item.call}
-    numbers = expansion.body_numbers
-    if relevant:
-        assert expansion.number is not None  # the grounder numbers every expansion it makes
-        numbers = expansion.number.items(expansion.body, numbers, relevant)
-    pushed = tuple(
-        [
-            Item(first + i, call, ancestors, relevant, numbers[i])
-            for i, call in enumerate(expansion.body)
-        ]
-    )
+    if relevant:  # numbered with them by canonical(): cheaper than numbering every child made
+        pushed = tuple(
+            [Item(first + i, call, ancestors, relevant) for i, call in enumerate(expansion.body)]
+        )
+    else:
+        numbers = expansion.body_numbers
+        pushed = tuple(
+            [
+                Item(first + i, call, ancestors, relevant, numbers[i])
+                for i, call in enumerate(expansion.body)
+            ]
+        )
     # Fresh labels are not placed yet: no channel got resolved, nothing to settle.
     return Partial(
         stack=(*pushed, *node.stack[1:]),
@@ -324,7 +329,7 @@ def _settle(
                 kept.target,
                 kept.data,
                 ch.bandwidth,
-                kept.number,
+                ch.number,  # the number of (kind, robots, data) with ch's bandwidth
             )
         dropped.append(i)
     if dropped:

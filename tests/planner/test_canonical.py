@@ -46,10 +46,11 @@ def _reached(domain: str, state: str, most: int) -> tuple[Grounder, list[Partial
 @pytest.mark.parametrize("family", ["cross-door", "conversion"])
 def test_items_are_numbered_when_made_and_canonical_only_reads_nodes(family: str) -> None:
     """Nodes are never written after they are made (issue 35): canonical() and
-    fingerprint() leave every node as it was, and each item's number, given
-    when its method was expanded, is its call with the ancestors whose method
-    can recur, as the canonical form defines it. The conversion graph
-    recurses, so there the ancestors count."""
+    fingerprint() leave every node as it was, and each item's and channel's
+    number, given when it was made, is what the canonical form defines: an
+    item's call with its ancestors whose method can recur (those with some
+    are numbered by canonical() itself), a channel's kind, robots, data and
+    bandwidth. The conversion graph recurses, so there the ancestors count."""
     domain, state = conversion(4) if family == "conversion" else _cross_door()
     grounder, nodes = _reached(domain, state, 300)
     recursive = grounder.task.recursive
@@ -65,10 +66,14 @@ def test_items_are_numbered_when_made_and_canonical_only_reads_nodes(family: str
         for item in node.stack:
             relevant = frozenset(a for a in item.ancestors if (a[0], len(a) - 1) in recursive)
             assert item.relevant == relevant
-            if item.label != 1:  # the goal: made by root(), with no numbering
+            if relevant or item.label == 1:  # numbered by canonical() (the goal: by root())
+                assert item.number == -1
+                checked += 1
+            else:
                 assert item.number == number((item.call, relevant))
-                checked += 1 if relevant else 0
-    assert checked > 0 or family != "conversion"  # some items had recursive ancestors
+        for ch in node.channels:
+            assert ch.number == number((ch.kind, ch.robots, ch.data, ch.bandwidth))
+    assert checked > len(nodes) or family != "conversion"  # many had recursive ancestors
 
 
 def _cross_door() -> tuple[str, str]:

@@ -48,7 +48,7 @@ def made(
         outputs,
         inputs,
         effects,
-        channel_numbers=tuple(number((k, r, d)) for k, r, _, _, d, _ in channels),
+        channel_numbers=tuple(number((k, r, d, bw)) for k, r, _, _, d, bw in channels),
         body_numbers=tuple(number((call, frozenset())) for call in body),
         number=number,
     )
