@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import copy
-from pathlib import Path
 
 import pytest
 
@@ -13,6 +12,7 @@ from cfgplan.planner.finish import fingerprint
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.partial import Item, Partial, root
 from cfgplan.planner.successors import successors
+from tests.backends.support import DOMAINS
 from tests.planner.problems import load_text
 from tests.planner.test_partial import local, task, with_channels
 
@@ -78,5 +78,5 @@ def test_items_are_numbered_when_made_and_canonical_only_reads_nodes(family: str
 
 def _cross_door() -> tuple[str, str]:
     """Thesis 6.2.2, step 1."""
-    folder = Path(__file__).resolve().parents[2] / "domains" / "cross-door"
+    folder = DOMAINS / "cross-door"
     return (folder / "domain.lisp").read_text(), (folder / "state-6.2.2-step1.lisp").read_text()
