@@ -5,16 +5,17 @@ When the choices of a goal fall into independent parts
 first (:class:`cfgplan.planner.search.BestFirst` from the part's start), and
 the configurations of the goal are the combinations of one configuration per
 part: the cost of the forced steps plus what each part adds. They are listed
-as the k cheapest sums are (a heap of combinations; taking one offers each
-part's next configuration in its place), each part's list grown only as far
-as the heap needs it.
+as the k cheapest sums are (:func:`cfgplan.planner.ranking.merge`: taking a
+combination offers each part's next configuration in its place), each
+part's list grown only as far as the merge needs it.
 
 At equal cost the thesis lists derivations in their depth-first order: the
 first choice item (by address) where two combinations differ decides, by
 the choices made below it. So a combination's place is its cost, then the
 choices below every choice item in address order; a part's own search lists
 its configurations in that same order, so a successor never comes before the
-combination it was offered by, and the heap lists in the thesis's order.
+combination it was offered by, and the merge lists in the thesis's order
+(:mod:`cfgplan.planner.ranking`).
 
 Each combination listed is derived again from the goal in the thesis's
 order (:func:`cfgplan.planner.components.replay`, resumed from the last
@@ -29,7 +30,6 @@ what remains after those already listed.
 
 from __future__ import annotations
 
-import heapq
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -39,6 +39,7 @@ from cfgplan.planner import clock
 from cfgplan.planner.components import Address, Parts, Trail, replay, segments
 from cfgplan.planner.grow import Grower, Stats
 from cfgplan.planner.partial import Partial
+from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.task import Ground
@@ -129,21 +130,24 @@ class Combined:
         first = self._offer((0,) * len(parts.parts))
         if first is None:  # some part has no configuration: let the plain search say why
             raise _Irregular
-        heap = [first]
         offered = {first[2]}
-        while heap:
-            total, _, at = heapq.heappop(heap)
-            config = self._derived(at, total)
-            if config is not None:
-                yield config
-            # Its successors only now: -k 1 searches no part for a second one.
+
+        def offers(offer: _Offer) -> Iterator[_Offer]:
+            """Each part's next configuration in place of the one ``offer``
+            takes: no earlier in the listing (a part lists in that order)."""
+            at = offer[2]
             for p in range(len(at)):
                 then = (*at[:p], at[p] + 1, *at[p + 1 :])
                 if then not in offered:
                     offered.add(then)
-                    offer = self._offer(then)
-                    if offer is not None:
-                        heapq.heappush(heap, offer)
+                    made = self._offer(then)
+                    if made is not None:
+                        yield made
+
+        for total, _, at in merge([first], offers, lambda _: True):
+            config = self._derived(at, total)
+            if config is not None:
+                yield config
 
     def _derived(self, at: tuple[int, ...], total: float) -> Configuration | None:
         """The combination ``at`` derived again from the goal in the thesis's

@@ -1,7 +1,7 @@
 """An anytime answer: when a search is stopped (``--time-limit``, Ctrl-C)
 before it has proven any configuration cheapest, dive depth-first from the
-open nodes, cheapest child first, to find *some* admissible configuration.
-It is marked as not proven optimal.
+open nodes, cheapest child first (:func:`cfgplan.planner.ranking.place`), to
+find *some* admissible configuration. It is marked as not proven optimal.
 
 A plain function over the search's parts: the open nodes, how to expand one
 and how to finish a complete one. Its own time is the caller's business
@@ -14,6 +14,7 @@ from collections.abc import Callable, Iterable
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.partial import Partial
+from cfgplan.planner.ranking import place
 
 Expand = Callable[[Partial], Iterable[tuple[float, Partial]]]
 Finish = Callable[[Partial, float], Configuration | None]
@@ -39,7 +40,7 @@ def dive(
                 if config is not None:
                     return config.model_copy(update={"proven": False, "derivation": 0})
                 continue
-            children = sorted(expand(node), key=lambda entry: (entry[0], entry[1].path))
+            children = sorted(expand(node), key=lambda entry: place(*entry))
             stack.extend(reversed(children))
     except KeyboardInterrupt:
         return None

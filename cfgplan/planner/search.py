@@ -6,9 +6,10 @@ first. Here the same derivations are explored best-first: a node's priority is
 the cost of its settled part (which never decreases as it grows) plus a lower
 bound on what it must still add (the heuristics, passed in: see
 :mod:`cfgplan.planner.bound` and :mod:`cfgplan.planner.partition`), and then
-its path of choices. So configurations come out ordered by cost and, at equal
-cost, in the depth-first order of the thesis (domain order of method
-versions, state order of facts, 6.3.2). Nothing is enumerated and then sorted.
+its path of choices (:func:`cfgplan.planner.ranking.place`). So configurations
+come out ordered by cost and, at equal cost, in the depth-first order of the
+thesis (domain order of method versions, state order of facts, 6.3.2).
+Nothing is enumerated and then sorted.
 
 Nodes are grown by a :class:`cfgplan.planner.grow.Grower`; this module only
 orders them. The time limit is the one :mod:`cfgplan.planner.clock` holds.
@@ -36,6 +37,7 @@ from cfgplan.planner import clock
 from cfgplan.planner.canonical import canonical
 from cfgplan.planner.grow import Grower, Reprice, Stats
 from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.ranking import place
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.task import Ground
 
@@ -102,11 +104,12 @@ class BestFirst:
             if self.progress is not None and elapsed > next_tick:
                 self.progress(self.stats, elapsed)
                 next_tick = elapsed + 0.5
-            # The heap holds (priority, path, refined, node): two queued nodes
+            # The heap holds (place, refined, node), the place (priority, path)
+            # flattened (ranking.place, :meth:`_queue`): two queued nodes
             # never have the same path (paths are unique choice sequences, and no
             # queued node is an ancestor of another), so tuples never compare
             # further than the path.
-            total, path, refined, node = heapq.heappop(self._heap)
+            total, _, refined, node = heapq.heappop(self._heap)
             if not refined:
                 # Every other queued priority is at most its node's refined one,
                 # so a node taken with its refined priority is the least in the
@@ -121,7 +124,7 @@ class BestFirst:
                 if raised is None:
                     continue
                 if raised > total:
-                    heapq.heappush(self._heap, (raised, path, True, node))
+                    heapq.heappush(self._heap, (*place(raised, node), True, node))
                     continue
             self.stats.nodes += 1
             if node.done:
@@ -191,7 +194,7 @@ class BestFirst:
     def _queue(self, entries: Iterator[tuple[float, Partial]]) -> None:
         lazy = self.grower.refine is not None
         for priority, node in entries:
-            heapq.heappush(self._heap, (priority, node.path, not lazy or node.done, node))
+            heapq.heappush(self._heap, (*place(priority, node), not lazy or node.done, node))
 
     @property
     def frontier(self) -> list[tuple[float, Partial]]:

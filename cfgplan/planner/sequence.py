@@ -45,6 +45,7 @@ from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, grower, in_parts
 from cfgplan.planner.prefix import Prefix
+from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
 from cfgplan.planner.task import Ground, Task, derive
@@ -126,6 +127,9 @@ class Ranked:
 
 @dataclass(order=True)
 class _Entry:
+    """A sequence (complete or not) or an offer, at its place: price, then
+    the ranks of its steps' configurations (:mod:`cfgplan.planner.ranking`)."""
+
     priority: float
     order: tuple[int, ...]  # the rank of each step's configuration: ties by earlier steps
     offer: bool  # an offer (False sorts first: a sequence at the same price and order)
@@ -230,42 +234,45 @@ class SequenceSearch:
         return done[(step, facts)]
 
     def _search(self) -> Iterator[PlannedSequence]:
-        """Best-first over sequences; a prefix is priced with :meth:`remaining`
-        (exact without switches), an offer at the prefix's cost plus its
-        configuration's alone (less or equal to what it turns out)."""
-        queue: list[_Entry] = []
-        if self.remaining(0, self.task.facts) < math.inf:
-            self._offer(queue, (), 0, 0.0)
-        while queue:
-            clock.check()
-            entry = heapq.heappop(queue)
-            if not entry.offer:
-                if len(entry.prefix) == len(self.goals):
-                    yield self._planned(entry.prefix, entry.cost)
-                else:
-                    self._offer(queue, entry.prefix, 0, entry.cost)
-                continue
-            prefix, j = entry.prefix, entry.order[-1]
-            whole = (*prefix, j)
-            config = self.configuration(whole)
-            cost = entry.cost + config.cost
-            if prefix and self.switch:
-                cost += self.switch * switching(self.configuration(prefix), config)
-            rest = self.remaining(len(whole), self.state_after(whole)[0])
-            if rest < math.inf:
-                done, levels = len(whole) == len(self.goals), self._levels
-                price = levels.cost(cost) if done else levels.bound(cost + rest)
-                heapq.heappush(queue, _Entry(price, whole, False, whole, cost))
-            self._offer(queue, prefix, j + 1, entry.cost)
+        """Best-first over sequences (:func:`cfgplan.planner.ranking.merge`);
+        a prefix is priced with :meth:`remaining` (exact without switches),
+        an offer at the prefix's cost plus its configuration's alone (less
+        or equal to what it turns out)."""
+        first = self._offered((), 0, 0.0) if self.remaining(0, self.task.facts) < math.inf else ()
+        steps = len(self.goals)
+        whole = merge(first, self._offers, lambda e: not e.offer and len(e.prefix) == steps)
+        for entry in whole:
+            yield self._planned(entry.prefix, entry.cost)
 
-    def _offer(self, queue: list[_Entry], prefix: tuple[int, ...], j: int, cost: float) -> None:
-        """Queue the j-th configuration of the step after ``prefix``, if there is one."""
+    def _offers(self, entry: _Entry) -> Iterator[_Entry]:
+        """What ``entry`` offers: a sequence not yet complete, its next
+        step's first configuration; an offer, the sequence it offers, priced
+        in full, and the next configuration of its step."""
+        if not entry.offer:
+            if len(entry.prefix) < len(self.goals):
+                yield from self._offered(entry.prefix, 0, entry.cost)
+            return
+        prefix, j = entry.prefix, entry.order[-1]
+        whole = (*prefix, j)
+        config = self.configuration(whole)
+        cost = entry.cost + config.cost
+        if prefix and self.switch:
+            cost += self.switch * switching(self.configuration(prefix), config)
+        rest = self.remaining(len(whole), self.state_after(whole)[0])
+        if rest < math.inf:
+            done, levels = len(whole) == len(self.goals), self._levels
+            price = levels.cost(cost) if done else levels.bound(cost + rest)
+            yield _Entry(price, whole, False, whole, cost)
+        yield from self._offered(prefix, j + 1, entry.cost)
+
+    def _offered(self, prefix: tuple[int, ...], j: int, cost: float) -> tuple[_Entry, ...]:
+        """The j-th configuration of the step after ``prefix``, offered, if there is one."""
         facts, _ = self.state_after(prefix)
         config = self.ranked(len(prefix), facts).get(j)
         if config is None:
-            return
+            return ()
         price = self._levels.bound(cost + config.cost)
-        heapq.heappush(queue, _Entry(price, (*prefix, j), True, prefix, cost))
+        return (_Entry(price, (*prefix, j), True, prefix, cost),)
 
     def _deepest(self) -> tuple[int, ...]:
         """The cheapest prefix among those that get furthest, found cheapest
