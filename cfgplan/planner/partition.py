@@ -73,6 +73,11 @@ kept, then forgotten all at once: siblings are refined soon after each other
 (the search takes them at nearly the same priority), so a few suffice, and
 memory stays bounded."""
 
+SUFFIXES = 4
+"""How many of a stack's suffixes are looked up for a sum to start from
+(a child's stack is its parent's with the top replaced by the top's body:
+its suffix below the body was summed for the parent)."""
+
 
 @dataclass(slots=True)
 class Kept:
@@ -125,11 +130,15 @@ class Partition:
     _instances: dict[Ground, Instance] = field(default_factory=dict)
     _counts: dict[Ground, Counts] = field(default_factory=dict)
     _orders: dict[Ground, tuple[Instance, ...]] = field(default_factory=dict)
+    _below_sets: dict[Ground, dict[int, Instance]] = field(default_factory=dict)
+    """Each ordered instance's :meth:`order` as a map from instance numbers."""
     number: Numbering = field(default_factory=Numbering)
     """The small integers that stand for keys in counts and totals."""
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
     _stacks: dict[tuple[Ground, ...], Kept] = field(default_factory=dict)
+    _sums: dict[tuple[Ground, ...], Counts] = field(default_factory=dict)
+    """The summed counts of stacks and their suffixes (:meth:`_sum`)."""
 
     def __post_init__(self) -> None:
         task = self.grounder.task
@@ -198,13 +207,26 @@ class Partition:
         return found
 
     def reach(self, call: Ground) -> tuple[Instance, ...] | None:
-        """:meth:`order`, or None when an instance recurs below itself."""
+        """:meth:`order`, or None when an instance recurs below itself. Each
+        instance's order is its children's, joined without repeats, then
+        itself: made from theirs (copies of small-integer maps), not by a walk
+        below every level of a deep chain again."""
         found = self._orders.get(call)
         if found is None:
-            below = self._below(call, ())
+            below = self._below(call, self._below_sets)
             if below is None:
                 return None
-            found = self._orders[call] = tuple(map(self.instance, below))
+            sets, orders = self._below_sets, self._orders
+            for current in below:
+                instance = self.instance(current)
+                joined: dict[int, Instance] = {}
+                for option in instance.options:
+                    for child in option.children:
+                        joined.update(sets[child])
+                joined[instance.key] = instance
+                sets[current] = joined
+                orders[current] = tuple(joined.values())
+            found = orders[call]
         return found
 
     def _below(self, call: Ground, done: Container[Ground]) -> list[Ground] | None:
@@ -380,6 +402,7 @@ class Partition:
         if found is None:
             if len(self._stacks) >= STACKS:
                 self._stacks.clear()
+                self._sums.clear()
             found = self._stacks[calls] = Kept(self._sum(calls))
             if found.pending is not None:
                 method = self.grounder.task.is_method
@@ -389,16 +412,44 @@ class Partition:
         return found
 
     def _sum(self, calls: tuple[Ground, ...]) -> Counts | None:
-        task = self.grounder.task
-        totals: Counts = {}
-        get = totals.get
-        for call in calls:
+        """The pending items' counts added up (None: some can recur). A
+        node's stack is its parent's less the top, plus the top's body: so
+        the sum of a stack is made from that of its longest suffix summed
+        before (among the next :data:`SUFFIXES`), one item at a time, each
+        step kept, and the next stack down the chain finds them. Integers:
+        the same sums in any order."""
+        sums = self._sums
+        start = next(
+            (i for i in range(1, min(len(calls), SUFFIXES) + 1) if calls[i:] in sums), None
+        )
+        if start is None:
+            start = 1
+            rest = self._add((), calls[1:], {})
+            if rest is None:
+                return None
+            sums[calls[1:]] = rest
+        total = sums[calls[start:]]
+        for i in range(start - 1, -1, -1):
+            added = self._add((calls[i],), (), dict(total))
+            if added is None:
+                return None
+            total = sums[calls[i:]] = added
+        return total
+
+    def _add(
+        self, first: tuple[Ground, ...], calls: tuple[Ground, ...], totals: Counts
+    ) -> Counts | None:
+        """``totals`` with the counts of ``first`` and ``calls`` added (a
+        pending functionality places itself on its agent too); None when one
+        can recur."""
+        is_method, get = self.grounder.task.is_method, totals.get
+        for call in (*first, *calls):
             counts = self.counts(call)
             if counts is None:
                 return None
             for key, n in counts.items():
                 totals[key] = get(key, 0) + n
-            if not task.is_method(call):  # a pending functionality places itself
+            if not is_method(call):
                 key = self.number(("@", call[1]))
                 totals[key] = get(key, 0) + 1
         return totals

@@ -113,6 +113,59 @@ def test_the_partitioned_bound_is_the_same_with_its_stack_memo_warm_or_cold() ->
         assert warm.estimate(node, bound.certain_agents(node)) == estimate
 
 
+@pytest.mark.parametrize("family", ["chain", "fusion", "dag"])
+def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topological(
+    family: str,
+) -> None:
+    """A child's stack of pending items is its parent's with the top replaced
+    by the top's body, so partition._sum makes a stack's summed counts from
+    those of its longest suffix summed before. Each must be the plain sum of
+    the items' counts (and a pending functionality's agent key), as made
+    afresh; and each instance's order (made from its children's) must hold
+    every instance below it once, each after all of its children."""
+    from benchmarks.families import chain, dag
+
+    made = {"chain": lambda: chain(8), "fusion": lambda: fusion(4, 3, 4, 3), "dag": lambda: dag(5)}
+    problem = load_text(*made[family]())
+    grounder, bound = Grounder(problem.task), Bound(problem.task)
+    partition = Partition(grounder)
+    stacks = []
+    for node in some_nodes(grounder, problem.goal_call):
+        partition.estimate(node, bound.certain_agents(node))
+        stacks.append(tuple(item.call for item in node.stack))
+    from_suffix = 0
+    for calls in stacks:
+        plain: dict[int, int] = {}
+        for call in calls:
+            for key, n in (partition.counts(call) or {}).items():
+                plain[key] = plain.get(key, 0) + n
+            if not problem.task.is_method(call):
+                key = partition.number(("@", call[1]))
+                plain[key] = plain.get(key, 0) + 1
+        assert partition._sum(calls) == plain
+        from_suffix += calls[1:] in partition._sums
+    assert from_suffix >= len(stacks) // 2  # the suffixes were there to start from
+
+    for call in {c for calls in stacks for c in calls}:
+        order = partition.order(call)
+        keys = [instance.key for instance in order]
+        assert len(keys) == len(set(keys)) and order[-1].call == call
+        position = {key: i for i, key in enumerate(keys)}
+        below = {call}
+        todo = [call]
+        while todo:
+            for option in partition.instance(todo.pop()).options:
+                for child in option.children:
+                    if child not in below:
+                        below.add(child)
+                        todo.append(child)
+        assert {partition.instance(c).key for c in below} == set(keys)
+        for instance in order:
+            for option in instance.options:
+                for child_key in option.child_keys:
+                    assert position[child_key] < position[instance.key]
+
+
 def test_a_repeated_method_instance_does_not_join_the_parts_of_its_twin() -> None:
     """Issue 35, shared sub-derivations (benchmarks/families/shared.py ``dag``):
     level 3 is expanded (by its refining version, ``step3``) while another
