@@ -51,7 +51,7 @@ from cfgplan.planner.room import Load, Room
 from cfgplan.planner.task import Ground, Task
 
 if TYPE_CHECKING:
-    from cfgplan.planner.partition import Instance, Option
+    from cfgplan.planner.graph import Instance, Option
 
 UNLIMITED = 1 << 40
 """More carriers than any count of occurrences: what is not capped."""
@@ -84,7 +84,7 @@ class Capped:
 @dataclass
 class Capacity:
     """The caps of one task, made from the AND/OR graph of its ground
-    instances (``instances``, ``order``: :class:`cfgplan.planner.partition.Partition`)."""
+    instances (``instances``, ``order``: :class:`cfgplan.planner.graph.Graph`)."""
 
     task: Task
     room: Room

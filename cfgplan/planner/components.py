@@ -143,7 +143,7 @@ def divide(
     index = {item.label: i for i, item in enumerate(items)}
     for i, item in enumerate(items):
         clock.check()
-        below = partition.reach(item.call)
+        below = partition.graph.reach(item.call)
         if below is None:
             return None
         for instance in below:

@@ -32,8 +32,10 @@ one link), S is that many at most (:mod:`cfgplan.planner.capacity`).
 
 Then the cost of each pending item is a plain minimum over its expansions,
 leaving out those whose own global channels the media cannot carry on top
-of the node's (:mod:`cfgplan.planner.room`), computed bottom-up over ground
-instances, and the items' costs add up: in
+of the node's (:mod:`cfgplan.planner.room`), computed bottom-up over the
+graph of ground instances (:mod:`cfgplan.planner.graph`; this bound is a
+pass over it, as the capacity's and the parts' are), and the items' costs
+add up: in
 any completion, a shared cost is charged at most as often as it can occur,
 each time ``w / S``, so never more than ``w`` in all. The search takes the
 larger of the two bounds (:func:`cfgplan.planner.plan.combined`).
@@ -45,25 +47,15 @@ itself) have no finite occurrence count: for such tasks this bound is off.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Container
 from dataclasses import dataclass, field
 
 from cfgplan.planner.capacity import Capacity
-from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
+from cfgplan.planner.graph import Graph, Instance, Option
+from cfgplan.planner.ground import Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
-from cfgplan.planner.prices import (
-    Counts,
-    Evaluation,
-    Least,
-    Prices,
-    Wire,
-    add,
-    most,
-    wire_keys,
-)
-from cfgplan.planner.report import DeadEnd
-from cfgplan.planner.room import Need, Room
+from cfgplan.planner.prices import Counts, Evaluation, Least, Prices, Wire, add, most
+from cfgplan.planner.room import Room
 from cfgplan.planner.split import Split, split_at
 from cfgplan.planner.task import Ground
 
@@ -94,31 +86,6 @@ class Kept:
     reuse: bool = True  # False: their nodes differ too much to start from another's
 
 
-@dataclass(frozen=True, slots=True)
-class Option:
-    """One expansion of a method, as this bound sees it."""
-
-    children: tuple[Ground, ...]
-    child_keys: tuple[int, ...]  # their numbers
-    channels: tuple[Wire, ...]
-    agents: tuple[str, ...]  # agents its functionality children run on, each once
-    agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
-    needs: tuple[Need, ...]  # what its own global channels need of the media
-    choice: int = 0  # its number among the method's expansions, as successors numbers them
-
-
-@dataclass(frozen=True, slots=True)
-class Instance:
-    """A ground instance in the AND/OR graph: a functionality (no options, its
-    weight) or a method with one option per feasible expansion."""
-
-    call: Ground
-    functionality: bool
-    options: tuple[Option, ...] = ()
-    weight: float = 0.0
-    key: int = -1  # its number: the key of a functionality; a method's in memos
-
-
 @dataclass
 class Partition:
     """The partitioned bound for one task; :meth:`estimate` on each node."""
@@ -127,14 +94,9 @@ class Partition:
     media: bool = True
     """Whether expansions the media cannot carry are priced as impossible
     (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
-    _instances: dict[Ground, Instance] = field(default_factory=dict)
     _counts: dict[Ground, Counts] = field(default_factory=dict)
-    _orders: dict[Ground, tuple[Instance, ...]] = field(default_factory=dict)
-    _below_sets: dict[Ground, dict[int, Instance]] = field(default_factory=dict)
-    """Each ordered instance's :meth:`order` as a map from instance numbers."""
     number: Numbering = field(default_factory=Numbering)
     """The small integers that stand for keys in counts and totals."""
-    _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
     _cyclic: bool = False
     _stacks: dict[tuple[Ground, ...], Kept] = field(default_factory=dict)
     _sums: dict[tuple[Ground, ...], Counts] = field(default_factory=dict)
@@ -143,45 +105,13 @@ class Partition:
     def __post_init__(self) -> None:
         task = self.grounder.task
         self.room = Room(task, self.number, self.media)
-        self.capacity = Capacity(task, self.room, self.number, self._instances, self.order)
-        self.least = Least(self.room, self.number)
+        self.graph = Graph(self.grounder, self.room, self.number)
+        """The AND/OR graph of ground instances this bound is a pass over."""
+        graph = self.graph
+        self.capacity = Capacity(task, self.room, self.number, graph.instances, graph.order)
+        self.least = Least(self.room, self.number, graph.made)
 
-    def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
-        """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
-        ident = (kind, data, sender, receiver)
-        found = self._wires.get(ident)
-        if found is None:
-            counted, shares, free = wire_keys(kind, data, sender, receiver)
-            weight = self.grounder.task.channel_cost(kind)
-            number = self.number
-            found = Wire(
-                weight, tuple(map(number, counted)), tuple(map(number, shares)), number(free)
-            )
-            self._wires[ident] = found
-        return found
-
-    # -- the AND/OR graph of ground instances, made once ----------------------
-    def instance(self, call: Ground) -> Instance:
-        found = self._instances.get(call)
-        if found is None:
-            task = self.grounder.task
-            schema = task.functionality(call)
-            if schema is not None:
-                weight = task.functionality_cost(schema, call)
-                found = Instance(call, True, weight=weight, key=self.number(("f", call)))
-            else:
-                options = []
-                choice = 0
-                for method in task.versions(call):
-                    for expansion in self.grounder.expansions(method, call):
-                        if not isinstance(expansion, DeadEnd):
-                            options.append(self._option(expansion, choice))
-                        choice += 1
-                found = Instance(call, False, tuple(options), key=self.number(("f", call)))
-            self._instances[call] = found
-            self.least.add(found)
-        return found
-
+    # -- the most occurrences of each key, a pass over the graph -----------------
     def counts(self, call: Ground) -> Counts | None:
         """Most occurrences of each key in one derivation of ``call``; None
         when ``call`` can recur into itself."""
@@ -190,71 +120,13 @@ class Partition:
         found = self._counts.get(call)
         if found is not None:
             return found
-        order = self._below(call, self._counts)
+        order = self.graph.below(call, self._counts)
         if order is None:
             self._cyclic = True
             return None
         for current in order:
-            self._counts[current] = self._count(self.instance(current))
+            self._counts[current] = self._count(self.graph.instances[current])
         return self._counts[call]
-
-    def order(self, call: Ground) -> tuple[Instance, ...]:
-        """Every instance below ``call`` (itself last), children before
-        parents: the order :meth:`cfgplan.planner.prices.Least.full` evaluates
-        them in, made once."""
-        found = self.reach(call)
-        assert found is not None  # counts() found no recursion below the pending items
-        return found
-
-    def reach(self, call: Ground) -> tuple[Instance, ...] | None:
-        """:meth:`order`, or None when an instance recurs below itself. Each
-        instance's order is its children's, joined without repeats, then
-        itself: made from theirs (copies of small-integer maps), not by a walk
-        below every level of a deep chain again."""
-        found = self._orders.get(call)
-        if found is None:
-            below = self._below(call, self._below_sets)
-            if below is None:
-                return None
-            sets, orders = self._below_sets, self._orders
-            for current in below:
-                instance = self.instance(current)
-                joined: dict[int, Instance] = {}
-                for option in instance.options:
-                    for child in option.children:
-                        joined.update(sets[child])
-                joined[instance.key] = instance
-                sets[current] = joined
-                orders[current] = tuple(joined.values())
-            found = orders[call]
-        return found
-
-    def _below(self, call: Ground, done: Container[Ground]) -> list[Ground] | None:
-        """The instances below ``call`` (itself included) not in ``done``,
-        children before parents, found without recursion; None when one is
-        met again on its own path (the recursion guard of 4.5 would prune it
-        there: its occurrences have no bound)."""
-        order: list[Ground] = []
-        state: dict[Ground, bool] = {}  # True: on the path; False: finished
-        stack: list[tuple[Ground, bool]] = [(call, False)]
-        while stack:
-            current, finished = stack.pop()
-            if finished:
-                state[current] = False
-                order.append(current)
-                continue
-            if current in done:
-                continue
-            on_path = state.get(current)
-            if on_path:
-                return None
-            if on_path is False:
-                continue
-            state[current] = True
-            stack.append((current, True))
-            for option in self.instance(current).options:
-                stack.extend((child, False) for child in option.children)
-        return order
 
     def _count(self, instance: Instance) -> Counts:
         """The most occurrences below ``instance``: over its options, the most
@@ -296,25 +168,6 @@ class Partition:
         for key in option.agent_keys:
             total[key] = total.get(key, 0) + 1
         return total
-
-    def _option(self, expansion: Expansion, choice: int) -> Option:
-        task = self.grounder.task
-        channels = tuple(self._own(expansion, spec) for spec in expansion.channels)
-        agents = tuple(dict.fromkeys(c[1] for c in expansion.body if not task.is_method(c)))
-        keys = tuple(self.number(("@", agent)) for agent in agents)
-        children = tuple(self.number(("f", call)) for call in expansion.body)
-        needs = self.room.needs(expansion.channels)
-        return Option(expansion.body, children, channels, agents, keys, needs, choice)
-
-    def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
-        """An own channel of an expansion: an end at a functionality of the body
-        is known, one at a method is not (it is re-wired when that is expanded)."""
-        task = self.grounder.task
-        kind, _, source, target, data, _ = spec
-        sender, receiver = expansion.body[source], expansion.body[target]
-        known_sender = None if task.is_method(sender) else sender
-        known_receiver = None if task.is_method(receiver) else receiver
-        return self.wire(kind, data, known_sender, known_receiver)
 
     # -- the bound of a node ----------------------------------------------------
     def estimate(self, node: Partial, certain: frozenset[str]) -> float | None:
@@ -359,7 +212,7 @@ class Partition:
             return None, None
         if not apart:
             return total, None
-        top = self._instances[node.stack[0].call]
+        top = self.graph.instances[node.stack[0].call]
         if top.functionality:
             return total, None
         found = costs.get(top.key) if costs is not None else None
@@ -376,7 +229,7 @@ class Partition:
         met once or twice, as on a chain, is priced as cheaply as can be). ``raised``:
         the keys whose totals differ from the pending items' counts."""
         least = self.least
-        orders = (self.order(call) for call in dict.fromkeys(calls))
+        orders = (self.graph.order(call) for call in dict.fromkeys(calls))
         if not kept.reuse or kept.evaluated < 2:
             kept.evaluated += 1
             memo = least.full(orders, prices)
@@ -405,9 +258,9 @@ class Partition:
                 self._sums.clear()
             found = self._stacks[calls] = Kept(self._sum(calls))
             if found.pending is not None:
-                method = self.grounder.task.is_method
+                method, instances = self.grounder.task.is_method, self.graph.instances
                 found.items = tuple(
-                    (self._instances[call].key, None if method(call) else call[1]) for call in calls
+                    (instances[call].key, None if method(call) else call[1]) for call in calls
                 )
         return found
 
@@ -464,7 +317,7 @@ class Partition:
         for ch in node.channels:
             src, dst = node.located.get(ch.source), node.located.get(ch.target)
             if src is not None and dst is not None:
-                present.update(self.wire(ch.kind, ch.data, src.call, dst.call).counted)
+                present.update(self.graph.wire(ch.kind, ch.data, src.call, dst.call).counted)
                 continue
             sender = src.call if src is not None else pending.get(ch.source)
             receiver = dst.call if dst is not None else pending.get(ch.target)
@@ -472,5 +325,5 @@ class Partition:
                 sender = None
             if receiver is not None and task.is_method(receiver):
                 receiver = None
-            future.append(self.wire(ch.kind, ch.data, sender, receiver))
+            future.append(self.graph.wire(ch.kind, ch.data, sender, receiver))
         return present, future

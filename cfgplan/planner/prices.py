@@ -26,7 +26,7 @@ from cfgplan.planner.room import Load, Need, Room
 from cfgplan.planner.task import Ground, Task
 
 if TYPE_CHECKING:
-    from cfgplan.planner.partition import Instance
+    from cfgplan.planner.graph import Instance
 
 Fits = Callable[[tuple[Need, ...], Load], bool]
 """Whether the media carry an expansion's needs on top of a node's load
@@ -198,6 +198,10 @@ class Least:
     room: Room
     """The media (its ``fits`` looked up at each use, so that it can be watched)."""
     number: Callable[[Key], int]
+    made: list[Instance]
+    """The graph's instances in the order made (:attr:`cfgplan.planner.graph.Graph.made`):
+    those after the first :attr:`indexed` are indexed when first needed (a
+    search that never meets a stack twice never needs it)."""
     reuse: float = 0.75
     """Start from another node's evaluation only while fewer keys changed
     than this share of its instances (else pricing from scratch is cheaper)."""
@@ -214,17 +218,13 @@ class Least:
     functionalities: dict[int, Instance] = field(default_factory=dict)
     reused: int = 0
     """How many evaluations :meth:`again` made (the others were from scratch)."""
-    _new: list[Instance] = field(default_factory=list)  # not indexed yet
-
-    def add(self, instance: Instance) -> None:
-        """A new instance of the graph (indexed when first needed: a search
-        that never meets a stack twice never needs it)."""
-        self._new.append(instance)
+    indexed: int = 0
 
     def _index(self) -> None:
-        for instance in self._new:
+        made = self.made
+        for instance in made[self.indexed :]:
             self.index(instance)
-        self._new.clear()
+        self.indexed = len(made)
 
     def index(self, instance: Instance) -> None:
         """Note what the expansions of ``instance`` read."""

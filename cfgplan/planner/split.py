@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from cfgplan.planner.partition import Instance
+    from cfgplan.planner.graph import Instance
 
 
 @dataclass(frozen=True, slots=True)

@@ -147,19 +147,19 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
     assert from_suffix >= len(stacks) // 2  # the suffixes were there to start from
 
     for call in {c for calls in stacks for c in calls}:
-        order = partition.order(call)
+        order = partition.graph.order(call)
         keys = [instance.key for instance in order]
         assert len(keys) == len(set(keys)) and order[-1].call == call
         position = {key: i for i, key in enumerate(keys)}
         below = {call}
         todo = [call]
         while todo:
-            for option in partition.instance(todo.pop()).options:
+            for option in partition.graph.instance(todo.pop()).options:
                 for child in option.children:
                     if child not in below:
                         below.add(child)
                         todo.append(child)
-        assert {partition.instance(c).key for c in below} == set(keys)
+        assert {partition.graph.instance(c).key for c in below} == set(keys)
         for instance in order:
             for option in instance.options:
                 for child_key in option.child_keys:
