@@ -7,7 +7,9 @@ once per task lets both be written as a short run of integers — equal values
 (Python's ``==``: a bandwidth 1 is 1.0), equal numbers; different values,
 different numbers — instead of texts made anew for every node. The table
 lives as long as the task's grounding memo and grows with the distinct
-values its searches meet.
+values its searches meet. It is the task's one numbering: the partitioned
+bound numbers its keys (instances, agents, channels as it prices them) from
+it too (:attr:`cfgplan.planner.partition.Partition.number`).
 """
 
 from __future__ import annotations

@@ -95,15 +95,17 @@ class Partition:
     """Whether expansions the media cannot carry are priced as impossible
     (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
     _counts: dict[Ground, Counts] = field(default_factory=dict)
-    number: Numbering = field(default_factory=Numbering)
-    """The small integers that stand for keys in counts and totals."""
+    number: Numbering = field(init=False)
+    """The small integers that stand for keys in counts and totals: the
+    task's one numbering (:attr:`cfgplan.planner.ground.Grounder.numbering`),
+    which canonical forms and fingerprints number their values by too."""
     _cyclic: bool = False
     _stacks: dict[tuple[Ground, ...], Kept] = field(default_factory=dict)
     _sums: dict[tuple[Ground, ...], Counts] = field(default_factory=dict)
     """The summed counts of stacks and their suffixes (:meth:`_sum`)."""
 
     def __post_init__(self) -> None:
-        task = self.grounder.task
+        task, self.number = self.grounder.task, self.grounder.numbering
         self.room = Room(task, self.number, self.media)
         self.graph = Graph(self.grounder, self.room, self.number)
         """The AND/OR graph of ground instances this bound is a pass over."""
