@@ -6,9 +6,10 @@ holds the whole frontier. Here ``--all`` instead walks the derivations depth
 first, in the thesis's order (4.5), keeping only the path, and collects the
 admissible configurations whose cost falls in a window ``[low, high)``;
 nodes whose bound reaches ``high`` are cut. At the end of a pass the window
-is sorted by cost, then depth-first order (6.3.2;
-:func:`cfgplan.planner.ranking.place`) — exactly the order the best-first
-search gives — and listed; when costs have a unit
+is sorted by cost, then depth-first order (6.3.2; the place of
+:mod:`cfgplan.planner.ranking`, a derivation's path stood for by its rank in
+the walk, which orders alike and holds less) — exactly the order the
+best-first search gives — and listed; when costs have a unit
 (:mod:`cfgplan.planner.levels`), the cheapest cost of a window is listed as
 it is walked (depth-first order is then the listing order).
 A configuration has one cost, so it falls in one window: distinct
@@ -41,7 +42,6 @@ from cfgplan.planner.canonical import canonical
 from cfgplan.planner.finish import Parts, admissible, build, fingerprint
 from cfgplan.planner.grow import Grower, Heuristic, Stats
 from cfgplan.planner.partial import Partial, root
-from cfgplan.planner.ranking import Path, place
 from cfgplan.planner.report import DeadEnd, Report, StopReason
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground
@@ -55,13 +55,13 @@ class _TooBig(Exception):
 
 @dataclass
 class Found:
-    """A complete derivation met in a window, its ``path`` (for its place,
-    :func:`cfgplan.planner.ranking.place`): admissible with its media
-    assignment, or not listed (``parts`` None: inadmissible, or a repeat). It
-    is built into a configuration when it is listed, numbered then."""
+    """A complete derivation met in a window, in depth-first order ``index``:
+    admissible with its media assignment, or not listed (``parts`` None:
+    inadmissible, or a repeat). It is built into a configuration when it is
+    listed, numbered then."""
 
     cost: float
-    path: Path
+    index: int
     parts: Parts | None
     media: tuple[Assignment, ...] = ()
     repeat: bool = False  # its configuration was met before in this window
@@ -155,7 +155,7 @@ class Windows:
         found: list[Found] = []
         closed: set[bytes] = set()
         stack = list(reversed(start))
-        taken = 0
+        index = taken = 0
         next_tick = 1.0
         while stack:
             clock.check()
@@ -175,13 +175,14 @@ class Windows:
                 self.progress(stats, elapsed)
                 next_tick = elapsed + 0.5
             if node.done:
+                index += 1
                 if priority < window.low:
                     continue  # listed in an earlier window
                 if priority < streamed:
                     budget = None  # something to list: this walk goes on to the end
-                    yield from self._list([self._found(node, priority, listed)])
+                    yield from self._list([self._found(node, priority, index, listed)])
                     continue
-                found.append(self._found(node, priority, held))
+                found.append(self._found(node, priority, index, held))
                 if len(found) > self.grower.options.most_held:
                     found, window.high = _halve(found)
                     window.cut(window.high)  # what it dropped, a later window lists
@@ -193,10 +194,10 @@ class Windows:
                 closed.add(key)
             children = list(grower.children(node))
             stack.extend(reversed(children))
-        found.sort(key=lambda f: place(f.cost, f))
+        found.sort(key=lambda f: (f.cost, f.index))  # ranking.place, by rank in the walk
         yield from self._list(found)
 
-    def _found(self, node: Partial, cost: float, admitted: set[bytes]) -> Found:
+    def _found(self, node: Partial, cost: float, index: int, admitted: set[bytes]) -> Found:
         """A complete derivation met: checked, unless (distinct mode) its
         configuration was admitted before in this window. Both have one cost,
         and the walk meets derivations in depth-first order, so the first met
@@ -204,13 +205,13 @@ class Windows:
         grower = self.grower
         ident = fingerprint(node, grower.grounder.numbering) if grower.distinct else None
         if ident is not None and ident in admitted:
-            return Found(cost, node.path, None, repeat=True)
+            return Found(cost, index, None, repeat=True)
         media = admissible(node, grower.grounder.task)
         if isinstance(media, DeadEnd):
-            return Found(cost, node.path, None, dead=media)
+            return Found(cost, index, None, dead=media)
         if ident is not None:
             admitted.add(ident)
-        return Found(cost, node.path, Parts(node.placed, node.channels, node.effects), media)
+        return Found(cost, index, Parts(node.placed, node.channels, node.effects), media)
 
     def _list(self, found: list[Found]) -> Iterator[Configuration]:
         """Sorted derivations of a window, numbered as :meth:`Grower.complete`

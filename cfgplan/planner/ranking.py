@@ -10,7 +10,9 @@ Every strategy ranks by it:
 - best-first search (:mod:`cfgplan.planner.search`) queues nodes by
   :func:`place`, a node's priority (cost so far plus a lower bound) for its cost;
 - the greedy dive (:mod:`cfgplan.planner.dive`) takes children by :func:`place`;
-- ``--all`` (:mod:`cfgplan.planner.enumerate`) sorts a cost window by :func:`place`;
+- ``--all`` (:mod:`cfgplan.planner.enumerate`) sorts a cost window by place,
+  each derivation's path stood for by its rank in the depth-first walk
+  (the walk meets derivations in path order; an integer holds less);
 - combinations of independent parts (:mod:`cfgplan.planner.combine`) and
   sequences of configurations (:mod:`cfgplan.planner.sequence`) are listed
   by :func:`merge`, each candidate carrying a place of its own kind: a
