@@ -279,26 +279,23 @@ class Partition:
         )
         if start is None:
             start = 1
-            rest = self._add((), calls[1:], {})
+            rest = self._add(calls[1:], {})
             if rest is None:
                 return None
             sums[calls[1:]] = rest
         total = sums[calls[start:]]
         for i in range(start - 1, -1, -1):
-            added = self._add((calls[i],), (), dict(total))
+            added = self._add(calls[i : i + 1], dict(total))
             if added is None:
                 return None
             total = sums[calls[i:]] = added
         return total
 
-    def _add(
-        self, first: tuple[Ground, ...], calls: tuple[Ground, ...], totals: Counts
-    ) -> Counts | None:
-        """``totals`` with the counts of ``first`` and ``calls`` added (a
-        pending functionality places itself on its agent too); None when one
-        can recur."""
+    def _add(self, calls: tuple[Ground, ...], totals: Counts) -> Counts | None:
+        """``totals`` with the counts of ``calls`` added (a pending
+        functionality places itself on its agent too); None when one can recur."""
         is_method, get = self.grounder.task.is_method, totals.get
-        for call in (*first, *calls):
+        for call in calls:
             counts = self.counts(call)
             if counts is None:
                 return None
