@@ -97,11 +97,12 @@ class Capacity:
     _occurs: dict[int, Counts] = field(default_factory=dict)
     _stacks: dict[tuple[Ground, ...], tuple[Capped, ...]] = field(default_factory=dict)
 
-    def lower(self, totals: Counts, calls: tuple[Ground, ...], load: Load) -> list[int]:
-        """Lower the occurrence counts ``totals`` of the pending items ``calls``
-        to what the media let occur at a node that loads them with ``load``;
-        the keys lowered."""
-        lowered: list[int] = []
+    def lower(self, totals: Counts, calls: tuple[Ground, ...], load: Load) -> dict[int, int]:
+        """What the occurrence counts ``totals`` of the pending items
+        ``calls`` are lowered to by what the media let occur at a node that
+        loads them with ``load``: the keys lowered, with their new totals
+        (``totals`` itself is not changed)."""
+        lowered: dict[int, int] = {}
         if not self.room.active:
             return lowered
         if len(self.instances) != self._made:
@@ -112,8 +113,7 @@ class Capacity:
                 continue
             allowed = min(self._most(limit, load) for limit in capped.limits) + capped.direct
             if allowed < now:
-                totals[capped.key] = max(allowed, 1)
-                lowered.append(capped.key)
+                lowered[capped.key] = max(allowed, 1)
         return lowered
 
     def _most(self, limit: Limit, load: Load) -> int:

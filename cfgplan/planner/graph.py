@@ -6,10 +6,10 @@ each instance once, and kept for the task (:func:`cfgplan.planner.plan.parts`).
 
 The passes over it are elsewhere: the partitioned bound's occurrence counts
 and cheapest derivations (:mod:`cfgplan.planner.partition`,
-:mod:`cfgplan.planner.prices`), how often the media let a shared cost occur
-(:mod:`cfgplan.planner.capacity`), and the independent parts of a goal
-(:mod:`cfgplan.planner.components`). What the graph holds of an expansion is
-what those passes read: its children and their numbers, its own channels as
+:mod:`cfgplan.planner.prices`, :mod:`cfgplan.planner.least`), how often the
+media let a shared cost occur (:mod:`cfgplan.planner.capacity`), and the
+independent parts of a goal (:mod:`cfgplan.planner.components`). What the
+graph holds of an expansion is what those passes read: its children and their numbers, its own channels as
 the bound prices them (:class:`~cfgplan.planner.prices.Wire`), the agents its
 functionalities run on, and what its global channels need of the media
 (:mod:`cfgplan.planner.room`).
@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
+from cfgplan.planner.partial import Channel, Placed
 from cfgplan.planner.prices import Wire, wire_keys
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.room import Need, Room
@@ -69,6 +70,8 @@ class Graph:
     _below_sets: dict[Ground, dict[int, Instance]] = field(default_factory=dict)
     """Each ordered instance's :meth:`order` as a map from instance numbers."""
     _wires: dict[tuple[object, ...], Wire] = field(default_factory=dict)
+    _between: dict[tuple[int, int, int], Wire] = field(default_factory=dict)
+    """:meth:`between`'s wires by channel number and the ends' names."""
 
     def wire(self, kind: str, data: object, sender: Ground | None, receiver: Ground | None) -> Wire:
         """A channel of ``kind`` and ``data`` with the known ends given (made once)."""
@@ -79,9 +82,28 @@ class Graph:
             weight = self.grounder.task.channel_cost(kind)
             number = self.number
             found = Wire(
-                weight, tuple(map(number, counted)), tuple(map(number, shares)), number(free)
+                weight,
+                tuple(map(number, counted)),
+                tuple(map(number, shares)),
+                number(free),
+                len(self._wires),
             )
             self._wires[ident] = found
+        return found
+
+    def between(self, channel: Channel, sender: Placed, receiver: Placed) -> Wire:
+        """:meth:`wire` of ``channel`` with both ends placed, looked up by
+        small integers (its number and the ends' names: the same kind, data
+        and calls) rather than by the calls themselves."""
+        number = channel.number
+        if number < 0:
+            number = self.number((channel.kind, channel.robots, channel.data, channel.bandwidth))
+        ident = (number, sender.name, receiver.name)
+        found = self._between.get(ident)
+        if found is None:
+            found = self._between[ident] = self.wire(
+                channel.kind, channel.data, sender.call, receiver.call
+            )
         return found
 
     def instance(self, call: Ground) -> Instance:
@@ -107,7 +129,7 @@ class Graph:
 
     def order(self, call: Ground) -> tuple[Instance, ...]:
         """Every instance below ``call`` (itself last), children before
-        parents: the order :meth:`cfgplan.planner.prices.Least.full` evaluates
+        parents: the order :meth:`cfgplan.planner.least.Least.full` evaluates
         them in, made once."""
         found = self.reach(call)
         assert found is not None  # counts() found no recursion below the pending items

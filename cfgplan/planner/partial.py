@@ -250,7 +250,8 @@ def place_functionality(
     effects = instance.effects
     located = dict(node.located)
     located[item.label] = new
-    touching = [i for i, ch in enumerate(node.channels) if item.label in (ch.source, ch.target)]
+    label = item.label
+    touching = [i for i, ch in enumerate(node.channels) if ch.source == label or ch.target == label]
     settled = _settle(node.channels, located, touching, node.resolved, task)
     if isinstance(settled, DeadEnd):
         return settled

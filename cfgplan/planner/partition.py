@@ -52,9 +52,10 @@ from dataclasses import dataclass, field
 from cfgplan.planner.capacity import Capacity
 from cfgplan.planner.graph import Graph, Instance, Option
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.least import Evaluation, Least
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
-from cfgplan.planner.prices import Counts, Evaluation, Least, Prices, Wire, add, most
+from cfgplan.planner.prices import Counts, Prices, Wire, add, most
 from cfgplan.planner.room import Room
 from cfgplan.planner.split import Split, split_at
 from cfgplan.planner.task import Ground
@@ -75,7 +76,7 @@ its suffix below the body was summed for the parent)."""
 class Kept:
     """What is kept for one stack of pending items: their summed counts
     (None: the bound is off), and the last node with them evaluated
-    (:class:`cfgplan.planner.prices.Least`: the next starts from it)."""
+    (:class:`cfgplan.planner.least.Least`: the next starts from it)."""
 
     pending: Counts | None
     items: tuple[tuple[int, str | None], ...] = ()
@@ -84,6 +85,42 @@ class Kept:
     last: Evaluation | None = None
     evaluated: int = 0  # nodes with them evaluated from scratch (the first two are)
     reuse: bool = True  # False: their nodes differ too much to start from another's
+    _future: tuple[int, ...] = ()  # the wires :meth:`waiting` was given last (by id: made once)
+    _totals: Counts | None = None  # and what it answered
+    _shared: dict[int, float] = field(default_factory=dict)
+    _raised: tuple[int, ...] = ()
+    _touched: dict[int, int] | None = None
+
+    def waiting(self, future: list[Wire]) -> tuple[Counts, dict[int, float]]:
+        """The totals of a node with these pending items whose channels
+        waiting for an end are ``future`` (each will be one channel of the
+        configuration: its counted keys one more), and the wires' prices at
+        those totals found so far (:attr:`cfgplan.planner.prices.Prices.shared`).
+        Kept, as the last answer (siblings' channels wait alike): the totals
+        never to be changed, the prices only added to."""
+        ident = tuple(map(id, future))
+        if self._totals is None or ident != self._future:
+            assert self.pending is not None  # the bound is on for these items
+            totals = dict(self.pending)
+            get = totals.get
+            raised: list[int] = []
+            for wire in future:
+                raised.extend(wire.counted)
+                for key in wire.counted:
+                    totals[key] = get(key, 0) + 1
+            self._future, self._totals, self._shared = ident, totals, {}
+            self._raised, self._touched = tuple(raised), None
+        return self._totals, self._shared
+
+    def touched(self, lowered: dict[int, int]) -> dict[int, int]:
+        """The totals of the keys whose totals differ from the pending items'
+        counts at the node :meth:`waiting` answered last: those its waiting
+        channels raised, and those the media ``lowered`` (never to be changed)."""
+        if self._touched is None:
+            assert self._totals is not None  # waiting() answered
+            totals = self._totals
+            self._touched = {key: totals[key] for key in self._raised}
+        return {**self._touched, **lowered} if lowered else self._touched
 
 
 @dataclass
@@ -191,18 +228,14 @@ class Partition:
         kept = self._pending(calls)
         if kept.pending is None:
             return 0.0, None
-        totals = dict(kept.pending)
-        get = totals.get
-        present, future = self._channels(node)
-        raised: list[int] = []
-        for waiting in future:
-            raised.extend(waiting.counted)
-            for key in waiting.counted:
-                totals[key] = get(key, 0) + 1
+        present, future = self._channels(node, kept)
+        totals, shared = kept.waiting(future)
         load = self.room.load(node.channels)
-        raised.extend(self.capacity.lower(totals, calls, load))
-        prices = Prices(task, node, certain, totals, present, self.number, load)
-        memo, costs = self._evaluate(kept, calls, prices, raised)
+        lowered = self.capacity.lower(totals, calls, load)
+        if lowered:
+            totals, shared = {**totals, **lowered}, {}
+        prices = Prices(task, node, certain, totals, present, self.number, load, shared=shared)
+        memo, costs = self._evaluate(kept, calls, prices, lowered)
         total = sum(map(prices.channel, future))
         total += sum(task.agent_cost(agent) for agent in certain - node.robots)
         agent = prices.agent
@@ -222,14 +255,14 @@ class Partition:
         return total, split_at(top, total - memo[top.key], priced)
 
     def _evaluate(
-        self, kept: Kept, calls: tuple[Ground, ...], prices: Prices, raised: list[int]
+        self, kept: Kept, calls: tuple[Ground, ...], prices: Prices, lowered: dict[int, int]
     ) -> tuple[dict[int, float], dict[int, tuple[float, ...]] | None]:
         """The cheapest derivation of each instance below the pending items
         ``calls`` at ``prices`` (and each expansion's price, when kept): from
         the last node with these pending items evaluated, when there is one
         and it pays; recorded for the next from the third node on (a stack
-        met once or twice, as on a chain, is priced as cheaply as can be). ``raised``:
-        the keys whose totals differ from the pending items' counts."""
+        met once or twice, as on a chain, is priced as cheaply as can be).
+        ``lowered``: the totals the media lowered (:meth:`Kept.touched`)."""
         least = self.least
         orders = (self.graph.order(call) for call in dict.fromkeys(calls))
         if not kept.reuse or kept.evaluated < 2:
@@ -237,8 +270,7 @@ class Partition:
             memo = least.full(orders, prices)
             kept.reuse = len(memo) >= least.smallest
             return memo, None
-        totals = prices.totals
-        touched = dict(zip(raised, map(totals.__getitem__, raised), strict=True))
+        touched = kept.touched(lowered)
         if kept.last is None:
             kept.last = least.record(orders, prices, touched)
         else:
@@ -306,23 +338,25 @@ class Partition:
                 totals[key] = get(key, 0) + 1
         return totals
 
-    def _channels(self, node: Partial) -> tuple[set[int], list[Wire]]:
+    def _channels(self, node: Partial, kept: Kept) -> tuple[set[int], list[Wire]]:
         """The keys of the channels already in C (resolved), and the wires of
-        those waiting for an end (each will be one channel of the configuration)."""
+        those waiting for an end (each will be one channel of the
+        configuration); ``kept``: the node's pending items (:meth:`_pending`)."""
         present: set[int] = set()
         future: list[Wire] = []
-        pending = {item.label: item.call for item in node.stack}
-        task = self.grounder.task
+        # The calls of the pending functionalities: an end at a method is not known.
+        pending = {
+            item.label: item.call
+            for item, (_, on) in zip(node.stack, kept.items, strict=True)
+            if on is not None
+        }
+        located, graph = node.located.get, self.graph
         for ch in node.channels:
-            src, dst = node.located.get(ch.source), node.located.get(ch.target)
+            src, dst = located(ch.source), located(ch.target)
             if src is not None and dst is not None:
-                present.update(self.graph.wire(ch.kind, ch.data, src.call, dst.call).counted)
+                present.update(graph.between(ch, src, dst).counted)
                 continue
             sender = src.call if src is not None else pending.get(ch.source)
             receiver = dst.call if dst is not None else pending.get(ch.target)
-            if sender is not None and task.is_method(sender):
-                sender = None
-            if receiver is not None and task.is_method(receiver):
-                receiver = None
-            future.append(self.graph.wire(ch.kind, ch.data, sender, receiver))
+            future.append(graph.wire(ch.kind, ch.data, sender, receiver))
         return present, future

@@ -42,7 +42,7 @@ class Split:
 def split_at(top: Instance, rest: float, priced: Sequence[float]) -> Split:
     """The split of a node whose top item is the method instance ``top``,
     its expansions ``priced`` in option order by its refinement
-    (:class:`cfgplan.planner.prices.Least`: each price the one the
+    (:class:`cfgplan.planner.least.Least`: each price the one the
     refinement took the cheapest of, so that a child's bound is never above
     a completion's cost)."""
     return Split(rest, {option.choice: priced[n] for n, option in enumerate(top.options)})
