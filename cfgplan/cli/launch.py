@@ -252,7 +252,12 @@ def launch(
         usage_error("names the hosts of --print-commands: give --print-commands", "--host")
     addresses = dict(_parse_hosts(hosts or ()))
     problem = load_problem(
-        domain, state, goal, None if weights is None else parse_weights(weights), sequence=True
+        domain,
+        state,
+        goal,
+        None if weights is None else parse_weights(weights),
+        sequence=True,
+        lasting=True,
     )
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     from cfgplan.reconfigure.local import coordinator_of

@@ -32,6 +32,15 @@ from cfgplan.problem import GOAL_SOURCE, Problem, load
 if TYPE_CHECKING:
     from cfgplan.planner.report import Report
 
+YOUNG = 50_000
+"""New objects between two young collections of the cycle collector in a
+process that plans and exits (Python's default: 700). A search makes many
+objects that live on (nodes, the bounds' caches) and next to no cyclic
+garbage (none on the benchmark families): fewer, larger young collections
+walk fewer of them before they die or grow old. Planning chain D=200 took
+475 ms instead of 550. A command that runs on (:func:`load_problem`'s
+``lasting``) keeps Python's pace: its pauses stay short."""
+
 __all__ = [
     "DomainArg",
     "ForceOpt",
@@ -146,9 +155,12 @@ def load_problem(
     goal: str | list[str] | None,
     weights: Weights | None,
     sequence: bool = False,
+    lasting: bool = False,
 ) -> Problem:
     """Read, check and compile; warnings go to stderr. Unless ``sequence``,
-    the command plans one configuration and refuses a sequence of goals."""
+    the command plans one configuration and refuses a sequence of goals.
+    ``lasting``: the command runs on after planning (a society), so the cycle
+    collector keeps Python's pace (see :data:`YOUNG`)."""
     goals = [goal] if isinstance(goal, str) else list(goal or [])
     if goals:
         remember_source(GOAL_SOURCE, "\n".join(f"(goal {g})" for g in goals))
@@ -160,6 +172,8 @@ def load_problem(
         # (13 % of planning chain D=200). Frozen objects are never collected,
         # so only where one command is the whole process.
         gc.freeze()
+        if not lasting:
+            gc.set_threshold(YOUNG, *gc.get_threshold()[1:])
     report(problem.warnings)
     if len(problem.goals) > 1 and not sequence:
         raise CfgplanError(

@@ -247,7 +247,7 @@ def run(
         )
     if ros_domain_id is not None and not (ros2 or ros2_map):
         usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
-    problem = load_problem(domain, state, goal, weights, sequence=True)
+    problem = load_problem(domain, state, goal, weights, sequence=True, lasting=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p) for p in deploy(config, problem.domain)]
     options = RunOptions(

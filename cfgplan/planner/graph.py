@@ -9,9 +9,10 @@ and cheapest derivations (:mod:`cfgplan.planner.partition`,
 :mod:`cfgplan.planner.prices`, :mod:`cfgplan.planner.least`), how often the
 media let a shared cost occur (:mod:`cfgplan.planner.capacity`), and the
 independent parts of a goal (:mod:`cfgplan.planner.components`). What the
-graph holds of an expansion is what those passes read: its children and their numbers, its own channels as
-the bound prices them (:class:`~cfgplan.planner.prices.Wire`), the agents its
-functionalities run on, and what its global channels need of the media
+graph holds of an expansion is what those passes read: its children and
+their numbers, its own channels as the bound prices them
+(:class:`~cfgplan.planner.prices.Wire`), the agents its functionalities run
+on, and what its global channels need of the media
 (:mod:`cfgplan.planner.room`).
 """
 

@@ -140,3 +140,29 @@ def test_what_one_command_reads_is_frozen_and_many_commands_freeze_nothing() -> 
     assert isinstance(many[0], int) and isinstance(many[1], int)
     assert one[1] - one[0] > 1_000  # the IR, the task, the parser's work
     assert abs(many[1] - many[0]) < 100  # (frozen objects die, a few move)
+
+
+def test_a_command_that_plans_and_exits_collects_young_objects_less_often() -> None:
+    """After reading, a one-command process that plans and exits makes the
+    cycle collector's young collections rarer (:data:`cfgplan.cli.options.YOUNG`
+    new objects apart): the search makes many lasting objects and next to
+    no cyclic garbage. A command that runs on (``lasting``: a society) and a
+    process running several commands keep Python's pace; the collector stays
+    on and still collects a cycle."""
+    read = (
+        "from cfgplan.cli.options import YOUNG, load_problem\n"
+        "from pathlib import Path\n"
+        "app._load(['plan'])\n"
+        "d = Path('domains/cross-door')\n"
+        "before = gc.get_threshold()[0]\n"
+        "{set}load_problem(d / 'domain.lisp', d / 'state-6.2.2-step1.lisp', None, None{lasting})\n"
+        "a = []; a.append(a); del a\n"
+        "print(json.dumps([before, gc.get_threshold()[0], YOUNG, gc.isenabled(), gc.collect()]))"
+    )
+    one = _gc_after(read.format(set="app.ONE_COMMAND.set(True)\n", lasting=""))
+    lasting = _gc_after(read.format(set="app.ONE_COMMAND.set(True)\n", lasting=", lasting=True"))
+    many = _gc_after(read.format(set="", lasting=""))
+    assert one[0] == 700 and one[1] == one[2] and one[2] != 700  # Python's default, then YOUNG
+    assert lasting[1] == lasting[0] == many[1] == many[0] == 700
+    for found in (one, lasting, many):
+        assert found[3] is True and isinstance(found[4], int) and found[4] >= 1  # the cycle
