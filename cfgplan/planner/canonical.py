@@ -17,12 +17,21 @@ from array import array
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Partial
+from cfgplan.planner.partial import Channel, Partial
 
 
 def placed_names(node: Partial) -> dict[int, int]:
     """Each placed instance's call, numbered, by label."""
     return {p.label: p.name for p in node.placed}
+
+
+def channel_number(channel: Channel, number: Numbering) -> int:
+    """The channel's kind, robots, data and bandwidth, numbered: made with
+    it (:attr:`cfgplan.planner.partial.Channel.number`) or looked up now."""
+    found = channel.number
+    if found < 0:
+        found = number((channel.kind, channel.robots, channel.data, channel.bandwidth))
+    return found
 
 
 def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> list[int]:
@@ -31,10 +40,7 @@ def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> 
     get = number.numbers.get
     out = []
     for ch in node.channels:
-        n = ch.number
-        if n < 0:
-            n = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
-        key = (n, names[ch.source], names[ch.target])
+        key = (channel_number(ch, number), names[ch.source], names[ch.target])
         found = get(key)
         out.append(number(key) if found is None else found)
     return out

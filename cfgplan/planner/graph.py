@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Container
 from dataclasses import dataclass, field
 
+from cfgplan.planner.canonical import channel_number
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Channel, Placed
@@ -96,10 +97,7 @@ class Graph:
         """:meth:`wire` of ``channel`` with both ends placed, looked up by
         small integers (its number and the ends' names: the same kind, data
         and calls) rather than by the calls themselves."""
-        number = channel.number
-        if number < 0:
-            number = self.number((channel.kind, channel.robots, channel.data, channel.bandwidth))
-        ident = (number, sender.name, receiver.name)
+        ident = (channel_number(channel, self.number), sender.name, receiver.name)
         found = self._between.get(ident)
         if found is None:
             found = self._between[ident] = self.wire(

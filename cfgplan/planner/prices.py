@@ -71,7 +71,7 @@ class Wire:
     counted: tuple[int, ...]
     shares: tuple[int, ...]
     free: int
-    number: int = -1
+    number: int
 
 
 def wire_keys(
