@@ -17,7 +17,7 @@ from cfgplan.ir.model import Domain, Goal, Span, State
 from cfgplan.notation import atom_text
 from cfgplan.planner.compile import compile_task, pattern
 from cfgplan.planner.task import Ground, Task
-from cfgplan.syntax.reader import parse, read_domain, read_state
+from cfgplan.syntax.reader import collection_paused, parse, read_domain, read_state
 
 GOAL_SOURCE = "--goal"
 
@@ -92,25 +92,26 @@ def load(
     """Read and check a domain and a state. The goals come from ``goal_text``
     (one, or several for a sequence), else from the state file's ``(goal ...)``
     or ``(sequence ...)``. Raises CfgplanError (with every error found) on bad input."""
-    domain, _ = read_domain(domain_path)
-    state, _ = read_state(state_path)
-    texts = [goal_text] if isinstance(goal_text, str) else list(goal_text or [])
-    goals: tuple[Goal, ...]
-    if texts:
-        goals = tuple(parse_goal(t, line) for line, t in enumerate(texts, 1))
-    else:
-        goals = (state.goal,) if state.goal is not None else state.sequence
-    if not goals:
-        raise error(
-            f"no goal: {state_path} has no (goal ...) form and --goal was not given",
-            hint=f"add (goal {example_goal(domain)}) to the state file, or pass --goal",
-        )
-    diagnostics: list[Diagnostic] = []
-    for goal in goals:
-        diagnostics += [d for d in check(domain, state, goal) if d not in diagnostics]
-    errors = [d for d in diagnostics if d.is_error]
-    if errors:
-        raise CfgplanError(diagnostics)
-    task = compile_task(domain, state, weights)
-    warnings = [d for d in diagnostics if not d.is_error]
-    return Problem(domain, state, goals[0], task, warnings, goals)
+    with collection_paused():  # reading, checking and compiling make many young objects
+        domain, _ = read_domain(domain_path)
+        state, _ = read_state(state_path)
+        texts = [goal_text] if isinstance(goal_text, str) else list(goal_text or [])
+        goals: tuple[Goal, ...]
+        if texts:
+            goals = tuple(parse_goal(t, line) for line, t in enumerate(texts, 1))
+        else:
+            goals = (state.goal,) if state.goal is not None else state.sequence
+        if not goals:
+            raise error(
+                f"no goal: {state_path} has no (goal ...) form and --goal was not given",
+                hint=f"add (goal {example_goal(domain)}) to the state file, or pass --goal",
+            )
+        diagnostics: list[Diagnostic] = []
+        for goal in goals:
+            diagnostics += [d for d in check(domain, state, goal) if d not in diagnostics]
+        errors = [d for d in diagnostics if d.is_error]
+        if errors:
+            raise CfgplanError(diagnostics)
+        task = compile_task(domain, state, weights)
+        warnings = [d for d in diagnostics if not d.is_error]
+        return Problem(domain, state, goals[0], task, warnings, goals)

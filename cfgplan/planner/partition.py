@@ -96,8 +96,9 @@ class Kept:
         waiting for an end are ``future`` (each will be one channel of the
         configuration: its counted keys one more), and the wires' prices at
         those totals found so far (:attr:`cfgplan.planner.prices.Prices.shared`).
-        Kept, as the last answer (siblings' channels wait alike): the totals
-        never to be changed, the prices only added to."""
+        Kept, as the last answer, from the second node with these items on
+        (siblings' channels wait alike): the totals never to be changed, the
+        prices only added to."""
         ident = tuple(map(id, future))
         if self._totals is None or ident != self._future:
             assert self.pending is not None  # the bound is on for these items
@@ -108,6 +109,11 @@ class Kept:
                 raised.extend(wire.counted)
                 for key in wire.counted:
                     totals[key] = get(key, 0) + 1
+            if not self.evaluated:
+                # The first node with these items: most stacks are met once
+                # (a chain), and a copy of the totals kept for each of
+                # them would add a tenth to the search's memory.
+                return totals, {}
             self._future, self._totals, self._shared = ident, totals, {}
             self._raised, self._touched = tuple(raised), None
         return self._totals, self._shared
@@ -140,6 +146,13 @@ class Partition:
     _stacks: dict[tuple[Ground, ...], Kept] = field(default_factory=dict)
     _sums: dict[tuple[Ground, ...], Counts] = field(default_factory=dict)
     """The summed counts of stacks and their suffixes (:meth:`_sum`)."""
+    _extra: dict[Ground, tuple[Counter[Ground], Counts]] = field(default_factory=dict)
+    """A method instance's counts taken apart (:meth:`_count`): the children
+    every option has, and the most of the rest."""
+    _over: dict[tuple[Ground, ...], tuple[Ground, Counts]] = field(default_factory=dict)
+    """A stack's items below its top, and the top and the stack's summed
+    counts: what a child's stack that ends with those items is summed from
+    (:meth:`_derive`)."""
 
     def __post_init__(self) -> None:
         task, self.number = self.grounder.task, self.grounder.numbering
@@ -188,7 +201,9 @@ class Partition:
                 add(total, self._counts[child])
             else:
                 total = dict(self._counts[child])
-        add(total, most(self._option_count(option, shared) for option in options))
+        extra = most(self._option_count(option, shared) for option in options)
+        self._extra[instance.call] = shared, extra
+        add(total, extra)
         return total
 
     def _option_count(self, option: Option, shared: Counter[Ground]) -> Counts:
@@ -288,15 +303,76 @@ class Partition:
         found = self._stacks.get(calls)
         if found is None:
             if len(self._stacks) >= STACKS:
-                self._stacks.clear()
-                self._sums.clear()
-            found = self._stacks[calls] = Kept(self._sum(calls))
+                self.forget()
+            derived = self._derive(calls)
+            if derived is not None:
+                self._sums[calls] = derived
+            found = self._stacks[calls] = Kept(self._sum(calls) if derived is None else derived)
             if found.pending is not None:
                 method, instances = self.grounder.task.is_method, self.graph.instances
                 found.items = tuple(
                     (instances[call].key, None if method(call) else call[1]) for call in calls
                 )
+                if calls and method(calls[0]):
+                    self._over[calls[1:]] = calls[0], found.pending
         return found
+
+    def forget(self) -> None:
+        """Forget every stack's sums and evaluations (memory stays bounded:
+        :data:`STACKS`)."""
+        self._stacks.clear()
+        self._sums.clear()
+        self._over.clear()
+
+    def _derive(self, calls: tuple[Ground, ...]) -> Counts | None:
+        """The summed counts of ``calls`` made from those of a parent's stack,
+        ``(top, *below)`` where ``calls`` ends with ``below`` (among the next
+        :data:`SUFFIXES` suffixes): the top's counts are those of the children
+        every option has plus the most of the rest (:meth:`_count`), so the
+        sum is the parent's less that rest, less those children no longer
+        pending (placed), plus the items that are not among them (and each
+        pending functionality's agent). On a chain, a few keys a level
+        instead of every level below (:meth:`_sum` adds up the level below
+        the top). None when no such parent was summed. Integers: the same
+        sums as made afresh (a key counted 0 times is left out, as there)."""
+        for start in range(1, min(len(calls), SUFFIXES) + 1):
+            found = self._over.get(calls[start:])
+            if found is not None:
+                break
+        else:
+            return None
+        top, summed = found
+        extra = self._extra.get(top)
+        if extra is None:
+            return None
+        shared, rest = extra
+        pending = Counter(calls[:start])
+        totals = dict(summed)
+        get, counts = totals.get, self.counts
+        changed = list(rest)
+        for key, n in rest.items():
+            totals[key] = get(key, 0) - n
+        for call in (shared - pending).elements():
+            below = counts(call)
+            assert below is not None  # below a top that does not recur
+            changed.extend(below)
+            for key, n in below.items():
+                totals[key] = get(key, 0) - n
+        for call in (pending - shared).elements():
+            below = counts(call)
+            if below is None:
+                return None
+            for key, n in below.items():
+                totals[key] = get(key, 0) + n
+        is_method = self.grounder.task.is_method
+        for call in calls[:start]:
+            if not is_method(call):
+                key = self.number(("@", call[1]))
+                totals[key] = get(key, 0) + 1
+        for key in changed:
+            if totals.get(key) == 0:
+                del totals[key]
+        return totals
 
     def _sum(self, calls: tuple[Ground, ...]) -> Counts | None:
         """The pending items' counts added up (None: some can recur). A
@@ -316,11 +392,22 @@ class Partition:
                 return None
             sums[calls[1:]] = rest
         total = sums[calls[start:]]
+        is_method = self.grounder.task.is_method
         for i in range(start - 1, -1, -1):
-            added = self._add(calls[i : i + 1], dict(total))
-            if added is None:
+            call = calls[i]
+            counts = self.counts(call)
+            if counts is None:
                 return None
-            total = sums[calls[i:]] = added
+            # The larger copied, the smaller added to it: a level of a deep
+            # chain counts every level below, the items below it few.
+            small, total = (
+                (total, dict(counts)) if len(counts) > len(total) else (counts, dict(total))
+            )
+            add(total, small)
+            if not is_method(call):
+                key = self.number(("@", call[1]))
+                total[key] = total.get(key, 0) + 1
+            sums[calls[i:]] = total
         return total
 
     def _add(self, calls: tuple[Ground, ...], totals: Counts) -> Counts | None:

@@ -17,6 +17,7 @@ from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.plan import combined
 from cfgplan.planner.successors import successors
+from cfgplan.planner.task import Ground
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
 
@@ -118,8 +119,10 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
     family: str,
 ) -> None:
     """A child's stack of pending items is its parent's with the top replaced
-    by the top's body, so partition._sum makes a stack's summed counts from
-    those of its longest suffix summed before. Each must be the plain sum of
+    by the top's body, so partition._derive makes a stack's summed counts
+    from its parent's (less the top's counts but those of the children
+    every option has), else partition._sum from those of its longest suffix
+    summed before. Each must be the plain sum of
     the items' counts (and a pending functionality's agent key), as made
     afresh; and each instance's order (made from its children's) must hold
     every instance below it once, each after all of its children."""
@@ -129,13 +132,33 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
     problem = load_text(*made[family]())
     grounder, bound = Grounder(problem.task), Bound(problem.task)
     partition = Partition(grounder)
+    derive, derived = partition._derive, 0
+
+    def counting(calls: tuple[Ground, ...]) -> dict[int, int] | None:
+        nonlocal derived
+        found = derive(calls)
+        derived += found is not None
+        return found
+
+    partition._derive = counting  # type: ignore[method-assign]
     stacks = []
     for node in some_nodes(grounder, problem.goal_call):
         partition.estimate(node, bound.certain_agents(node))
-        stacks.append(tuple(item.call for item in node.stack))
+        calls = tuple(item.call for item in node.stack)
+        stacks.append(calls)
+        plain: dict[int, int] = {}
+        for call in calls:
+            for key, n in (partition.counts(call) or {}).items():
+                plain[key] = plain.get(key, 0) + n
+            if not problem.task.is_method(call):
+                key = partition.number(("@", call[1]))
+                plain[key] = plain.get(key, 0) + 1
+        assert partition._stacks[calls].pending == plain  # as the search summed it
+    if family != "fusion":  # (fusion: siblings, one stack summed for all)
+        assert derived >= len(set(stacks)) // 2  # most from their parents' (_derive)
     from_suffix = 0
     for calls in stacks:
-        plain: dict[int, int] = {}
+        plain = {}
         for call in calls:
             for key, n in (partition.counts(call) or {}).items():
                 plain[key] = plain.get(key, 0) + n

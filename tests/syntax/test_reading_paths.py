@@ -201,3 +201,34 @@ def test_reading_a_file_pauses_the_collector(
     path.write_text("(state (robot Pippi))")
     reader.read_state(path)
     assert seen == [False]
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_loading_a_problem_pauses_the_collector_until_it_is_compiled(
+    enabled: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """cfgplan.problem.load keeps the collector off while it checks and
+    compiles what it read, not only while the parser runs, and leaves it as
+    it was, after a refused problem too."""
+    import cfgplan.problem as problem
+
+    seen: list[bool] = []
+    real = problem.compile_task
+
+    def compiling(*args: Any, **kwargs: Any) -> Any:
+        seen.append(gc.isenabled())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(problem, "compile_task", compiling)
+    cross = ROOT / "domains" / "cross-door"
+    was = gc.isenabled()
+    try:
+        (gc.enable if enabled else gc.disable)()
+        loaded = problem.load(cross / "domain.lisp", cross / "state-6.2.2-step1.lisp")
+        assert gc.isenabled() is enabled
+        with pytest.raises(CfgplanError):
+            problem.load(cross / "domain.lisp", cross / "state-6.2.2-step1.lisp", "(no-such R)")
+        assert gc.isenabled() is enabled
+    finally:
+        (gc.enable if was else gc.disable)()
+    assert seen == [False] and loaded.task is not None
