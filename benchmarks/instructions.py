@@ -31,7 +31,7 @@ from pathlib import Path
 
 from benchmarks.instances import Instance, by_name, problem_files
 
-__all__ = ["NAMES", "Options", "count", "main", "plan_runs"]
+__all__ = ["NAMES", "Options", "count", "main", "plan_runs", "warm"]
 
 NAMES = (
     "cross-door 6.2.2",
@@ -92,6 +92,17 @@ def _callgrind(name: str, runs: int, options: Options, against: Path | None) -> 
     return int(found.group(1))
 
 
+def warm(name: str, against: Path | None = None) -> None:
+    """Run :func:`plan_runs` of ``name`` once, uncounted, so that the counted
+    processes find the tree's bytecode (and the parser's tables) written:
+    else the first of them compiles every module it imports, and its count
+    is that of compiling (a tree checked out by ``--against`` is fresh)."""
+    from benchmarks.run import harness_command
+
+    command, cwd = harness_command("instructions", ["--one", name, "0"], against)
+    subprocess.run(command, cwd=cwd, capture_output=True, check=True)
+
+
 def count(name: str, options: Options, against: Path | None = None) -> float:
     """Instructions of one warm planning run of instance ``name``; with
     ``against`` (a folder made by :func:`benchmarks.run.checkout`), of the
@@ -150,6 +161,9 @@ def main() -> None:
             except subprocess.CalledProcessError:
                 print(f"cfgplan: no git revision {args.against!r} here", file=sys.stderr)
                 raise SystemExit(1) from None
+        warm(names[0])
+        if against is not None:
+            warm(names[0], against)
         for name in names:
             now = count(name, options)
             if against is None:
