@@ -54,12 +54,11 @@ class Bound:
 
     task: Task
     grounder: Grounder | None = None
-    """The search's grounding memo, whose bindings the summaries share."""
+    """The search's grounding memo, whose expansions the summaries read."""
     summaries: Summaries = field(init=False)
 
     def __post_init__(self) -> None:
-        binder = None if self.grounder is None else self.grounder.method_bindings
-        self.summaries = Summaries(self.task, binder)
+        self.summaries = Summaries(self.task, self.grounder)
 
     def feasible(self, node: Partial) -> float | None:
         """0 when every pending item may still complete, else None (no

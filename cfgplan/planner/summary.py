@@ -4,7 +4,10 @@ summaries the bound of a node is made of (:mod:`cfgplan.planner.bound`).
 A :class:`Summary` intersects the expansions of one ground instance (4.5:
 its method versions and precondition bindings): the functionality
 instances, robots and channels all of them hold, and the least their
-functionalities and channels can cost. They depend only on the task, so one
+functionalities and channels can cost. The expansions are the grounder's
+(:meth:`cfgplan.planner.ground.Grounder.expansions`: the ground instances
+every pass of the planner reads, the search's steps and the graph's options
+alike), made once. They depend only on the task, so one
 :class:`Summaries` serves every search of a task. Summaries are computed
 without recursion (a method hierarchy may be thousands of levels deep):
 :meth:`Summaries.summary` runs the summarising generators on an explicit
@@ -13,16 +16,17 @@ stack.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator, Iterable
+from collections.abc import Generator
 from dataclasses import dataclass, field, replace
 
 from cfgplan.planner import clock
-from cfgplan.planner.ground import Grounder, channel_kind
+from cfgplan.planner.ground import Expansion, Grounder
 from cfgplan.planner.match import exists
 from cfgplan.planner.partial import Key
 from cfgplan.planner.parts import Part, least, own_part
-from cfgplan.planner.task import Ground, MethodSchema, Signature, Task
-from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
+from cfgplan.planner.report import DeadEnd
+from cfgplan.planner.task import Ground, Signature, Task
+from cfgplan.planner.unify import bind_name, substitute
 
 ChannelId = tuple[str, Ground, Key | None, Key | None]
 """(kind, data, sender, receiver): None where the end is not known yet."""
@@ -86,9 +90,6 @@ too: the search prunes the recursion on its own path, but another version
 may still complete, and the bound must not cut a node that has a completion.
 """
 
-Binder = Callable[[MethodSchema, Ground], Iterable[Bindings]]
-"""Every binding of a method version's preconditions for a call, in order."""
-
 Summarising = Generator[Ground, Summary, Summary]
 """A summary being made: it yields each call whose summary it needs, is sent
 that summary, and returns its own."""
@@ -100,10 +101,9 @@ class Summaries:
     signature can reach, memoised."""
 
     task: Task
-    binder: Binder | None = None
-    """The bindings of a method version for a call: the search's grounding
-    memo's (:meth:`cfgplan.planner.ground.Grounder.method_bindings`), so that
-    each ground instance is matched once; None: a memo of its own."""
+    grounder: Grounder | None = None
+    """The ground instances summarised: the search's grounding memo, so that
+    each is matched and instantiated once; None: a memo of their own."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
     _reached: dict[Signature, tuple[frozenset[str], frozenset[str], frozenset[str]]] = field(
         default_factory=dict
@@ -117,7 +117,8 @@ class Summaries:
     _walked: set[Ground] = field(default_factory=set)
 
     def __post_init__(self) -> None:
-        self._bind = self.binder or Grounder(self.task).method_bindings
+        grounder = self.grounder or Grounder(self.task)
+        self._expansions = grounder.expansions
 
     def summary(self, call: Ground) -> Summary:
         """What every feasible expansion of ``call`` contains (memoised)."""
@@ -218,11 +219,10 @@ class Summaries:
             clock.check()
             call = todo.pop()
             for method in self.task.versions(call):
-                for env in self._bind(method, call):
-                    for _, pattern in method.body:
-                        child = substitute(pattern, env)
-                        if not is_ground(child):
-                            continue
+                for expansion in self._expansions(method, call):
+                    if isinstance(expansion, DeadEnd):
+                        continue  # (the checker refuses a variable bound by nothing)
+                    for child in expansion.body:
                         if not self.task.is_method(child):
                             self._parents.setdefault(child, set()).add(call)
                         elif child not in self._walked:
@@ -271,8 +271,10 @@ class Summaries:
             )
         expansions: list[Expanded] = []
         for method in self.task.versions(call):
-            for env in self._bind(method, call):
-                expansion = yield from self._expansion(call, method, env)
+            for ground in self._expansions(method, call):
+                if isinstance(ground, DeadEnd):
+                    continue  # a variable bound by nothing: it never expands
+                expansion = yield from self._expansion(call, ground)
                 if expansion is not None:
                     expansions.append(expansion)
         if not expansions:
@@ -291,33 +293,25 @@ class Summaries:
         return Summary(True, funcs, robots, channels, producers, minimum, wiring, together)
 
     def _expansion(
-        self, caller: Ground, method: MethodSchema, env: Bindings
+        self, caller: Ground, expansion: Expansion
     ) -> Generator[Ground, Summary, Expanded | None]:
-        body: dict[str, tuple[Ground, Summary, bool]] = {}
+        body: list[tuple[Ground, Summary, bool]] = []
         funcs: set[Key] = set()
         robots: set[str] = set()
         channels: set[ChannelId] = set()
-        for label, pattern in method.body:
-            call = substitute(pattern, env)
-            if not is_ground(call):
-                return None
+        for call in expansion.body:
             sub = yield call
             if not sub.feasible:
                 return None
-            body[label] = (call, sub, not self.task.is_method(call))
+            body.append((call, sub, not self.task.is_method(call)))
             funcs |= sub.functionalities
             robots |= sub.robots
             channels |= sub.channels
         own: set[tuple[str, Ground]] = set()
         into_own: set[tuple[str, Ground, Ground]] = set()  # channels into an own functionality
-        for spec in method.channels:
-            data = substitute(spec.data, env)
-            ends = substitute(("robots", *spec.robots), env)
-            if not is_ground(data) or not is_ground(ends):
-                return None
-            kind = channel_kind(spec.kind, ends[1:])[0]
-            src_call, src_sum, src_func = body[spec.source]
-            dst_call, _, dst_func = body[spec.target]
+        for kind, _, source, target, data, _ in expansion.channels:
+            src_call, src_sum, src_func = body[source]
+            dst_call, _, dst_func = body[target]
             if dst_func and self._own(dst_call, caller):
                 into_own.add((kind, data, dst_call))
             else:
@@ -326,10 +320,9 @@ class Summaries:
             receiver = dst_call if dst_func else None
             channels.add((kind, data, sender, receiver))
         producers: dict[Ground, Key | None] = {}
-        for port in method.outputs:
-            data = substitute(port.data, env)
-            call, sub, is_functionality = body[port.label]
-            producers.setdefault(data, call if is_functionality else sub.producer(data))
+        for data, (offset, _) in expansion.outputs.items():
+            call, sub, is_functionality = body[offset]
+            producers[data] = call if is_functionality else sub.producer(data)
         # A part is named by what it can reach; an own functionality (and a
         # channel into one) by itself alone: it shares with no other part.
         own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
@@ -340,7 +333,7 @@ class Summaries:
         # taken as sharing that cannot: weaker, still a bound).
         whole = list(wires)
         parts: list[Part] = []
-        for call, sub, func in body.values():
+        for call, sub, func in body:
             reached, carried, both = self.reach(call)
             wires.append((carried, sub.wiring))
             if func and self._own(call, caller):

@@ -60,14 +60,14 @@ def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
     assert config.cost == 10 + 2 + 1
 
 
-def test_the_grounding_memo_s_bindings_give_the_same_summaries() -> None:
-    """The search's summaries read the bindings the grounding memo made
-    (:attr:`Summaries.binder`); with a memo of their own, they must be the same,
-    with two helpers (three expansions of ``(get A)``) and with none."""
+def test_the_grounding_memo_s_expansions_give_the_same_summaries() -> None:
+    """The search's summaries read the expansions the grounding memo made
+    (:attr:`Summaries.grounder`); with a memo of their own, they must be the
+    same, with two helpers (three expansions of ``(get A)``) and with none."""
     for state, helpers in (("(robot A) (robot B) (helper B) (helper C)", 2), ("(robot A)", 0)):
         problem = load_text(TWO_VERSIONS, f"(state {state}) (goal (go A))")
         grounder = Grounder(problem.task)
-        shared = Summaries(problem.task, grounder.method_bindings)
+        shared = Summaries(problem.task, grounder)
         own = Summaries(problem.task)
         for call in [("go", "A"), ("get", "A"), ("get", "B"), ("act", "A")]:
             assert shared.summary(call) == own.summary(call)
