@@ -2,7 +2,9 @@
 option per feasible expansion (its method versions in domain order, the
 bindings of their preconditions in state order), every functionality
 instance with its weight. Made on demand from the grounder's expansions,
-each instance once, and kept for the task (:func:`cfgplan.planner.plan.parts`).
+each instance once, and kept by the grounder
+(:meth:`cfgplan.planner.ground.Grounder.graph`: one per task, as the grounder
+is, :func:`cfgplan.planner.plan.parts`), numbered by its numbering.
 
 The passes over it are elsewhere: the partitioned bound's occurrence counts
 and cheapest derivations (:mod:`cfgplan.planner.partition`,

@@ -50,13 +50,12 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from cfgplan.planner.capacity import Capacity
-from cfgplan.planner.graph import Graph, Instance, Option
+from cfgplan.planner.graph import Instance, Option
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.least import Evaluation, Least
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.prices import Counts, Prices, Wire, add, most
-from cfgplan.planner.room import Room
 from cfgplan.planner.split import Split, split_at
 from cfgplan.planner.task import Ground
 
@@ -156,10 +155,9 @@ class Partition:
 
     def __post_init__(self) -> None:
         task, self.number = self.grounder.task, self.grounder.numbering
-        self.room = Room(task, self.number, self.media)
-        self.graph = Graph(self.grounder, self.room, self.number)
-        """The AND/OR graph of ground instances this bound is a pass over."""
-        graph = self.graph
+        self.graph = graph = self.grounder.graph(self.media)
+        """The AND/OR graph of ground instances this bound is a pass over (the grounder's)."""
+        self.room = graph.room
         self.capacity = Capacity(task, self.room, self.number, graph.instances, graph.order)
         self.least = Least(self.room, self.number, graph.made)
 
