@@ -54,11 +54,13 @@ class Bound:
 
     task: Task
     grounder: Grounder | None = None
-    """The search's grounding memo, whose expansions the summaries read."""
+    """The search's grounding memo, whose graph the summaries are a pass over."""
+    media: bool = True
+    """Which of its graphs (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
     summaries: Summaries = field(init=False)
 
     def __post_init__(self) -> None:
-        self.summaries = Summaries(self.task, self.grounder)
+        self.summaries = Summaries(self.task, self.grounder, self.media)
 
     def feasible(self, node: Partial) -> float | None:
         """0 when every pending item may still complete, else None (no

@@ -6,8 +6,9 @@ each instance once, and kept by the grounder
 (:meth:`cfgplan.planner.ground.Grounder.graph`: one per task, as the grounder
 is, :func:`cfgplan.planner.plan.parts`), numbered by its numbering.
 
-The passes over it are elsewhere: the partitioned bound's occurrence counts
-and cheapest derivations (:mod:`cfgplan.planner.partition`,
+The passes over it are elsewhere: what every expansion of an instance
+contains (:mod:`cfgplan.planner.summary`, the first bound), the partitioned
+bound's occurrence counts and cheapest derivations (:mod:`cfgplan.planner.partition`,
 :mod:`cfgplan.planner.prices`, :mod:`cfgplan.planner.least`), how often the
 media let a shared cost occur (:mod:`cfgplan.planner.capacity`), and the
 independent parts of a goal (:mod:`cfgplan.planner.components`). What the
@@ -43,6 +44,7 @@ class Option:
     agents: tuple[str, ...]  # agents its functionality children run on, each once
     agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
     needs: tuple[Need, ...]  # what its own global channels need of the media
+    expansion: Expansion  # the grounder's, which it stands for (what the summaries read)
     choice: int = 0  # its number among the method's expansions, as successors numbers them
 
 
@@ -193,7 +195,7 @@ class Graph:
         keys = tuple(self.number(("@", agent)) for agent in agents)
         children = tuple(self.number(("f", call)) for call in expansion.body)
         needs = self.room.needs(expansion.channels)
-        return Option(expansion.body, children, channels, agents, keys, needs, choice)
+        return Option(expansion.body, children, channels, agents, keys, needs, expansion, choice)
 
     def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
         """An own channel of an expansion: an end at a functionality of the body

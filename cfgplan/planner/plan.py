@@ -49,7 +49,7 @@ def parts(task: Task, media: bool = True) -> tuple[Grounder, Bound, Partition]:
     if found is None:
         grounder = Grounder(task)
         partition = Partition(grounder, media)
-        found = task.memo[key] = (grounder, Bound(task, grounder), partition)
+        found = task.memo[key] = (grounder, Bound(task, grounder, media), partition)
     return found
 
 

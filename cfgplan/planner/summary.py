@@ -4,10 +4,10 @@ summaries the bound of a node is made of (:mod:`cfgplan.planner.bound`).
 A :class:`Summary` intersects the expansions of one ground instance (4.5:
 its method versions and precondition bindings): the functionality
 instances, robots and channels all of them hold, and the least their
-functionalities and channels can cost. The expansions are the grounder's
-(:meth:`cfgplan.planner.ground.Grounder.expansions`: the ground instances
-every pass of the planner reads, the search's steps and the graph's options
-alike), made once. They depend only on the task, so one
+functionalities and channels can cost. It is a pass over the grounder's
+graph of ground instances (:meth:`cfgplan.planner.ground.Grounder.graph`:
+each option stands for one of the expansions the search takes), as the
+partitioned bound is. They depend only on the task, so one
 :class:`Summaries` serves every search of a task. Summaries are computed
 without recursion (a method hierarchy may be thousands of levels deep):
 :meth:`Summaries.summary` runs the summarising generators on an explicit
@@ -24,7 +24,6 @@ from cfgplan.planner.ground import Expansion, Grounder
 from cfgplan.planner.match import exists
 from cfgplan.planner.partial import Key
 from cfgplan.planner.parts import Part, least, own_part
-from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.task import Ground, Signature, Task
 from cfgplan.planner.unify import bind_name, substitute
 
@@ -102,8 +101,12 @@ class Summaries:
 
     task: Task
     grounder: Grounder | None = None
-    """The ground instances summarised: the search's grounding memo, so that
-    each is matched and instantiated once; None: a memo of their own."""
+    """Whose graph of ground instances is summarised (:meth:`Grounder.graph`):
+    the search's, so that each instance is matched and instantiated once;
+    None: a grounder of their own."""
+    media: bool = True
+    """Which of the grounder's graphs (:attr:`cfgplan.planner.options.SearchOptions.media`):
+    the one the partitioned bound reads too."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
     _reached: dict[Signature, tuple[frozenset[str], frozenset[str], frozenset[str]]] = field(
         default_factory=dict
@@ -118,7 +121,7 @@ class Summaries:
 
     def __post_init__(self) -> None:
         grounder = self.grounder or Grounder(self.task)
-        self._expansions = grounder.expansions
+        self._instance = grounder.graph(self.media).instance
 
     def summary(self, call: Ground) -> Summary:
         """What every feasible expansion of ``call`` contains (memoised)."""
@@ -218,16 +221,13 @@ class Summaries:
         while todo:
             clock.check()
             call = todo.pop()
-            for method in self.task.versions(call):
-                for expansion in self._expansions(method, call):
-                    if isinstance(expansion, DeadEnd):
-                        continue  # (the checker refuses a variable bound by nothing)
-                    for child in expansion.body:
-                        if not self.task.is_method(child):
-                            self._parents.setdefault(child, set()).add(call)
-                        elif child not in self._walked:
-                            self._walked.add(child)
-                            todo.append(child)
+            for option in self._instance(call).options:
+                for child in option.children:
+                    if not self.task.is_method(child):
+                        self._parents.setdefault(child, set()).add(call)
+                    elif child not in self._walked:
+                        self._walked.add(child)
+                        todo.append(child)
 
     def beyond(self, functionality: Ground, ancestors: frozenset[Ground]) -> bool:
         """Whether no expansion of an item below ``ancestors`` can derive
@@ -270,13 +270,10 @@ class Summaries:
                 True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost, 0.0, cost
             )
         expansions: list[Expanded] = []
-        for method in self.task.versions(call):
-            for ground in self._expansions(method, call):
-                if isinstance(ground, DeadEnd):
-                    continue  # a variable bound by nothing: it never expands
-                expansion = yield from self._expansion(call, ground)
-                if expansion is not None:
-                    expansions.append(expansion)
+        for option in self._instance(call).options:  # the feasible expansions, in order
+            expansion = yield from self._expansion(call, option.expansion)
+            if expansion is not None:
+                expansions.append(expansion)
         if not expansions:
             return INFEASIBLE
         funcs = frozenset.intersection(*(e.functionalities for e in expansions))

@@ -60,10 +60,12 @@ def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
     assert config.cost == 10 + 2 + 1
 
 
-def test_the_grounding_memo_s_expansions_give_the_same_summaries() -> None:
-    """The search's summaries read the expansions the grounding memo made
-    (:attr:`Summaries.grounder`); with a memo of their own, they must be the
-    same, with two helpers (three expansions of ``(get A)``) and with none."""
+def test_the_grounding_memo_s_graph_gives_the_same_summaries() -> None:
+    """The search's summaries are a pass over the grounding memo's graph of
+    ground instances (:attr:`Summaries.grounder`, the graph the partitioned
+    bound reads: it holds what they summarised); with a memo of their own,
+    they must be the same, with two helpers (three expansions of ``(get A)``)
+    and with none."""
     for state, helpers in (("(robot A) (robot B) (helper B) (helper C)", 2), ("(robot A)", 0)):
         problem = load_text(TWO_VERSIONS, f"(state {state}) (goal (go A))")
         grounder = Grounder(problem.task)
@@ -71,6 +73,10 @@ def test_the_grounding_memo_s_expansions_give_the_same_summaries() -> None:
         own = Summaries(problem.task)
         for call in [("go", "A"), ("get", "A"), ("get", "B"), ("act", "A")]:
             assert shared.summary(call) == own.summary(call)
+            if problem.task.is_method(call):
+                assert call in grounder.graph().instances
+        options = grounder.graph().instances[("get", "A")].options
+        assert len(options) == 1 + helpers
         with_helper = problem.task.versions(("get", "A"))[1]
         assert len(grounder.method_bindings(with_helper, ("get", "A"))) == helpers
 
