@@ -166,23 +166,53 @@ class Task:
     @cached_property
     def recursive(self) -> frozenset[Signature]:
         """Method signatures that can reach themselves through method bodies:
-        only their instances can meet the recursion guard of 4.5."""
-        reach: dict[Signature, set[Signature]] = {}
+        only their instances can meet the recursion guard of 4.5. Those of
+        a strongly connected component of the call graph with a cycle in it
+        (more than one signature, or one that calls itself), found in one
+        walk (Tarjan's, without recursion: a hierarchy may be thousands of
+        levels deep)."""
+        reach: dict[Signature, tuple[Signature, ...]] = {}
         for sig, versions in self.methods.items():
-            calls = {(p[0], len(p) - 1) for m in versions for _, p in m.body}
-            reach[sig] = calls & self.methods.keys()
+            called = dict.fromkeys((p[0], len(p) - 1) for m in versions for _, p in m.body)
+            reach[sig] = tuple(c for c in called if c in self.methods)
+        index: dict[Signature, int] = {}  # in the order first met
+        low: dict[Signature, int] = {}  # the least index it reaches on the stack
+        stack: list[Signature] = []
+        on_stack: set[Signature] = set()
         found: set[Signature] = set()
         for start in self.methods:
-            seen: set[Signature] = set()
-            todo = list(reach[start])
-            while todo:
-                sig = todo.pop()
-                if sig == start:
-                    found.add(start)
-                    break
-                if sig not in seen:
-                    seen.add(sig)
-                    todo.extend(reach[sig])
+            if start in index:
+                continue
+            index[start] = low[start] = len(index)
+            stack.append(start)
+            on_stack.add(start)
+            walk = [(start, iter(reach[start]))]
+            while walk:
+                sig, calls = walk[-1]
+                for callee in calls:
+                    if callee not in index:
+                        index[callee] = low[callee] = len(index)
+                        stack.append(callee)
+                        on_stack.add(callee)
+                        walk.append((callee, iter(reach[callee])))
+                        break
+                    if callee in on_stack:
+                        low[sig] = min(low[sig], index[callee])
+                else:
+                    walk.pop()
+                    if walk:
+                        caller = walk[-1][0]
+                        low[caller] = min(low[caller], low[sig])
+                    if low[sig] == index[sig]:  # sig is the root of a component
+                        component = []
+                        while True:
+                            member = stack.pop()
+                            on_stack.discard(member)
+                            component.append(member)
+                            if member == sig:
+                                break
+                        if len(component) > 1 or sig in reach[sig]:
+                            found.update(component)
         return frozenset(found)
 
     @cached_property
