@@ -141,31 +141,26 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
         return found
 
     partition._derive = counting  # type: ignore[method-assign]
+    def plain(calls: tuple[Ground, ...]) -> dict[int, int]:
+        total: dict[int, int] = {}
+        for call in calls:
+            for key, n in (partition.counts(call) or {}).items():
+                total[key] = total.get(key, 0) + n
+            if not problem.task.is_method(call):
+                key = partition.number(("@", call[1]))
+                total[key] = total.get(key, 0) + 1
+        return total
+
     stacks = []
     for node in some_nodes(grounder, problem.goal_call):
         partition.estimate(node, bound.certain_agents(node))
         calls = tuple(item.call for item in node.stack)
         stacks.append(calls)
-        plain: dict[int, int] = {}
-        for call in calls:
-            for key, n in (partition.counts(call) or {}).items():
-                plain[key] = plain.get(key, 0) + n
-            if not problem.task.is_method(call):
-                key = partition.number(("@", call[1]))
-                plain[key] = plain.get(key, 0) + 1
-        assert partition._stacks[calls].pending == plain  # as the search summed it
-    if family != "fusion":  # (fusion: siblings, one stack summed for all)
-        assert derived >= len(set(stacks)) // 2  # most from their parents' (_derive)
+        assert partition._stacks[calls].pending == plain(calls)  # as the search summed it
+    assert derived >= len(set(stacks)) // 2  # most from their parents' (_derive)
     from_suffix = 0
     for calls in stacks:
-        plain = {}
-        for call in calls:
-            for key, n in (partition.counts(call) or {}).items():
-                plain[key] = plain.get(key, 0) + n
-            if not problem.task.is_method(call):
-                key = partition.number(("@", call[1]))
-                plain[key] = plain.get(key, 0) + 1
-        assert partition._sum(calls) == plain
+        assert partition._sum(calls) == plain(calls)
         from_suffix += calls[1:] in partition._sums
     assert from_suffix >= len(stacks) // 2  # the suffixes were there to start from
 
