@@ -141,6 +141,7 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
         return found
 
     partition._derive = counting  # type: ignore[method-assign]
+
     def plain(calls: tuple[Ground, ...]) -> dict[int, int]:
         total: dict[int, int] = {}
         for call in calls:
