@@ -183,8 +183,9 @@ class Grounder:
     def graph(self, media: bool = True) -> Graph:
         """The AND/OR graph of the task's ground instances
         (:mod:`cfgplan.planner.graph`), made of these expansions and numbered
-        by :attr:`numbering`, once: the partitioned bound, the capacity caps
-        and the independent parts are passes over it. ``media``: whether an
+        by :attr:`numbering`, once: both bounds (the summaries and the
+        partitioned bound), the capacity caps and the independent parts are
+        passes over it. ``media``: whether an
         option notes what its global channels need of the media
         (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
         found = self._graphs.get(media)
