@@ -36,16 +36,20 @@ from cfgplan.planner.task import Ground
 
 @dataclass(frozen=True, slots=True)
 class Option:
-    """One expansion of a method, as this bound sees it."""
+    """One expansion of a method, as the passes over the graph see it."""
 
-    children: tuple[Ground, ...]
-    child_keys: tuple[int, ...]  # their numbers
+    expansion: Expansion  # the grounder's, which it stands for (what the summaries read)
+    child_keys: tuple[int, ...]  # its children's numbers
     channels: tuple[Wire, ...]
     agents: tuple[str, ...]  # agents its functionality children run on, each once
     agent_keys: tuple[int, ...]  # their numbers as keys ("@", agent)
     needs: tuple[Need, ...]  # what its own global channels need of the media
-    expansion: Expansion  # the grounder's, which it stands for (what the summaries read)
     choice: int = 0  # its number among the method's expansions, as successors numbers them
+
+    @property
+    def children(self) -> tuple[Ground, ...]:
+        """Its body's calls (the expansion's)."""
+        return self.expansion.body
 
 
 @dataclass(frozen=True, slots=True)
@@ -195,7 +199,7 @@ class Graph:
         keys = tuple(self.number(("@", agent)) for agent in agents)
         children = tuple(self.number(("f", call)) for call in expansion.body)
         needs = self.room.needs(expansion.channels)
-        return Option(expansion.body, children, channels, agents, keys, needs, expansion, choice)
+        return Option(expansion, children, channels, agents, keys, needs, choice)
 
     def _own(self, expansion: Expansion, spec: ChannelSpec) -> Wire:
         """An own channel of an expansion: an end at a functionality of the body

@@ -362,11 +362,10 @@ class Partition:
                 return None
             for key, n in below.items():
                 totals[key] = get(key, 0) + n
-        is_method = self.grounder.task.is_method
         for call in calls[:start]:
-            if not is_method(call):
-                key = self.number(("@", call[1]))
-                totals[key] = get(key, 0) + 1
+            agent = self._agent(call)
+            if agent is not None:
+                totals[agent] = get(agent, 0) + 1
         for key in changed:
             if totals.get(key) == 0:
                 del totals[key]
@@ -390,7 +389,6 @@ class Partition:
                 return None
             sums[calls[1:]] = rest
         total = sums[calls[start:]]
-        is_method = self.grounder.task.is_method
         for i in range(start - 1, -1, -1):
             call = calls[i]
             counts = self.counts(call)
@@ -402,26 +400,31 @@ class Partition:
                 (total, dict(counts)) if len(counts) > len(total) else (counts, dict(total))
             )
             add(total, small)
-            if not is_method(call):
-                key = self.number(("@", call[1]))
-                total[key] = total.get(key, 0) + 1
+            agent = self._agent(call)
+            if agent is not None:
+                total[agent] = total.get(agent, 0) + 1
             sums[calls[i:]] = total
         return total
 
     def _add(self, calls: tuple[Ground, ...], totals: Counts) -> Counts | None:
         """``totals`` with the counts of ``calls`` added (a pending
         functionality places itself on its agent too); None when one can recur."""
-        is_method, get = self.grounder.task.is_method, totals.get
+        get = totals.get
         for call in calls:
             counts = self.counts(call)
             if counts is None:
                 return None
             for key, n in counts.items():
                 totals[key] = get(key, 0) + n
-            if not is_method(call):
-                key = self.number(("@", call[1]))
-                totals[key] = get(key, 0) + 1
+            agent = self._agent(call)
+            if agent is not None:
+                totals[agent] = get(agent, 0) + 1
         return totals
+
+    def _agent(self, call: Ground) -> int | None:
+        """The key of the agent a pending item places itself on, counted once
+        more in a stack's sum: a functionality's robot (None: a method)."""
+        return None if self.grounder.task.is_method(call) else self.number(("@", call[1]))
 
     def _channels(self, node: Partial, kept: Kept) -> tuple[set[int], list[Wire]]:
         """The keys of the channels already in C (resolved), and the wires of
