@@ -37,10 +37,11 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.components import Address, Parts, Trail, replay, segments
-from cfgplan.planner.grow import Grower, Stats
+from cfgplan.planner.grow import Grower
 from cfgplan.planner.partial import Partial
+from cfgplan.planner.pricer import Pricer
 from cfgplan.planner.ranking import merge
-from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.report import Report, Stats, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.task import Ground
 
@@ -69,11 +70,13 @@ class Combined:
 
     grower: Grower
     """The plain search's: for the greedy dive and for handing over."""
+    pricer: Pricer
+    """The plain search's, as :attr:`grower`."""
     goal: Ground
     parts: Parts
-    make: Callable[[frozenset[int]], Grower]
-    """A fresh grower for each part's search, given the labels of the
-    functionalities the forced steps placed (:attr:`Grower.given`)."""
+    make: Callable[[frozenset[int]], tuple[Grower, Pricer]]
+    """A fresh grower and pricer for each part's search, given the labels of
+    the functionalities the forced steps placed (:attr:`Grower.given`)."""
     progress: Progress | None = None
     stopped: StopReason | None = None
     stats: Stats = field(default_factory=Stats)
@@ -121,9 +124,9 @@ class Combined:
     def _combine(self) -> Iterator[Configuration]:
         parts = self.parts
         for p in range(len(parts.parts)):
-            grower = self.make(frozenset(parts.node.located))
+            grower, pricer = self.make(frozenset(parts.node.located))
             self._starts.append((parts.start(p), parts.owners(p)))
-            search = BestFirst(grower, self.goal, self._progress, origin=self._starts[p][0])
+            search = BestFirst(grower, pricer, self.goal, self._progress, origin=self._starts[p][0])
             self._searches.append(search)
             self._streams.append(iter(search))
             self._lists.append([])
@@ -157,7 +160,7 @@ class Combined:
         for p, i in enumerate(at):
             choices.update(self._lists[p][i].choices)
         node = replay(self.grower.grounder, self.goal, choices, self._trail)
-        if node is None or self.grower.cost(node) != total:
+        if node is None or self.pricer.cost(node) != total:
             raise _Irregular
         config = self.grower.finish(node, total, self.stats.derivations + 1)
         if config is None:
@@ -215,7 +218,7 @@ class Combined:
 
     def _hand_over(self, listed: int) -> Iterator[Configuration]:
         """The plain search, skipping the ``listed`` configurations already listed."""
-        plain = BestFirst(self.grower, self.goal, self.progress)
+        plain = BestFirst(self.grower, self.pricer, self.goal, self.progress)
         self.stats, self.handed_over = plain.stats, True
         for config in plain:
             if listed:

@@ -40,9 +40,10 @@ from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.canonical import canonical
 from cfgplan.planner.finish import Parts, admissible, build, fingerprint
-from cfgplan.planner.grow import Grower, Heuristic, Stats
+from cfgplan.planner.grow import Grower
 from cfgplan.planner.partial import Partial, root
-from cfgplan.planner.report import DeadEnd, Report, StopReason
+from cfgplan.planner.pricer import Heuristic, Pricer
+from cfgplan.planner.report import DeadEnd, Report, Stats, StopReason
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground
 
@@ -89,10 +90,12 @@ class Windows:
     """An iterator over every configuration, cheapest first, window by window."""
 
     grower: Grower
+    pricer: Pricer
+    """The bounds, for the windows pruned by them."""
     goal: Ground
     feasible: Heuristic
     """Decides only whether a node can complete: all a window without an upper
-    edge needs, and cheaper than a bound."""
+    edge needs, and cheaper than a bound (the first walk's pricer)."""
     progress: Progress | None = None
     stopped: StopReason | None = None
     _start: float = field(default=0.0)
@@ -115,29 +118,29 @@ class Windows:
         self.stats.seconds = time.perf_counter() - self._start
 
     def _windows(self) -> Iterator[Configuration]:
-        grower = self.grower
-        start = [(p, n) for p, n in grower.settle(root(self.goal))]
+        grower, bounded = self.grower, self.pricer
+        start = [(p, n) for p, n in grower.settle(root(self.goal), bounded)]
         if not start:
             return
         low = min(p for p, _ in start)
-        bounds = grower.heuristic, grower.refine
-        with grower.priced_by(self.feasible):
-            window = Window(low, float("inf"))
-            try:
-                yield from self._walk(start, window, budget=self.grower.options.one_pass)
-            except _TooBig:
-                # The cheapest lie deep: look for them first, pruned by the bounds.
-                with grower.priced_by(*bounds):
-                    window = Window(low, grower.levels.above(low))
-                    yield from self._walk(start, window)
-            while window.beyond is not None:  # something was cut: the costs above
-                window = Window(max(window.high, window.beyond), float("inf"))
-                yield from self._walk(start, window)
+        plain = Pricer(grower.levels, self.feasible, stats=self.stats)
+        window = Window(low, float("inf"))
+        try:
+            yield from self._walk(start, window, plain, budget=self.grower.options.one_pass)
+        except _TooBig:
+            # The cheapest lie deep: look for them first, pruned by the bounds.
+            bounded.warmed(plain.settled)
+            window = Window(low, grower.levels.above(low))
+            yield from self._walk(start, window, bounded)
+        while window.beyond is not None:  # something was cut: the costs above
+            window = Window(max(window.high, window.beyond), float("inf"))
+            yield from self._walk(start, window, plain)
 
     def _walk(
         self,
         start: list[tuple[float, Partial]],
         window: Window,
+        pricer: Pricer,
         budget: int | None = None,
     ) -> Iterator[Configuration]:
         """One depth-first pass over the derivations costing from ``window.low``
@@ -163,7 +166,7 @@ class Windows:
             if window.cut(priority):
                 continue
             if not node.done:
-                raised = grower.refined(node, priority)
+                raised = pricer.refined(node, priority)
                 if raised is None or window.cut(raised):
                     continue
             stats.nodes += 1
@@ -192,7 +195,7 @@ class Windows:
                 if key in closed:
                     continue
                 closed.add(key)
-            children = list(grower.children(node))
+            children = list(grower.children(node, pricer))
             stack.extend(reversed(children))
         found.sort(key=lambda f: (f.cost, f.index))  # ranking.place, by rank in the walk
         yield from self._list(found)

@@ -31,7 +31,7 @@ class SearchOptions:
     cheaper). Where it seldom pays (build-wall, the wall and relay families)
     it only costs time; where it helps (ecology, fusion, media-tight) most of
     its raises pay. Dropping an admissible bound never changes the answer,
-    only how many nodes are taken (tests/planner/test_grow.py)."""
+    only how many nodes are taken (tests/planner/test_pricer.py)."""
 
     pays: int = 4
     """See :attr:`trial`."""
@@ -39,7 +39,7 @@ class SearchOptions:
     rely: int = 32
     """Refinements after which, if the stronger bound was at least the first
     one every time, the first one is no longer computed (only whether a node
-    can complete is: :attr:`cfgplan.planner.grow.Grower.feasible`): where the
+    can complete is: :attr:`cfgplan.planner.pricer.Pricer.feasible`): where the
     stronger bound always dominates (fusion), the first adds only its cost."""
 
     together: int = 8

@@ -19,6 +19,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from functools import partial
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
@@ -28,12 +29,13 @@ from cfgplan.planner.components import Parts, divide, unroll
 from cfgplan.planner.dive import dive
 from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.grow import Grower, Heuristic, Splitter, Stats
+from cfgplan.planner.grow import Grower
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.prefix import Prefix
-from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
+from cfgplan.planner.report import Report, Stats, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
@@ -104,27 +106,29 @@ def splitting(bound: Bound, partition: Partition) -> Splitter:
     return split
 
 
-def grower(
+def growing(
     task: Task,
     options: SearchOptions,
     distinct: bool = True,
     given: frozenset[int] = frozenset(),
     splits: bool = True,
-) -> Grower:
-    """A grower with the task's bounds (:func:`parts`), its children priced
-    from splits (unless ``splits`` is False, or :attr:`SearchOptions.splits`
-    is); ``given``: :attr:`Grower.given`. Every strategy's grower is made here."""
+) -> tuple[Grower, Pricer]:
+    """A grower for ``task`` and a pricer with the task's bounds
+    (:func:`parts`), children priced from splits (unless ``splits`` is
+    False, or :attr:`SearchOptions.splits` is); ``given``:
+    :attr:`Grower.given`. Every strategy's grower and pricer are made here."""
     grounder, bound, partition = parts(task, options.media)
-    return Grower(
-        grounder,
+    made = Grower(grounder, distinct, given, options=options)
+    pricer = Pricer(
+        task.levels,
         bound.estimator(options),
         partitioned(bound, partition),
-        distinct,
         bound.feasible,
-        split=splitting(bound, partition) if splits and options.splits else None,
-        given=given,
-        options=options,
+        splitting(bound, partition) if splits and options.splits else None,
+        options,
+        made.stats,
     )
+    return made, pricer
 
 
 def in_parts(
@@ -146,10 +150,10 @@ def in_parts(
         return search
     distinct = search.grower.distinct
 
-    def make(given: frozenset[int]) -> Grower:
-        return grower(task, options, distinct, given)
+    def make(given: frozenset[int]) -> tuple[Grower, Pricer]:
+        return growing(task, options, distinct, given)
 
-    return Combined(search.grower, search.goal, found, make, progress)
+    return Combined(search.grower, search.pricer, search.goal, found, make, progress)
 
 
 def _no_bound(node: Partial) -> float:
@@ -185,12 +189,14 @@ class Run:
     strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
-        made = grower(self.task, self.options, self.distinct, splits=self.limit is not None)
+        made, pricer = growing(
+            self.task, self.options, self.distinct, splits=self.limit is not None
+        )
         if self.limit is None:
             bound = parts(self.task, self.options.media)[1]
-            self.strategy = Windows(made, self.goal, bound.feasible, self.progress)
+            self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
         else:
-            self.strategy = BestFirst(made, self.goal, self.progress)
+            self.strategy = BestFirst(made, pricer, self.goal, self.progress)
 
     def _search(self) -> Iterator[Configuration]:
         """The configurations, cheapest first: the goal's parts apart, if it has some."""
@@ -247,14 +253,14 @@ class Run:
             return None
         grace = self.options.grace
         end = time.perf_counter() + grace if deadline is None else deadline + grace
-        grower = self.strategy.grower
+        grower, pricer = self.strategy.grower, self.strategy.pricer
         try:
             with clock.limit(end):
                 if isinstance(self.strategy, BestFirst):
                     frontier = self.strategy.frontier
                 else:  # the windows keep no frontier: dive from the start
-                    frontier = sorted(grower.settle(root(self.goal)), key=_order)
-                return dive(frontier, grower.children, grower.finish)
+                    frontier = sorted(grower.settle(root(self.goal), pricer), key=_order)
+                return dive(frontier, partial(grower.children, pricer=pricer), grower.finish)
         except (clock.OutOfTime, KeyboardInterrupt):
             return None
 
@@ -262,7 +268,10 @@ class Run:
         """The bounds cut branches before their dead ends were met: search them
         without the bounds, so the report can say why nothing is admissible."""
         grounder = parts(self.task, self.options.media)[0]
-        explaining = BestFirst(Grower(grounder, _no_bound, None, self.distinct), self.goal)
+        unbounded = Grower(grounder, self.distinct)
+        explaining = BestFirst(
+            unbounded, Pricer(self.task.levels, _no_bound, stats=unbounded.stats), self.goal
+        )
         spent = time.perf_counter() - started
         end = time.perf_counter() + max(self.options.explain_seconds, 2 * spent)
         if deadline is not None:

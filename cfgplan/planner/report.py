@@ -68,3 +68,17 @@ class Report:
 
     def reject(self, dead: DeadEnd) -> None:
         self.rejected.append(dead)
+
+
+@dataclass
+class Stats:
+    """What the search did: shown by ``--verbose`` and in JSON output."""
+
+    nodes: int = 0  # nodes taken to be expanded or finished
+    expansions: int = 0  # method instances expanded
+    derivations: int = 0  # complete derivations met (duplicates included)
+    duplicates: int = 0  # complete derivations whose configuration was listed already
+    rejected: int = 0  # complete derivations found inadmissible (4.5 step 4)
+    pruned: int = 0  # nodes the bounds proved to have no completion
+    seconds: float = 0.0
+    complete: bool = True  # False when a limit stopped the search early

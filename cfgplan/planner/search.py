@@ -11,8 +11,9 @@ come out ordered by cost and, at equal cost, in the depth-first order of the
 thesis (domain order of method versions, state order of facts, 6.3.2).
 Nothing is enumerated and then sorted.
 
-Nodes are grown by a :class:`cfgplan.planner.grow.Grower`; this module only
-orders them. The time limit is the one :mod:`cfgplan.planner.clock` holds.
+Nodes are grown by a :class:`cfgplan.planner.grow.Grower` and priced by a
+:class:`cfgplan.planner.pricer.Pricer`; this module only orders them. The
+time limit is the one :mod:`cfgplan.planner.clock` holds.
 
 In distinct mode a partial configuration reached again (its canonical form)
 is expanded once, by the node taken first; bounds of the node alone price
@@ -35,10 +36,11 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.canonical import canonical
-from cfgplan.planner.grow import Grower, Reprice, Stats
+from cfgplan.planner.grow import Grower
 from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.pricer import Pricer, Reprice
 from cfgplan.planner.ranking import place
-from cfgplan.planner.report import Report, StopReason
+from cfgplan.planner.report import Report, Stats, StopReason
 from cfgplan.planner.task import Ground
 
 Progress = Callable[[Stats, float], None]
@@ -54,6 +56,9 @@ class BestFirst:
     """An iterator over configurations, best first."""
 
     grower: Grower
+    """Expands, settles and finishes the nodes."""
+    pricer: Pricer
+    """Prices them: the bounds, and when the stronger one is used."""
     goal: Ground
     progress: Progress | None = None
     origin: Partial | None = None
@@ -95,8 +100,8 @@ class BestFirst:
         self.stats.seconds = time.perf_counter() - start
 
     def _search(self, start: float) -> Iterator[Configuration]:
-        grower = self.grower
-        self._queue(grower.settle(root(self.goal) if self.origin is None else self.origin))
+        grower, pricer = self.grower, self.pricer
+        self._queue(grower.settle(root(self.goal) if self.origin is None else self.origin, pricer))
         next_tick = 1.0
         while self._heap:
             clock.check()
@@ -116,8 +121,8 @@ class BestFirst:
                 # order of refined priorities (then paths): refining lazily
                 # changes no order, only how many nodes are refined.
                 beaten = self._heap[0][0] if self._heap else None
-                raised = grower.refined(node, total, beaten)
-                repriced = grower.take_repriced()
+                raised = pricer.refined(node, total, beaten)
+                repriced = pricer.take_repriced()
                 if repriced is not None:
                     self._reprice(node, raised is None, repriced)
                     continue
@@ -142,10 +147,10 @@ class BestFirst:
                 if first is not None:
                     if node.path < first and not self._restarted:
                         raise _Twins
-                    grower.splits.pop(node.path, None)  # it is not expanded
+                    pricer.discard(node)  # it is not expanded
                     continue
                 self._closed[key] = node.path
-            self._queue(grower.children(node))
+            self._queue(grower.children(node, pricer))
 
     def _again(self) -> None:
         """Start over, the children priced by their own bounds only. Priced
@@ -158,6 +163,7 @@ class BestFirst:
         numbered alike, and skipped."""
         self._restarted = True
         self.grower.start_over()
+        self.pricer.without_splits()
         self._heap, self._closed = [], {}
 
     def _reprice(self, taken: Partial, pruned: bool, which: Reprice) -> None:
@@ -167,7 +173,6 @@ class BestFirst:
         form must have one priority, or the later of them in depth-first order
         could be expanded first and close the form to the earlier one (the
         order of equal-cost configurations would then not be the thesis's)."""
-        grower = self.grower
         nodes = []
         kept = []
         for entry in self._heap:
@@ -181,18 +186,13 @@ class BestFirst:
         heapq.heapify(self._heap)
         priced: list[tuple[float, Partial]] = []
         for node in nodes:
-            if node.done:
-                priced.append((grower.cost(node), node))
-                continue
-            rest = grower.heuristic(node)
-            if rest is None:
-                grower.stats.pruned += 1
-            else:
-                priced.append((grower.priority(node, rest), node))
+            priority = self.pricer.again(node)
+            if priority is not None:
+                priced.append((priority, node))
         self._queue(iter(priced))
 
     def _queue(self, entries: Iterator[tuple[float, Partial]]) -> None:
-        lazy = self.grower.refine is not None
+        lazy = self.pricer.lazy
         for priority, node in entries:
             heapq.heappush(self._heap, (*place(priority, node), not lazy or node.done, node))
 

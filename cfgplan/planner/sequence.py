@@ -43,7 +43,7 @@ from cfgplan.planner import clock
 from cfgplan.planner.combine import Combined
 from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.plan import Run, grower, in_parts
+from cfgplan.planner.plan import Run, growing, in_parts
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
@@ -110,7 +110,7 @@ class Ranked:
     _more: Iterator[Configuration] = field(init=False)
 
     def __post_init__(self) -> None:
-        plain = BestFirst(grower(self.task, self.options), self.goal)
+        plain = BestFirst(*growing(self.task, self.options), self.goal)
         self.search = in_parts(plain, self.task, self.options)
         self._more = iter(self.search)
 

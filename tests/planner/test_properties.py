@@ -255,7 +255,7 @@ def _coverage(example: Generated) -> Coverage:
         fan_out="mon" in names,
         repeated_channel=bool(derivations) and len(channels) > len(set(channels)),
         repeated_call=bool(derivations) and "(?t2 " in text,
-        raised=bounded.strategy.grower.raised > 0,
+        raised=bounded.strategy.pricer.raised > 0,
         media_cut=any(cut),
     )
 

@@ -143,13 +143,13 @@ def test_best_first_lists_in_the_order_of_the_windows_when_the_first_bound_is_dr
     texts: tuple[str, str],
 ) -> None:
     """On fusion the stronger bound dominates the first, which the
-    search then stops computing (grow.RELY) and re-prices its open nodes:
+    search then stops computing (SearchOptions.rely) and re-prices its open nodes:
     the 200 cheapest come out in the depth-first order --all lists them in,
     equal costs included, with the same derivation numbers."""
     problem = problem_of(texts)
     run = Run(problem.task, problem.goal_call, limit=200)
     best = list(run)
-    assert run.strategy.grower.heuristic is run.strategy.grower.feasible
+    assert run.strategy.pricer.heuristic is run.strategy.pricer.feasible
     listed, _ = plan(problem.task, problem.goal_call, limit=None)
     assert [(c.cost, c.identity(), c.derivation) for c in best] == [
         (c.cost, c.identity(), c.derivation) for c in listed[:200]

@@ -84,7 +84,7 @@ def test_pricing_children_from_splits_changes_no_ranked_list(texts: tuple[str, s
     assert [(c.cost, c.identity(), c.derivation) for c in configs] == [
         (c.cost, c.identity(), c.derivation) for c in without
     ]
-    assert with_splits.strategy.grower.tried < without.strategy.grower.tried
+    assert with_splits.strategy.pricer.tried < without.strategy.pricer.tried
     assert with_splits.stats.nodes == without.stats.nodes
 
 
@@ -106,7 +106,7 @@ def test_a_search_started_over_lists_what_one_search_lists(
             yield config
             if index == 2 and not told:
                 told.append(True)
-                self.grower.lifted = max(self.grower.lifted, 1)
+                self.pricer.lifted = max(self.pricer.lifted, 1)
                 raise search._Twins
 
     monkeypatch.setattr(search.BestFirst, "_search", interrupted)
@@ -120,4 +120,4 @@ def test_a_search_started_over_lists_what_one_search_lists(
     assert [getattr(restarted.stats, k) for k in counted] == [
         getattr(run.stats, k) for k in counted
     ]
-    assert restarted.strategy.grower.split is None
+    assert restarted.strategy.pricer.split is None

@@ -1,4 +1,4 @@
-"""The stronger bound is given up where it does not pay (cfgplan/planner/grow.py),
+"""The stronger bound is given up where it does not pay (cfgplan/planner/pricer.py),
 and giving it up never changes what is found."""
 
 from __future__ import annotations
@@ -36,11 +36,11 @@ def test_the_partition_bound_is_given_up_where_it_never_pays_and_kept_where_it_d
     _, on_wall = _run(wall(6, 20, 8), 1, warm=0)
     _, on_chain = _run(chain(8), 1, warm=0)
     _, on_fusion = _run(fusion(8, 3, 6, 6), 1, warm=0)
-    assert on_wall.strategy.grower.refine is None
-    chain_grower = on_chain.strategy.grower
-    assert chain_grower.refine is not None
-    assert chain_grower.raised == 0 and chain_grower.dominated == chain_grower.tried > 4
-    assert on_fusion.strategy.grower.refine is not None
+    assert on_wall.strategy.pricer.refine is None
+    chain_pricer = on_chain.strategy.pricer
+    assert chain_pricer.refine is not None
+    assert chain_pricer.raised == 0 and chain_pricer.dominated == chain_pricer.tried > 4
+    assert on_fusion.strategy.pricer.refine is not None
 
 
 @pytest.mark.parametrize(
@@ -51,7 +51,7 @@ def test_giving_the_bound_up_changes_nothing_found(texts: tuple[str, str]) -> No
     and with the usual rule, are the same configurations at the same costs."""
     usual, _ = _run(texts, 10, warm=0)
     kept, run = _run(texts, 10, warm=0, trial=10**9)
-    assert run.strategy.grower.refine is not None
+    assert run.strategy.pricer.refine is not None
     assert [cost for cost, _ in usual] == [cost for cost, _ in kept]
     last = usual[-1][0]  # ties at the last cost may be cut differently
     assert sorted(c for c in usual if c[0] < last) == sorted(c for c in kept if c[0] < last)
@@ -65,15 +65,15 @@ def test_a_small_search_never_tries_the_stronger_bound() -> None:
     problem = load(domains / "domain.lisp", domains / "state-6.4.lisp")
     small = Run(problem.task, problem.goal_call, limit=1)
     assert [c.cost for c in small] == [53]
-    assert small.strategy.grower.settled < SearchOptions().warm
-    assert small.strategy.grower.tried == 0
+    assert small.strategy.pricer.settled < SearchOptions().warm
+    assert small.strategy.pricer.tried == 0
     _, large = _run(ecology(18, 3, 3), 1)
-    assert large.strategy.grower.settled > SearchOptions().warm
-    assert large.strategy.grower.tried > 0
+    assert large.strategy.pricer.settled > SearchOptions().warm
+    assert large.strategy.pricer.tried > 0
 
 
 def _together(run: Run) -> Together:
-    first = run.strategy.grower.first
+    first = run.strategy.pricer.first
     assert isinstance(first, Estimator)
     return first.together
 
