@@ -46,15 +46,6 @@ class Grower:
     def __post_init__(self) -> None:
         self.levels = self.grounder.task.levels
 
-    def start_over(self) -> None:
-        """Forget what was met and listed, for a strategy that starts over
-        (:meth:`cfgplan.planner.search.BestFirst._again`): the statistics
-        of the listing count again from nothing; nodes and expansions go on."""
-        self.seen.clear()
-        self.report = Report()
-        stats = self.stats
-        stats.derivations = stats.duplicates = stats.rejected = 0
-
     def children(self, node: Partial, pricer: Pricer) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children
         with their priorities by ``pricer`` (dead ends go to the report)."""

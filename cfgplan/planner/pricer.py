@@ -232,10 +232,3 @@ class Pricer:
     def discard(self, node: Partial) -> None:
         """``node`` will not be expanded (a twin of a node expanded before): forget its split."""
         self.splits.pop(node.path, None)
-
-    def without_splits(self) -> None:
-        """Price children by their own bounds from now on (a search that
-        starts over, :meth:`cfgplan.planner.search.BestFirst._again`)."""
-        self.split = None
-        self.splits.clear()
-        self.lifted = 0

@@ -16,14 +16,17 @@ Nodes are grown by a :class:`cfgplan.planner.grow.Grower` and priced by a
 time limit is the one :mod:`cfgplan.planner.clock` holds.
 
 In distinct mode a partial configuration reached again (its canonical form)
-is expanded once, by the node taken first; bounds of the node alone price
-both alike, so that is the first in depth-first order. A child priced from
-its parent's split (:mod:`cfgplan.planner.split`), or one priced before a
-bound was given up and its twin after, may not be; should the later node
-have been taken first, the search starts over, once, without the splits
-(:meth:`BestFirst._again`). (Before, it started over only when a split had
-lifted a priority: ``-k 5`` was not a prefix of ``--all`` on
-``tests/data/repros/k-not-prefix-of-all``.)
+is expanded once, by the node first in the thesis's order: its derivations
+are the ones listed. Bounds of the node alone price both alike, so that is
+the one taken first. A child priced from its parent's split
+(:mod:`cfgplan.planner.split`) may be priced above its twin, and so taken
+after it although it comes first in depth-first order: it then *supersedes*
+the twin (:meth:`BestFirst._supersede`). It is expanded too, and what the
+twin's expansion left open is dropped as it is taken. Nothing the twin
+derived was listed yet: the earlier node's priority bounds what both
+complete at, and at that cost its path comes first. So the search never
+starts over to repair its order (issue 35; ``tests/data/repros/
+k-not-prefix-of-all``, where ``-k 5`` was once not a prefix of ``--all``).
 """
 
 from __future__ import annotations
@@ -46,11 +49,6 @@ from cfgplan.planner.task import Ground
 Progress = Callable[[Stats, float], None]
 
 
-class _Twins(Exception):
-    """A node's canonical form was closed by a node that comes after it in
-    depth-first order (:meth:`BestFirst._again`)."""
-
-
 @dataclass
 class BestFirst:
     """An iterator over configurations, best first."""
@@ -70,11 +68,19 @@ class BestFirst:
     _closed: dict[bytes, tuple[int, ...]] = field(default_factory=dict)
     """The canonical forms of the partial nodes expanded (distinct), each with
     the path of the node that was expanded."""
-    _restarted: bool = False  # the search started over once (:meth:`_again`)
+    _superseded: set[tuple[int, ...]] = field(default_factory=set)
+    """The paths of expanded nodes an earlier twin superseded (:meth:`_supersede`)."""
+    _depths: set[int] = field(default_factory=set)
+    """Their lengths: a node is below one when its path's prefix of such a length is one."""
 
     @property
     def stats(self) -> Stats:
         return self.grower.stats
+
+    @property
+    def superseded(self) -> int:
+        """How many expanded nodes an earlier twin superseded (:meth:`_supersede`)."""
+        return len(self._superseded)
 
     @property
     def report(self) -> Report:
@@ -82,18 +88,8 @@ class BestFirst:
 
     def __iter__(self) -> Iterator[Configuration]:
         start = time.perf_counter()
-        listed = 0
         try:
-            try:
-                for config in self._search(start):
-                    listed += 1
-                    yield config
-            except _Twins:
-                self._again()
-                for config in self._search(start):
-                    listed -= 1
-                    if listed < 0:
-                        yield config
+            yield from self._search(start)
         except clock.OutOfTime:
             self.stats.complete = False
             self.stopped = StopReason.TIME_LIMIT
@@ -115,6 +111,9 @@ class BestFirst:
             # queued node is an ancestor of another), so tuples never compare
             # further than the path.
             total, _, refined, node = heapq.heappop(self._heap)
+            if self._superseded and self._below_superseded(node.path):
+                pricer.discard(node)  # its twin's own derivations stand for it
+                continue
             if not refined:
                 # Every other queued priority is at most its node's refined one,
                 # so a node taken with its refined priority is the least in the
@@ -144,27 +143,36 @@ class BestFirst:
                 # choices has the same completions: only the first one counts.
                 key = canonical(node, grower.grounder)
                 first = self._closed.get(key)
-                if first is not None:
-                    if node.path < first and not self._restarted:
-                        raise _Twins
-                    pricer.discard(node)  # it is not expanded
-                    continue
+                if first is not None and not self._below_superseded(first):
+                    if node.path > first:
+                        pricer.discard(node)  # it is not expanded
+                        continue
+                    self._supersede(first)
                 self._closed[key] = node.path
             self._queue(grower.children(node, pricer))
 
-    def _again(self) -> None:
-        """Start over, the children priced by their own bounds only. Priced
-        from their parents' splits (:mod:`cfgplan.planner.split`), two nodes
-        of one canonical form were taken out of depth-first order, so that
-        the later one stood for both: its configurations would be listed in
-        its place among those of equal cost. None of them was listed yet
-        (they cost at least what the earlier node was taken at, and come
-        after it at that cost), and what was listed before is listed again,
-        numbered alike, and skipped."""
-        self._restarted = True
-        self.grower.start_over()
-        self.pricer.without_splits()
-        self._heap, self._closed = [], {}
+    def _supersede(self, later: tuple[int, ...]) -> None:
+        """The node at path ``later`` was expanded, and a node before it in
+        depth-first order (a smaller path) has just been taken with the same
+        canonical form: priced from its parent's split, it was priced above
+        its twin. The earlier node's derivations are the ones to list, so it
+        is expanded, and every open node below ``later`` is dropped when
+        taken (the twin's derivations are the earlier node's, again).
+
+        None of them was listed: the earlier node was taken at a priority that
+        bounds what any of its completions costs, and so what any of the
+        twin's costs (they complete alike); at that cost the earlier path
+        comes first. Nor counted: the twin's complete derivations are taken
+        after it, and dropped. Forms the twin's expansion closed are open
+        again (:meth:`_below_superseded`), for whichever node reaches them
+        first in the thesis's order."""
+        self._superseded.add(later)
+        self._depths.add(len(later))
+
+    def _below_superseded(self, path: tuple[int, ...]) -> bool:
+        """Whether ``path`` is a superseded node's, or extends one."""
+        superseded = self._superseded
+        return any(path[:depth] in superseded for depth in self._depths)
 
     def _reprice(self, taken: Partial, pruned: bool, which: Reprice) -> None:
         """The bounds in use changed (one given up, or one no longer needed):

@@ -1,17 +1,16 @@
 """Children priced from their parent's split (cfgplan.planner.split): never
 past a child's cheapest completion, the same ranked lists with fewer
-refinements, and the search started over when two nodes of one canonical
-form were taken out of depth-first order."""
+refinements, and a node taken after its twin of one canonical form that it
+comes before in depth-first order superseding that twin."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
-from benchmarks.families import ecology, fusion, media_tight, wall
-from cfgplan.configuration.model import Configuration
-from cfgplan.planner import plan, search
+from benchmarks.families import ecology, fusion, media_tight
+from cfgplan.planner import search
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
@@ -19,6 +18,7 @@ from cfgplan.planner.partial import Partial
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.plan import Run
 from cfgplan.planner.successors import successors
+from cfgplan.problem import load
 from tests.planner.test_bound import least_completion
 from tests.planner.test_room import search_tree
 from tests.planner.test_scale import problem_of
@@ -88,36 +88,33 @@ def test_pricing_children_from_splits_changes_no_ranked_list(texts: tuple[str, s
     assert with_splits.stats.nodes == without.stats.nodes
 
 
-def test_a_search_started_over_lists_what_one_search_lists(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """Told after its third configuration that two nodes of one canonical form
-    were taken out of depth-first order (which pricing children from splits
-    can cause, and no family or generated problem was seen to), the search
-    starts over without the splits and skips what it listed: the list, its
-    derivation numbers and the repeats counted are those of one search."""
-    problem = problem_of(wall(3, 4, 3))  # repeats: distinct lists skip some derivations
-    expected, run = plan(problem.task, problem.goal_call, limit=40)
-    original = search.BestFirst._search
-    told: list[bool] = []
+REPRO = Path(__file__).resolve().parents[1] / "data" / "repros" / "k-not-prefix-of-all"
 
-    def interrupted(self: search.BestFirst, start: float) -> Iterator[Configuration]:
-        for index, config in enumerate(original(self, start)):
-            yield config
-            if index == 2 and not told:
-                told.append(True)
-                self.pricer.lifted = max(self.pricer.lifted, 1)
-                raise search._Twins
 
-    monkeypatch.setattr(search.BestFirst, "_search", interrupted)
-    again, restarted = plan(problem.task, problem.goal_call, limit=40)
-    assert told
-    assert run.stats.duplicates > 0
-    assert [(c.cost, c.identity(), c.derivation) for c in again] == [
-        (c.cost, c.identity(), c.derivation) for c in expected
-    ]
+@pytest.mark.parametrize("limit", [3, 5, 6, 7])
+def test_a_twin_taken_out_of_order_is_superseded_and_the_list_is_one_searchs(limit: int) -> None:
+    """On the issue-35 repro (from its third configuration on) the stronger
+    bound, tried and given up, has priced a node above its twin of one
+    canonical form that comes later in depth-first order, so that the twin
+    is taken first: the earlier node
+    supersedes it when taken (search.py, ``BestFirst._supersede``), and the
+    search goes on without starting over. The list, its derivation numbers
+    and the repeats and rejections counted are those of the search priced by
+    the first bound alone (``warm`` never reached), where twins are priced
+    alike and never taken out of order."""
+
+    def searched(**tuned: int) -> tuple[list[tuple[float, object, int]], Run]:
+        problem = load(REPRO / "labels-domain.lisp", REPRO / "labels-state.lisp")
+        options = SearchOptions(components=False, **tuned)
+        run = Run(problem.task, problem.goal_call, limit=limit, options=options)
+        return [(c.cost, c.identity(), c.derivation) for c in run], run
+
+    found, run = searched()
+    expected, plain = searched(warm=10**9)
+    assert isinstance(run.strategy, search.BestFirst)
+    assert isinstance(plain.strategy, search.BestFirst)
+    assert run.strategy.superseded > 0 and run.strategy.pricer.tried > 0
+    assert plain.strategy.superseded == 0 and plain.strategy.pricer.tried == 0
+    assert found == expected
     counted = ("derivations", "duplicates", "rejected")
-    assert [getattr(restarted.stats, k) for k in counted] == [
-        getattr(run.stats, k) for k in counted
-    ]
-    assert restarted.strategy.pricer.split is None
+    assert [getattr(run.stats, k) for k in counted] == [getattr(plain.stats, k) for k in counted]
