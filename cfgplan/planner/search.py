@@ -19,7 +19,8 @@ In distinct mode a partial configuration reached again (its canonical form)
 is expanded once, by the node first in the thesis's order: its derivations
 are the ones listed. Bounds of the node alone price both alike, so that is
 the one taken first. A child priced from its parent's split
-(:mod:`cfgplan.planner.split`) may be priced above its twin, and so taken
+(:mod:`cfgplan.planner.split`), or priced before the stronger bound was
+given up and its twin after, may be priced above its twin, and so taken
 after it although it comes first in depth-first order: it then *supersedes*
 the twin (:meth:`BestFirst._supersede`). It is expanded too, and what the
 twin's expansion left open is dropped as it is taken. Nothing the twin
@@ -154,18 +155,22 @@ class BestFirst:
     def _supersede(self, later: tuple[int, ...]) -> None:
         """The node at path ``later`` was expanded, and a node before it in
         depth-first order (a smaller path) has just been taken with the same
-        canonical form: priced from its parent's split, it was priced above
-        its twin. The earlier node's derivations are the ones to list, so it
-        is expanded, and every open node below ``later`` is dropped when
-        taken (the twin's derivations are the earlier node's, again).
+        canonical form: it was priced above its twin (by its parent's split,
+        or by the stronger bound given up between the two). The earlier
+        node's derivations are the ones to list, so it is expanded, and every
+        open node below ``later`` is dropped when taken (the twin's
+        derivations are the earlier node's, again).
 
         None of them was listed: the earlier node was taken at a priority that
         bounds what any of its completions costs, and so what any of the
         twin's costs (they complete alike); at that cost the earlier path
-        comes first. Nor counted: the twin's complete derivations are taken
-        after it, and dropped. Forms the twin's expansion closed are open
-        again (:meth:`_below_superseded`), for whichever node reaches them
-        first in the thesis's order."""
+        comes first. (Before the earlier node was made, an ancestor of it
+        stood in the queue for it: its priority bounds the same completions,
+        and its path, a prefix of the earlier one's, comes first too.) Nor
+        counted: the twin's complete derivations are taken after it, and
+        dropped. Forms the twin's expansion closed are open again
+        (:meth:`_below_superseded`), for whichever node reaches them first in
+        the thesis's order."""
         self._superseded.add(later)
         self._depths.add(len(later))
 
