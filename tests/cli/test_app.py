@@ -198,3 +198,38 @@ def test_a_goal_without_parentheses_gets_a_hint(cfgplan: Run) -> None:
         "      |       ^^^^^^^^^^^^^^^^^^^^^",
         "  hint: add the parentheses: --goal '(do-dock Vacu Charger1)'",
     ]
+
+
+def _console(args: list[str]) -> subprocess.CompletedProcess[str]:
+    """The console script's :func:`~cfgplan.cli.app.console` on ``args``, in a
+    process of its own, stdout a pipe, with an exit handler that says when the
+    interpreter was torn down as usual."""
+    code = (
+        "import atexit, sys\n"
+        "atexit.register(lambda: sys.stderr.write('torn down\\n'))\n"
+        f"sys.argv = ['cfgplan', *{args!r}]\n"
+        "from cfgplan.cli.app import console\nconsole()\n"
+    )
+    return subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120
+    )
+
+
+def test_a_planning_command_leaves_at_once_with_its_output_whole(cfgplan: Run) -> None:
+    """``plan`` (a QUICK_EXIT command) ends without the interpreter's teardown
+    (app._leave: no exit handler runs), yet what it printed through the pipe
+    is whole, the same as in-process, and its exit status is kept: 0, or 1
+    for a file that is not there (its message on stderr). ``--version`` is no
+    such command: torn down as usual."""
+    quick = _console(["plan", "--format", "json", *CROSS])
+    assert quick.returncode == 0, quick.stderr
+    assert "torn down" not in quick.stderr
+    assert json.loads(quick.stdout) == json.loads(
+        cfgplan("plan", "--format", "json", *CROSS).stdout
+    )
+    missing = _console(["plan", CROSS[0], "domains/cross-door/no-such-state.lisp"])
+    assert missing.returncode == 1
+    assert "no such file" in missing.stderr and "torn down" not in missing.stderr
+    usual = _console(["--version"])
+    assert usual.returncode == 0 and usual.stdout.startswith("cfgplan ")
+    assert "torn down" in usual.stderr
