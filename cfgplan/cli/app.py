@@ -318,12 +318,15 @@ def main() -> None:
 
 def console() -> NoReturn:
     """The console script and ``python -m cfgplan``: :func:`main`, then, for
-    a :data:`QUICK_EXIT` command, the process ends at once (:func:`_leave`).
+    a :data:`QUICK_EXIT` command, the process ends at once (:func:`_leave`) —
+    unless a profiler or a coverage tool watches it (``python -m cProfile``,
+    ``coverage run``), which writes what it found when the interpreter ends.
     (:func:`main` itself only raises SystemExit: tests call it in process.)"""
     try:
         main()
     except SystemExit as done:
-        if command_of(sys.argv[1:]) in QUICK_EXIT:
+        watched = sys.gettrace() is not None or sys.getprofile() is not None
+        if command_of(sys.argv[1:]) in QUICK_EXIT and not watched:
             _leave(done.code)
         raise
     sys.exit(0)  # pragma: no cover - main() always raises SystemExit

@@ -6,10 +6,12 @@ past the last configuration, a hint for a --goal without parentheses."""
 from __future__ import annotations
 
 import json
+import pstats
 import re
 import subprocess
 import sys
 from importlib.metadata import version
+from pathlib import Path
 
 import pytest
 import typer
@@ -233,3 +235,21 @@ def test_a_planning_command_leaves_at_once_with_its_output_whole(cfgplan: Run) -
     usual = _console(["--version"])
     assert usual.returncode == 0 and usual.stdout.startswith("cfgplan ")
     assert "torn down" in usual.stderr
+
+
+def test_a_profiled_planning_command_ends_as_usual(tmp_path: Path) -> None:
+    """Under ``python -m cProfile -o FILE -m cfgplan plan ...`` the profile is
+    written: a watched process is not ended at once (the profiler writes it
+    when the command returns)."""
+    profile = tmp_path / "plan.prof"
+    out = subprocess.run(
+        [sys.executable, "-m", "cProfile", "-o", str(profile), "-m", "cfgplan", "plan", *CROSS],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    assert profile.stat().st_size > 0
+    stats = pstats.Stats(str(profile))
+    assert any(name == "console" for _, _, name in stats.stats)  # type: ignore[attr-defined]
