@@ -41,7 +41,7 @@ class Grower:
     seen: set[bytes] = field(default_factory=set)  # fingerprints listed (distinct)
     models: Models = field(default_factory=Models)
     options: SearchOptions = field(default_factory=SearchOptions)
-    """The strategies' settings (the pricer's rule reads its own copy)."""
+    """The strategies' settings (their pricer is given the same, for its rule)."""
 
     def __post_init__(self) -> None:
         self.levels = self.grounder.task.levels
