@@ -103,18 +103,11 @@ class Pricer:
     # -- pricing settled nodes -----------------------------------------------------
 
     def price(self, node: Partial) -> float | None:
-        """A settled node's priority: a complete node's cost, else its cost
-        plus the bound in use; None when that bound proves it has no
-        completion (counted as pruned)."""
-        if node.stack:
-            rest = self.heuristic(node)
-            if rest is None:
-                self.stats.pruned += 1
-                return None
-            priority = self.priority(node, rest)
-        else:
-            priority = self.cost(node)
-        self.settled += 1
+        """A node just settled priced (:meth:`again`), and counted towards
+        ``warm`` unless pruned."""
+        priority = self.again(node)
+        if priority is not None:
+            self.settled += 1
         return priority
 
     def priority(self, node: Partial, rest: float) -> float:
@@ -157,8 +150,10 @@ class Pricer:
             self.raised += 1  # the node's refinement paid: it priced its children
 
     def again(self, node: Partial) -> float | None:
-        """An open node priced again by the bounds now in use (after
-        :meth:`take_repriced`); None: pruned."""
+        """A node's priority by the bound in use: a complete node's cost,
+        else its cost plus that bound; None when the bound proves it has no
+        completion (counted as pruned). Also an open node's, priced again
+        when the bounds in use changed (:meth:`take_repriced`)."""
         if node.done:
             return self.cost(node)
         rest = self.heuristic(node)
