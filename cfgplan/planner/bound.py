@@ -36,7 +36,7 @@ The pending items are read through their static summaries
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Set
+from collections.abc import Set
 from dataclasses import dataclass, field
 from itertools import compress
 
@@ -94,11 +94,15 @@ class Bound:
         new_robots: set[str] = set()
         future: set[ChannelId] = set()
         pending: dict[int, tuple[Ground, Summary]] = {}
+        methods: dict[int, Ground] = {}  # the pending method items, by label
+        is_method = task.is_method
         for item in node.stack:
             sub = self.summaries.summary(item.call)
             if not sub.feasible:
                 return None
             pending[item.label] = (item.call, sub)
+            if is_method(item.call):
+                methods[item.label] = item.call
             needed |= sub.functionalities
             new_robots |= sub.robots
             future |= sub.channels
@@ -130,10 +134,18 @@ class Bound:
         counted = together is None or together.counted
         alone = self._alone(node, pending, future)
         parts = self._parts(node, pending, alone, _Have.of(node, resolved, task), counted)
-        waiting = self._waiting(future, resolved, alone)
+        receivers = {c[3][0] for c in future if c[3] is not None}
+        unreached = self._unreached(receivers, set(methods.values()))
+        waiting = self._waiting(future, resolved, alone, unreached)
         deepest, widest, whole = parts.least(waiting)
-        repeats = _repeats(node, task)
+        repeats = _repeats(node, methods)
         if repeats:
+            # A channel waiting for an end merges with none a left-out item
+            # makes, as far as this count goes: those are not counted at all.
+            kept = {c for label, c in methods.items() if label not in repeats}
+            more = self._unreached(receivers - unreached, kept)
+            if more:
+                waiting = self._waiting(future, resolved, alone, unreached | more)
             again = parts.least(waiting, repeats)
             deepest, widest = max(deepest, again[0]), max(widest, again[1])
             whole = max(whole, again[2])
@@ -228,28 +240,67 @@ class Bound:
                 guarded[item.label] = total
         return guarded
 
+    def _unreached(self, names: Set[str], methods: Set[Ground]) -> set[str]:
+        """The functionality ``names`` none of the method instances ``methods`` can reach."""
+        if not names:
+            return set()
+        reach = self.summaries.reach
+        below = [reach(call)[0] for call in methods]
+        return {name for name in names if not any(name in names_below for names_below in below)}
+
     def _waiting(
         self,
         future: set[ChannelId],
         resolved: set[tuple[str, Ground, Key, Key]],
         alone: frozenset[Key],
+        unreached: Set[str],
     ) -> list[Part]:
         """The channels waiting for an end (``future``) as parts of
         :func:`least`, in the channels' and the together least costs: named
         by their data predicates (parts whose data predicates differ cannot
         merge, so they add up). A channel from or into a functionality in
         ``alone`` can merge with none a pending item makes (those have both
-        ends inside its expansion): they are a part of their own."""
-        apart = {c for c in future if c[2] in alone or c[3] in alone}
-        rest = future - apart if apart else future
-        parts: list[Part] = [
-            (
-                frozenset(data[0] for _, data, _, _ in rest),
-                _channel_bound(rest, resolved, self.task),
+        ends inside its expansion): they are a part of their own. So is a
+        channel into a functionality whose name no pending method item can
+        reach (``unreached``): a channel an item makes ends at a body item
+        of its expansion, which has a name it reaches (issue 35: on the
+        ``dag`` family the channels into the fusers waiting on the stack
+        were joined with every level below, by their data)."""
+        channel_cost = self.task.channel_cost
+        names: set[str] = set()  # the data predicates of the channels not apart
+        full = [0.0, 0.0]  # fully known channels not in C: not apart, apart
+        covered: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
+        open_ends: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
+        for channel in future:
+            kind, data, sender, receiver = channel
+            side = int(
+                sender in alone
+                or receiver in alone
+                or (receiver is not None and receiver[0] in unreached)
             )
-        ]
-        if apart:
-            parts.append((own_part("channels"), _channel_bound(apart, resolved, self.task)))
+            if not side:
+                names.add(data[0])
+            if receiver is None:
+                continue
+            if sender is None:
+                open_ends[side].add((kind, data, receiver))
+            elif channel not in resolved:
+                full[side] += channel_cost(kind)
+                covered[side].add((kind, data, receiver))
+        # Channels certain to be new: fully known ones not in C, plus one per
+        # (kind, data, receiver) of those whose sender is unknown and that
+        # nothing known could be.
+        costs = list(full)
+        if open_ends[0] or open_ends[1]:
+            known = {(k, d, r) for k, d, _, r in resolved}
+            for side in (0, 1):
+                for kind, data, receiver in open_ends[side]:
+                    end = (kind, data, receiver)
+                    if end not in covered[side] and end not in known:
+                        costs[side] += channel_cost(kind)
+        parts: list[Part] = [(frozenset(names), costs[0])]
+        if costs[1] or open_ends[1] or covered[1]:
+            parts.append((own_part("channels"), costs[1]))
         return parts
 
 
@@ -357,8 +408,8 @@ def _within(costs: dict[str, float], names: Set[str]) -> float:
     return sum([cost for name, cost in costs.items() if name in names])
 
 
-def _repeats(node: Partial, task: Task) -> set[int]:
-    """The labels of pending method items whose ground instance is being
+def _repeats(node: Partial, methods: dict[int, Ground]) -> set[int]:
+    """The labels of pending method items (``methods``) whose ground instance is being
     expanded elsewhere in the node (an ancestor of another item).
 
     Left out of a least cost, such an item is priced at nothing, which it may
@@ -373,7 +424,7 @@ def _repeats(node: Partial, task: Task) -> set[int]:
     above: set[Ground] = set()
     for item in node.stack:
         above |= item.ancestors
-    return {item.label for item in node.stack if item.call in above and task.is_method(item.call)}
+    return {label for label, call in methods.items() if call in above}
 
 
 def _pending_call(pending: dict[int, tuple[Ground, Summary]], label: int, task: Task) -> Key | None:
@@ -396,25 +447,3 @@ def _pending_end(
     if not task.is_method(call):
         return call
     return sub.producer(data)
-
-
-def _channel_bound(
-    future: Iterable[ChannelId], resolved: set[tuple[str, Ground, Key, Key]], task: Task
-) -> float:
-    """Channels certain to be new: fully known ones not in C, plus one per
-    (kind, data, receiver) of those whose sender is unknown and that nothing
-    known could be."""
-    full: set[tuple[str, Ground, Key, Key]] = set()
-    open_ends: set[tuple[str, Ground, Key]] = set()
-    for kind, data, src, dst in future:
-        if src is not None and dst is not None:
-            if (kind, data, src, dst) not in resolved:
-                full.add((kind, data, src, dst))
-        elif src is None and dst is not None:
-            open_ends.add((kind, data, dst))
-    covered = {(k, d, r) for k, d, _, r in full} | {(k, d, r) for k, d, _, r in resolved}
-    total = sum(task.channel_cost(kind) for kind, *_ in full)
-    for kind, data, dst in open_ends:
-        if (kind, data, dst) not in covered:
-            total += task.channel_cost(kind)
-    return total

@@ -23,8 +23,10 @@ from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.pricer import Pricer
+from cfgplan.planner.replay import Replays, deviations, filtered, repeatable, replay
 from cfgplan.planner.report import DeadEnd, Report, Stats
 from cfgplan.planner.successors import successors
+from cfgplan.planner.task import Ground
 
 
 @dataclass
@@ -42,26 +44,107 @@ class Grower:
     models: Models = field(default_factory=Models)
     options: SearchOptions = field(default_factory=SearchOptions)
     """The strategies' settings (their pricer is given the same, for its rule)."""
+    replays: bool = False
+    """Replay a closed sub-derivation in one step (:mod:`cfgplan.planner.replay`):
+    the best-first search does (:attr:`SearchOptions.replays`); depth-first
+    walks do not, as a replay's path lies inside its deviations' span."""
+    roots: tuple[Ground, ...] = ()
+    """The calls on the stack the search started from (what may repeat is below them)."""
+    _replays: Replays | None = field(default=None, init=False)
 
     def __post_init__(self) -> None:
         self.levels = self.grounder.task.levels
 
     def children(self, node: Partial, pricer: Pricer) -> Iterator[tuple[float, Partial]]:
         """Expand the method on top of ``node``; yield its settled children
-        with their priorities by ``pricer`` (dead ends go to the report)."""
+        with their priorities by ``pricer`` (dead ends go to the report).
+        Where the search replays (:attr:`replays`) and ``node``'s top item
+        closed a sub-derivation before, the children are the replay and the
+        node standing for its deviations (:mod:`cfgplan.planner.replay`)."""
         self.stats.expansions += 1
+        made = self._replayed(node, pricer) if self.replays else None
+        if made is not None:
+            yield from made
+            return
         yield from pricer.expanded(node, self._children(node))
 
     def _children(self, node: Partial) -> Iterator[Partial]:
+        remember = self._remember()
         for child in successors(self.grounder, node):
             clock.check()
             if isinstance(child, DeadEnd):
                 self.report.note(child)
-            else:
-                yield from self._settled(child)
+                continue
+            if remember is not None:
+                child = remember.expanded(node, child)
+            yield from self._kept(node, self._settled(child))
+
+    def _kept(self, node: Partial, children: Iterator[Partial]) -> Iterator[Partial]:
+        """``children`` of ``node`` but those a run of choices it must not
+        make leads to (:func:`cfgplan.planner.replay.filtered`)."""
+        if not node.forbidden:
+            yield from children
+            return
+        for child in children:
+            kept = filtered(node, child)
+            if kept is not None:
+                yield kept
+
+    def _replayed(self, node: Partial, pricer: Pricer) -> list[tuple[float, Partial]] | None:
+        """The replay of ``node``'s top item, settled and priced, and the node
+        for its deviations priced at their floor; None when there is no
+        replay (nothing recorded, or the walk would meet a dead end)."""
+        memory = node.memory
+        if memory is None or node.deviates:
+            return None
+        item = node.stack[0]
+        record = memory.records.get(item.call)
+        if record is None or item.call in item.ancestors:
+            return None
+        if len(record.flat) < self.options.replay_least:
+            return None  # a short walk costs less than pricing its deviations
+        replayed = replay(node, item, record, self.grounder)
+        if replayed is None:
+            return None
+        remember = self._remember()
+        assert remember is not None
+        made = list(
+            pricer.expanded(
+                node, self._kept(node, self._settled(remember.replayed(replayed, record)))
+            )
+        )
+        floor = pricer.floor(self._settled(d) for d in deviations(node, item, record, remember))
+        if floor is not None:
+            deviating = node.but(
+                forbidden=(*node.forbidden, record.flat),
+                deviates=True,
+                floor=max(node.floor, floor),
+            )
+            priority = pricer.again(deviating)
+            if priority is not None:
+                made.append((priority, deviating))
+        self.stats.replays += 1
+        return made
+
+    def _remember(self) -> Replays | None:
+        """The replay rules of this search (made at its first expansion)."""
+        if not self.replays:
+            return None
+        if self._replays is None:
+            graph = self.grounder.graph(self.options.media)
+            memo: dict[tuple[Ground, ...], Replays] = self.grounder.task.memo.setdefault(
+                "replays" if self.options.media else "replays-without-media", {}
+            )
+            found = memo.get(self.roots)
+            if found is None:
+                found = memo[self.roots] = Replays(graph, repeatable(graph, self.roots))
+            self._replays = found
+        return self._replays
 
     def settle(self, node: Partial, pricer: Pricer) -> Iterator[tuple[float, Partial]]:
         """``node`` settled (:meth:`_settled`), each node priced by ``pricer``."""
+        if self.replays and not self.roots:
+            self.roots = tuple(item.call for item in node.stack)
         for settled in self._settled(node):
             priority = pricer.price(settled)
             if priority is not None:
@@ -72,6 +155,7 @@ class Grower:
         when one has several); yield each node that has a method on top, or
         is complete."""
         task = self.grounder.task
+        remember = self._replays
         todo = [node]
         while todo:
             current = todo.pop()
@@ -84,7 +168,7 @@ class Grower:
                 if isinstance(child, DeadEnd):
                     self.report.note(child)
                 else:
-                    placed.append(child)
+                    placed.append(child if remember is None else remember.placed(current, child))
             todo.extend(reversed(placed))
 
     def complete(self, node: Partial, total: float) -> Configuration | None:

@@ -74,6 +74,17 @@ class SearchOptions:
     node's split, so that most are never refined themselves
     (:mod:`cfgplan.planner.split`); False prices each child alone."""
 
+    replays: bool = True
+    """In the best-first search, do a sub-derivation closed before again in
+    one step where the same method instance is on top again, beside a node
+    for its other derivations priced at their floor
+    (:mod:`cfgplan.planner.replay`); False walks it step by step."""
+
+    replay_least: int = 4
+    """The fewest method expansions a sub-derivation must have to be replayed:
+    a shorter walk costs less than pricing its deviations (the wall family's
+    are one or two)."""
+
     dive: bool = True
     """When a limit stops the search before anything was proven, dive greedily
     from the open nodes for a configuration (:mod:`cfgplan.planner.dive`,

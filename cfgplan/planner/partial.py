@@ -15,7 +15,8 @@ functionality keeps the label of its first instance.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Span
@@ -24,6 +25,9 @@ from cfgplan.planner import clock
 from cfgplan.planner.ground import Expansion, FunctionalityInstance
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task
+
+if TYPE_CHECKING:
+    from cfgplan.planner.replay import Memory
 
 Key = Ground
 """A functionality instance's identity: ``("camera", "Emil")``."""
@@ -87,10 +91,46 @@ class Partial:
     cost: float  # of the settled part: placed functionalities, robots, resolved channels
     robots: frozenset[str]  # where the placed functionalities run
     resolved: frozenset[ChannelKey]  # channels whose two ends are placed
+    memory: Memory | None = None
+    """The sub-derivations it closed, for replays (:mod:`cfgplan.planner.replay`;
+    None where the search does not replay)."""
+    floor: float = 0.0
+    """A lower bound on the cost of each of its derivations, known from an
+    ancestor (a replay's deviations, :func:`cfgplan.planner.replay.deviations`)."""
+    forbidden: tuple[tuple[int, ...], ...] = ()
+    """Runs of choices it must not make next, to their end: the replays
+    made beside an ancestor (:func:`cfgplan.planner.replay.filtered`)."""
+    deviates: bool = False
+    """It stands for a replayed node's other derivations: its top item is
+    expanded step by step, not replayed again."""
 
     @property
     def done(self) -> bool:
         return not self.stack
+
+    def but(self, **changes: Any) -> Partial:
+        """A new node like this one but for ``changes`` (this one is kept as it is)."""
+        return replace(self, **changes)
+
+    def remembering(self, memory: Memory | None) -> Partial:
+        """:meth:`but` with another :attr:`memory` (made often: written out)."""
+        return Partial(
+            self.stack,
+            self.placed,
+            self.labels,
+            self.located,
+            self.channels,
+            self.effects,
+            self.next_label,
+            self.path,
+            self.cost,
+            self.robots,
+            self.resolved,
+            memory,
+            self.floor,
+            self.forbidden,
+            self.deviates,
+        )
 
 
 def root(goal: Ground) -> Partial:
@@ -187,6 +227,8 @@ def expand_method(
         cost=node.cost,
         robots=node.robots,
         resolved=node.resolved,
+        memory=node.memory,
+        floor=node.floor,
     )
 
 
@@ -212,7 +254,7 @@ def reuse_functionality(node: Partial, item: Item, existing: int, task: Task) ->
                 ch.bandwidth,
                 ch.number,
             )
-    settled = _settle(tuple(relabelled), node.located, touching, node.resolved, task)
+    settled = settle(tuple(relabelled), node.located, touching, node.resolved, task)
     if isinstance(settled, DeadEnd):
         return settled
     channels, added, resolved = settled
@@ -228,6 +270,8 @@ def reuse_functionality(node: Partial, item: Item, existing: int, task: Task) ->
         cost=node.cost + added,
         robots=node.robots,
         resolved=resolved,
+        memory=node.memory,
+        floor=node.floor,
     )
 
 
@@ -252,7 +296,7 @@ def place_functionality(
     located[item.label] = new
     label = item.label
     touching = [i for i, ch in enumerate(node.channels) if ch.source == label or ch.target == label]
-    settled = _settle(node.channels, located, touching, node.resolved, task)
+    settled = settle(node.channels, located, touching, node.resolved, task)
     if isinstance(settled, DeadEnd):
         return settled
     channels, added, resolved = settled
@@ -275,10 +319,12 @@ def place_functionality(
         cost=node.cost + added,
         robots=robots,
         resolved=resolved,
+        memory=node.memory,
+        floor=node.floor,
     )
 
 
-def _settle(
+def settle(
     channels: tuple[Channel, ...],
     located: dict[int, Placed],
     touching: list[int],

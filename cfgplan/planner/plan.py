@@ -112,13 +112,14 @@ def growing(
     distinct: bool = True,
     given: frozenset[int] = frozenset(),
     splits: bool = True,
+    replays: bool = False,
 ) -> tuple[Grower, Pricer]:
     """A grower for ``task`` and a pricer with the task's bounds
     (:func:`parts`), children priced from splits (unless ``splits`` is
     False, or :attr:`SearchOptions.splits` is); ``given``:
     :attr:`Grower.given`. Every strategy's grower and pricer are made here."""
     grounder, bound, partition = parts(task, options.media)
-    made = Grower(grounder, distinct, given, options=options)
+    made = Grower(grounder, distinct, given, options=options, replays=replays and options.replays)
     pricer = Pricer(
         task.levels,
         bound.estimator(options),
@@ -189,8 +190,9 @@ class Run:
     strategy: BestFirst | Combined | Windows = field(init=False)
 
     def __post_init__(self) -> None:
+        ranked = self.limit is not None
         made, pricer = growing(
-            self.task, self.options, self.distinct, splits=self.limit is not None
+            self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
             bound = parts(self.task, self.options.media)[1]

@@ -23,7 +23,7 @@ how many nodes are taken (tests/planner/test_pricer.py).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -135,7 +135,7 @@ class Pricer:
             priority = self.price(child)
             if priority is None:
                 continue
-            if split is not None and not child.done:
+            if split is not None and not child.done and len(child.path) > depth:
                 price = split.prices.get(child.path[depth])
                 if price == INFINITE:
                     self.stats.pruned += 1
@@ -160,7 +160,27 @@ class Pricer:
         if rest is None:
             self.stats.pruned += 1
             return None
-        return self.priority(node, rest)
+        priority = self.priority(node, rest)
+        return node.floor if node.floor > priority else priority
+
+    def floor(self, nodes: Iterable[Iterator[Partial]]) -> float | None:
+        """The least priority of ``nodes`` (a replay's deviations, each settled,
+        :func:`cfgplan.planner.replay.deviations`), by the bound in use: a
+        lower bound on every derivation that deviates; None when none can
+        complete."""
+        least = None
+        for settled in nodes:
+            for node in settled:
+                if node.done:
+                    priority = self.cost(node)
+                else:
+                    rest = self.heuristic(node)
+                    if rest is None:
+                        continue  # no completion (not counted as pruned: never queued)
+                    priority = self.priority(node, rest)
+                if least is None or priority < least:
+                    least = priority
+        return least
 
     # -- the stronger bound, lazily ------------------------------------------------
 

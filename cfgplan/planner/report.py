@@ -76,6 +76,7 @@ class Stats:
 
     nodes: int = 0  # nodes taken to be expanded or finished
     expansions: int = 0  # method instances expanded
+    replays: int = 0  # of them, sub-derivations done again in one step (replay.py)
     derivations: int = 0  # complete derivations met (duplicates included)
     duplicates: int = 0  # complete derivations whose configuration was listed already
     rejected: int = 0  # complete derivations found inadmissible (4.5 step 4)

@@ -139,7 +139,7 @@ class BestFirst:
                     self.stats.seconds = time.perf_counter() - start
                     yield config
                 continue
-            if grower.distinct:
+            if grower.distinct and not node.forbidden:
                 # The same partial configuration reached by another order of
                 # choices has the same completions: only the first one counts.
                 key = canonical(node, grower.grounder)

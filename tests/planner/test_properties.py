@@ -38,6 +38,7 @@ from hypothesis import strategies as st
 from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, parts
 from cfgplan.planner.report import Condition
 from cfgplan.planner.room import Load, Need, Room
@@ -222,6 +223,7 @@ class Coverage:
     repeated_call: bool  # a call twice in a body, and configurations found
     raised: bool  # the partitioned bound, on from the first node, raised a priority
     media_cut: bool  # ... and left out an expansion the media cannot carry (room.py)
+    replayed: bool  # a ranked search replayed a sub-derivation (replay.py), and listed
 
 
 def _coverage(example: Generated) -> Coverage:
@@ -245,6 +247,8 @@ def _coverage(example: Generated) -> Coverage:
     with patch.object(room, "fits", fits):
         bounded = Run(problem.task, problem.goal_call, limit=3, distinct=False, options=FIRST_NODE)
         list(bounded)
+    replaying = Run(problem.task, problem.goal_call, 6, options=SearchOptions(replay_least=1))
+    replayed = bool(list(replaying)) and replaying.stats.replays > 0
     return Coverage(
         derivations=len(derivations),
         distinct=len({c.identity() for c in derivations}),
@@ -257,6 +261,7 @@ def _coverage(example: Generated) -> Coverage:
         repeated_call=bool(derivations) and "(?t2 " in text,
         raised=bounded.strategy.pricer.raised > 0,
         media_cut=any(cut),
+        replayed=replayed,
     )
 
 
@@ -284,3 +289,4 @@ def test_the_generator_covers_what_it_should() -> None:
     assert any(s.repeated_call for s in seen)
     assert any(s.raised for s in seen)
     assert any(s.media_cut for s in seen)
+    assert sum(s.replayed for s in seen) >= 10
