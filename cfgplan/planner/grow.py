@@ -47,10 +47,14 @@ class Grower:
     replays: bool = False
     """Replay a closed sub-derivation in one step (:mod:`cfgplan.planner.replay`):
     the best-first search does (:attr:`SearchOptions.replays`); depth-first
-    walks do not, as a replay's path lies inside its deviations' span."""
+    walks do not, as a replay's path lies inside its deviations' span.
+    Turned off for the rest of a search whose replays do not pay
+    (:attr:`SearchOptions.replay_trial`)."""
     roots: tuple[Ground, ...] = ()
     """The calls on the stack the search started from (what may repeat is below them)."""
     _replays: Replays | None = field(default=None, init=False)
+    _gave_up: int = field(default=0, init=False)
+    """Sub-derivations remembered and not replayed (:meth:`_missed`)."""
 
     def __post_init__(self) -> None:
         self.levels = self.grounder.task.levels
@@ -69,14 +73,11 @@ class Grower:
         yield from pricer.expanded(node, self._children(node))
 
     def _children(self, node: Partial) -> Iterator[Partial]:
-        remember = self._remember()
-        for child in successors(self.grounder, node):
+        for child in successors(self.grounder, node, self._remember()):
             clock.check()
             if isinstance(child, DeadEnd):
                 self.report.note(child)
                 continue
-            if remember is not None:
-                child = remember.expanded(node, child)
             yield from self._kept(node, self._settled(child))
 
     def _kept(self, node: Partial, children: Iterator[Partial]) -> Iterator[Partial]:
@@ -93,27 +94,36 @@ class Grower:
     def _replayed(self, node: Partial, pricer: Pricer) -> list[tuple[float, Partial]] | None:
         """The replay of ``node``'s top item, settled and priced, and the node
         for its deviations priced at their floor; None when there is no
-        replay (nothing recorded, or the walk would meet a dead end)."""
+        replay (nothing recorded, or the walk would meet a dead end), or
+        when a deviation may cost no more than it: the deviating node would
+        be taken at once and walk it all the same (the wall family's equal
+        costs)."""
         memory = node.memory
         if memory is None or node.deviates:
             return None
         item = node.stack[0]
         record = memory.records.get(item.call)
-        if record is None or item.call in item.ancestors:
-            return None
-        if len(record.flat) < self.options.replay_least:
-            return None  # a short walk costs less than pricing its deviations
-        replayed = replay(node, item, record, self.grounder)
-        if replayed is None:
+        if record is None:
             return None
         remember = self._remember()
         assert remember is not None
-        made = list(
-            pricer.expanded(
-                node, self._kept(node, self._settled(remember.replayed(replayed, record)))
-            )
+        replayed = None
+        if item.call not in item.ancestors and len(record.flat) >= self.options.replay_least:
+            # (a shorter walk costs less than pricing its deviations)
+            memory = remember.replaying(node, record)
+            replayed = replay(node, item, record, self.grounder, memory)
+        if replayed is None:
+            self._missed()
+            return None
+        again = list(self._kept(node, self._settled(replayed)))
+        best = pricer.floor([iter(again)])
+        floor = pricer.floor(
+            (self._settled(d) for d in deviations(node, item, record, remember)), best
         )
-        floor = pricer.floor(self._settled(d) for d in deviations(node, item, record, remember))
+        if floor is not None and best is not None and floor <= best:
+            self._missed()
+            return None
+        made = list(pricer.expanded(node, iter(again)))
         if floor is not None:
             deviating = node.but(
                 forbidden=(*node.forbidden, record.flat),
@@ -126,18 +136,32 @@ class Grower:
         self.stats.replays += 1
         return made
 
+    def _missed(self) -> None:
+        """A sub-derivation remembered was not replayed (too short, a dead end
+        on the walk, or a deviation costing no more): after
+        :attr:`SearchOptions.replay_trial` of them and no replay, the search
+        stops replaying, and remembering."""
+        self._gave_up += 1
+        if self._gave_up >= self.options.replay_trial and not self.stats.replays:
+            self.replays = False
+            self._replays = None
+
     def _remember(self) -> Replays | None:
         """The replay rules of this search (made at its first expansion)."""
         if not self.replays:
             return None
         if self._replays is None:
             graph = self.grounder.graph(self.options.media)
-            memo: dict[tuple[Ground, ...], Replays] = self.grounder.task.memo.setdefault(
-                "replays" if self.options.media else "replays-without-media", {}
+            memo: dict[tuple[tuple[Ground, ...], int], Replays] = (
+                self.grounder.task.memo.setdefault(
+                    "replays" if self.options.media else "replays-without-media", {}
+                )
             )
-            found = memo.get(self.roots)
+            least = self.options.replay_least
+            found = memo.get((self.roots, least))
             if found is None:
-                found = memo[self.roots] = Replays(graph, repeatable(graph, self.roots))
+                remembered = repeatable(graph, self.roots, least)
+                found = memo[(self.roots, least)] = Replays(graph, remembered)
             self._replays = found
         return self._replays
 
@@ -164,11 +188,11 @@ class Grower:
                 yield current
                 continue
             placed: list[Partial] = []
-            for child in successors(self.grounder, current):
+            for child in successors(self.grounder, current, remember):
                 if isinstance(child, DeadEnd):
                     self.report.note(child)
                 else:
-                    placed.append(child if remember is None else remember.placed(current, child))
+                    placed.append(child)
             todo.extend(reversed(placed))
 
     def complete(self, node: Partial, total: float) -> Configuration | None:

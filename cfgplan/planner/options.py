@@ -80,6 +80,12 @@ class SearchOptions:
     for its other derivations priced at their floor
     (:mod:`cfgplan.planner.replay`); False walks it step by step."""
 
+    replay_trial: int = 4
+    """Sub-derivations remembered but not replayed a search may meet before
+    it has replayed one (too short, a dead end on the walk, or a deviation
+    costing no more than the replay: the wall family's equal costs): then it
+    stops replaying, and remembering, for the rest of the search."""
+
     replay_least: int = 4
     """The fewest method expansions a sub-derivation must have to be replayed:
     a shorter walk costs less than pricing its deviations (the wall family's

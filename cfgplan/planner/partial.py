@@ -112,26 +112,6 @@ class Partial:
         """A new node like this one but for ``changes`` (this one is kept as it is)."""
         return replace(self, **changes)
 
-    def remembering(self, memory: Memory | None) -> Partial:
-        """:meth:`but` with another :attr:`memory` (made often: written out)."""
-        return Partial(
-            self.stack,
-            self.placed,
-            self.labels,
-            self.located,
-            self.channels,
-            self.effects,
-            self.next_label,
-            self.path,
-            self.cost,
-            self.robots,
-            self.resolved,
-            memory,
-            self.floor,
-            self.forbidden,
-            self.deviates,
-        )
-
 
 def root(goal: Ground) -> Partial:
     """The initial node: the goal alone on the stack, C empty."""
@@ -154,13 +134,20 @@ def root(goal: Ground) -> Partial:
 
 
 def expand_method(
-    node: Partial, item: Item, expansion: Expansion, span: Span | None, choice: int
+    node: Partial,
+    item: Item,
+    expansion: Expansion,
+    span: Span | None,
+    choice: int,
+    memory: Memory | None = None,
 ) -> Partial | DeadEnd:
     """Step 3 of 4.5: fresh labels (a), add the method's channels (b), push its
     body (c), and re-wire every channel at the expanded instance through
     ``:out`` (its sending end) and ``:in`` (its receiving end) (d). A channel
     with *both* ends at the instance is re-wired at both; if that makes a
-    functionality feed itself, the cycle check of step 4 rejects it."""
+    functionality feed itself, the cycle check of step 4 rejects it.
+    ``memory``: the child's (:meth:`cfgplan.planner.replay.Replays.expanding`;
+    None where the search does not replay)."""
     first = node.next_label
     numbered = expansion.channel_numbers
     block = [
@@ -227,7 +214,7 @@ def expand_method(
         cost=node.cost,
         robots=node.robots,
         resolved=node.resolved,
-        memory=node.memory,
+        memory=memory,
         floor=node.floor,
     )
 
@@ -235,7 +222,9 @@ def expand_method(
 # -- step 2a: add a functionality, or reuse the one already in C ----------------------
 
 
-def reuse_functionality(node: Partial, item: Item, existing: int, task: Task) -> Partial | DeadEnd:
+def reuse_functionality(
+    node: Partial, item: Item, existing: int, task: Task, memory: Memory | None = None
+) -> Partial | DeadEnd:
     """Step 2a of 4.5 when the instance "already exists in the current
     configuration": it is not added again; the channels at the item's label
     move to the existing label (and may now have both ends placed)."""
@@ -270,7 +259,7 @@ def reuse_functionality(node: Partial, item: Item, existing: int, task: Task) ->
         cost=node.cost + added,
         robots=node.robots,
         resolved=resolved,
-        memory=node.memory,
+        memory=memory,
         floor=node.floor,
     )
 
@@ -282,6 +271,7 @@ def place_functionality(
     instance: FunctionalityInstance,
     choice: int | None,
     task: Task,
+    memory: Memory | None = None,
 ) -> Partial | DeadEnd:
     """Step 2a of 4.5: add the functionality to C at its robot (its first
     argument), with its inputs, outputs and postconditions instantiated under
@@ -319,7 +309,7 @@ def place_functionality(
         cost=node.cost + added,
         robots=robots,
         resolved=resolved,
-        memory=node.memory,
+        memory=memory,
         floor=node.floor,
     )
 

@@ -163,11 +163,14 @@ class Pricer:
         priority = self.priority(node, rest)
         return node.floor if node.floor > priority else priority
 
-    def floor(self, nodes: Iterable[Iterator[Partial]]) -> float | None:
+    def floor(
+        self, nodes: Iterable[Iterator[Partial]], beaten: float | None = None
+    ) -> float | None:
         """The least priority of ``nodes`` (a replay's deviations, each settled,
         :func:`cfgplan.planner.replay.deviations`), by the bound in use: a
         lower bound on every derivation that deviates; None when none can
-        complete."""
+        complete. Once one is at most ``beaten``, that one's (the rest are
+        not priced)."""
         least = None
         for settled in nodes:
             for node in settled:
@@ -180,6 +183,8 @@ class Pricer:
                     priority = self.priority(node, rest)
                 if least is None or priority < least:
                     least = priority
+                    if beaten is not None and least <= beaten:
+                        return least
         return least
 
     # -- the stronger bound, lazily ------------------------------------------------

@@ -44,11 +44,12 @@ and a replay's path lies inside its deviations' span).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
-from cfgplan.planner.graph import Graph, Option
-from cfgplan.planner.ground import Grounder
+from cfgplan.planner.graph import Graph
+from cfgplan.planner.ground import Expansion, Grounder
 from cfgplan.planner.partial import Channel, Item, Partial, expand_method, settle
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.task import Ground
@@ -57,11 +58,13 @@ from cfgplan.planner.task import Ground
 @dataclass(eq=False, slots=True)
 class Record:
     """A closed sub-derivation: the method instance ``call`` expanded by
-    ``option``, and the records of its body's method items, in body order
+    ``expansion``, and the records of its body's method items, in body order
     (a record is shared by every sub-derivation that replayed it)."""
 
     call: Ground
-    option: Option
+    choice: int
+    """Its expansion's number among the method's (as successors numbers them)."""
+    expansion: Expansion
     children: tuple[Record, ...]
     at: dict[int, Record]
     """The children by their body offset."""
@@ -75,7 +78,7 @@ class Record:
         """The choices of the walk, in path order (this expansion's, then each
         child's in body order)."""
         if self._flat is None:
-            flat = [self.option.choice]
+            flat = [self.choice]
             for child in self.children:
                 flat.extend(child.flat)
             self._flat = tuple(flat)
@@ -85,14 +88,14 @@ class Record:
     def size(self) -> int:
         """The labels the walk takes: every body item of every expansion."""
         if self._size < 0:
-            self._size = self.option.expansion.size + sum(c.size for c in self.children)
+            self._size = self.expansion.size + sum(c.size for c in self.children)
         return self._size
 
     @property
     def effects(self) -> tuple[tuple[bool, Ground], ...]:
         """The postconditions the walk's expansions add, in their order."""
         if self._effects is None:
-            effects = list(self.option.expansion.effects)
+            effects = list(self.expansion.effects)
             for child in self.children:
                 effects.extend(child.effects)
             self._effects = tuple(effects)
@@ -117,7 +120,7 @@ class Record:
         ``:out``'s that has one); None when a ``:out`` is missing."""
         record = self
         while True:
-            expansion = record.option.expansion
+            expansion = record.expansion
             port = expansion.outputs.get(data)
             if port is None:
                 return None
@@ -132,7 +135,7 @@ class Record:
         """Where a channel of ``data`` received by this instance ends once
         re-wired through each ``:in`` (an ``:in`` may feed several): the
         functionality calls in channel order; None when an ``:in`` is missing."""
-        expansion = self.option.expansion
+        expansion = self.expansion
         offsets = expansion.inputs.get(data)
         if not offsets:
             return None
@@ -154,7 +157,8 @@ class Opening:
     """A method instance expanded whose sub-derivation is not closed yet."""
 
     call: Ground
-    option: Option
+    choice: int
+    expansion: Expansion
     depth: int
     """The stack's length once it is closed (its item's stack, less it)."""
     children: tuple[Record, ...] = ()
@@ -179,67 +183,58 @@ class Replays:
 
     graph: Graph
     repeatable: frozenset[Ground]
-    _options: dict[tuple[Ground, int], Option] = field(default_factory=dict)
     _positions: dict[int, tuple[int, ...]] = field(default_factory=dict)
 
-    def option(self, call: Ground, choice: int) -> Option:
-        """The graph's option of ``call`` numbered ``choice``."""
-        found = self._options.get((call, choice))
-        if found is None:
-            for option in self.graph.instance(call).options:
-                self._options[(call, option.choice)] = option
-            found = self._options[(call, choice)]
-        return found
-
-    def expanded(self, node: Partial, child: Partial) -> Partial:
-        """``child``, made by expanding ``node``'s top item, remembering it."""
+    def expanding(
+        self, node: Partial, item: Item, expansion: Expansion, choice: int
+    ) -> Memory | None:
+        """The memory of the child made by expanding ``item`` (``node``'s top)
+        by ``expansion``: the expansion opened, if it is remembered."""
         memory = node.memory
-        call = node.stack[0].call
+        call = item.call
         if call not in self.repeatable and (memory is None or not memory.opened):
-            return child
+            return memory
         if memory is None:
             memory = Memory()
-        option = self.option(call, child.path[-1])
-        opening = Opening(call, option, len(node.stack) - 1)
-        return _remember(
-            child, self._close(Memory((*memory.opened, opening), memory.records), child)
-        )
+        depth = len(node.stack) - 1
+        made = Memory((*memory.opened, Opening(call, choice, expansion, depth)), memory.records)
+        return self._close(made, depth) if not expansion.body else made
 
-    def placed(self, node: Partial, child: Partial) -> Partial:
-        """``child``, made by placing or reusing ``node``'s top functionality."""
+    def placing(self, node: Partial, chosen: bool) -> Memory | None:
+        """The memory of the child made by placing or reusing ``node``'s top
+        functionality (``chosen``: one of several bindings)."""
         memory = node.memory
         if memory is None or not memory.opened:
-            return child
-        if len(child.path) > len(node.path):  # a binding chosen: not replayed
+            return memory
+        depth = len(node.stack) - 1
+        if chosen:  # not replayed: the instance reused would take no choice there
             memory = Memory(tuple(_impure(o) for o in memory.opened), memory.records)
-        return _remember(child, self._close(memory, child))
+        elif depth > memory.opened[-1].depth:
+            return memory  # nothing closed
+        return self._close(memory, depth)
 
-    def replayed(self, child: Partial, record: Record) -> Partial:
-        """``child``, a replay of ``record``, remembering it as a closed child."""
-        memory = child.memory
+    def replaying(self, node: Partial, record: Record) -> Memory | None:
+        """The memory of ``node``'s top item's replay of ``record``: a closed child."""
+        memory = node.memory
         if memory is None or not memory.opened:
-            return child
-        last = memory.opened[-1]
-        opened = (*memory.opened[:-1], _with_child(last, record))
-        return _remember(child, self._close(Memory(opened, memory.records), child))
+            return memory
+        opened = (*memory.opened[:-1], _with_child(memory.opened[-1], record))
+        return self._close(Memory(opened, memory.records), len(node.stack) - 1)
 
-    def _close(self, memory: Memory, node: Partial) -> Memory:
-        """Close the open expansions whose sub-derivation ``node`` completed."""
+    def _close(self, memory: Memory, depth: int) -> Memory:
+        """Close the open expansions a node whose stack is ``depth`` long completed."""
         opened, records = memory.opened, memory.records
-        depth = len(node.stack)
+        if not opened or depth > opened[-1].depth:
+            return memory
         copied = False
         while opened and depth <= opened[-1].depth:
             done = opened[-1]
             opened = opened[:-1]
             record = None
-            methods = self._methods(done.option)
+            methods = self._methods(done.expansion)
             if done.pure and len(methods) == len(done.children):
-                record = Record(
-                    done.call,
-                    done.option,
-                    done.children,
-                    dict(zip(methods, done.children, strict=True)),
-                )
+                at = dict(zip(methods, done.children, strict=True))
+                record = Record(done.call, done.choice, done.expansion, done.children, at)
                 if done.call in self.repeatable and done.call not in records:
                     if not copied:
                         records, copied = dict(records), True
@@ -250,32 +245,36 @@ class Replays:
                 opened = (*opened[:-1], parent)
         return Memory(opened, records)
 
-    def _methods(self, option: Option) -> tuple[int, ...]:
-        """The body offsets of an option's method items."""
-        found = self._positions.get(id(option))
+    def _methods(self, expansion: Expansion) -> tuple[int, ...]:
+        """The body offsets of an expansion's method items."""
+        found = self._positions.get(id(expansion))
         if found is None:
             is_method = self.graph.grounder.task.is_method
-            body = option.expansion.body
-            found = tuple(i for i, call in enumerate(body) if is_method(call))
-            self._positions[id(option)] = found
+            found = tuple(i for i, call in enumerate(expansion.body) if is_method(call))
+            self._positions[id(expansion)] = found
         return found
 
 
 def _with_child(opening: Opening, record: Record) -> Opening:
     return Opening(
-        opening.call, opening.option, opening.depth, (*opening.children, record), opening.pure
+        opening.call,
+        opening.choice,
+        opening.expansion,
+        opening.depth,
+        (*opening.children, record),
+        opening.pure,
     )
 
 
 def _impure(opening: Opening) -> Opening:
-    return Opening(opening.call, opening.option, opening.depth, opening.children, False)
+    return Opening(
+        opening.call, opening.choice, opening.expansion, opening.depth, opening.children, False
+    )
 
 
-def _remember(node: Partial, memory: Memory) -> Partial:
-    return node.remembering(memory)
-
-
-def replay(node: Partial, item: Item, record: Record, grounder: Grounder) -> Partial | None:
+def replay(
+    node: Partial, item: Item, record: Record, grounder: Grounder, memory: Memory | None = None
+) -> Partial | None:
     """``node`` with ``item`` (its top) expanded as ``record`` was, in one
     step: the node the walk with the record's choices reaches. None where the
     walk meets a dead end, or merges channels in an order one step would not
@@ -327,6 +326,7 @@ def replay(node: Partial, item: Item, record: Record, grounder: Grounder) -> Par
         path=(*node.path, *record.flat),
         cost=node.cost + added,
         resolved=resolved,
+        memory=memory,
         forbidden=(),
         deviates=False,
     )
@@ -356,7 +356,7 @@ def deviations(node: Partial, item: Item, record: Record, replays: Replays) -> I
         ancestors = item.ancestors if current is record else inner
         stand_in = Item(item.label, current.call, ancestors, item.relevant)
         for option in replays.graph.instance(current.call).options:
-            if option.choice == current.option.choice:
+            if option.choice == current.choice:
                 continue
             made = expand_method(rest, stand_in, option.expansion, None, option.choice)
             if isinstance(made, Partial):
@@ -382,10 +382,12 @@ def filtered(node: Partial, child: Partial) -> Partial | None:
     return child.but(forbidden=tuple(kept)) if kept or child.forbidden else child
 
 
-def repeatable(graph: Graph, roots: Iterable[Ground]) -> frozenset[Ground]:
+def repeatable(graph: Graph, roots: Iterable[Ground], least: int = 1) -> frozenset[Ground]:
     """The method instances below ``roots`` that may occur twice in one
     derivation (the recursion guard ignored): below two method items of one
-    option's body, or below two roots. Only they are remembered."""
+    option's body, or below two roots; and whose derivations may take at
+    least ``least`` method expansions (one below itself: any). Only they are
+    remembered."""
     task = graph.grounder.task
     reach: dict[Ground, frozenset[Ground]] = {}
 
@@ -412,7 +414,46 @@ def repeatable(graph: Graph, roots: Iterable[Ground]) -> frozenset[Ground]:
             slots = [child for child in option.children if task.is_method(child)]
             if len(slots) > 1:
                 _twice(slots, below, found)
+    if least > 1:
+        longest = _longest(graph, found)
+        found = {call for call in found if longest[call] >= least}
     return frozenset(found)
+
+
+def _longest(graph: Graph, calls: Iterable[Ground]) -> dict[Ground, float]:
+    """The most method expansions a derivation of each call may take (the
+    recursion guard ignored: infinite where an instance is below itself)."""
+    task = graph.grounder.task
+    longest: dict[Ground, float] = {}
+    on_path: set[Ground] = set()
+    for start in calls:
+        todo: list[tuple[Ground, bool]] = [(start, False)]
+        while todo:
+            call, ready = todo.pop()
+            if call in longest:
+                continue
+            options = graph.instance(call).options
+            children = {c for o in options for c in o.children if task.is_method(c)}
+            if not ready:
+                on_path.add(call)
+                todo.append((call, True))
+                for child in children:
+                    if child in on_path:
+                        longest[call] = math.inf  # below itself
+                    elif child not in longest:
+                        todo.append((child, False))
+                continue
+            on_path.discard(call)
+            if call in longest:
+                continue
+            longest[call] = max(
+                (
+                    1 + sum(longest.get(c, math.inf) for c in o.children if task.is_method(c))
+                    for o in options
+                ),
+                default=1,
+            )
+    return longest
 
 
 def _twice(slots: list[Ground], below: object, found: set[Ground]) -> None:

@@ -17,6 +17,7 @@ reason. The best-first search, the greedy dive and the naive baseline
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 from cfgplan.notation import call_text
 from cfgplan.planner.ground import Grounder
@@ -32,21 +33,32 @@ from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, MethodSchema
 from cfgplan.planner.unify import bind_name
 
+if TYPE_CHECKING:
+    from cfgplan.planner.replay import Replays
+
 Child = Partial | DeadEnd
 
 
-def successors(grounder: Grounder, node: Partial) -> Iterator[Child]:
-    """The children of ``node`` (whose stack is not empty), in 4.5's order."""
+def successors(
+    grounder: Grounder, node: Partial, remember: Replays | None = None
+) -> Iterator[Child]:
+    """The children of ``node`` (whose stack is not empty), in 4.5's order;
+    ``remember``: the search's replay rules, which give each child its
+    memory (:mod:`cfgplan.planner.replay`; None: none is kept)."""
     item = node.stack[0]
     versions = grounder.task.versions(item.call)
     if versions:
-        yield from _expand(grounder, node, item, versions)
+        yield from _expand(grounder, node, item, versions, remember)
     else:
-        yield from _place(grounder, node, item)
+        yield from _place(grounder, node, item, remember)
 
 
 def _expand(
-    grounder: Grounder, node: Partial, item: Item, versions: tuple[MethodSchema, ...]
+    grounder: Grounder,
+    node: Partial,
+    item: Item,
+    versions: tuple[MethodSchema, ...],
+    remember: Replays | None,
 ) -> Iterator[Child]:
     if item.call in item.ancestors:
         yield DeadEnd(
@@ -66,11 +78,16 @@ def _expand(
             if isinstance(expansion, DeadEnd):
                 yield expansion
             else:
-                yield expand_method(node, item, expansion, method.span, choice)
+                memory = (
+                    None if remember is None else remember.expanding(node, item, expansion, choice)
+                )
+                yield expand_method(node, item, expansion, method.span, choice, memory)
             choice += 1
 
 
-def _place(grounder: Grounder, node: Partial, item: Item) -> Iterator[Child]:
+def _place(
+    grounder: Grounder, node: Partial, item: Item, remember: Replays | None
+) -> Iterator[Child]:
     task = grounder.task
     schema = task.functionality(item.call)
     if schema is None:
@@ -82,15 +99,17 @@ def _place(grounder: Grounder, node: Partial, item: Item) -> Iterator[Child]:
         return
     existing = node.labels.get(item.call)
     if existing is not None:
-        yield reuse_functionality(node, item, existing, task)
+        memory = None if remember is None else remember.placing(node, False)
+        yield reuse_functionality(node, item, existing, task, memory)
         return
     options = grounder.instances(schema, item.call)
     if not options:
         yield _no_binding(grounder, schema, item.call, call_text(item.call))
         return
+    memory = None if remember is None else remember.placing(node, len(options) > 1)
     for index, instance in enumerate(options):
         choice = index if len(options) > 1 else None
-        yield place_functionality(node, item, schema, instance, choice, task)
+        yield place_functionality(node, item, schema, instance, choice, task, memory)
 
 
 def _no_binding(
