@@ -36,7 +36,7 @@ The pending items are read through their static summaries
 
 from __future__ import annotations
 
-from collections.abc import Set
+from collections.abc import Iterable, Set
 from dataclasses import dataclass, field
 from itertools import compress
 
@@ -113,9 +113,12 @@ class Bound:
             if src is not None and dst is not None:
                 resolved.add((ch.kind, ch.data, src, dst))
                 continue
-            sender = src if src is not None else _pending_end(pending, ch.source, ch.data, task)
-            receiver = dst if dst is not None else _pending_call(pending, ch.target, task)
-            future.add((ch.kind, ch.data, sender, receiver))
+            if src is None:
+                src = _pending_end(pending, methods, ch.source, ch.data)
+            if dst is None and ch.target not in methods:
+                entry = pending.get(ch.target)  # a pending functionality: what it will be
+                dst = entry[0] if entry is not None else None
+            future.add((ch.kind, ch.data, src, dst))
         mandatory = 0.0
         for key in needed:
             if key not in placed:
@@ -135,7 +138,7 @@ class Bound:
         alone = self._alone(node, pending, future)
         parts = self._parts(node, pending, alone, _Have.of(node, resolved, task), counted)
         receivers = {c[3][0] for c in future if c[3] is not None}
-        unreached = self._unreached(receivers, set(methods.values()))
+        unreached = self._unreached(receivers, methods.values())
         waiting = self._waiting(future, resolved, alone, unreached)
         deepest, widest, whole = parts.least(waiting)
         repeats = _repeats(node, methods)
@@ -240,13 +243,12 @@ class Bound:
                 guarded[item.label] = total
         return guarded
 
-    def _unreached(self, names: Set[str], methods: Set[Ground]) -> set[str]:
+    def _unreached(self, names: Set[str], methods: Iterable[Ground]) -> set[str]:
         """The functionality ``names`` none of the method instances ``methods`` can reach."""
         if not names:
             return set()
         reach = self.summaries.reach
-        below = [reach(call)[0] for call in methods]
-        return {name for name in names if not any(name in names_below for names_below in below)}
+        return set(names).difference(*[reach(call)[0] for call in methods])
 
     def _waiting(
         self,
@@ -299,9 +301,13 @@ class Bound:
                     if end not in covered[side] and end not in known:
                         costs[side] += channel_cost(kind)
         parts: list[Part] = [(frozenset(names), costs[0])]
-        if costs[1] or open_ends[1] or covered[1]:
-            parts.append((own_part("channels"), costs[1]))
+        if costs[1]:
+            parts.append((_APART, costs[1]))
         return parts
+
+
+_APART = own_part("channels")
+"""The part of the channels waiting for an end that merge with nothing pending."""
 
 
 @dataclass(slots=True)
@@ -427,23 +433,14 @@ def _repeats(node: Partial, methods: dict[int, Ground]) -> set[int]:
     return {label for label, call in methods.items() if call in above}
 
 
-def _pending_call(pending: dict[int, tuple[Ground, Summary]], label: int, task: Task) -> Key | None:
-    """The functionality a label will be, when it is a pending functionality item."""
-    entry = pending.get(label)
-    if entry is None:
-        return None
-    call = entry[0]
-    return None if task.is_method(call) else call
-
-
 def _pending_end(
-    pending: dict[int, tuple[Ground, Summary]], label: int, data: Ground, task: Task
+    pending: dict[int, tuple[Ground, Summary]], methods: dict[int, Ground], label: int, data: Ground
 ) -> Key | None:
     """The certain producer of ``data`` behind a pending label, if there is one."""
     entry = pending.get(label)
     if entry is None:
         return None
     call, sub = entry
-    if not task.is_method(call):
+    if label not in methods:
         return call
     return sub.producer(data)

@@ -152,16 +152,19 @@ class Grower:
             return None
         if self._replays is None:
             graph = self.grounder.graph(self.options.media)
-            memo: dict[tuple[tuple[Ground, ...], int], Replays] = (
+            memo: dict[tuple[tuple[Ground, ...], int, int], Replays] = (
                 self.grounder.task.memo.setdefault(
                     "replays" if self.options.media else "replays-without-media", {}
                 )
             )
-            least = self.options.replay_least
-            found = memo.get((self.roots, least))
+            key = (self.roots, self.options.replay_least, self.options.replay_worth)
+            found = memo.get(key)
             if found is None:
-                remembered = repeatable(graph, self.roots, least)
-                found = memo[(self.roots, least)] = Replays(graph, remembered)
+                remembered = repeatable(graph, *key)
+                found = memo[key] = Replays(graph, remembered)
+            if not found.repeatable:
+                self.replays = False  # nothing worth remembering here
+                return None
             self._replays = found
         return self._replays
 

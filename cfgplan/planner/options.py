@@ -86,6 +86,12 @@ class SearchOptions:
     costing no more than the replay: the wall family's equal costs): then it
     stops replaying, and remembering, for the rest of the search."""
 
+    replay_worth: int = 32
+    """The fewest method expansions replays must be able to save in one
+    derivation (every later occurrence of every repeated instance, at its
+    longest) for a search to remember anything: the thesis's build-a-wall,
+    with a few short repeats, is over before remembering would pay."""
+
     replay_least: int = 4
     """The fewest method expansions a sub-derivation must have to be replayed:
     a shorter walk costs less than pricing its deviations (the wall family's

@@ -39,7 +39,15 @@ costs more than the replay, the deviating node is never taken.
 
 The best-first search uses it (:attr:`cfgplan.planner.grow.Grower.replays`);
 ``--all``'s depth-first walks do not (they meet derivations in path order,
-and a replay's path lies inside its deviations' span).
+and a replay's path lies inside its deviations' span). Where a deviation may
+cost no more than the replay, the occurrence is expanded as usual (the
+deviating node would be taken at once and walk it all the same); so is a walk
+shorter than :attr:`~cfgplan.planner.options.SearchOptions.replay_least`,
+and a search that met :attr:`~cfgplan.planner.options.SearchOptions.replay_trial`
+such misses before any replay stops remembering (:class:`cfgplan.planner.grow.Grower`).
+Only instances that may occur twice in one derivation, with a derivation at
+least that long, are remembered (:func:`repeatable`): elsewhere a node's
+memory stays None and costs nothing.
 """
 
 from __future__ import annotations
@@ -47,6 +55,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from cfgplan.planner.graph import Graph
 from cfgplan.planner.ground import Expansion, Grounder
@@ -152,9 +161,9 @@ class Record:
         return tuple(ends)
 
 
-@dataclass(frozen=True, slots=True)
-class Opening:
-    """A method instance expanded whose sub-derivation is not closed yet."""
+class Opening(NamedTuple):
+    """A method instance expanded whose sub-derivation is not closed yet (a
+    named tuple: one is made for every expansion remembered)."""
 
     call: Ground
     choice: int
@@ -167,13 +176,13 @@ class Opening:
     the instance reused would take no choice there)."""
 
 
-@dataclass(frozen=True, slots=True)
-class Memory:
+class Memory(NamedTuple):
     """What a node remembers for replays: the expansions still open, innermost
-    last, and a record for each repeatable instance it closed (the first)."""
+    last, and a record for each repeatable instance it closed (the first;
+    never written: a close copies it)."""
 
-    opened: tuple[Opening, ...] = ()
-    records: Mapping[Ground, Record] = field(default_factory=dict)
+    opened: tuple[Opening, ...]
+    records: Mapping[Ground, Record]
 
 
 @dataclass
@@ -195,7 +204,7 @@ class Replays:
         if call not in self.repeatable and (memory is None or not memory.opened):
             return memory
         if memory is None:
-            memory = Memory()
+            memory = Memory((), {})
         depth = len(node.stack) - 1
         made = Memory((*memory.opened, Opening(call, choice, expansion, depth)), memory.records)
         return self._close(made, depth) if not expansion.body else made
@@ -382,12 +391,16 @@ def filtered(node: Partial, child: Partial) -> Partial | None:
     return child.but(forbidden=tuple(kept)) if kept or child.forbidden else child
 
 
-def repeatable(graph: Graph, roots: Iterable[Ground], least: int = 1) -> frozenset[Ground]:
+def repeatable(
+    graph: Graph, roots: Iterable[Ground], least: int = 1, worth: float = 0
+) -> frozenset[Ground]:
     """The method instances below ``roots`` that may occur twice in one
     derivation (the recursion guard ignored): below two method items of one
     option's body, or below two roots; and whose derivations may take at
     least ``least`` method expansions (one below itself: any). Only they are
-    remembered."""
+    remembered; none when replays could save fewer than ``worth`` expansions
+    in all (each later occurrence of each, at its longest: the thesis's
+    build-a-wall, two or three short repeats)."""
     task = graph.grounder.task
     reach: dict[Ground, frozenset[Ground]] = {}
 
@@ -414,10 +427,52 @@ def repeatable(graph: Graph, roots: Iterable[Ground], least: int = 1) -> frozens
             slots = [child for child in option.children if task.is_method(child)]
             if len(slots) > 1:
                 _twice(slots, below, found)
-    if least > 1:
+    if least > 1 or worth > 0:
         longest = _longest(graph, found)
         found = {call for call in found if longest[call] >= least}
+        if worth > 0 and found:
+            occurs = _occurrences(graph, methods, {c for root in methods for c in below(root)})
+            saved = sum((occurs[call] - 1) * longest[call] for call in found)
+            if saved < worth:
+                found = set()
     return frozenset(found)
+
+
+def _occurrences(graph: Graph, roots: list[Ground], calls: set[Ground]) -> dict[Ground, float]:
+    """At most how often each of ``calls`` (every method instance below
+    ``roots``) occurs in one derivation: once per root, and for each caller,
+    as often as the caller times the most the caller's one body holds it
+    (infinite on and below a cycle)."""
+    task = graph.grounder.task
+    most: dict[Ground, dict[Ground, int]] = {}  # caller -> child -> most per body
+    waiting = dict.fromkeys(calls, 0)  # callers not yet counted
+    for call in calls:
+        per: dict[Ground, int] = {}
+        for option in graph.instance(call).options:
+            counts: dict[Ground, int] = {}
+            for child in option.children:
+                if task.is_method(child):
+                    counts[child] = counts.get(child, 0) + 1
+            for child, count in counts.items():
+                per[child] = max(per.get(child, 0), count)
+        most[call] = per
+        for child in per:
+            waiting[child] += 1
+    occurs: dict[Ground, float] = dict.fromkeys(calls, 0.0)
+    for root in roots:
+        occurs[root] += 1
+    ready = [call for call, count in waiting.items() if count == 0]
+    while ready:
+        call = ready.pop()
+        for child, count in most[call].items():
+            occurs[child] += occurs[call] * count
+            waiting[child] -= 1
+            if waiting[child] == 0:
+                ready.append(child)
+    for call, count in waiting.items():
+        if count:  # on or below a cycle
+            occurs[call] = math.inf
+    return occurs
 
 
 def _longest(graph: Graph, calls: Iterable[Ground]) -> dict[Ground, float]:

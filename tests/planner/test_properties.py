@@ -247,7 +247,9 @@ def _coverage(example: Generated) -> Coverage:
     with patch.object(room, "fits", fits):
         bounded = Run(problem.task, problem.goal_call, limit=3, distinct=False, options=FIRST_NODE)
         list(bounded)
-    replaying = Run(problem.task, problem.goal_call, 6, options=SearchOptions(replay_least=1))
+    replaying = Run(
+        problem.task, problem.goal_call, 6, options=SearchOptions(replay_least=1, replay_worth=0)
+    )
     replayed = bool(list(replaying)) and replaying.stats.replays > 0
     return Coverage(
         derivations=len(derivations),

@@ -34,7 +34,7 @@ from cfgplan.problem import Problem
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
 
-EVERY = SearchOptions(replay_least=1)
+EVERY = SearchOptions(replay_least=1, replay_worth=0)
 """Replay every sub-derivation closed, however short (small domains' are)."""
 
 NODE_FIELDS = (
