@@ -100,7 +100,8 @@ class Ranked:
     """The configurations of one goal in one state, in cost order, planned as
     far as they are asked for (best-first search continued, never restarted),
     assembled as a run's ``-k`` is (:func:`cfgplan.planner.plan.in_parts`:
-    children priced from splits, independent parts searched apart)."""
+    children priced from splits, sub-derivations replayed, independent parts
+    searched apart)."""
 
     task: Task
     goal: Ground
@@ -110,7 +111,7 @@ class Ranked:
     _more: Iterator[Configuration] = field(init=False)
 
     def __post_init__(self) -> None:
-        plain = BestFirst(*growing(self.task, self.options), self.goal)
+        plain = BestFirst(*growing(self.task, self.options, replays=True), self.goal)
         self.search = in_parts(plain, self.task, self.options)
         self._more = iter(self.search)
 
