@@ -23,7 +23,8 @@ from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.pricer import Pricer
-from cfgplan.planner.replay import Replays, deviations, filtered, repeatable, replay
+from cfgplan.planner.repeats import repeatable
+from cfgplan.planner.replay import Replays, deviations, filtered, replay
 from cfgplan.planner.report import DeadEnd, Report, Stats
 from cfgplan.planner.successors import successors
 from cfgplan.planner.task import Ground

@@ -142,6 +142,8 @@ class BestFirst:
             if grower.distinct and not node.forbidden:
                 # The same partial configuration reached by another order of
                 # choices has the same completions: only the first one counts.
+                # (A node that must not follow a replay's choices, replay.py,
+                # has fewer: it neither closes a form nor is closed by one.)
                 key = canonical(node, grower.grounder)
                 first = self._closed.get(key)
                 if first is not None and not self._below_superseded(first):
