@@ -14,7 +14,7 @@ functionality keeps the label of its first instance.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -154,34 +154,22 @@ def expand_method(
         Channel(kind, robots, first + src, first + dst, data, bandwidth, numbered[i])
         for i, (kind, robots, src, dst, data, bandwidth) in enumerate(expansion.channels)
     ]
-    rewired: list[Channel] = []
-    expanded = item.label
-    for ch in node.channels:
-        at_source, at_target = ch.source == expanded, ch.target == expanded
-        if not (at_source or at_target):
-            rewired.append(ch)
-            continue
-        source, bandwidth, number = ch.source, ch.bandwidth, ch.number
-        if at_source:
-            port = expansion.outputs.get(ch.data)
-            if port is None:
-                missing = f"no :out entry produces {atom_text(ch.data)}"
-                return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
-            source = first + port[0]
-            if bandwidth is None and ch.kind == "global" and port[1] is not None:
-                bandwidth = port[1]  # a global channel allocates the :out's bandwidth
-                assert expansion.number is not None  # the grounder numbers what it makes
-                number = expansion.number((ch.kind, ch.robots, ch.data, bandwidth))
-        targets: tuple[int, ...] = (ch.target,)
-        if at_target:
-            offsets = expansion.inputs.get(ch.data)
-            if not offsets:
-                missing = f"no :in entry consumes {atom_text(ch.data)}"
-                return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
-            targets = tuple(first + k for k in offsets)  # an :in may feed several
-        rewired.extend(
-            Channel(ch.kind, ch.robots, source, t, ch.data, bandwidth, number) for t in targets
-        )
+    outputs, inputs = expansion.outputs, expansion.inputs
+
+    def out(data: Ground) -> Port | None:
+        port = outputs.get(data)
+        return None if port is None else (first + port[0], port[1])
+
+    def into(data: Ground) -> tuple[int, ...] | None:
+        offsets = inputs.get(data)
+        return tuple(first + k for k in offsets) if offsets else None
+
+    done = rewire(node.channels, item.label, out, into, expansion.number)
+    if isinstance(done, Unwired):
+        verb = "produces" if done.end == ":out" else "consumes"
+        missing = f"no {done.end} entry {verb} {atom_text(done.data)}"
+        return DeadEnd(expansion.where, missing, span, Condition.INFORMATION)
+    rewired = done[0]
     ancestors = item.ancestors | {item.call}
     # The body's relevant ancestors: the item's, and the item when its method
     # can recur; when every ancestor is one (a domain of one recursive
@@ -217,6 +205,65 @@ def expand_method(
         memory=memory,
         floor=node.floor,
     )
+
+
+Port = tuple[int, float | None]
+"""Where a channel's sending end goes once re-wired: a label, and the bandwidth
+of the ``:out`` entry it went through (None: it has none)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Unwired:
+    """A channel that cannot be re-wired: no ``end`` entry (``:out`` or ``:in``) for ``data``."""
+
+    end: str
+    data: Ground
+
+
+def rewire(
+    channels: Sequence[Channel],
+    label: int,
+    out: Callable[[Ground], Port | None],
+    into: Callable[[Ground], Sequence[int] | None],
+    number: Callable[[Hashable], int] | None,
+) -> tuple[list[Channel], list[int]] | Unwired:
+    """Step 3d of 4.5: every channel at ``label`` re-wired in place, its
+    sending end through ``out`` (a global channel without a bandwidth takes
+    the ``:out`` entry's, numbered by ``number``) and its receiving end
+    through ``into`` (an ``:in`` may feed several: one channel each), both
+    ends when it runs from the instance to itself. The channels, and the
+    indices of those re-wired; or the first end that cannot be. One
+    expansion's ports (:func:`expand_method`) or a replayed walk's, port
+    after port (:func:`cfgplan.planner.replay.replay`)."""
+    rewired: list[Channel] = []
+    touching: list[int] = []
+    for ch in channels:
+        at_source, at_target = ch.source == label, ch.target == label
+        if not (at_source or at_target):
+            rewired.append(ch)
+            continue
+        source, bandwidth, numbered = ch.source, ch.bandwidth, ch.number
+        if at_source:
+            port = out(ch.data)
+            if port is None:
+                return Unwired(":out", ch.data)
+            source = port[0]
+            if bandwidth is None and ch.kind == "global" and port[1] is not None:
+                bandwidth = port[1]  # a global channel allocates the :out's bandwidth
+                assert number is not None  # the grounder numbers what it makes
+                numbered = number((ch.kind, ch.robots, ch.data, bandwidth))
+        targets: Sequence[int] = (ch.target,)
+        if at_target:
+            found = into(ch.data)
+            if not found:
+                return Unwired(":in", ch.data)
+            targets = found
+        for target in targets:
+            touching.append(len(rewired))
+            rewired.append(
+                Channel(ch.kind, ch.robots, source, target, ch.data, bandwidth, numbered)
+            )
+    return rewired, touching
 
 
 # -- step 2a: add a functionality, or reuse the one already in C ----------------------

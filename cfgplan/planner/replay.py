@@ -52,13 +52,21 @@ elsewhere a node's memory stays None and costs nothing.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from cfgplan.planner.graph import Graph
 from cfgplan.planner.ground import Expansion, Grounder
-from cfgplan.planner.partial import Channel, Item, Partial, expand_method, settle
+from cfgplan.planner.partial import (
+    Item,
+    Partial,
+    Port,
+    Unwired,
+    expand_method,
+    rewire,
+    settle,
+)
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.task import Ground
 
@@ -119,20 +127,20 @@ class Record:
             self._calls = frozenset(calls)
         return self._calls
 
-    def source(
-        self, data: Ground, kind: str, bandwidth: float | None
-    ) -> tuple[Ground, float | None] | None:
+    def source(self, data: Ground) -> tuple[Ground, float | None] | None:
         """Where a channel of ``data`` sent from this instance starts once the
         walk re-wired it through each ``:out`` (4.5 step 3d): the functionality
-        call, and its bandwidth (a global one without takes the first
-        ``:out``'s that has one); None when a ``:out`` is missing."""
+        call, and the bandwidth of the first ``:out`` on the way that has one
+        (the one a global channel without takes); None when a ``:out`` is
+        missing."""
         record = self
+        bandwidth = None
         while True:
             expansion = record.expansion
             port = expansion.outputs.get(data)
             if port is None:
                 return None
-            if bandwidth is None and kind == "global" and port[1] is not None:
+            if bandwidth is None:
                 bandwidth = port[1]
             child = record.at.get(port[0])
             if child is None:
@@ -290,38 +298,23 @@ def replay(
     if record.calls & item.ancestors:
         return None  # the recursion guard prunes the walk somewhere
     labels = node.labels
-    label = item.label
-    out: list[Channel] = []
-    touching: list[int] = []
-    idents: set[tuple[str, int, int, Ground]] = set()
-    for ch in node.channels:
-        at_source, at_target = ch.source == label, ch.target == label
-        if not (at_source or at_target):
-            out.append(ch)
-            continue
-        source, bandwidth, number = ch.source, ch.bandwidth, ch.number
-        if at_source:
-            found = record.source(ch.data, ch.kind, ch.bandwidth)
-            if found is None:
-                return None
-            call, bandwidth = found
-            source = labels[call]
-            if bandwidth != ch.bandwidth:
-                number = grounder.numbering((ch.kind, ch.robots, ch.data, bandwidth))
-        targets: Iterable[int] = (ch.target,)
-        if at_target:
-            ends = record.targets(ch.data)
-            if ends is None:
-                return None
-            targets = [labels[call] for call in ends]
-        for target in targets:
-            ident = (ch.kind, source, target, ch.data)
-            if ident in idents:
-                return None  # two become one: which is kept depends on the walk's order
-            idents.add(ident)
-            touching.append(len(out))
-            out.append(Channel(ch.kind, ch.robots, source, target, ch.data, bandwidth, number))
-    settled = settle(tuple(out), node.located, touching, node.resolved, grounder.task)
+
+    def out(data: Ground) -> Port | None:
+        found = record.source(data)
+        return None if found is None else (labels[found[0]], found[1])
+
+    def into(data: Ground) -> list[int] | None:
+        ends = record.targets(data)
+        return None if ends is None else [labels[call] for call in ends]
+
+    done = rewire(node.channels, item.label, out, into, grounder.numbering)
+    if isinstance(done, Unwired):
+        return None
+    rewired, touching = done
+    idents = {(c.kind, c.source, c.target, c.data) for c in map(rewired.__getitem__, touching)}
+    if len(idents) < len(touching):
+        return None  # two become one: which is kept depends on the walk's order
+    settled = settle(tuple(rewired), node.located, touching, node.resolved, grounder.task)
     if isinstance(settled, DeadEnd):
         return None
     channels, added, resolved = settled
