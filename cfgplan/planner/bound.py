@@ -36,7 +36,7 @@ The pending items are read through their static summaries
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Set
+from collections.abc import Set
 from dataclasses import dataclass, field
 from itertools import compress
 
@@ -46,6 +46,7 @@ from cfgplan.planner.partial import Key, Partial
 from cfgplan.planner.parts import Part, least, own_part
 from cfgplan.planner.summary import ChannelId, Summaries, Summary
 from cfgplan.planner.task import Ground, Task
+from cfgplan.planner.waiting import sort_channels, unreached_by, waiting_parts
 
 
 @dataclass
@@ -106,19 +107,7 @@ class Bound:
             needed |= sub.functionalities
             new_robots |= sub.robots
             future |= sub.channels
-        by_label = {p.label: p.call for p in node.placed}
-        resolved: set[tuple[str, Ground, Key, Key]] = set()
-        for ch in node.channels:
-            src, dst = by_label.get(ch.source), by_label.get(ch.target)
-            if src is not None and dst is not None:
-                resolved.add((ch.kind, ch.data, src, dst))
-                continue
-            if src is None:
-                src = _pending_end(pending, methods, ch.source, ch.data)
-            if dst is None and ch.target not in methods:
-                entry = pending.get(ch.target)  # a pending functionality: what it will be
-                dst = entry[0] if entry is not None else None
-            future.add((ch.kind, ch.data, src, dst))
+        resolved = sort_channels(node, pending, methods, future)
         mandatory = 0.0
         for key in needed:
             if key not in placed:
@@ -137,18 +126,19 @@ class Bound:
         counted = together is None or together.counted
         alone = self._alone(node, pending, future)
         parts = self._parts(node, pending, alone, _Have.of(node, resolved, task), counted)
+        reach, cost = self.summaries.reach.names, task.channel_cost
         receivers = {c[3][0] for c in future if c[3] is not None}
-        unreached = self._unreached(receivers, methods.values())
-        waiting = self._waiting(future, resolved, alone, unreached)
+        unreached = unreached_by(reach, receivers, methods.values())
+        waiting = waiting_parts(cost, future, resolved, alone, unreached)
         deepest, widest, whole = parts.least(waiting)
         repeats = _repeats(node, methods)
         if repeats:
             # A channel waiting for an end merges with none a left-out item
             # makes, as far as this count goes: those are not counted at all.
             kept = {c for label, c in methods.items() if label not in repeats}
-            more = self._unreached(receivers - unreached, kept)
+            more = unreached_by(reach, receivers - unreached, kept)
             if more:
-                waiting = self._waiting(future, resolved, alone, unreached | more)
+                waiting = waiting_parts(cost, future, resolved, alone, unreached | more)
             again = parts.least(waiting, repeats)
             deepest, widest = max(deepest, again[0]), max(widest, again[1])
             whole = max(whole, again[2])
@@ -199,7 +189,7 @@ class Bound:
         A functionality in ``alone`` is a part of its own (it shares with
         nothing pending)."""
         guarded = self._guarded(node, pending)
-        reach = self.summaries.reach
+        reach = self.summaries.reach.of
         parts = _Parts(slack=counted and any(sub.slack for _, sub in pending.values()))
         for label, (call, sub) in pending.items():
             names, data, both = reach(call)
@@ -234,7 +224,7 @@ class Bound:
         for item in node.stack:
             if item.label not in pending or not task.is_method(item.call):
                 continue
-            names = summaries.names(item.call)
+            names = summaries.reach.names(item.call)
             total = 0.0
             for p in node.placed:
                 if p.call[0] in names and summaries.beyond(p.call, item.ancestors):
@@ -242,72 +232,6 @@ class Bound:
             if total:
                 guarded[item.label] = total
         return guarded
-
-    def _unreached(self, names: Set[str], methods: Iterable[Ground]) -> set[str]:
-        """The functionality ``names`` none of the method instances ``methods`` can reach."""
-        if not names:
-            return set()
-        reach = self.summaries.reach
-        return set(names).difference(*[reach(call)[0] for call in methods])
-
-    def _waiting(
-        self,
-        future: set[ChannelId],
-        resolved: set[tuple[str, Ground, Key, Key]],
-        alone: frozenset[Key],
-        unreached: Set[str],
-    ) -> list[Part]:
-        """The channels waiting for an end (``future``) as parts of
-        :func:`least`, in the channels' and the together least costs: named
-        by their data predicates (parts whose data predicates differ cannot
-        merge, so they add up). A channel from or into a functionality in
-        ``alone`` can merge with none a pending item makes (those have both
-        ends inside its expansion): they are a part of their own. So is a
-        channel into a functionality whose name no pending method item can
-        reach (``unreached``): a channel an item makes ends at a body item
-        of its expansion, which has a name it reaches (issue 35: on the
-        ``dag`` family the channels into the fusers waiting on the stack
-        were joined with every level below, by their data)."""
-        channel_cost = self.task.channel_cost
-        names: set[str] = set()  # the data predicates of the channels not apart
-        full = [0.0, 0.0]  # fully known channels not in C: not apart, apart
-        covered: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
-        open_ends: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
-        for channel in future:
-            kind, data, sender, receiver = channel
-            side = int(
-                sender in alone
-                or receiver in alone
-                or (receiver is not None and receiver[0] in unreached)
-            )
-            if not side:
-                names.add(data[0])
-            if receiver is None:
-                continue
-            if sender is None:
-                open_ends[side].add((kind, data, receiver))
-            elif channel not in resolved:
-                full[side] += channel_cost(kind)
-                covered[side].add((kind, data, receiver))
-        # Channels certain to be new: fully known ones not in C, plus one per
-        # (kind, data, receiver) of those whose sender is unknown and that
-        # nothing known could be.
-        costs = list(full)
-        if open_ends[0] or open_ends[1]:
-            known = {(k, d, r) for k, d, _, r in resolved}
-            for side in (0, 1):
-                for kind, data, receiver in open_ends[side]:
-                    end = (kind, data, receiver)
-                    if end not in covered[side] and end not in known:
-                        costs[side] += channel_cost(kind)
-        parts: list[Part] = [(frozenset(names), costs[0])]
-        if costs[1]:
-            parts.append((_APART, costs[1]))
-        return parts
-
-
-_APART = own_part("channels")
-"""The part of the channels waiting for an end that merge with nothing pending."""
 
 
 @dataclass(slots=True)
@@ -431,16 +355,3 @@ def _repeats(node: Partial, methods: dict[int, Ground]) -> set[int]:
     for item in node.stack:
         above |= item.ancestors
     return {label for label, call in methods.items() if call in above}
-
-
-def _pending_end(
-    pending: dict[int, tuple[Ground, Summary]], methods: dict[int, Ground], label: int, data: Ground
-) -> Key | None:
-    """The certain producer of ``data`` behind a pending label, if there is one."""
-    entry = pending.get(label)
-    if entry is None:
-        return None
-    call, sub = entry
-    if label not in methods:
-        return call
-    return sub.producer(data)

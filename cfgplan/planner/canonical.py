@@ -17,7 +17,8 @@ from array import array
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Channel, Partial
+from cfgplan.planner.partial import Partial
+from cfgplan.planner.wiring import Channel
 
 
 def placed_names(node: Partial) -> dict[int, int]:
@@ -27,7 +28,7 @@ def placed_names(node: Partial) -> dict[int, int]:
 
 def channel_number(channel: Channel, number: Numbering) -> int:
     """The channel's kind, robots, data and bandwidth, numbered: made with
-    it (:attr:`cfgplan.planner.partial.Channel.number`) or looked up now."""
+    it (:attr:`cfgplan.planner.wiring.Channel.number`) or looked up now."""
     found = channel.number
     if found < 0:
         found = number((channel.kind, channel.robots, channel.data, channel.bandwidth))

@@ -20,10 +20,11 @@ from cfgplan.planner import clock
 from cfgplan.planner.canonical import channel_numbers, digest, placed_names
 from cfgplan.planner.ground import Effects
 from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Channel as PartialChannel
-from cfgplan.planner.partial import Partial, Placed, demands
+from cfgplan.planner.partial import Partial, Placed
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task
+from cfgplan.planner.wiring import Channel as PartialChannel
+from cfgplan.planner.wiring import demands
 
 
 @dataclass

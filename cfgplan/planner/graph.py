@@ -27,11 +27,12 @@ from dataclasses import dataclass, field
 from cfgplan.planner.canonical import channel_number
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Channel, Placed
+from cfgplan.planner.partial import Placed
 from cfgplan.planner.prices import Wire, wire_keys
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.room import Need, Room
 from cfgplan.planner.task import Ground
+from cfgplan.planner.wiring import Channel
 
 
 @dataclass(frozen=True, slots=True)

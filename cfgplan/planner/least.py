@@ -180,7 +180,7 @@ class Least:
         changed, children before parents. None when too much changed
         (:attr:`reuse`). The answer is made of ``before``'s maps, changed
         in place rather than copied: a caller keeps the answer only, as
-        :class:`~cfgplan.planner.partition.Kept` does (``before`` is
+        :class:`~cfgplan.planner.occurrences.Kept` does (``before`` is
         untouched when the answer is None)."""
         changed = self._changed(before, prices, touched)
         memo = before.memo
@@ -236,7 +236,7 @@ class Least:
         old = before.prices
         changed: set[int] = set()
         if before.touched is not touched and before.touched != touched:
-            # (siblings: the same channels mostly wait, Partition's Kept.waiting)
+            # (siblings: the same channels mostly wait, occurrences.Kept.waiting)
             changed.update(key for key, _ in before.touched.items() ^ touched.items())
         for call in old.node.labels.keys() ^ new.node.labels.keys():
             changed.add(self.number(("f", call)))

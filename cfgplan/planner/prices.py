@@ -114,7 +114,7 @@ class Prices:
     shared: dict[int, float] = field(default_factory=dict)
     """Each wire's ``weight / S`` found so far, by wire number: it reads
     ``totals`` only, so nodes given one ``totals`` (siblings,
-    :class:`cfgplan.planner.partition.Kept`) share one of these."""
+    :class:`cfgplan.planner.occurrences.Kept`) share one of these."""
 
     def agent(self, agent: str) -> float:
         found = self.agents.get(agent)

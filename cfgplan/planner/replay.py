@@ -58,17 +58,10 @@ from typing import NamedTuple
 
 from cfgplan.planner.graph import Graph
 from cfgplan.planner.ground import Expansion, Grounder
-from cfgplan.planner.partial import (
-    Item,
-    Partial,
-    Port,
-    Unwired,
-    expand_method,
-    rewire,
-    settle,
-)
+from cfgplan.planner.partial import Item, Partial, expand_method
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.task import Ground
+from cfgplan.planner.wiring import Port, Unwired, rewire, settle
 
 
 @dataclass(eq=False, slots=True)

@@ -28,8 +28,8 @@ from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
 
 from cfgplan.planner.ground import ChannelSpec
-from cfgplan.planner.partial import Channel
 from cfgplan.planner.task import Task
+from cfgplan.planner.wiring import Channel
 
 
 @dataclass(frozen=True, slots=True)

@@ -24,7 +24,8 @@ from cfgplan.planner.ground import Expansion, Grounder
 from cfgplan.planner.match import exists
 from cfgplan.planner.partial import Key
 from cfgplan.planner.parts import Part, least, own_part
-from cfgplan.planner.task import Ground, Signature, Task
+from cfgplan.planner.reach import Reach
+from cfgplan.planner.task import Ground, Task
 from cfgplan.planner.unify import bind_name, substitute
 
 ChannelId = tuple[str, Ground, Key | None, Key | None]
@@ -96,8 +97,7 @@ that summary, and returns its own."""
 
 @dataclass
 class Summaries:
-    """The summaries of one task's ground instances, and the names each
-    signature can reach, memoised."""
+    """The summaries of one task's ground instances, memoised."""
 
     task: Task
     grounder: Grounder | None = None
@@ -108,12 +108,6 @@ class Summaries:
     """Which of the grounder's graphs (:attr:`cfgplan.planner.options.SearchOptions.media`):
     the one the partitioned bound reads too."""
     _memo: dict[Ground, Summary] = field(default_factory=dict)
-    _reached: dict[Signature, tuple[frozenset[str], frozenset[str], frozenset[str]]] = field(
-        default_factory=dict
-    )
-    _reached_by_call: dict[Ground, tuple[frozenset[str], frozenset[str], frozenset[str]]] = field(
-        default_factory=dict
-    )
     _parents: dict[Ground, set[Ground]] = field(default_factory=dict)
     """Functionality instance -> the method instances whose bodies call it,
     over every ground instance reachable from a summarised call."""
@@ -122,6 +116,8 @@ class Summaries:
     def __post_init__(self) -> None:
         grounder = self.grounder or Grounder(self.task)
         self._instance = grounder.graph(self.media).instance
+        self.reach = Reach(self.task)
+        """The names each instance can reach: what names a summary's parts."""
 
     def summary(self, call: Ground) -> Summary:
         """What every feasible expansion of ``call`` contains (memoised)."""
@@ -331,7 +327,7 @@ class Summaries:
         whole = list(wires)
         parts: list[Part] = []
         for call, sub, func in body:
-            reached, carried, both = self.reach(call)
+            reached, carried, both = self.reach.of(call)
             wires.append((carried, sub.wiring))
             if func and self._own(call, caller):
                 parts.append((own_part(call), sub.minimum))
@@ -348,75 +344,6 @@ class Summaries:
             least(wires),
             least(whole),
         )
-
-    # -- what a signature can reach ---------------------------------------------
-    def names(self, call: Ground) -> frozenset[str]:
-        """The functionality names an instance can reach through method bodies."""
-        return self.reach(call)[0]
-
-    def reach(self, call: Ground) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
-        """:meth:`names`; the data predicates of the channels its expansions
-        can create; and the two together."""
-        found = self._reached_by_call.get(call)
-        if found is None:
-            found = self._reached_by_call[call] = self._reach_signature((call[0], len(call) - 1))
-        return found
-
-    def _reach_signature(
-        self, sig: Signature
-    ) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
-        found = self._reached.get(sig)
-        if found is not None:
-            return found
-        if not self.task.recursive:
-            return self._reach_below(sig)
-        names: set[str] = set()
-        data: set[str] = set()
-        seen = {sig}
-        todo = [sig]
-        while todo:
-            current = todo.pop()
-            if current in self.task.functionalities:
-                names.add(current[0])
-                continue
-            for method in self.task.methods.get(current, ()):
-                data.update(c.data[0] for c in method.channels)
-                for _, pattern in method.body:
-                    child = (pattern[0], len(pattern) - 1)
-                    if child not in seen:
-                        seen.add(child)
-                        todo.append(child)
-        result = self._reached[sig] = (frozenset(names), frozenset(data), frozenset(names | data))
-        return result
-
-    def _reach_below(self, sig: Signature) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
-        """:meth:`_reach_signature` where no signature reaches itself: each
-        from the signatures its bodies call, children first (no walk below
-        every level of a deep hierarchy again)."""
-        task, reached = self.task, self._reached
-        stack: list[tuple[Signature, bool]] = [(sig, False)]
-        while stack:
-            current, ready = stack.pop()
-            if current in reached:
-                continue
-            if current in task.functionalities:
-                reached[current] = (frozenset({current[0]}), frozenset(), frozenset({current[0]}))
-                continue
-            versions = task.methods.get(current, ())
-            children = [(p[0], len(p) - 1) for m in versions for _, p in m.body]
-            if not ready:
-                stack.append((current, True))
-                stack.extend((child, False) for child in children if child not in reached)
-                continue
-            names: set[str] = set()
-            data = {c.data[0] for m in versions for c in m.channels}
-            for child in children:
-                below = reached.get(child)
-                if below is not None:  # None: a name neither method nor functionality
-                    names |= below[0]
-                    data |= below[1]
-            reached[current] = (frozenset(names), frozenset(data), frozenset(names | data))
-        return reached[sig]
 
 
 def common_channels(sets: list[frozenset[ChannelId]]) -> frozenset[ChannelId]:

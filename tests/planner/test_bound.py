@@ -101,7 +101,7 @@ def test_channels_with_one_end_open_are_told_apart_by_the_other() -> None:
 
 def test_the_partitioned_bound_is_the_same_with_its_stack_memo_warm_or_cold() -> None:
     """The summed counts of a stack of pending items are kept for the
-    siblings that share it (partition.STACKS): a kept sum must be the sum."""
+    siblings that share it (occurrences.STACKS): a kept sum must be the sum."""
     problem = load_text(*fusion(4, 3, 4, 3))
     grounder, bound = Grounder(problem.task), Bound(problem.task)
     warm = Partition(grounder)
@@ -119,9 +119,9 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
     family: str,
 ) -> None:
     """A child's stack of pending items is its parent's with the top replaced
-    by the top's body, so partition._derive makes a stack's summed counts
+    by the top's body, so occurrences._derive makes a stack's summed counts
     from its parent's (less the top's counts but those of the children
-    every option has), else partition._sum from those of its longest suffix
+    every option has), else occurrences._sum from those of its longest suffix
     summed before. Each must be the plain sum of
     the items' counts (and a pending functionality's agent key), as made
     afresh; and each instance's order (made from its children's) must hold
@@ -132,7 +132,8 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
     problem = load_text(*made[family]())
     grounder, bound = Grounder(problem.task), Bound(problem.task)
     partition = Partition(grounder)
-    derive, derived = partition._derive, 0
+    occurrences = partition.occurrences
+    derive, derived = occurrences._derive, 0
 
     def counting(calls: tuple[Ground, ...]) -> dict[int, int] | None:
         nonlocal derived
@@ -140,12 +141,12 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
         derived += found is not None
         return found
 
-    partition._derive = counting  # type: ignore[method-assign]
+    occurrences._derive = counting  # type: ignore[method-assign]
 
     def plain(calls: tuple[Ground, ...]) -> dict[int, int]:
         total: dict[int, int] = {}
         for call in calls:
-            for key, n in (partition.counts(call) or {}).items():
+            for key, n in (occurrences.counts(call) or {}).items():
                 total[key] = total.get(key, 0) + n
             if not problem.task.is_method(call):
                 key = partition.number(("@", call[1]))
@@ -157,12 +158,12 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
         partition.estimate(node, bound.certain_agents(node))
         calls = tuple(item.call for item in node.stack)
         stacks.append(calls)
-        assert partition._stacks[calls].pending == plain(calls)  # as the search summed it
+        assert occurrences._stacks[calls].pending == plain(calls)  # as the search summed it
     assert derived >= len(set(stacks)) // 2  # most from their parents' (_derive)
     from_suffix = 0
     for calls in stacks:
-        assert partition._sum(calls) == plain(calls)
-        from_suffix += calls[1:] in partition._sums
+        assert occurrences._sum(calls) == plain(calls)
+        from_suffix += calls[1:] in occurrences._sums
     assert from_suffix >= len(stacks) // 2  # the suffixes were there to start from
 
     for call in {c for calls in stacks for c in calls}:

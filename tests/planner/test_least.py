@@ -63,7 +63,7 @@ def priced(
             if made is not None:
                 made.append(found)
         if cold:
-            found._stacks.clear()
+            found.occurrences.forget()
         yield found.split(node, certain)
 
 

@@ -7,7 +7,6 @@ from dataclasses import replace
 from cfgplan.planner.ground import ChannelSpec, Effects, Expansion, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.partial import (
-    Channel,
     Item,
     Partial,
     expand_method,
@@ -17,6 +16,7 @@ from cfgplan.planner.partial import (
 )
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Task
+from cfgplan.planner.wiring import Channel
 from tests.planner.problems import load_text
 
 DOMAIN = """\

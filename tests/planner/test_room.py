@@ -17,10 +17,11 @@ from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import ChannelSpec, Grounder
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.partial import Channel, Partial, root
+from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.room import Room
 from cfgplan.planner.successors import successors
+from cfgplan.planner.wiring import Channel
 from cfgplan.problem import Problem
 from tests.planner.problems import PROPERTY, load_text
 from tests.planner.test_bound import least_completion
