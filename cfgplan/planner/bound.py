@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Set
 from dataclasses import dataclass, field
-from itertools import compress
+from itertools import compress, repeat
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
@@ -191,9 +191,10 @@ class Bound:
         guarded = self._guarded(node, pending)
         reach = self.summaries.reach.of
         parts = _Parts(slack=counted and any(sub.slack for _, sub in pending.values()))
+        placed, resolved = have.functionalities, have.channels  # (often empty: no call then)
         for label, (call, sub) in pending.items():
             names, data, both = reach(call)
-            wired = have.channels_in(data)
+            wired = _within(resolved, data) if resolved else 0.0
             parts.labels.append(label)
             parts.channels.append((data, max(0.0, sub.wiring - wired)))
             if call in alone:
@@ -203,7 +204,9 @@ class Bound:
                 if parts.slack:
                     parts.together.append((own, sub.together if new else 0.0))
                 continue
-            reusable = have.functionalities_in(names) - guarded.get(label, 0.0)
+            reusable = _within(placed, names) if placed else 0.0
+            if guarded:
+                reusable -= guarded.get(label, 0.0)
             parts.functionalities.append((names, max(0.0, sub.minimum - reusable)))
             if parts.slack:
                 parts.together.append((both, max(0.0, sub.together - reusable - wired)))
@@ -312,19 +315,16 @@ class _Have:
     @classmethod
     def of(cls, node: Partial, resolved: set[tuple[str, Ground, Key, Key]], task: Task) -> _Have:
         functionalities: dict[str, float] = {}
-        for p in node.placed:
-            cost = task.functionality_cost(p.schema, p.call)
-            functionalities[p.call[0]] = functionalities.get(p.call[0], 0.0) + cost
+        if node.placed:
+            cost_of, get = task.functionality_cost, functionalities.get
+            for p in node.placed:
+                functionalities[p.call[0]] = get(p.call[0], 0.0) + cost_of(p.schema, p.call)
         channels: dict[str, float] = {}
-        for kind, data, _, _ in resolved:
-            channels[data[0]] = channels.get(data[0], 0.0) + task.channel_cost(kind)
+        if resolved:
+            channel_cost, get = task.channel_cost, channels.get
+            for kind, data, _, _ in resolved:
+                channels[data[0]] = get(data[0], 0.0) + channel_cost(kind)
         return cls(functionalities, channels)
-
-    def functionalities_in(self, names: Set[str]) -> float:
-        return _within(self.functionalities, names)
-
-    def channels_in(self, names: Set[str]) -> float:
-        return _within(self.channels, names)
 
 
 def _within(costs: dict[str, float], names: Set[str]) -> float:
@@ -333,8 +333,7 @@ def _within(costs: dict[str, float], names: Set[str]) -> float:
     if not costs or not names:
         return 0.0
     if len(names) < len(costs):
-        get = costs.get
-        return sum([get(name, 0.0) for name in names])
+        return sum(map(costs.get, names, repeat(0.0)))
     return sum([cost for name, cost in costs.items() if name in names])
 
 
@@ -351,7 +350,12 @@ def _repeats(node: Partial, methods: dict[int, Ground]) -> set[int]:
     largest (the shared sub-derivations of issue 35). Ancestors are part of
     the canonical form (:mod:`cfgplan.planner.canonical`), so two nodes of
     one form leave out the same items."""
+    if not methods:
+        return set()
     above: set[Ground] = set()
+    last = None
     for item in node.stack:
-        above |= item.ancestors
+        if item.ancestors is not last:  # (siblings share theirs)
+            last = item.ancestors
+            above |= last
     return {label for label, call in methods.items() if call in above}

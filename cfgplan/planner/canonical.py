@@ -41,7 +41,10 @@ def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> 
     get = number.numbers.get
     out = []
     for ch in node.channels:
-        key = (channel_number(ch, number), names[ch.source], names[ch.target])
+        numbered = ch.number  # channel_number(ch, number), written out: the hot loop
+        if numbered < 0:
+            numbered = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
+        key = (numbered, names[ch.source], names[ch.target])
         found = get(key)
         out.append(number(key) if found is None else found)
     return out

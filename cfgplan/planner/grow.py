@@ -79,7 +79,8 @@ class Grower:
             if isinstance(child, DeadEnd):
                 self.report.note(child)
                 continue
-            yield from self._kept(node, self._settled(child))
+            settled = self._settled(child)
+            yield from self._kept(node, settled) if node.forbidden else settled
 
     def _kept(self, node: Partial, children: Iterator[Partial]) -> Iterator[Partial]:
         """``children`` of ``node`` but those a run of choices it must not

@@ -5,7 +5,7 @@ names it can reach and its own least cost (:mod:`cfgplan.planner.summary`,
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Set
+from collections.abc import Hashable, Set
 
 Part = tuple[Set[Hashable], float]
 """A part of :func:`least`: the names it can reach, its least cost."""
@@ -25,18 +25,49 @@ such parts only, as every part is met with each of them."""
 
 MOST_WIDE = 8
 
+FEW = 8
+"""Up to this many parts, the groups are found by meeting each part with
+the groups so far (:func:`_few`): on the thesis's instances a node has a
+handful of parts, and a few set intersections cost less than filing every
+name (:func:`_many`)."""
 
-def least(parts: Iterable[Part]) -> float:
+
+def least(parts: list[Part]) -> float:
     """The least a set of parts can cost together, each part given by the
     names it can reach (functionality names, or channel data predicates) and
     its own least cost: parts whose names are disjoint cannot share an
     instance, so their costs add; parts that may share count as the largest
-    of them. The groups of parts linked by shared names are found with a
-    union-find over the parts (a deep recursive path has hundreds of parts of
-    their own). A narrow part's names are filed (name -> a part reaching it);
-    a wide one is met with the filed names and with the other wide parts by
-    set intersections, so that the work grows with the narrow names, not the
-    wide ones (a chain of D levels: D names a level, D levels)."""
+    of them. The groups' costs are added up in order of size, so that how
+    the groups were found (:func:`_few` or :func:`_many`) makes no
+    difference, float for float."""
+    return _few(parts) if len(parts) <= FEW else _many(parts)
+
+
+def _few(parts: list[Part]) -> float:
+    """:func:`least`, each part met with the groups found so far."""
+    alone = 0.0  # parts that reach no name: they share with nothing
+    groups: list[Set[Hashable]] = []  # each group's names
+    costs: list[float] = []  # and its dearest part's cost
+    for names, part_cost in parts:
+        if not names:
+            alone += part_cost
+            continue
+        for i in range(len(groups) - 1, -1, -1):
+            if not groups[i].isdisjoint(names):
+                names = names | groups.pop(i)
+                part_cost = max(part_cost, costs.pop(i))
+        groups.append(names)
+        costs.append(part_cost)
+    return alone + sum(sorted(costs))
+
+
+def _many(parts: list[Part]) -> float:
+    """:func:`least` by a union-find over the parts (a deep recursive path
+    has hundreds of parts of their own). A narrow part's names are filed
+    (name -> a part reaching it); a wide one is met with the filed names and
+    with the other wide parts by set intersections, so that the work grows
+    with the narrow names, not the wide ones (a chain of D levels: D names a
+    level, D levels)."""
     owner: dict[Hashable, int] = {}  # a narrow part's name -> a part that reaches it
     wide: list[tuple[int, Set[Hashable]]] = []
     parent: list[int] = []

@@ -32,16 +32,21 @@ def sort_channels(
     functionality, a pending one, or the certain producer of its data behind
     a pending method (None where not known). ``pending``: the pending items
     by label, with their summaries; ``methods``: the method items among them."""
-    by_label = {p.label: p.call for p in node.placed}
+    located = node.located.get
     resolved: set[Resolved] = set()
     for ch in node.channels:
-        src, dst = by_label.get(ch.source), by_label.get(ch.target)
-        if src is not None and dst is not None:
-            resolved.add((ch.kind, ch.data, src, dst))
+        source, target = located(ch.source), located(ch.target)
+        if source is not None and target is not None:
+            resolved.add((ch.kind, ch.data, source.call, target.call))
             continue
-        if src is None:
+        if source is not None:
+            src: Key | None = source.call
+        else:
             src = _pending_end(pending, methods, ch.source, ch.data)
-        if dst is None and ch.target not in methods:
+        dst: Key | None = None
+        if target is not None:
+            dst = target.call
+        elif ch.target not in methods:
             entry = pending.get(ch.target)  # a pending functionality: what it will be
             dst = entry[0] if entry is not None else None
         future.add((ch.kind, ch.data, src, dst))
@@ -53,9 +58,12 @@ def unreached_by(
 ) -> set[str]:
     """The functionality ``names`` none of the method instances ``methods``
     can ``reach`` (:meth:`cfgplan.planner.reach.Reach.names`)."""
-    if not names:
-        return set()
-    return set(names).difference(*[reach(call) for call in methods])
+    left = set(names)
+    for call in methods:
+        if not left:
+            break  # (most often at once: one item reaches every name waiting)
+        left.difference_update(reach(call))
+    return left
 
 
 def waiting_parts(
@@ -81,12 +89,16 @@ def waiting_parts(
     full = [0.0, 0.0]  # fully known channels not in C: not apart, apart
     covered: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
     open_ends: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
+    apart = bool(alone or unreached)  # (seldom: most nodes have no channel apart)
     for channel in future:
         kind, data, sender, receiver = channel
         side = int(
-            sender in alone
-            or receiver in alone
-            or (receiver is not None and receiver[0] in unreached)
+            apart
+            and (
+                sender in alone
+                or receiver in alone
+                or (receiver is not None and receiver[0] in unreached)
+            )
         )
         if not side:
             names.add(data[0])

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cfgplan.planner.parts import MOST_WIDE, WIDE, least, own_part
+from cfgplan.planner.parts import FEW, MOST_WIDE, WIDE, _few, _many, least, own_part
 from tests.planner.problems import PROPERTY
 
 
@@ -81,3 +81,25 @@ def test_least_is_the_sum_of_the_groups_dearest_parts(
 ) -> None:
     given_parts: list[tuple[Set[Hashable], float]] = list(parts)
     assert least(given_parts) == groups_by_pairs(given_parts)
+
+
+@pytest.mark.quick(30)
+@PROPERTY
+@given(
+    st.lists(
+        st.tuples(
+            st.one_of(
+                st.frozensets(st.integers(0, 12), max_size=3),
+                st.frozensets(st.integers(0, WIDE + 40), min_size=WIDE + 1, max_size=WIDE + 20),
+            ),
+            st.floats(0.0, 100.0),
+        ),
+        max_size=2 * FEW,
+    )
+)
+def test_few_parts_and_many_give_one_float(parts: list[tuple[frozenset[int], float]]) -> None:
+    """Below FEW parts least() meets each with the groups so far, above it
+    files their names: both find the same groups and add their costs in one
+    order, so any costs (not only the exact halves above) give one float."""
+    given_parts: list[tuple[Set[Hashable], float]] = list(parts)
+    assert _few(given_parts) == _many(given_parts)
