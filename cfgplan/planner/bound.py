@@ -124,8 +124,9 @@ class Bound:
         # pending item, and without the items that repeat a method instance
         # already being expanded in this node (see _repeats).
         counted = together is None or together.counted
-        alone = self._alone(node, pending, future)
-        parts = self._parts(node, pending, alone, _Have.of(node, resolved, task), counted)
+        alone = self._alone(node, pending, methods, future)
+        have = _Have.of(node, resolved, task)
+        parts = self._parts(node, pending, methods, alone, have, counted)
         reach, cost = self.summaries.reach.names, task.channel_cost
         receivers = {c[3][0] for c in future if c[3] is not None}
         unreached = unreached_by(reach, receivers, methods.values())
@@ -150,7 +151,11 @@ class Bound:
         return total + sum(task.agent_cost(agent) for agent in new_robots - node.robots)
 
     def _alone(
-        self, node: Partial, pending: dict[int, tuple[Ground, Summary]], future: set[ChannelId]
+        self,
+        node: Partial,
+        pending: dict[int, tuple[Ground, Summary]],
+        methods: dict[int, Ground],
+        future: set[ChannelId],
     ) -> frozenset[Key]:
         """Pending functionality instances (and ends of channels waiting for
         an end) that no pending method item can derive, as only its
@@ -161,16 +166,20 @@ class Bound:
         names, they would all count as one with it."""
         if not self.task.recursive:
             return frozenset()
-        task, beyond = self.task, self.summaries.beyond
-        above = [item.ancestors for item in node.stack if task.is_method(item.call)]
-        keys = {call for call, _ in pending.values() if not task.is_method(call)}
+        beyond = self.summaries.beyond_all
+        # Each method item's ancestors, once (siblings share theirs).
+        above = list(
+            {id(i.ancestors): i.ancestors for i in node.stack if i.label in methods}.values()
+        )
+        keys = {call for label, (call, _) in pending.items() if label not in methods}
         keys |= {end for _, _, sender, receiver in future for end in (sender, receiver) if end}
-        return frozenset(k for k in keys if all(beyond(k, ancestors) for ancestors in above))
+        return frozenset(k for k in keys if beyond(k, above))
 
     def _parts(
         self,
         node: Partial,
         pending: dict[int, tuple[Ground, Summary]],
+        methods: dict[int, Ground],
         alone: frozenset[Key],
         have: _Have,
         counted: bool = True,
@@ -188,7 +197,7 @@ class Bound:
         and while the search still ``counted`` it (:class:`Together`).
         A functionality in ``alone`` is a part of its own (it shares with
         nothing pending)."""
-        guarded = self._guarded(node, pending)
+        guarded = self._guarded(node, methods)
         reach = self.summaries.reach.of
         parts = _Parts(slack=counted and any(sub.slack for _, sub in pending.values()))
         placed, resolved = have.functionalities, have.channels  # (often empty: no call then)
@@ -212,9 +221,7 @@ class Bound:
                 parts.together.append((both, max(0.0, sub.together - reusable - wired)))
         return parts
 
-    def _guarded(
-        self, node: Partial, pending: dict[int, tuple[Ground, Summary]]
-    ) -> dict[int, float]:
+    def _guarded(self, node: Partial, methods: dict[int, Ground]) -> dict[int, float]:
         """Per pending method item, the cost of the functionalities in C that
         its expansion cannot reuse, as only its ancestors call them
         (:meth:`Summaries.beyond`): on a recursive path (a conversion graph,
@@ -225,7 +232,7 @@ class Bound:
         summaries, task = self.summaries, self.task
         guarded: dict[int, float] = {}
         for item in node.stack:
-            if item.label not in pending or not task.is_method(item.call):
+            if item.label not in methods:
                 continue
             names = summaries.reach.names(item.call)
             total = 0.0

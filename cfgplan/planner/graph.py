@@ -106,7 +106,10 @@ class Graph:
         """:meth:`wire` of ``channel`` with both ends placed, looked up by
         small integers (its number and the ends' names: the same kind, data
         and calls) rather than by the calls themselves."""
-        ident = (channel_number(channel, self.number), sender.name, receiver.name)
+        numbered = channel.number  # channel_number(channel, ...), written out: once a node
+        if numbered < 0:
+            numbered = channel_number(channel, self.number)
+        ident = (numbered, sender.name, receiver.name)
         found = self._between.get(ident)
         if found is None:
             found = self._between[ident] = self.wire(

@@ -44,21 +44,32 @@ def least(parts: list[Part]) -> float:
 
 
 def _few(parts: list[Part]) -> float:
-    """:func:`least`, each part met with the groups found so far."""
+    """:func:`least`, each part met with the groups found so far (groups
+    have disjoint names: a part joins every group it shares a name with)."""
     alone = 0.0  # parts that reach no name: they share with nothing
-    groups: list[Set[Hashable]] = []  # each group's names
-    costs: list[float] = []  # and its dearest part's cost
+    groups: list[tuple[Set[Hashable], float]] = []  # names, the dearest part's cost
     for names, part_cost in parts:
         if not names:
             alone += part_cost
             continue
-        for i in range(len(groups) - 1, -1, -1):
-            if not groups[i].isdisjoint(names):
-                names = names | groups.pop(i)
-                part_cost = max(part_cost, costs.pop(i))
-        groups.append(names)
-        costs.append(part_cost)
-    return alone + sum(sorted(costs))
+        kept: list[tuple[Set[Hashable], float]] | None = None  # (most often: all join)
+        for group in groups:
+            if group[0].isdisjoint(names):
+                if kept is None:
+                    kept = []
+                kept.append(group)
+            else:
+                names = names | group[0]
+                if group[1] > part_cost:
+                    part_cost = group[1]
+        if kept is None:
+            groups = [(names, part_cost)]
+        else:
+            kept.append((names, part_cost))
+            groups = kept
+    if len(groups) == 1:
+        return alone + groups[0][1]
+    return alone + sum(sorted([cost for _, cost in groups]))
 
 
 def _many(parts: list[Part]) -> float:

@@ -16,7 +16,7 @@ stack.
 
 from __future__ import annotations
 
-from collections.abc import Generator
+from collections.abc import Generator, Sequence
 from dataclasses import dataclass, field, replace
 
 from cfgplan.planner import clock
@@ -236,9 +236,18 @@ class Summaries:
         agree. The callers are those of the instances reachable from every
         call summarised so far: all those reachable from the item, once its
         own summary was asked for."""
+        return self.beyond_all(functionality, (ancestors,))
+
+    def beyond_all(self, functionality: Ground, ancestries: Sequence[frozenset[Ground]]) -> bool:
+        """:meth:`beyond` for each of ``ancestries`` (so True when there are none)."""
+        if not ancestries:
+            return True
         callers = self._parents.get(functionality)
-        if not callers or not callers <= ancestors:
+        if not callers:
             return False
+        for ancestors in ancestries:
+            if not callers <= ancestors:
+                return False
         recursive = self.task.recursive
         return all((c[0], len(c) - 1) in recursive for c in callers)
 

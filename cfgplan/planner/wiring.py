@@ -116,6 +116,7 @@ def settle(
     new: set[ChannelKey] = set()
     dropped: list[int] = []
     added = 0.0
+    new_global = False  # a global channel newly resolved: the media may overflow
     for i in touching:
         ch = channels[i]
         src, dst = located.get(ch.source), located.get(ch.target)
@@ -130,6 +131,7 @@ def settle(
             added += task.channel_cost(ch.kind)
             if ch.kind == "global":
                 added += task.link_cost(src.robot, dst.robot)
+                new_global = True
             continue
         # An identical channel is already there (rare): keep it, drop this one.
         j = next(
@@ -155,7 +157,7 @@ def settle(
         dropped.append(i)
     if dropped:
         out = [c for i, c in enumerate(out) if i not in dropped]
-    if task.media and any(k == "global" for k, *_ in new):
+    if new_global and task.media:
         overflow = _media(out, located, task)
         if overflow is not None:
             return overflow
