@@ -129,6 +129,12 @@ def main() -> None:
     parser.add_argument(
         "--against", metavar="REV", help="compare with cfgplan at this git revision"
     )
+    parser.add_argument(
+        "--markdown",
+        type=Path,
+        metavar="FILE",
+        help="also write the table as the documentation's page of instruction counts",
+    )
     args = parser.parse_args()
     if args.one:
         name, runs = args.one
@@ -151,8 +157,14 @@ def main() -> None:
     columns = ["instance", "M instructions"]
     if args.against:
         columns = ["instance", f"M instructions {args.against}", "M instructions now", "now / then"]
-    print("| " + " | ".join(columns) + " |")
-    print("|" + "---|" * len(columns), flush=True)
+    table: list[str] = []
+
+    def show(line: str) -> None:
+        print(line, flush=True)
+        table.append(line)
+
+    show("| " + " | ".join(columns) + " |")
+    show("|" + "---|" * len(columns))
     with tempfile.TemporaryDirectory() as tmp:
         against = None
         if args.against:
@@ -167,11 +179,18 @@ def main() -> None:
         for name in names:
             now = count(name, options)
             if against is None:
-                print(f"| {name} | {_millions(now)} |", flush=True)
+                show(f"| {name} | {_millions(now)} |")
                 continue
             then = count(name, options, against)
             cells = [name, _millions(then), _millions(now), f"{now / then:.3f}"]
-            print("| " + " | ".join(cells) + " |", flush=True)
+            show("| " + " | ".join(cells) + " |")
+    if args.markdown:
+        from benchmarks.page import instructions_page
+
+        args.markdown.write_text(
+            instructions_page(table, machine(), sys.argv[1:]), encoding="utf-8"
+        )
+        print(f"\nwrote {args.markdown}")
 
 
 if __name__ == "__main__":

@@ -1,9 +1,11 @@
-"""The benchmark page of the documentation site, written by the benchmark suite.
+"""The benchmark pages of the documentation site, written by the benchmarks.
 
 ``python -m benchmarks.run --markdown docs/explanation/benchmarks.md`` writes
 the page: what is measured, the families, then the table of that run with the
-machine, the date, the revision and the command that made it. Nobody edits the
-page by hand; run the suite again instead.
+machine, the date, the revision and the command that made it;
+``python -m benchmarks.instructions --against 6332e93 --markdown
+docs/explanation/instructions.md`` the page of instruction counts. Nobody
+edits the pages by hand; run the benchmark again instead.
 """
 
 from __future__ import annotations
@@ -100,22 +102,63 @@ def page(
     table: Sequence[str], machine: str, command: Sequence[str], note: str | None = None
 ) -> str:
     """The page: the introduction, then this run's facts and table."""
-    shown = shlex.join(["python", "-m", "benchmarks.run", *_without_note(command)])
+    measured = (
+        "- times: planning in-process, warm, best of repeats; memory: peak RSS of the process"
+    )
+    return _document("Benchmarks", INTRO, "run", table, machine, command, measured, note)
+
+
+INSTRUCTIONS_INTRO = """\
+`python -m benchmarks.instructions` counts the instructions one warm planning
+run of each small instance takes (callgrind's Ir: two fresh processes under
+valgrind, one planning `--runs` more times than the other; the difference
+over `--runs` is one run's, reading, imports and exit cancelled out). Where a
+planning run takes milliseconds a time moves by tens of percent on a shared
+machine; a count repeats to within a fraction of a percent. `--against REV`
+counts cfgplan at git revision REV beside this one: issue 35 asks that no row
+of the benchmark table be slower than at the revision it was filed at,
+`6332e93`, "instruction counts where timing is noise".
+
+The instances are those of the [benchmark page](benchmarks.md), the small
+row of each family.
+"""
+
+
+def instructions_page(table: Sequence[str], machine: str, command: Sequence[str]) -> str:
+    """The page of instruction counts (:mod:`benchmarks.instructions`)."""
+    measured = "- counted: callgrind Ir per warm top-1 planning run, Python's hashes fixed"
+    return _document(
+        "Instruction counts", INSTRUCTIONS_INTRO, "instructions", table, machine, command, measured
+    )
+
+
+def _document(
+    title: str,
+    intro: str,
+    module: str,
+    table: Sequence[str],
+    machine: str,
+    command: Sequence[str],
+    measured: str,
+    note: str | None = None,
+) -> str:
+    """A page written by ``benchmarks.<module>``: ``intro``, then the run's facts and table."""
+    shown = shlex.join(["python", "-m", f"benchmarks.{module}", *_without_note(command)])
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     facts = [
         f"- machine: {machine}",
         f"- date: {when}",
         f"- revision: `{revision()}`",
-        "- times: planning in-process, warm, best of repeats; memory: peak RSS of the process",
+        measured,
     ]
     if note:
         facts.append(f"- note: {note}")
     lines = [
-        "<!-- Written by `python -m benchmarks.run --markdown ...`: do not edit by hand. -->",
+        f"<!-- Written by `python -m benchmarks.{module} --markdown ...`: do not edit by hand. -->",
         "",
-        "# Benchmarks",
+        f"# {title}",
         "",
-        INTRO,
+        intro,
         "## The last run",
         "",
         *facts,

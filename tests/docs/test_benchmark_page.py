@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from benchmarks.page import page, write
+from benchmarks.page import instructions_page, page, write
 
 ROOT = Path(__file__).resolve().parents[2]
 TABLE = ["| instance | best |", "|---|---|", "| cross-door 6.2.2 | 44 |"]
@@ -31,3 +31,17 @@ def test_the_committed_page_was_written_by_the_script() -> None:
     assert "| instance | configs |" in text
     assert "Made with `python -m benchmarks.run" in text
     assert page(TABLE, "m", []).count("# Benchmarks") == 1
+
+
+def test_the_instruction_page_says_how_it_was_counted_and_against_what() -> None:
+    """docs/explanation/instructions.md is what ``python -m
+    benchmarks.instructions --markdown`` writes: the table of counts beside
+    the revision issue 35 was filed at, and the command to count again."""
+    table = ["| instance | M instructions 6332e93 | M instructions now | now / then |"]
+    made = instructions_page(table, "m", ["--against", "6332e93", "--markdown", "x.md"])
+    assert made.startswith("<!-- Written by `python -m benchmarks.instructions --markdown")
+    assert table[0] in made
+    assert "`python -m benchmarks.instructions --against 6332e93 --markdown x.md`" in made
+    text = (ROOT / "docs" / "explanation" / "instructions.md").read_text(encoding="utf-8")
+    assert text.startswith("<!-- Written by `python -m benchmarks.instructions --markdown")
+    assert "| instance | M instructions 6332e93 | M instructions now | now / then |" in text
