@@ -69,7 +69,9 @@ The instances (`benchmarks/instances.py`; families in `benchmarks/families/`):
 - **deliveries S R**: a sequence of S configurations for R robots.
 
 `--against REV` prints instead one table that puts cfgplan at git revision REV
-beside this one, each instance planned by both in turn.
+beside this one, each instance planned by both in turn. Where planning takes
+milliseconds, times are mostly noise: the [instruction counts](instructions.md)
+of the small rows compare revisions instead.
 """
 
 

@@ -9,7 +9,8 @@ is, :func:`cfgplan.planner.plan.parts`), numbered by its numbering.
 The passes over it are elsewhere: what every expansion of an instance
 contains (:mod:`cfgplan.planner.summary`, the first bound), the partitioned
 bound's occurrence counts and cheapest derivations (:mod:`cfgplan.planner.partition`,
-:mod:`cfgplan.planner.prices`, :mod:`cfgplan.planner.least`), how often the
+:mod:`cfgplan.planner.occurrences`, :mod:`cfgplan.planner.prices`,
+:mod:`cfgplan.planner.least`), how often the
 media let a shared cost occur (:mod:`cfgplan.planner.capacity`), and the
 independent parts of a goal (:mod:`cfgplan.planner.components`). What the
 graph holds of an expansion is what those passes read: its children and

@@ -1,7 +1,7 @@
 """Parts that may share: the least a set of pending items (or of one
 expansion's body items) can cost together, when each is known only by the
-names it can reach and its own least cost (:mod:`cfgplan.planner.summary`,
-:mod:`cfgplan.planner.bound`)."""
+names it can reach (:mod:`cfgplan.planner.reach`) and its own least cost
+(:mod:`cfgplan.planner.summary`, :mod:`cfgplan.planner.bound`)."""
 
 from __future__ import annotations
 
