@@ -125,7 +125,7 @@ class Bound:
         # already being expanded in this node (see _repeats).
         counted = together is None or together.counted
         alone = self._alone(node, pending, methods, future)
-        have = _Have.of(node, resolved, task)
+        have = _have(node, resolved, task)
         parts = self._parts(node, pending, methods, alone, have, counted)
         reach, cost = self.summaries.reach.names, task.channel_cost
         receivers = {c[3][0] for c in future if c[3] is not None}
@@ -181,7 +181,7 @@ class Bound:
         pending: dict[int, tuple[Ground, Summary]],
         methods: dict[int, Ground],
         alone: frozenset[Key],
-        have: _Have,
+        have: Have,
         counted: bool = True,
     ) -> _Parts:
         """Each pending item as a part of the three least costs.
@@ -200,7 +200,7 @@ class Bound:
         guarded = self._guarded(node, methods)
         reach = self.summaries.reach.of
         parts = _Parts(slack=counted and any(sub.slack for _, sub in pending.values()))
-        placed, resolved = have.functionalities, have.channels  # (often empty: no call then)
+        placed, resolved = have  # (often empty: no call then)
         for label, (call, sub) in pending.items():
             names, data, both = reach(call)
             wired = _within(resolved, data) if resolved else 0.0
@@ -230,14 +230,16 @@ class Bound:
         if not self.task.recursive:
             return {}
         summaries, task = self.summaries, self.task
+        beyond = summaries.beyond_all
         guarded: dict[int, float] = {}
         for item in node.stack:
             if item.label not in methods:
                 continue
             names = summaries.reach.names(item.call)
+            ancestry = (item.ancestors,)
             total = 0.0
             for p in node.placed:
-                if p.call[0] in names and summaries.beyond(p.call, item.ancestors):
+                if p.call[0] in names and beyond(p.call, ancestry):
                     total += task.functionality_cost(p.schema, p.call)
             if total:
                 guarded[item.label] = total
@@ -311,27 +313,24 @@ class _Parts:
         return least(functionalities), least(waiting + channels), whole
 
 
-@dataclass(slots=True)
-class _Have:
-    """What C already holds, per name: the cost of its functionalities by
-    functionality name, of its resolved channels by data predicate."""
+Have = tuple[dict[str, float], dict[str, float]]
+"""What C already holds, per name: the cost of its functionalities by
+functionality name, and of its resolved channels by data predicate (:func:`_have`)."""
 
-    functionalities: dict[str, float]
-    channels: dict[str, float]
 
-    @classmethod
-    def of(cls, node: Partial, resolved: set[tuple[str, Ground, Key, Key]], task: Task) -> _Have:
-        functionalities: dict[str, float] = {}
-        if node.placed:
-            cost_of, get = task.functionality_cost, functionalities.get
-            for p in node.placed:
-                functionalities[p.call[0]] = get(p.call[0], 0.0) + cost_of(p.schema, p.call)
-        channels: dict[str, float] = {}
-        if resolved:
-            channel_cost, get = task.channel_cost, channels.get
-            for kind, data, _, _ in resolved:
-                channels[data[0]] = get(data[0], 0.0) + channel_cost(kind)
-        return cls(functionalities, channels)
+def _have(node: Partial, resolved: set[tuple[str, Ground, Key, Key]], task: Task) -> Have:
+    """:data:`Have` of ``node``, whose resolved channels are ``resolved``."""
+    functionalities: dict[str, float] = {}
+    if node.placed:
+        cost_of, get = task.functionality_cost, functionalities.get
+        for p in node.placed:
+            functionalities[p.call[0]] = get(p.call[0], 0.0) + cost_of(p.schema, p.call)
+    channels: dict[str, float] = {}
+    if resolved:
+        channel_cost, get = task.channel_cost, channels.get
+        for kind, data, _, _ in resolved:
+            channels[data[0]] = get(data[0], 0.0) + channel_cost(kind)
+    return functionalities, channels
 
 
 def _within(costs: dict[str, float], names: Set[str]) -> float:
