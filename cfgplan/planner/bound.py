@@ -36,13 +36,13 @@ The pending items are read through their static summaries
 
 from __future__ import annotations
 
-from collections.abc import Set
+from collections.abc import Iterable, Set
 from dataclasses import dataclass, field
 from itertools import compress, repeat
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.partial import Key, Partial
+from cfgplan.planner.partial import Item, Key, Partial
 from cfgplan.planner.parts import Part, least, own_part
 from cfgplan.planner.summary import ChannelId, Summaries, Summary
 from cfgplan.planner.task import Ground, Task
@@ -166,11 +166,8 @@ class Bound:
         names, they would all count as one with it."""
         if not self.task.recursive:
             return frozenset()
-        beyond = self.summaries.beyond_all
-        # Each method item's ancestors, once (siblings share theirs).
-        above = list(
-            {id(i.ancestors): i.ancestors for i in node.stack if i.label in methods}.values()
-        )
+        beyond = self.summaries.beyond
+        above = _ancestries(i for i in node.stack if i.label in methods)
         keys = {call for label, (call, _) in pending.items() if label not in methods}
         keys |= {end for _, _, sender, receiver in future for end in (sender, receiver) if end}
         return frozenset(k for k in keys if beyond(k, above))
@@ -230,7 +227,7 @@ class Bound:
         if not self.task.recursive:
             return {}
         summaries, task = self.summaries, self.task
-        beyond = summaries.beyond_all
+        beyond = summaries.beyond
         guarded: dict[int, float] = {}
         for item in node.stack:
             if item.label not in methods:
@@ -359,9 +356,18 @@ def _repeats(node: Partial, methods: dict[int, Ground]) -> set[int]:
     if not methods:
         return set()
     above: set[Ground] = set()
-    last = None
-    for item in node.stack:
-        if item.ancestors is not last:  # (siblings share theirs)
-            last = item.ancestors
-            above |= last
+    for ancestors in _ancestries(node.stack):
+        above |= ancestors
     return {label for label, call in methods.items() if call in above}
+
+
+def _ancestries(items: Iterable[Item]) -> list[frozenset[Ground]]:
+    """The ancestors of ``items`` (stack items), a run of siblings' once:
+    they share one set, and lie side by side on the stack."""
+    found: list[frozenset[Ground]] = []
+    last = None
+    for item in items:
+        if item.ancestors is not last:
+            last = item.ancestors
+            found.append(last)
+    return found

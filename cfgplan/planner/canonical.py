@@ -41,9 +41,9 @@ def channel_numbers(node: Partial, names: dict[int, int], number: Numbering) -> 
     get = number.numbers.get
     out = []
     for ch in node.channels:
-        numbered = ch.number  # channel_number(ch, number), written out: the hot loop
+        numbered = ch.number  # (most are numbered when made: no call then)
         if numbered < 0:
-            numbered = number((ch.kind, ch.robots, ch.data, ch.bandwidth))
+            numbered = channel_number(ch, number)
         key = (numbered, names[ch.source], names[ch.target])
         found = get(key)
         out.append(number(key) if found is None else found)

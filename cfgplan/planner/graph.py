@@ -107,7 +107,7 @@ class Graph:
         """:meth:`wire` of ``channel`` with both ends placed, looked up by
         small integers (its number and the ends' names: the same kind, data
         and calls) rather than by the calls themselves."""
-        numbered = channel.number  # channel_number(channel, ...), written out: once a node
+        numbered = channel.number  # (most are numbered when made: no call then)
         if numbered < 0:
             numbered = channel_number(channel, self.number)
         ident = (numbered, sender.name, receiver.name)

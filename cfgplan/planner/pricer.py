@@ -132,10 +132,9 @@ class Pricer:
         before = self.lifted
         depth = len(node.path)
         for child in children:
-            priority = self.again(child)  # self.price(child), written out: the hot loop
+            priority = self.price(child)
             if priority is None:
                 continue
-            self.settled += 1
             if split is not None and not child.done and len(child.path) > depth:
                 price = split.prices.get(child.path[depth])
                 if price == INFINITE:

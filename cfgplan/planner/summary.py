@@ -225,10 +225,11 @@ class Summaries:
                         self._walked.add(child)
                         todo.append(child)
 
-    def beyond(self, functionality: Ground, ancestors: frozenset[Ground]) -> bool:
-        """Whether no expansion of an item below ``ancestors`` can derive
-        ``functionality``: every method instance whose body calls it is one of
-        the ancestors, which the recursion guard of 4.5 prunes there.
+    def beyond(self, functionality: Ground, ancestries: Sequence[frozenset[Ground]]) -> bool:
+        """Whether no expansion of an item below any of ``ancestries`` (each
+        an item's ancestors) can derive ``functionality``: every method
+        instance whose body calls it is one of those ancestors, which the
+        recursion guard of 4.5 prunes there (so True when there are none).
 
         Only callers whose signatures can recur are trusted to be ancestors
         (:attr:`Task.recursive`): those are the ancestors the canonical form
@@ -236,10 +237,6 @@ class Summaries:
         agree. The callers are those of the instances reachable from every
         call summarised so far: all those reachable from the item, once its
         own summary was asked for."""
-        return self.beyond_all(functionality, (ancestors,))
-
-    def beyond_all(self, functionality: Ground, ancestries: Sequence[frozenset[Ground]]) -> bool:
-        """:meth:`beyond` for each of ``ancestries`` (so True when there are none)."""
         if not ancestries:
             return True
         callers = self._parents.get(functionality)

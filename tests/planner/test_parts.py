@@ -34,6 +34,18 @@ def groups_by_pairs(parts: list[tuple[Set[Hashable], float]]) -> float:
     return alone + sum(max(parts[i][1] for i in members) for members, _ in groups)
 
 
+def part_lists(
+    narrow_names: int, narrow_most: int, costs: st.SearchStrategy[float], most: int
+) -> st.SearchStrategy[list[tuple[frozenset[int], float]]]:
+    """Lists of up to ``most`` parts, each narrow (up to ``narrow_most`` of
+    the names 0..``narrow_names``) or wide (more than WIDE names), at ``costs``."""
+    names = st.one_of(
+        st.frozensets(st.integers(0, narrow_names), max_size=narrow_most),
+        st.frozensets(st.integers(0, WIDE + 40), min_size=WIDE + 1, max_size=WIDE + 20),
+    )
+    return st.lists(st.tuples(names, costs), max_size=most)
+
+
 def names(prefix: str, count: int) -> frozenset[Hashable]:
     return frozenset(f"{prefix}{i}" for i in range(count))
 
@@ -64,18 +76,7 @@ def test_wide_parts_past_the_most_are_filed_name_by_name_and_still_met() -> None
 
 @pytest.mark.quick(30)
 @PROPERTY
-@given(
-    st.lists(
-        st.tuples(
-            st.one_of(
-                st.frozensets(st.integers(0, WIDE + 40), max_size=4),
-                st.frozensets(st.integers(0, WIDE + 40), min_size=WIDE + 1, max_size=WIDE + 20),
-            ),
-            st.sampled_from([0.0, 0.5, 1.0, 2.0, 3.0, 10.0]),
-        ),
-        max_size=30,
-    )
-)
+@given(part_lists(WIDE + 40, 4, st.sampled_from([0.0, 0.5, 1.0, 2.0, 3.0, 10.0]), 30))
 def test_least_is_the_sum_of_the_groups_dearest_parts(
     parts: list[tuple[frozenset[int], float]],
 ) -> None:
@@ -85,18 +86,7 @@ def test_least_is_the_sum_of_the_groups_dearest_parts(
 
 @pytest.mark.quick(30)
 @PROPERTY
-@given(
-    st.lists(
-        st.tuples(
-            st.one_of(
-                st.frozensets(st.integers(0, 12), max_size=3),
-                st.frozensets(st.integers(0, WIDE + 40), min_size=WIDE + 1, max_size=WIDE + 20),
-            ),
-            st.floats(0.0, 100.0),
-        ),
-        max_size=2 * FEW,
-    )
-)
+@given(part_lists(12, 3, st.floats(0.0, 100.0), 2 * FEW))
 def test_few_parts_and_many_give_one_float(parts: list[tuple[frozenset[int], float]]) -> None:
     """Below FEW parts least() meets each with the groups so far, above it
     files their names: both find the same groups and add their costs in one
