@@ -40,7 +40,8 @@ class SearchOptions:
     """Refinements after which, if the stronger bound was at least the first
     one every time, the first one is no longer computed (only whether a node
     can complete is: :attr:`cfgplan.planner.pricer.Pricer.feasible`): where the
-    stronger bound always dominates (fusion), the first adds only its cost."""
+    stronger bound always dominates (fusion), the first adds only its cost.
+    The open nodes keep the priorities they have (lower bounds still)."""
 
     together: int = 8
     """Estimates in which the first bound's together least cost (an item's

@@ -15,8 +15,8 @@ Whether the stronger bound pays for itself is decided here, and only here
 (:class:`~cfgplan.planner.options.SearchOptions`: ``warm``, ``trial``,
 ``pays``, ``rely``): tried once a search has settled ``warm`` nodes, given up
 when it seldom raises a priority, and relied on alone when it always
-dominates the first. A strategy learns that the bounds in use changed from
-:meth:`Pricer.take_repriced`, and prices its open nodes again. Dropping or
+dominates the first. A strategy learns from :meth:`Pricer.take_repriced`
+when the bound given up leaves open nodes to price again. Dropping or
 adding an admissible bound never changes what is found nor its order, only
 how many nodes are taken (tests/planner/test_pricer.py).
 """
@@ -233,8 +233,15 @@ class Pricer:
             self.heuristic = self.first
         rely = self.options.rely
         if self.tried == rely and self.dominated == rely and self.feasible is not None:
-            # The stronger bound is all that counts here.
-            self.heuristic, self.repriced = self.feasible, Reprice.ALL
+            # The stronger bound is all that counts here: nodes settled from
+            # now on are priced by ``feasible``. The open nodes keep their
+            # priorities, lower bounds still, and each is refined when taken,
+            # as before; priced again by ``feasible`` they would only drop to
+            # their cost, to be taken and refined anew at once (chain D=200:
+            # 82 refinements of the deepest stacks for nothing). Twins priced
+            # apart so are met as those priced apart by a split
+            # (:meth:`cfgplan.planner.search.BestFirst._supersede`).
+            self.heuristic = self.feasible
         return max(priority, raised)
 
     def take_repriced(self) -> Reprice | None:

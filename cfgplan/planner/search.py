@@ -158,7 +158,9 @@ class BestFirst:
         """The node at path ``later`` was expanded, and a node before it in
         depth-first order (a smaller path) has just been taken with the same
         canonical form: it was priced above its twin (by its parent's split,
-        or by the stronger bound given up between the two). The earlier
+        by the stronger bound given up between the two, or by the first bound
+        no longer computed for the later one,
+        :attr:`~cfgplan.planner.options.SearchOptions.rely`). The earlier
         node's derivations are the ones to list, so it is expanded, and every
         open node below ``later`` is dropped when taken (the twin's
         derivations are the earlier node's, again).
@@ -182,12 +184,12 @@ class BestFirst:
         return any(path[:depth] in superseded for depth in self._depths)
 
     def _reprice(self, taken: Partial, pruned: bool, which: Reprice) -> None:
-        """The bounds in use changed (one given up, or one no longer needed):
-        price the open nodes ``which`` says, and ``taken`` unless it was
-        ``pruned``, by the bounds now in use. Two nodes with one canonical
-        form must have one priority, or the later of them in depth-first order
-        could be expanded first and close the form to the earlier one (the
-        order of equal-cost configurations would then not be the thesis's)."""
+        """The stronger bound was given up: price the open nodes ``which``
+        says, and ``taken`` unless it was ``pruned``, by the bounds now in
+        use. Two nodes with one canonical form should have one priority, or
+        the later of them in depth-first order could be expanded first and
+        close the form to the earlier one (:meth:`_supersede` then repairs
+        the order of equal-cost configurations, the thesis's, at a cost)."""
         nodes = []
         kept = []
         for entry in self._heap:

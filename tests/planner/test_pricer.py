@@ -43,6 +43,24 @@ def test_the_partition_bound_is_given_up_where_it_never_pays_and_kept_where_it_d
     assert on_fusion.strategy.pricer.refine is not None
 
 
+def test_dropping_the_first_bound_keeps_the_open_nodes_priorities() -> None:
+    """On chain D=60 the first bound is dropped (``rely``) with dozens of
+    nodes open, the siblings of the levels above, each priced above the
+    frontier by its parent's split. Priced again by feasibility alone, each
+    fell to its cost and was taken and refined at once (133 refinements for
+    62 nodes taken); keeping their priorities, none is refined that is not
+    taken (the search goes straight down), and it finds the same."""
+    found, run = _run(chain(60), 1)
+    pricer = run.strategy.pricer
+    dropped = pricer.heuristic is pricer.feasible
+    refined, taken = pricer.tried, run.stats.nodes  # (plain integers: a failure
+    del pricer, run  # shows them, not the reprs of the search's whole state)
+    assert dropped
+    assert refined <= taken == 62
+    kept, _ = _run(chain(60), 1, rely=10**9)  # the first bound never dropped
+    assert found == kept
+
+
 @pytest.mark.parametrize(
     "texts", [wall(3, 4, 3), chain(8), ecology(6, 2, 1)], ids=["wall", "chain", "ecology"]
 )

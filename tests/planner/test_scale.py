@@ -143,7 +143,7 @@ def test_best_first_lists_in_the_order_of_the_windows_when_the_first_bound_is_dr
     texts: tuple[str, str],
 ) -> None:
     """On fusion the stronger bound dominates the first, which the
-    search then stops computing (SearchOptions.rely) and re-prices its open nodes:
+    search then stops computing (SearchOptions.rely), its open nodes keeping their priorities:
     the 200 cheapest come out in the depth-first order --all lists them in,
     equal costs included, with the same derivation numbers."""
     problem = problem_of(texts)
