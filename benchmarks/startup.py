@@ -6,8 +6,9 @@ what the console script runs), timed from start to exit; the table shows the
 best and the median of ``--repeats`` runs, and each over the bare
 interpreter (``python -c pass``), the yardstick of issue 32's targets:
 ``--version`` and ``--help`` within 2x, ``plan`` on cross-door 6.2.2 under
-200 ms; the last row is the floor under ``plan``: typer, pydantic, rich and
-Lark imported, nothing of cfgplan. ``--against REV`` runs cfgplan at git
+200 ms; the last two rows are the floor under ``plan``: typer, pydantic, rich and
+Lark imported, nothing of cfgplan, and the same with one pydantic model
+defined (:data:`ONE_MODEL`). ``--against REV`` runs cfgplan at git
 revision REV (checked out into a temporary folder as
 :func:`benchmarks.run.checkout` does) side by side: each repeat runs every
 row under both, in turn, so that a machine loaded by other work slows both
@@ -36,6 +37,11 @@ from benchmarks.run import ROOT, checkout, machine
 
 CROSS = ("domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp")
 
+ONE_MODEL = "import pydantic; pydantic.create_model('One', x=(int, 0))"
+"""The first model a process defines loads what pydantic leaves until then
+(its fields, types and plugin loader, which imports ``importlib.metadata``):
+``cfgplan plan`` defines its IR's models, so this is part of its floor."""
+
 ROWS: list[tuple[str, list[str]]] = [
     ("bare interpreter", ["-c", "pass"]),
     ("cfgplan --version", ["-m", "cfgplan", "--version"]),
@@ -47,6 +53,10 @@ ROWS: list[tuple[str, list[str]]] = [
     (
         "the libraries plan loads, alone",
         ["-c", "import typer.main, pydantic.main, rich.console, rich.table, lark.lark"],
+    ),
+    (
+        "the same, and one pydantic model defined",
+        ["-c", f"import typer.main, rich.console, rich.table, lark.lark; {ONE_MODEL}"],
     ),
 ]
 """What is measured: a name, and the interpreter's arguments (run from the
