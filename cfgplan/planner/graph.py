@@ -161,9 +161,12 @@ class Graph:
             for current in below:
                 instance = self.instance(current)
                 joined: dict[int, Instance] = {}
-                for option in instance.options:
-                    for child in option.children:
-                        joined.update(sets[child])
+                # Each child once (on a chain every version calls the level
+                # below): the same map, its keys in the same order.
+                for child in dict.fromkeys(
+                    c for option in instance.options for c in option.children
+                ):
+                    joined.update(sets[child])
                 joined[instance.key] = instance
                 sets[current] = joined
                 orders[current] = tuple(joined.values())

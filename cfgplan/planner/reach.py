@@ -80,17 +80,21 @@ class Reach:
                 reached[current] = (frozenset({current[0]}), frozenset(), frozenset({current[0]}))
                 continue
             versions = task.methods.get(current, ())
-            children = [(p[0], len(p) - 1) for m in versions for _, p in m.body]
+            # Each signature once: on a chain every version calls the level
+            # below, whose sets (every name below it) are then joined once.
+            children = list(dict.fromkeys((p[0], len(p) - 1) for m in versions for _, p in m.body))
             if not ready:
                 stack.append((current, True))
                 stack.extend((child, False) for child in children if child not in reached)
                 continue
-            names: set[str] = set()
-            data = {c.data[0] for m in versions for c in m.channels}
+            names: list[frozenset[str]] = []
+            data = [frozenset(c.data[0] for m in versions for c in m.channels)]
             for child in children:
                 below = reached.get(child)
                 if below is not None:  # None: a name neither method nor functionality
-                    names |= below[0]
-                    data |= below[1]
-            reached[current] = (frozenset(names), frozenset(data), frozenset(names | data))
+                    names.append(below[0])
+                    data.append(below[1])
+            # Each set made once (no set copied into a frozenset).
+            reached_names, reached_data = frozenset().union(*names), frozenset().union(*data)
+            reached[current] = (reached_names, reached_data, reached_names | reached_data)
         return reached[sig]
