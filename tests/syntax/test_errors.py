@@ -9,13 +9,8 @@ from pathlib import Path
 import pytest
 
 from cfgplan.diagnostics import WINDOW, CfgplanError, Diagnostic, render, source_line
-from cfgplan.syntax.reader import (
-    MAX_NESTING,
-    parse,
-    read_domain,
-    read_state,
-    state_from,
-)
+from cfgplan.syntax.reader import parse, read_domain, read_state, state_from
+from cfgplan.syntax.transform import MAX_NESTING
 
 ROOT = Path(__file__).resolve().parents[2]
 CROSS_DOOR = ROOT / "domains" / "cross-door" / "domain.lisp"

@@ -1,8 +1,8 @@
 """The reader's shortcuts build what the long way builds (issue 35: reading a
 big domain faster, cfgplan/syntax/reader.py).
 
-- Lark's inlined rules (``_expr``, ``_item``, the repetitions) are passed up
-  as a bare list of children (``_Run``), not a positioned ``Tree``: the IR is
+- Lark's inlined rules (``_expr``, ``_quoted``, the repetitions) are passed up
+  as a bare list of children (``Run``), not a positioned ``Tree``: the IR is
   the one the same transformer makes of the tree Lark builds itself.
 - A symbol's or number's span is made when asked for, from its token: every
   span the IR keeps covers the text it was read from, and an error at a
@@ -26,6 +26,7 @@ from benchmarks import families
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.ir.model import Atom, Functionality, Method, Span
 from cfgplan.syntax import reader
+from cfgplan.syntax.transform import ToIR
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -78,7 +79,7 @@ def _by_tree(text: str, filename: str) -> reader.SourceFile:
     """The long way: Lark builds its positioned tree (inlined rules spliced by
     Lark itself), then the reader's transformer maps it, afterwards."""
     parser = Lark(reader.grammar_text(), **reader.OPTIONS)
-    transformer = reader._ToIR()
+    transformer = ToIR()
     transformer.begin(filename)
     items = transformer.transform(parser.parse(reader.normalize(text))).children
     assert transformer.failed is None
