@@ -2,12 +2,14 @@
 
 When the choices of a goal fall into independent parts
 (:mod:`cfgplan.planner.components`), each part is searched on its own, best
-first (:class:`cfgplan.planner.search.BestFirst` from the part's start), and
-the configurations of the goal are the combinations of one configuration per
-part: the cost of the forced steps plus what each part adds. They are listed
-as the k cheapest sums are (:func:`cfgplan.planner.ranking.merge`: taking a
-combination offers each part's next configuration in its place), each
-part's list grown only as far as the merge needs it.
+first (:class:`cfgplan.planner.search.BestFirst` from the part's start,
+listing the complete nodes step 4 admits: only their choices are combined,
+so no part's configuration is built), and the configurations of the goal
+are the combinations of one configuration per part: the cost of the forced
+steps plus what each part adds. They are listed as the k cheapest sums are
+(:func:`cfgplan.planner.ranking.merge`: taking a combination offers each
+part's next configuration in its place), each part's list grown only as far
+as the merge needs it.
 
 At equal cost the thesis lists derivations in their depth-first order: the
 first choice item (by address) where two combinations differ decides, by
@@ -37,7 +39,7 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.components import Address, Parts, Trail, replay, segments
-from cfgplan.planner.grow import Grower
+from cfgplan.planner.grow import Completion, Grower
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.pricer import Pricer
 from cfgplan.planner.ranking import merge
@@ -83,7 +85,7 @@ class Combined:
     handed_over: bool = False
     """Whether the plain search lists the rest (the parts did not combine)."""
     _searches: list[BestFirst] = field(default_factory=list)
-    _streams: list[Iterator[Configuration]] = field(default_factory=list)
+    _streams: list[Iterator[Completion]] = field(default_factory=list)
     _starts: list[tuple[Partial, dict[int, Address]]] = field(default_factory=list)
     """Each part's start node and its choice items' addresses by label."""
     _lists: list[list[_Entry]] = field(default_factory=list)
@@ -128,7 +130,7 @@ class Combined:
             self._starts.append((parts.start(p), parts.owners(p)))
             search = BestFirst(grower, pricer, self.goal, self._progress, origin=self._starts[p][0])
             self._searches.append(search)
-            self._streams.append(iter(search))
+            self._streams.append(search.completions())
             self._lists.append([])
         first = self._offer((0,) * len(parts.parts))
         if first is None:  # some part has no configuration: let the plain search say why
@@ -188,21 +190,20 @@ class Combined:
         found = self._lists[p]
         while len(found) <= i:
             search = self._searches[p]
-            config = next(self._streams[p], None)
+            admitted = next(self._streams[p], None)
             self._count()
             if search.stopped is not None:
                 self.stopped = search.stopped
                 raise clock.OutOfTime
             if search.stats.duplicates:
                 raise _Irregular
-            if config is None:
+            if admitted is None:
                 return None
-            assert search.last is not None
             start, owners = self._starts[p]
-            made = segments(self.grower.grounder, start, search.last.path, owners)
+            made = segments(self.grower.grounder, start, admitted.node.path, owners)
             if made is None:
                 raise _Irregular
-            found.append(_Entry(search.last.cost - start.cost, made))
+            found.append(_Entry(admitted.node.cost - start.cost, made))
         return found[i]
 
     def _progress(self, stats: Stats, elapsed: float) -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
@@ -28,6 +29,16 @@ from cfgplan.planner.replay import Replays, deviations, filtered, replay
 from cfgplan.planner.report import DeadEnd, Report, Stats
 from cfgplan.planner.successors import successors
 from cfgplan.planner.task import Ground
+
+
+class Completion(NamedTuple):
+    """A complete node that passed step 4 (:meth:`Grower.admit`): its
+    cost, its media assignment, and its number among the derivations."""
+
+    node: Partial
+    total: float
+    media: tuple[Assignment, ...]
+    derivation: int
 
 
 @dataclass
@@ -203,18 +214,31 @@ class Grower:
     def complete(self, node: Partial, total: float) -> Configuration | None:
         """Step 4 for a complete node, in the order configurations are listed:
         the configuration, or None (a repeat in distinct mode, or inadmissible)."""
+        admitted = self.admit(node, total)
+        return None if admitted is None else self.build(admitted)
+
+    def admit(self, node: Partial, total: float) -> Completion | None:
+        """:meth:`complete` but for building the configuration: what it is
+        built from (:meth:`build`), numbered among the derivations, or None.
+        An independent part's search uses no more (:mod:`cfgplan.planner.combine`:
+        it takes the part's choices from the node and derives the combinations)."""
         ident = fingerprint(node, self.grounder.numbering) if self.distinct else None
         if ident is not None and ident in self.seen:
             self.stats.derivations += 1
             self.stats.duplicates += 1
             return None
-        config = self.finish(node, total, self.stats.derivations + 1)
-        if config is None:
+        media = self.admissible(node)
+        if media is None:
             return None
         self.stats.derivations += 1
         if ident is not None:
             self.seen.add(ident)
-        return config
+        return Completion(node, total, media, self.stats.derivations)
+
+    def build(self, admitted: Completion) -> Configuration:
+        """The configuration of a node :meth:`admit` admitted."""
+        node, total, media, derivation = admitted
+        return build(node, total, self.grounder.task, self.models, media, derivation)
 
     def finish(self, node: Partial, total: float, derivation: int = 0) -> Configuration | None:
         """The admissible configuration of a complete node, or None (rejection reported)."""

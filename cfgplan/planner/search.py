@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.canonical import canonical
-from cfgplan.planner.grow import Grower
+from cfgplan.planner.grow import Completion, Grower
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.pricer import Pricer, Reprice
 from cfgplan.planner.ranking import place
@@ -89,6 +89,17 @@ class BestFirst:
 
     def __iter__(self) -> Iterator[Configuration]:
         start = time.perf_counter()
+        for admitted in self.completions():
+            config = self.grower.build(admitted)
+            self.stats.seconds = time.perf_counter() - start  # the caller may stop here
+            yield config
+
+    def completions(self) -> Iterator[Completion]:
+        """The complete nodes step 4 admits, best first: what the
+        configurations are built from (:meth:`__iter__`). An independent
+        part's search lists these, not configurations: only its choices are
+        combined (:mod:`cfgplan.planner.combine`)."""
+        start = time.perf_counter()
         try:
             yield from self._search(start)
         except clock.OutOfTime:
@@ -96,7 +107,7 @@ class BestFirst:
             self.stopped = StopReason.TIME_LIMIT
         self.stats.seconds = time.perf_counter() - start
 
-    def _search(self, start: float) -> Iterator[Configuration]:
+    def _search(self, start: float) -> Iterator[Completion]:
         grower, pricer = self.grower, self.pricer
         self._queue(grower.settle(root(self.goal) if self.origin is None else self.origin, pricer))
         next_tick = 1.0
@@ -133,11 +144,11 @@ class BestFirst:
                     continue
             self.stats.nodes += 1
             if node.done:
-                config = grower.complete(node, total)
-                if config is not None:
+                admitted = grower.admit(node, total)
+                if admitted is not None:
                     self.last = node
                     self.stats.seconds = time.perf_counter() - start
-                    yield config
+                    yield admitted
                 continue
             if grower.distinct and not node.forbidden:
                 # The same partial configuration reached by another order of

@@ -5,6 +5,7 @@ costs, labels and derivation numbers, in the same order (issue 11)."""
 from __future__ import annotations
 
 import re
+from itertools import islice
 
 import pytest
 from hypothesis import Phase, assume, given, settings
@@ -13,7 +14,7 @@ from hypothesis import strategies as st
 from benchmarks.families import ecology, media_tight
 from cfgplan.planner.combine import Combined
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.plan import Run, divided
+from cfgplan.planner.plan import Run, divided, growing
 from cfgplan.planner.search import BestFirst
 from tests.planner.generated import generated
 from tests.planner.oracle import depth_first
@@ -223,3 +224,23 @@ def test_a_search_in_parts_stopped_by_its_limit_says_how_long_it_took() -> None:
     found = list(run)
     assert isinstance(run.strategy, Combined) and len(found) == 2
     assert run.stats.seconds > 0.0
+
+
+def test_a_search_lists_the_completions_its_configurations_are_built_from() -> None:
+    """What a part's search lists (``BestFirst.completions``: the complete
+    nodes step 4 admits, no configuration built) are, in order and with
+    their derivation numbers, what its iteration builds its configurations
+    from; ecology N=6, not distinct, so that repeats are numbered too."""
+    problem = problem_of(ecology(6, 2, 1))
+    plain = SearchOptions(components=False)
+
+    def search() -> BestFirst:
+        grower, pricer = growing(problem.task, plain, distinct=False)
+        return BestFirst(grower, pricer, problem.goal_call)
+
+    listed = [config.model_dump_json() for config in islice(search(), 12)]
+    admitting = search()
+    admitted = list(islice(admitting.completions(), 12))
+    assert all(c.node.done for c in admitted)
+    assert [admitting.grower.build(c).model_dump_json() for c in admitted] == listed
+    assert [c.derivation for c in admitted] == list(range(1, 13))
