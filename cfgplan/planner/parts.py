@@ -25,11 +25,14 @@ such parts only, as every part is met with each of them."""
 
 MOST_WIDE = 8
 
-FEW = 8
-"""Up to this many parts, the groups are found by meeting each part with
-the groups so far (:func:`_few`): on the thesis's instances a node has a
-handful of parts, and a few set intersections cost less than filing every
-name (:func:`_many`)."""
+GROUPS = 16
+"""While the parts met so far make at most this many groups, the next part is
+met with each group (:func:`_grouped`: a few set intersections, done in C);
+past it, as on a deep recursive path with hundreds of parts of their own,
+the groups are found again by filing every name (:func:`_many`). On the
+dag family, whose parts mostly join one group, meeting the groups takes a
+third of the time filing the names does (issue 35: dag D=30's estimates);
+on fusion, whose groups stay apart, filing is the cheaper."""
 
 
 def least(parts: list[Part]) -> float:
@@ -38,14 +41,16 @@ def least(parts: list[Part]) -> float:
     its own least cost: parts whose names are disjoint cannot share an
     instance, so their costs add; parts that may share count as the largest
     of them. The groups' costs are added up in order of size, so that how
-    the groups were found (:func:`_few` or :func:`_many`) makes no
+    the groups were found (:func:`_grouped` or :func:`_many`) makes no
     difference, float for float."""
-    return _few(parts) if len(parts) <= FEW else _many(parts)
+    found = _grouped(parts, GROUPS)
+    return _many(parts) if found is None else found
 
 
-def _few(parts: list[Part]) -> float:
+def _grouped(parts: list[Part], most: int) -> float | None:
     """:func:`least`, each part met with the groups found so far (groups
-    have disjoint names: a part joins every group it shares a name with)."""
+    have disjoint names: a part joins every group it shares a name with);
+    None once more than ``most`` groups are apart."""
     alone = 0.0  # parts that reach no name: they share with nothing
     groups: list[tuple[Set[Hashable], float]] = []  # names, the dearest part's cost
     for names, part_cost in parts:
@@ -67,6 +72,8 @@ def _few(parts: list[Part]) -> float:
         else:
             kept.append((names, part_cost))
             groups = kept
+            if len(groups) > most:
+                return None
     if len(groups) == 1:
         return alone + groups[0][1]
     return alone + sum(sorted([cost for _, cost in groups]))
@@ -74,7 +81,7 @@ def _few(parts: list[Part]) -> float:
 
 def _many(parts: list[Part]) -> float:
     """:func:`least` by a union-find over the parts (a deep recursive path
-    has hundreds of parts of their own). A narrow part's names are filed
+    has hundreds of parts of their own, each a group). A narrow part's names are filed
     (name -> a part reaching it); a wide one is met with the filed names and
     with the other wide parts by set intersections, so that the work grows
     with the narrow names, not the wide ones (a chain of D levels: D names a
@@ -112,14 +119,20 @@ def _many(parts: list[Part]) -> float:
                 join(owner[name], part)
             wide.append((part, names))
             continue
-        for name in names:  # the hot loop: join() written out
-            other = owner.setdefault(name, part)
-            if other == part:
+        # The hot loop: join() and root() written out, this part's root kept
+        # as it changes (not found again for every name it reaches).
+        mine = root(part)
+        for name in names:
+            a = owner.setdefault(name, part)
+            if a == part:
                 continue
-            a, b = root(other), root(part)
-            if a != b:
-                parent[b] = a
-                cost[a] = max(cost[a], cost[b])
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            if a != mine:
+                parent[mine] = a
+                cost[a] = max(cost[a], cost[mine])
+                mine = a
     # Which part ends up a group's root depends on the order names are met
     # in (a set's, which differs from one process to the next): summed in
     # order of size, the groups' costs give one float whatever it was.

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cfgplan.planner.parts import FEW, MOST_WIDE, WIDE, _few, _many, least, own_part
+from cfgplan.planner.parts import GROUPS, MOST_WIDE, WIDE, _grouped, _many, least, own_part
 from tests.planner.problems import PROPERTY
 
 
@@ -71,7 +71,7 @@ def test_wide_parts_past_the_most_are_filed_name_by_name_and_still_met() -> None
     ]
     parts.append((frozenset({"link0", f"link{many - 2}"}), 0.0))  # joins the first and a late one
     # Every part its own group but the first, which counts in the late one's.
-    assert least(parts) == sum(range(2, many + 1)) == groups_by_pairs(parts)
+    assert _many(parts) == least(parts) == sum(range(2, many + 1)) == groups_by_pairs(parts)
 
 
 @pytest.mark.quick(30)
@@ -86,10 +86,16 @@ def test_least_is_the_sum_of_the_groups_dearest_parts(
 
 @pytest.mark.quick(30)
 @PROPERTY
-@given(part_lists(12, 3, st.floats(0.0, 100.0), 2 * FEW))
-def test_few_parts_and_many_give_one_float(parts: list[tuple[frozenset[int], float]]) -> None:
-    """Below FEW parts least() meets each with the groups so far, above it
-    files their names: both find the same groups and add their costs in one
-    order, so any costs (not only the exact halves above) give one float."""
+@given(part_lists(40, 3, st.floats(0.0, 100.0), 3 * GROUPS))
+def test_meeting_groups_and_filing_names_give_one_float(
+    parts: list[tuple[frozenset[int], float]],
+) -> None:
+    """While at most GROUPS groups are apart least() meets each part with
+    the groups so far, past it it files their names: both find the same
+    groups and add their costs in one order, so any costs (not only the
+    exact halves above) give one float; with fewer groups, meeting them
+    never gives up."""
     given_parts: list[tuple[Set[Hashable], float]] = list(parts)
-    assert _few(given_parts) == _many(given_parts)
+    met = _grouped(given_parts, len(given_parts))
+    assert met == _many(given_parts) == least(given_parts)
+    assert _grouped(given_parts, GROUPS) in (met, None)
