@@ -186,7 +186,8 @@ class Combined:
         return self.grower.levels.cost(raw), key, at
 
     def _entry(self, p: int, i: int) -> _Entry | None:
-        """Part p's ``i``-th configuration (searched as far as needed), or None."""
+        """Part p's ``i``-th configuration (a completion of its search, searched
+        as far as needed, not built), or None."""
         found = self._lists[p]
         while len(found) <= i:
             search = self._searches[p]

@@ -217,7 +217,7 @@ class Windows:
         return Found(cost, index, Parts(node.placed, node.channels, node.effects), media)
 
     def _list(self, found: list[Found]) -> Iterator[Configuration]:
-        """Sorted derivations of a window, numbered as :meth:`Grower.complete`
+        """Sorted derivations of a window, numbered as :meth:`Grower.admit`
         numbers them (repeats counted, inadmissible ones not)."""
         stats = self.stats
         task, models = self.grower.grounder.task, self.grower.models

@@ -211,17 +211,13 @@ class Grower:
                     placed.append(child)
             todo.extend(reversed(placed))
 
-    def complete(self, node: Partial, total: float) -> Configuration | None:
-        """Step 4 for a complete node, in the order configurations are listed:
-        the configuration, or None (a repeat in distinct mode, or inadmissible)."""
-        admitted = self.admit(node, total)
-        return None if admitted is None else self.build(admitted)
-
     def admit(self, node: Partial, total: float) -> Completion | None:
-        """:meth:`complete` but for building the configuration: what it is
-        built from (:meth:`build`), numbered among the derivations, or None.
-        An independent part's search uses no more (:mod:`cfgplan.planner.combine`:
-        it takes the part's choices from the node and derives the combinations)."""
+        """Step 4 for a complete node, in the order configurations are listed:
+        what its configuration is built from (:meth:`build`), numbered among
+        the derivations (a repeat counts, an inadmissible one does not), or
+        None (a repeat in distinct mode, or inadmissible). An independent
+        part's search uses no more (:mod:`cfgplan.planner.combine`: it takes
+        the part's choices from the node and derives the combinations)."""
         ident = fingerprint(node, self.grounder.numbering) if self.distinct else None
         if ident is not None and ident in self.seen:
             self.stats.derivations += 1

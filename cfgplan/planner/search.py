@@ -64,7 +64,7 @@ class BestFirst:
     """Where to search from (default: the goal alone on the stack)."""
     stopped: StopReason | None = None
     last: Partial | None = None
-    """The complete node of the configuration listed last."""
+    """The complete node listed last (:meth:`completions`)."""
     _heap: list[tuple[float, tuple[int, ...], bool, Partial]] = field(default_factory=list)
     _closed: dict[bytes, tuple[int, ...]] = field(default_factory=dict)
     """The canonical forms of the partial nodes expanded (distinct), each with

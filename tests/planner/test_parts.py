@@ -99,3 +99,16 @@ def test_meeting_groups_and_filing_names_give_one_float(
     met = _grouped(given_parts, len(given_parts))
     assert met == _many(given_parts) == least(given_parts)
     assert _grouped(given_parts, GROUPS) in (met, None)
+
+
+def test_more_groups_than_the_cap_are_found_by_filing_names() -> None:
+    """Past GROUPS groups apart, meeting each part with the groups gives up
+    and least() files the names instead: the same sum. One part then joins
+    the first and the last group (a group is found whole either way)."""
+    parts: list[tuple[Set[Hashable], float]] = [
+        (frozenset({f"n{i}"}), float(i)) for i in range(GROUPS + 4)
+    ]
+    parts.append((frozenset({"n0", f"n{GROUPS + 3}"}), 0.5))
+    assert _grouped(parts, GROUPS) is None
+    assert _grouped(parts, len(parts)) == _many(parts) == least(parts) == groups_by_pairs(parts)
+    assert least(parts) == sum(range(1, GROUPS + 4))  # n0's part counts in the last one's group
