@@ -241,7 +241,7 @@ class Grower:
         media = self.admissible(node)
         if media is None:
             return None
-        return build(node, total, self.grounder.task, self.models, media, derivation)
+        return self.build(Completion(node, total, media, derivation))
 
     def admissible(self, node: Partial) -> tuple[Assignment, ...] | None:
         """Step 4's checks: the media assignment of a complete node, or None
