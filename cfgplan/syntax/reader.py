@@ -95,18 +95,21 @@ def cache_file() -> Path | None:
     return Path(home, "cfgplan", f"parser-{hashlib.sha256(key).hexdigest()[:16]}.lark")
 
 
-def build_parser(cache: Path | None) -> tuple[Lark, ToIR]:
+def build_parser(cache: Path | None, grammar: str | None = None) -> tuple[Lark, ToIR]:
     """A parser, its transformer inside (LALR only: faster than transforming
     a tree afterwards, and no tree is held), with :data:`OPTIONS`. With ``cache``,
     its tables are read from that file, or built and written there; a file
-    that cannot be read (truncated, another Lark's) or written is ignored."""
+    that cannot be read (truncated, another Lark's) or written is ignored.
+    ``grammar``: another grammar's text than :func:`grammar_text` (tests
+    compare grammars; Lark reads a cache only if made from the same text)."""
     transformer = ToIR()
     where: str | bool = False
     if cache is not None:
         with contextlib.suppress(OSError):
             cache.parent.mkdir(parents=True, exist_ok=True)
             where = str(cache)
-    parser = Lark(grammar_text(), **OPTIONS, transformer=transformer, cache=where)
+    parser = Lark(grammar or grammar_text(), **OPTIONS, transformer=transformer, cache=where)
+    transformer.use(parser)
     return parser, transformer
 
 
@@ -168,10 +171,14 @@ def decode(data: bytes, filename: str) -> str:
         ) from None
 
 
-def parse(text: str, filename: str = "<text>") -> SourceFile:
+def parse(
+    text: str, filename: str = "<text>", *, parser: tuple[Lark, ToIR] | None = None
+) -> SourceFile:
     """Parse one file's text into its forms (functionalities, methods, states, goals).
 
-    The text is normalized first (:func:`normalize`); spans count lines in the result."""
+    The text is normalized first (:func:`normalize`); spans count lines in the result.
+    ``parser``: another parser and its transformer (:func:`build_parser`), not
+    the one every read uses (tests compare grammars)."""
     text = normalize(text)
     source = SourceFile(filename, text)
     if not text.strip() or all(
@@ -179,11 +186,11 @@ def parse(text: str, filename: str = "<text>") -> SourceFile:
     ):
         span = Span(file=filename, line=1, column=1, end_line=1, end_column=1)
         raise error("the file is empty: it holds no forms", span)
-    parser, transformer = _parser()
+    lark_parser, transformer = parser or _parser()
     try:
         with _lock, collection_paused():  # one parser, its transformer told which file it reads
             transformer.begin(filename)
-            items = parser.parse(text).children
+            items = lark_parser.parse(text).children
             failed = transformer.failed
     except UnexpectedInput as exc:
         from cfgplan.syntax.unexpected import syntax_error  # for a wrong file only (issue 32)

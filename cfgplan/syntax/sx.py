@@ -7,21 +7,43 @@ their keyword values as :class:`Sx` trees and interpret them in
 
 from __future__ import annotations
 
-from typing import Literal
-
-from lark import Token
+from typing import Literal, NamedTuple, Protocol
 
 from cfgplan.ir.model import SExpr, Span
 
 SxKind = Literal["symbol", "number", "list"]
 
 
-def token_end(tok: Token) -> tuple[int, int]:
+class Located(Protocol):
+    """Where a token was read: a Lark ``Token``, or a :class:`Place`."""
+
+    @property
+    def line(self) -> int | None: ...
+    @property
+    def column(self) -> int | None: ...
+    @property
+    def end_line(self) -> int | None: ...
+    @property
+    def end_column(self) -> int | None: ...
+
+
+class Place(NamedTuple):
+    """Where an atom of a one-line list (the grammar's ``ATOMS`` token) was
+    read: Lark makes no token of its own for it. Lines and columns count
+    from 1 as Lark's do; the end is just past the atom."""
+
+    line: int
+    column: int
+    end_line: int
+    end_column: int
+
+
+def token_end(tok: Located) -> tuple[int, int]:
     """Line and column just past a token (Lark's positions; 0 where it has none)."""
     return tok.end_line or tok.line or 0, tok.end_column or tok.column or 0
 
 
-def token_span(file: str, tok: Token) -> Span:
+def token_span(file: str, tok: Located) -> Span:
     """Where a token stands in ``file``."""
     end_line, end_column = token_end(tok)
     return Span(
@@ -62,7 +84,7 @@ class Sx:
         items: tuple[Sx, ...] = (),
         depth: int = 0,
         *,
-        at: Token | None = None,
+        at: Located | None = None,
         file: str = "<text>",
     ) -> None:
         if span is None and at is None:

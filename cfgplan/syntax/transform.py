@@ -6,21 +6,38 @@ and last tokens (:class:`ToIR`).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple, TypeVar
 
-from lark import Token
+from lark import Lark, Token
 from lark.visitors import Transformer
 
 from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.ir.model import Functionality, Goal, Method, Span, State
 from cfgplan.syntax import forms
-from cfgplan.syntax.sx import Sx, token_end
+from cfgplan.syntax.sx import Place, Sx, SxKind, token_end
 
 T = TypeVar("T")
 
 MAX_NESTING = 64
 """Lists may nest this deep; deeper input is refused (no recursion anywhere)."""
+
+
+ATOM_TERMINALS = ("NUMBER", "SYMBOL")
+"""The terminals an ``ATOMS`` token holds (the grammar's ``_ATOM``)."""
+
+
+def atom_scanner(parser: Lark) -> re.Pattern[str]:
+    """What finds the atoms of an ``ATOMS`` token as Lark's lexer would find
+    them read one by one: the grammar's own :data:`ATOM_TERMINALS`, each a
+    group named after it, tried in the order Lark's lexer tries them (the
+    higher priority first: a ``NUMBER`` before a ``SYMBOL``)."""
+    terminals = sorted(
+        (parser.get_terminal(name) for name in ATOM_TERMINALS),
+        key=lambda t: (-t.priority, -t.pattern.max_width, -len(t.pattern.value), t.name),
+    )
+    return re.compile("|".join(f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in terminals))
 
 
 class GoalSequence(NamedTuple):
@@ -56,10 +73,12 @@ class ToIR(Transformer[Token, Any]):
 
     filename = "<text>"
     failed: CfgplanError | None = None
+    atoms: re.Pattern[str] | None = None
+    """What finds the atoms of an ``ATOMS`` token (:meth:`use`)."""
 
     def __default__(self, data: str, children: list[Any], meta: Any) -> Run:
         """Every rule without a method of its own: ``start`` and the inlined
-        ones (``_expr``, ``_quoted``, ``_form`` and the repetitions
+        ones (``_expr``, ``_quoted`` and the repetitions
         Lark makes of ``(...)*``), whose children the rule above splices
         into its own (Lark reads only their ``children``).
 
@@ -77,7 +96,12 @@ class ToIR(Transformer[Token, Any]):
         rules itself, grammar/cfgplan.lark)."""
         return Run(children)
 
-    _quoted = _form = _expr
+    _quoted = _expr
+
+    def use(self, parser: Lark) -> None:
+        """Read ``ATOMS`` tokens with the terminals of ``parser``, the parser
+        this transformer runs in or whose trees it transforms (:func:`atom_scanner`)."""
+        self.atoms = atom_scanner(parser)
 
     def begin(self, filename: str) -> None:
         self.filename, self.failed = filename, None
@@ -119,7 +143,25 @@ class ToIR(Transformer[Token, Any]):
                 return Sx("symbol", text=str(child), at=child, file=self.filename)
             if kind == "NUMBER":
                 return Sx("number", text=str(child), at=child, file=self.filename)
+            if kind == "ATOMS":
+                return self._atoms(child)
         return child
+
+    def _atoms(self, tok: Token) -> Sx:
+        """An ``ATOMS`` token, a list of atoms on one line, as the node
+        :meth:`list` makes of the same text read token by token: each atom a
+        symbol or number node placed where it stands (a :class:`Place`, no
+        token made), the list's span the token's."""
+        if self.atoms is None:
+            raise RuntimeError("ToIR.use(parser) tells the transformer its parser's terminals")
+        filename, line, column = self.filename, tok.line or 0, tok.column or 0
+        items = []
+        for found in self.atoms.finditer(tok):
+            start, end = found.span()
+            at = Place(line, column + start, line, column + end)
+            kind: SxKind = "number" if found.lastgroup == "NUMBER" else "symbol"
+            items.append(Sx(kind, text=found.group(), at=at, file=filename))
+        return Sx("list", self._span(tok, tok), items=tuple(items), depth=1)  # atoms only
 
     def list(self, children: Sequence[Any]) -> Sx:
         item = self._leaf

@@ -25,6 +25,7 @@ __all__ = ["syntax_error"]
 
 _TERMINAL_NAMES = {
     "LPAR": '"("',
+    "ATOMS": '"("',  # a list of atoms on one line, one token (the grammar): its "("
     "RPAR": '")"',
     "COMMA": '","',
     "QUOTE": "a quote '",
@@ -141,6 +142,9 @@ def _describe_expected(expected: set[str]) -> str:
 
 def _unexpected_token(exc: UnexpectedToken, filename: str, text: str) -> CfgplanError:
     tok: Token = exc.token
+    if tok.type == "ATOMS":  # a one-line list where no list may stand: its "(" is unexpected
+        start, column = tok.start_pos or 0, tok.column or 1
+        tok = Token("LPAR", "(", start, tok.line, column, tok.line, column + 1, start + 1)
     line = tok.line or 1
     column = tok.column or 1
     end_column = (tok.end_column or column + 1) if tok.end_line == tok.line else column + 1
