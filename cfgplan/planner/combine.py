@@ -100,10 +100,15 @@ class Combined:
         self._order = sorted(
             (parts.address[item.label], p) for p, items in enumerate(parts.parts) for item in items
         )
+        self._finisher = self.make(self.grower.given)[0]
+        """Step 4 for the combinations (:meth:`_derived`): a grower of its
+        own, so that what it rejects is not counted again by the plain search
+        handed over to, which meets those derivations again itself."""
 
     @property
     def report(self) -> Report:
-        return self.grower.report
+        """The combinations' rejections; once handed over, the plain search's."""
+        return self.grower.report if self.handed_over else self._finisher.report
 
     def __iter__(self) -> Iterator[Configuration]:
         start = self._start = time.perf_counter()
@@ -164,7 +169,7 @@ class Combined:
         node = replay(self.grower.grounder, self.goal, choices, self._trail)
         if node is None or self.pricer.cost(node) != total:
             raise _Irregular
-        config = self.grower.finish(node, total, self.stats.derivations + 1)
+        config = self._finisher.finish(node, total, self.stats.derivations + 1)
         if config is None:
             self.stats.rejected += 1
             return None

@@ -140,6 +140,20 @@ def test_a_part_meeting_a_configuration_twice_hands_over_to_the_plain_search() -
     assert len(listed) == 3
 
 
+def test_what_the_parts_rejected_before_handing_over_is_not_counted_twice() -> None:
+    """The cycle a1-b1 is rejected among the combinations, then the parts
+    hand over (get-b's twin); the plain search meets it again: it is counted,
+    and reported, once, as by the plain search alone (2 rejected)."""
+    problem = problem_of((CYCLE.format(twin=TWIN), STATE))
+    plain = Run(problem.task, problem.goal_call, 10, options=SearchOptions(components=False))
+    run = Run(problem.task, problem.goal_call, 10)
+    assert len(list(plain)) == len(list(run)) == 3
+    assert isinstance(run.strategy, Combined) and run.strategy.handed_over
+    assert run.stats.rejected == plain.stats.rejected == 2
+    rejected = [dead.describe() for dead in run.strategy.report.rejected]
+    assert rejected == [dead.describe() for dead in plain.strategy.report.rejected]
+
+
 HELPERS = """\
 (make-functionality :name '(base ?r) :out '((ready ?r)))
 (make-functionality :name '(a ?r) :out '((a ?r)))
