@@ -2,7 +2,17 @@
 object (issue 35): a search is given a :class:`SearchOptions`, and tests pass
 one instead of patching module constants. None of them changes what is found
 or its order, only how much work finding it takes (the property tests of
-``tests/planner`` check that with the extreme settings)."""
+``tests/planner`` check that with the extreme settings).
+
+Not here: the sizes of what a task's bounds keep (made once per task and
+shared by every search of it, :func:`cfgplan.planner.plan.parts`), which no
+search could set for itself: how many stacks' counts are kept
+(:data:`cfgplan.planner.occurrences.STACKS`,
+:data:`cfgplan.planner.capacity.STACKS`), and where
+:func:`cfgplan.planner.parts.least` changes its way of meeting parts
+(``WIDE``, ``MOST_WIDE``, ``GROUPS``: the same floats either way, each way
+tested on its own in ``tests/planner/test_parts.py``). Tests read them and
+never patch them."""
 
 from __future__ import annotations
 
