@@ -188,6 +188,9 @@ class Run:
     more: bool | None = field(init=False, default=False)
     """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
     strategy: BestFirst | Combined | Windows = field(init=False)
+    explained: Report | None = field(init=False, default=None)
+    """Why nothing was found, when the bounds cut the dead ends before the
+    search met them (:meth:`_explain`): the report of a search without them."""
 
     def __post_init__(self) -> None:
         ranked = self.limit is not None
@@ -216,7 +219,7 @@ class Run:
 
     @property
     def report(self) -> Report:
-        return self.strategy.report
+        return self.strategy.report if self.explained is None else self.explained
 
     @property
     def stopped(self) -> StopReason | None:
@@ -284,7 +287,7 @@ class Run:
         report = explaining.report
         if explaining.stopped is not None:
             report.unfinished = True
-        self.strategy.grower.report = report
+        self.explained = report
 
 
 def plan(
