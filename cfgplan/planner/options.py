@@ -11,8 +11,10 @@ search could set for itself: how many stacks' counts are kept
 :data:`cfgplan.planner.capacity.STACKS`), and where
 :func:`cfgplan.planner.parts.least` changes its way of meeting parts
 (``WIDE``, ``MOST_WIDE``, ``GROUPS``: the same floats either way, each way
-tested on its own in ``tests/planner/test_parts.py``). Tests read them and
-never patch them."""
+tested on its own in ``tests/planner/test_parts.py``), and when an evaluation
+of the partitioned bound starts from a sibling's
+(:attr:`cfgplan.planner.least.Least.reuse`, ``smallest``: the same floats
+either way). Tests read them and never patch them."""
 
 from __future__ import annotations
 
