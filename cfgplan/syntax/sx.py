@@ -88,7 +88,7 @@ class Sx:
         file: str = "<text>",
     ) -> None:
         if span is None and at is None:
-            raise ValueError("an Sx needs a span or the token it was read from")
+            raise ValueError("an Sx needs a span or where it was read (a token, a Place)")
         self.kind = kind
         self._span = span
         self.text = text

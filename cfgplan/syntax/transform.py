@@ -25,7 +25,9 @@ MAX_NESTING = 64
 
 
 ATOM_TERMINALS = ("NUMBER", "SYMBOL")
-"""The terminals an ``ATOMS`` token holds (the grammar's ``_ATOM``)."""
+"""What an atom of an ``ATOMS`` token is read as: the terminals of the
+grammar's lists of atoms (the token itself matches each as a ``SYMBOL``,
+whose text covers a ``NUMBER``'s)."""
 
 
 def atom_scanner(parser: Lark) -> re.Pattern[str]:
@@ -78,7 +80,7 @@ class ToIR(Transformer[Token, Any]):
 
     def __default__(self, data: str, children: list[Any], meta: Any) -> Run:
         """Every rule without a method of its own: ``start`` and the inlined
-        ones (``_expr``, ``_quoted`` and the repetitions
+        ones (``_expr``, ``_quoted``, ``_form`` and the repetitions
         Lark makes of ``(...)*``), whose children the rule above splices
         into its own (Lark reads only their ``children``).
 
@@ -96,7 +98,7 @@ class ToIR(Transformer[Token, Any]):
         rules itself, grammar/cfgplan.lark)."""
         return Run(children)
 
-    _quoted = _expr
+    _quoted = _form = _expr
 
     def use(self, parser: Lark) -> None:
         """Read ``ATOMS`` tokens with the terminals of ``parser``, the parser

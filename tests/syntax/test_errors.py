@@ -76,6 +76,18 @@ def test_unbalanced_parenthesis_one_too_many() -> None:
     assert d.hint == "there is one ')' too many, or an opening '(' is missing"
 
 
+@pytest.mark.parametrize("value", ["a", "(a b)", "(a\n b)"])
+def test_a_keyword_after_a_goal_names_the_one_thing_expected(value: str) -> None:
+    """A goal holds one value: after it only its ")" may come, whatever the
+    value (a list on one line is one token, grammar/cfgplan.lark)."""
+    text = f"(goal {value} :k)\n"
+    d = reader_error(text)
+    at = text.index(":k")
+    line, column = text.count("\n", 0, at) + 1, at - text.rfind("\n", 0, at)
+    assert_rendered(d, text, line, column, "unexpected ':k'")
+    assert d.message == "unexpected ':k'; expected \")\""
+
+
 def test_missing_close_before_next_form() -> None:
     text = "(make-functionality :name '(camera ?r) :out '((image ?r))\n" + FUNCTIONALITIES
     d = reader_error(text)
