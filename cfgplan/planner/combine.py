@@ -70,10 +70,10 @@ class _Irregular(Exception):
 class Combined:
     """An iterator over configurations, best first, part by part."""
 
-    grower: Grower
-    """The plain search's: for the greedy dive and for handing over."""
-    pricer: Pricer
-    """The plain search's, as :attr:`grower`."""
+    plain: Grower
+    """The plain search's grower: what the parts hand over to, if they must."""
+    plain_pricer: Pricer
+    """The plain search's pricer, as :attr:`plain`."""
     goal: Ground
     parts: Parts
     make: Callable[[frozenset[int]], tuple[Grower, Pricer]]
@@ -100,15 +100,27 @@ class Combined:
         self._order = sorted(
             (parts.address[item.label], p) for p, items in enumerate(parts.parts) for item in items
         )
-        self._finisher = self.make(self.grower.given)[0]
-        """Step 4 for the combinations (:meth:`_derived`): a grower of its
-        own, so that what it rejects is not counted again by the plain search
-        handed over to, which meets those derivations again itself."""
+        self._own = self.make(self.plain.given)
+        """The combinations' grower and pricer: step 4 for each combination
+        (:meth:`_derived`), the greedy dive. Not the plain search's: that one,
+        handed over to, derives everything again from the goal, and would
+        count what the combinations rejected a second time."""
+
+    @property
+    def grower(self) -> Grower:
+        """The grower of the search under way, which its report and counts
+        are in and a greedy dive goes on with: the combinations' own, or,
+        once handed over, the plain search's."""
+        return self.plain if self.handed_over else self._own[0]
+
+    @property
+    def pricer(self) -> Pricer:
+        """The pricer of the search under way, as :attr:`grower`."""
+        return self.plain_pricer if self.handed_over else self._own[1]
 
     @property
     def report(self) -> Report:
-        """The combinations' rejections; once handed over, the plain search's."""
-        return self.grower.report if self.handed_over else self._finisher.report
+        return self.grower.report
 
     def __iter__(self) -> Iterator[Configuration]:
         start = self._start = time.perf_counter()
@@ -169,7 +181,7 @@ class Combined:
         node = replay(self.grower.grounder, self.goal, choices, self._trail)
         if node is None or self.pricer.cost(node) != total:
             raise _Irregular
-        config = self._finisher.finish(node, total, self.stats.derivations + 1)
+        config = self.grower.finish(node, total, self.stats.derivations + 1)
         if config is None:
             self.stats.rejected += 1
             return None
@@ -225,7 +237,7 @@ class Combined:
 
     def _hand_over(self, listed: int) -> Iterator[Configuration]:
         """The plain search, skipping the ``listed`` configurations already listed."""
-        plain = BestFirst(self.grower, self.pricer, self.goal, self.progress)
+        plain = BestFirst(self.plain, self.plain_pricer, self.goal, self.progress)
         self.stats, self.handed_over = plain.stats, True
         for config in plain:
             if listed:

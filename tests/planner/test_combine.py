@@ -140,18 +140,23 @@ def test_a_part_meeting_a_configuration_twice_hands_over_to_the_plain_search() -
     assert len(listed) == 3
 
 
-def test_what_the_parts_rejected_before_handing_over_is_not_counted_twice() -> None:
-    """The cycle a1-b1 is rejected among the combinations, then the parts
-    hand over (get-b's twin); the plain search meets it again: it is counted,
-    and reported, once, as by the plain search alone (2 rejected)."""
-    problem = problem_of((CYCLE.format(twin=TWIN), STATE))
+@pytest.mark.parametrize(("twin", "handed_over", "rejections"), [(TWIN, True, 2), ("", False, 1)])
+def test_what_the_parts_reject_is_counted_and_reported_once(
+    twin: str, handed_over: bool, rejections: int
+) -> None:
+    """The cycle a1-b1 is rejected among the combinations. With get-b's twin
+    the parts then hand over, and the plain search meets it again: it is
+    counted, and reported, once, as by the plain search alone; without the
+    twin the combinations' own report says it."""
+    problem = problem_of((CYCLE.format(twin=twin), STATE))
     plain = Run(problem.task, problem.goal_call, 10, options=SearchOptions(components=False))
     run = Run(problem.task, problem.goal_call, 10)
     assert len(list(plain)) == len(list(run)) == 3
-    assert isinstance(run.strategy, Combined) and run.strategy.handed_over
-    assert run.stats.rejected == plain.stats.rejected == 2
-    rejected = [dead.describe() for dead in run.strategy.report.rejected]
-    assert rejected == [dead.describe() for dead in plain.strategy.report.rejected]
+    assert isinstance(run.strategy, Combined) and run.strategy.handed_over is handed_over
+    assert run.stats.rejected == plain.stats.rejected == rejections
+    rejected = [dead.describe() for dead in run.report.rejected]
+    assert rejected == [dead.describe() for dead in plain.report.rejected]
+    assert len(rejected) == rejections
 
 
 HELPERS = """\
