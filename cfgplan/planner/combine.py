@@ -120,6 +120,8 @@ class Combined:
 
     @property
     def report(self) -> Report:
+        """What the search under way met (:attr:`grower`'s): the combinations'
+        rejections and the dive's dead ends, or the plain search's."""
         return self.grower.report
 
     def __iter__(self) -> Iterator[Configuration]:

@@ -137,7 +137,8 @@ def in_parts(
 ) -> BestFirst | Combined:
     """``search``, or, when its goal has independent parts
     (:func:`divided`; :attr:`SearchOptions.components`), those parts searched
-    apart and combined, with ``search``'s grower for the dive and the hand-over.
+    apart and combined (:class:`~cfgplan.planner.combine.Combined`), handing over
+    to ``search`` if the parts do not combine as assumed.
     Found under the time limit: should it pass, ``search`` is kept, and stops
     at once. Every ranked listing (a run's ``-k``, a sequence's steps) is
     assembled so."""

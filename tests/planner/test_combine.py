@@ -14,6 +14,7 @@ from benchmarks.families import ecology, media_tight
 from cfgplan.planner.combine import Combined
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, divided, growing
+from cfgplan.planner.report import Condition
 from cfgplan.planner.search import BestFirst
 from tests.planner.generated import generated
 from tests.planner.oracle import depth_first
@@ -157,6 +158,20 @@ def test_what_the_parts_reject_is_counted_and_reported_once(
     rejected = [dead.describe() for dead in run.report.rejected]
     assert rejected == [dead.describe() for dead in plain.report.rejected]
     assert len(rejected) == rejections
+
+
+def test_the_dive_of_parts_stopped_at_once_reports_what_it_met() -> None:
+    """Stopped before anything was proven, the parts' run dives greedily: it
+    finds a configuration, and the cycle it met on the way (a1 with b1,
+    rejected by step 4) is in the run's report."""
+    problem = problem_of((CYCLE.format(twin=""), STATE))
+    run = Run(problem.task, problem.goal_call, 10, time_limit=0)
+    run._divide()  # the parts found now: under the limit of 0 s they would not be
+    assert isinstance(run.strategy, Combined)
+    found = list(run)
+    assert len(found) == 1 and not found[0].proven
+    assert not run.strategy.handed_over
+    assert [dead.condition for dead in run.report.rejected] == [Condition.CYCLE]
 
 
 HELPERS = """\

@@ -88,6 +88,17 @@ def test_a_keyword_after_a_goal_names_the_one_thing_expected(value: str) -> None
     assert d.message == "unexpected ':k'; expected \")\""
 
 
+@pytest.mark.parametrize("value", ["a", "(a b)"])
+def test_a_keyword_among_facts_names_what_may_come(value: str) -> None:
+    """In a state another fact, or its ")", may follow a fact (no quote: facts
+    are not quoted)."""
+    text = f"(state {value} :k)\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, text.index(":k") + 1, "unexpected ':k'")
+    expected = '"(", ")", ",", a name followed by (, a number or a symbol'
+    assert d.message == f"unexpected ':k'; expected {expected}"
+
+
 def test_missing_close_before_next_form() -> None:
     text = "(make-functionality :name '(camera ?r) :out '((image ?r))\n" + FUNCTIONALITIES
     d = reader_error(text)
