@@ -8,7 +8,10 @@ import os
 import re
 from pathlib import Path
 
-from cfgplan.configuration.model import Configuration
+from cfgplan.backends.divide import Individual
+from cfgplan.backends.wiring import RobotPart, wire
+from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
+from cfgplan.ir.model import Atom, Domain, Functionality
 from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
@@ -20,6 +23,24 @@ EXAMPLE_IMPL = ROOT / "examples" / "cross-door" / "impl.py"
 
 UPDATE = os.environ.get("CFGPLAN_UPDATE_GOLDEN", "") not in ("", "0")
 """CFGPLAN_UPDATE_GOLDEN=1 pytest ... rewrites the golden files (check them by eye)."""
+
+MEDIA_STATE = "state-4.6-media.lisp"
+BANDWIDTH_DOMAIN = "domain-bandwidth.lisp"
+
+
+def bundled_pairs() -> list[tuple[Path, Path]]:
+    """Every domain with every state of its folder that has a goal; the
+    bandwidth domain goes with the media state, domain.lisp with the others."""
+    pairs: list[tuple[Path, Path]] = []
+    for domain in sorted(DOMAINS.glob("*/domain*.lisp")):
+        for state in sorted(domain.parent.glob("state-*.lisp")):
+            if (domain.name == BANDWIDTH_DOMAIN) != (state.name == MEDIA_STATE):
+                continue
+            if "(goal" not in state.read_text(encoding="utf-8"):
+                continue
+            pairs.append((domain, state))
+    return pairs
+
 
 CROSS = ("cross-door/domain.lisp", "cross-door/state-6.2.2-step1.lisp")
 CARRY = ("carry-bar/domain.lisp", "carry-bar/state-6.3.2.lisp")
@@ -82,3 +103,31 @@ def thesis_labels(config: Configuration) -> dict[str, str]:
 def relabel(text: str, labels: dict[str, str]) -> str:
     """Replace the thesis's labels (F109 ...) in ``text`` by ours."""
     return re.sub(r"\bF\d+\b", lambda m: labels[m.group(0)], text)
+
+
+def one_robot_part(channels: list[tuple[str, str, tuple[str, ...]]]) -> RobotPart:
+    """A robot part built by hand (no planner), for what no bundled domain has.
+
+    Robot R: two producers P1, P2 of (x R) and a consumer C of (x R), (y R)."""
+    domain = Domain(
+        functionalities=(
+            Functionality(
+                name=Atom(predicate="p", args=("?r",)), outputs=(Atom(predicate="x", args=("?r",)),)
+            ),
+            Functionality(
+                name=Atom(predicate="c", args=("?r", "?o")),
+                inputs=(Atom(predicate="x", args=("?r",)), Atom(predicate="y", args=("?r",))),
+            ),
+        )
+    )
+    fs = (
+        FunctionalityInstance(label="F1", name="p", args=("R",)),
+        FunctionalityInstance(label="F2", name="p", args=("R",)),
+        FunctionalityInstance(label="F3", name="c", args=("R", "Obj")),
+    )
+    chs = tuple(
+        Channel(kind="local", source=s, target=t, source_robot="R", target_robot="R", data=d)
+        for s, t, d in channels
+    )
+    ind = Individual("R", fs, chs)
+    return RobotPart(ind, wire(ind, domain))

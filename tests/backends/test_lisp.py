@@ -6,16 +6,14 @@ import re
 
 import pytest
 
-from cfgplan.backends.divide import Individual
 from cfgplan.backends.lisp import to_lisp
-from cfgplan.backends.wiring import RobotPart, deploy, wire
-from cfgplan.configuration.model import Channel, FunctionalityInstance
+from cfgplan.backends.wiring import deploy
 from cfgplan.diagnostics import CfgplanError
-from cfgplan.ir.model import Atom, Domain, Functionality
 from tests.backends.support import (
     carry_bar_33,
     check_golden,
     cross_door_44,
+    one_robot_part,
     relabel,
     thesis_labels,
 )
@@ -89,35 +87,9 @@ def test_carry_bar_33_golden(robot: str) -> None:
         )
 
 
-def _part(channels: list[tuple[str, str, tuple[str, ...]]]) -> RobotPart:
-    """Robot R: two producers P1, P2 of (x R) and a consumer C of (x R), (y R)."""
-    domain = Domain(
-        functionalities=(
-            Functionality(
-                name=Atom(predicate="p", args=("?r",)), outputs=(Atom(predicate="x", args=("?r",)),)
-            ),
-            Functionality(
-                name=Atom(predicate="c", args=("?r", "?o")),
-                inputs=(Atom(predicate="x", args=("?r",)), Atom(predicate="y", args=("?r",))),
-            ),
-        )
-    )
-    fs = (
-        FunctionalityInstance(label="F1", name="p", args=("R",)),
-        FunctionalityInstance(label="F2", name="p", args=("R",)),
-        FunctionalityInstance(label="F3", name="c", args=("R", "Obj")),
-    )
-    chs = tuple(
-        Channel(kind="local", source=s, target=t, source_robot="R", target_robot="R", data=d)
-        for s, t, d in channels
-    )
-    ind = Individual("R", fs, chs)
-    return RobotPart(ind, wire(ind, domain))
-
-
 def test_several_channels_into_one_input_and_an_input_without_one() -> None:
     """Silent in the thesis: (LIST CH-a CH-b) for several channels, NIL for none."""
-    part = _part([("F1", "F3", ("x", "R")), ("F2", "F3", ("x", "R"))])
+    part = one_robot_part([("F1", "F3", ("x", "R")), ("F2", "F3", ("x", "R"))])
     text = to_lisp(part)
     assert "(c 'Obj (LIST CH-1 CH-2) NIL)" in text
     assert "(p (LIST CH-1))" in text and "(p (LIST CH-2))" in text
@@ -125,6 +97,6 @@ def test_several_channels_into_one_input_and_an_input_without_one() -> None:
 
 def test_a_channel_the_functionality_has_no_input_for_is_an_error() -> None:
     with pytest.raises(CfgplanError, match=r"carries x\(R\), but F2: p\(R\) has no such input"):
-        _part([("F1", "F2", ("x", "R"))])
+        one_robot_part([("F1", "F2", ("x", "R"))])
     with pytest.raises(CfgplanError, match=r"carries z\(R\), but F1: p\(R\) has no such output"):
-        _part([("F1", "F3", ("z", "R"))])
+        one_robot_part([("F1", "F3", ("z", "R"))])

@@ -18,26 +18,7 @@ from cfgplan.configuration.model import Assignment, Channel, Configuration, Func
 from cfgplan.ir.model import Atom, Eval, Negation, State
 from cfgplan.planner import plan
 from cfgplan.problem import Problem, load
-
-ROOT = Path(__file__).resolve().parents[2]
-DOMAINS = ROOT / "domains"
-MEDIA_STATE = "state-4.6-media.lisp"
-BANDWIDTH_DOMAIN = "domain-bandwidth.lisp"
-
-
-def bundled_pairs() -> list[tuple[Path, Path]]:
-    """Every domain with every state of its folder that has a goal; the
-    bandwidth domain goes with the media state, domain.lisp with the others."""
-    pairs: list[tuple[Path, Path]] = []
-    for domain in sorted(DOMAINS.glob("*/domain*.lisp")):
-        for state in sorted(domain.parent.glob("state-*.lisp")):
-            if (domain.name == BANDWIDTH_DOMAIN) != (state.name == MEDIA_STATE):
-                continue
-            if "(goal" not in state.read_text(encoding="utf-8"):
-                continue
-            pairs.append((domain, state))
-    return pairs
-
+from tests.backends.support import BANDWIDTH_DOMAIN, DOMAINS, MEDIA_STATE, bundled_pairs
 
 PAIRS = bundled_pairs()
 
