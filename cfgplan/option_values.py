@@ -28,8 +28,24 @@ def whole(low: int) -> Callable[[str], int]:
     return parse
 
 
+def kept(text: str, value: float) -> bool:
+    """Whether ``value``, ``float(text)``, is the number ``text`` writes: a float
+    keeps 15 to 17 significant digits, and a number written with more that it
+    cannot hold would be silently rounded (``99999999999999999999`` is
+    ``1e+20``). ``0.1`` is kept: it reads back as ``0.1``."""
+    from decimal import Decimal  # loaded by pydantic on the planner's side; light anyway
+
+    return Decimal(text) == Decimal(repr(value))
+
+
+def rounding(text: str, value: float) -> str:
+    """The message for a number that :func:`kept` says would be rounded."""
+    return f"{text} has more digits than a number keeps: it would be read as {value!r}"
+
+
 def number(low: float, *, above: bool = False) -> Callable[[str], float]:
-    """A parser of finite numbers of at least ``low`` (``above``: more than ``low``)."""
+    """A parser of finite numbers of at least ``low`` (``above``: more than
+    ``low``), kept as written (:func:`kept`)."""
 
     def parse(text: str) -> float:
         try:
@@ -38,6 +54,8 @@ def number(low: float, *, above: bool = False) -> Callable[[str], float]:
             raise ValueError(f"{text!r} is not a number") from None
         if not math.isfinite(value):
             raise ValueError(f"{text}: must be a finite number")
+        if isinstance(text, str) and not kept(text.strip(), value):  # (typer: a default)
+            raise ValueError(rounding(text, value))
         if value < low or (above and value == low):
             raise ValueError(f"{text}: must be {'more than' if above else 'at least'} {low:g}")
         return value

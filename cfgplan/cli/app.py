@@ -61,7 +61,8 @@ def _sources(diagnostics: list[Diagnostic]) -> dict[str, str]:
     for d in diagnostics:
         if d.span is not None and d.span.file not in sources:
             with contextlib.suppress(CfgplanError):
-                sources[d.span.file] = decode(read_source(d.span.file), d.span.file)
+                data = read_source(d.span.file)
+                sources[d.span.file] = decode(data, d.span.file, quoting=True)
     return sources
 
 

@@ -16,7 +16,8 @@ import math
 from pydantic import BaseModel, ConfigDict
 
 from cfgplan.diagnostics import error
-from cfgplan.ir.model import Quantity
+from cfgplan.ir.model import MAX_WEIGHT, Weight
+from cfgplan.option_values import kept, rounding
 
 
 class Weights(BaseModel):
@@ -24,12 +25,12 @@ class Weights(BaseModel):
 
     model_config = ConfigDict(frozen=True)
 
-    robot: Quantity = 10
-    global_: Quantity = 3
-    local: Quantity = 1
-    functionality: Quantity = 1
-    device: Quantity = 10
-    reliability: Quantity = 0
+    robot: Weight = 10
+    global_: Weight = 3
+    local: Weight = 1
+    functionality: Weight = 1
+    device: Weight = 10
+    reliability: Weight = 0
 
     def __str__(self) -> str:
         return (
@@ -39,10 +40,6 @@ class Weights(BaseModel):
             + (f",reliability={fmt(self.reliability)}" if self.reliability else "")
         )
 
-
-MAX_WEIGHT = 1e15
-"""Larger weights are refused: costs stay finite (no ``inf`` or ``nan`` in the
-output, which strict JSON parsers reject) and exact integers for integer weights."""
 
 _NAMES = {
     "robot": "robot",
@@ -74,6 +71,8 @@ def parse_weights(text: str) -> Weights:
             )
         if number < 0:
             raise error(f"bad weight {part!r}: weights are not negative")
+        if not kept(value.strip(), number):
+            raise error(f"bad weight {part!r}: {rounding(value.strip(), number)}")
         values[_NAMES[key]] = number
     return Weights(**values)
 

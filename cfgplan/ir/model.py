@@ -18,7 +18,17 @@ from typing_extensions import TypeAliasType
 from cfgplan.notation import atom_text, sexpr_text
 
 Quantity = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-"""A bandwidth, cost, frequency or capacity: finite and not negative."""
+"""A bandwidth, frequency or capacity: finite and not negative."""
+
+MAX_WEIGHT = 1e15
+"""The largest weight of the cost (``--weights``) or ``:cost``: larger ones are
+refused, so that costs stay finite (no ``inf`` or ``nan`` in the output, which
+strict JSON parsers reject) and, for whole weights, whole numbers (a float holds
+every whole number up to 2^53, about 9e15)."""
+
+Weight = Annotated[float, Field(ge=0, le=MAX_WEIGHT, allow_inf_nan=False)]
+"""A weight of the cost sum or a functionality's ``:cost``: a :data:`Quantity` of
+at most :data:`MAX_WEIGHT`."""
 
 Term = str
 """A variable (``?r``) or a constant (``Pippi``)."""
@@ -140,7 +150,7 @@ class Functionality(Node):
     outputs: tuple[Atom, ...] = ()
     precond: tuple[Condition, ...] = ()
     postcond: tuple[Effect, ...] = ()
-    cost: Quantity | None = None
+    cost: Weight | None = None
     freq: Quantity | None = None
     reliability: Quantity | None = None  # the chance it works, in (0, 1] (7.2; beyond the thesis)
 

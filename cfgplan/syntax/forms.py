@@ -14,6 +14,7 @@ from typing import Any, NamedTuple, TypeVar
 
 from cfgplan.diagnostics import error
 from cfgplan.ir.model import (
+    MAX_WEIGHT,
     Atom,
     BodyItem,
     ChannelSpec,
@@ -29,6 +30,7 @@ from cfgplan.ir.model import (
     Span,
     State,
 )
+from cfgplan.option_values import kept, rounding
 from cfgplan.syntax.sx import Sx
 
 FUNCTIONALITY_KEYWORDS = (
@@ -131,7 +133,7 @@ def quantity(text: str) -> float | None:
 _QUANTITY = re.compile(r"\+?\d{1,300}(\.\d{1,300})?")
 
 
-def _number(node: Sx, what: str) -> float:
+def _number(node: Sx, what: str, most: float | None = None) -> float:
     value = quantity(node.text) if node.kind == "number" else None
     if value is None:
         raise error(
@@ -139,6 +141,20 @@ def _number(node: Sx, what: str) -> float:
             node.span,
             "write digits with an optional fraction; quantities are not negative",
         )
+    if most is not None and value > most:
+        raise error(
+            f"{what} is at most {most:g}, found {node}",
+            node.span,
+            "weights and :cost are at most 1e+15, so that a configuration's cost stays exact",
+        )
+    return _kept(node.text, value, node.span)
+
+
+def _kept(text: str, value: float, span: Span | None) -> float:
+    """``value`` if it is the number ``text`` writes, else an error: cfgplan's
+    numbers are floats, and what the user wrote is never silently rounded."""
+    if not kept(text, value):
+        raise error(rounding(text, value), span, "write at most 15 significant digits")
     return value
 
 
@@ -156,7 +172,7 @@ def _reliability(node: Sx) -> float:
             node.span,
             "a reliability is the chance it works: a number above 0 and at most 1, e.g. 0.95",
         )
-    return value
+    return _kept(node.text, value, node.span)
 
 
 def condition(node: Sx) -> Condition:
@@ -278,7 +294,7 @@ def functionality(span: Span, children: Sequence[Any]) -> Functionality:
     """``(make-functionality :name ... :in ... :out ... :precond ... :postcond ...)``."""
     form = "make-functionality"
     opts = _options(form, span, children, FUNCTIONALITY_KEYWORDS)
-    cost = _number(opts[":cost"].value, ":cost") if ":cost" in opts else None
+    cost = _number(opts[":cost"].value, ":cost", MAX_WEIGHT) if ":cost" in opts else None
     freq = _number(opts[":freq"].value, ":freq") if ":freq" in opts else None
     reliability = _reliability(opts[":reliability"].value) if ":reliability" in opts else None
     return Functionality(
@@ -325,6 +341,7 @@ def _medium(fact: Atom) -> Medium:
             fact.span,
             "e.g. (medium socket Pippi Emil 200)",
         )
+    _kept(capacity, cap, fact.span)
     reliability = probability(rest[0]) if rest else None
     if rest and reliability is None:
         raise error(
@@ -332,6 +349,8 @@ def _medium(fact: Atom) -> Medium:
             fact.span,
             "e.g. (medium wifi Pippi Emil 200 0.9)",
         )
+    if rest and reliability is not None:
+        _kept(rest[0], reliability, fact.span)
     return Medium(
         type=mtype,
         sender=sender,

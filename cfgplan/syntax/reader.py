@@ -151,10 +151,13 @@ def normalize(text: str) -> str:
     return text.removeprefix(BOM).replace("\r\n", "\n").replace("\r", "\n")
 
 
-def decode(data: bytes, filename: str) -> str:
+def decode(data: bytes, filename: str, *, quoting: bool = False) -> str:
     """Decode UTF-8 source (see :func:`normalize`); a bad byte is reported at
-    its line and column."""
+    its line and column. ``quoting``: the text to quote in a message about the
+    file, a bad byte shown as U+FFFD (one character, so columns still match)."""
     data = data.removeprefix(BOM.encode("utf-8")).replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    if quoting:
+        return data.decode("utf-8", errors="replace")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:

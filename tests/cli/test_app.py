@@ -144,6 +144,14 @@ def test_usage_and_help_speak_cfgplan(cfgplan: Run, command: str) -> None:
         (["plan", *DOCKING, "--time-limit", "-1"], "-1: must be at least 0"),
         (["plan", *DOCKING, "--time-limit", "soon"], "'soon' is not a number"),
         (["plan", *DOCKING, "--weights", "robot=x"], "bad weight 'robot=x'"),
+        (
+            ["plan", *DOCKING, "--weights", "local=1.00000000000000000001"],
+            "1.00000000000000000001 has more digits than a number keeps: it would be read as 1.0",
+        ),
+        (
+            ["run", *DOCKING, "--impl", "x", "--rate", "10.000000000000000000001"],
+            "it would be read as 10.0",
+        ),
         (["plan", *DOCKING, "--rank", "2", "-k", "3"], "-k and --all list several"),
         (["render", *DOCKING, "-o", "x.dot", "--rank", "first"], "'first' is not a whole"),
         (["emit", *DOCKING, "-o", "out", "--lang", "c"], "'c' is not a language: choose lisp"),

@@ -134,6 +134,22 @@ def test_bad_goal_is_input_error_with_caret(cfgplan: Run) -> None:
     assert "Traceback" not in out.stderr
 
 
+def test_a_latin_1_byte_is_shown_where_it_stands(cfgplan: Run, tmp_path: Path) -> None:
+    """The message quotes the line, the bad byte shown as U+FFFD, with a caret
+    under it (a newcomer's Latin-1 state had the place but no line and no caret)."""
+    state = tmp_path / "latin1.lisp"
+    state.write_bytes(
+        b"(state (robot Pippi)\r\n  (in Pippi Caf\xe9))\n(goal (do-cross-door Pippi Door1))\n"
+    )
+    out = cfgplan("plan", CROSS[0], str(state))
+    assert out.returncode == 1
+    assert out.stderr.splitlines()[:3] == [
+        f"{state}:2:16: error: invalid UTF-8 byte 0xe9",
+        "    2 |   (in Pippi Caf\ufffd))",
+        "      |                ^",
+    ]
+
+
 def test_missing_file_is_input_error(cfgplan: Run) -> None:
     out = cfgplan("plan", "nope.lisp", CROSS[1])
     assert out.returncode == 1

@@ -161,6 +161,58 @@ def test_keyword_in_wrong_case() -> None:
     assert d.hint == "keywords are case-sensitive: write :name"
 
 
+@pytest.mark.parametrize(
+    ("value", "read_as"),
+    [
+        ("99999999999999999999999999999999", "1e+32"),  # a newcomer's: the cost came out wrong
+        ("12345678901234567", "1.2345678901234568e+16"),
+        ("0.99999999999999999999", "1.0"),
+    ],
+)
+def test_a_number_is_never_silently_rounded(value: str, read_as: str) -> None:
+    """cfgplan's quantities are floats: a number written with more digits than a
+    float keeps is refused where it stands, not rounded into another."""
+    keywords = [":freq", ":reliability"] if float(value) <= 1 else [":freq"]
+    for keyword in keywords:
+        text = f"(make-functionality :name '(camera ?r)\n  {keyword} {value})\n"
+        d = reader_error(text)
+        assert_rendered(
+            d, text, 2, len(keyword) + 4, f"{value} has more digits than a number keeps"
+        )
+        assert d.message.endswith(f"it would be read as {read_as}")
+        assert d.hint == "write at most 15 significant digits"
+
+
+@pytest.mark.parametrize("value", ["0.1", "1000000000000000", "100000000000000000000", "007.50"])
+def test_numbers_a_float_keeps_are_read(value: str) -> None:
+    """0.1 reads back as 0.1, and 1e20 is a float exactly: both kept."""
+    (form,) = parse(f"(make-functionality :name '(camera ?r) :freq {value})\n").functionalities
+    assert form.freq == float(value)
+
+
+def test_a_cost_is_at_most_the_largest_weight() -> None:
+    """A :cost replaces a weight (thesis 3.2), and weights are at most 1e15 so
+    that a configuration's cost stays exact: 1e15 is read, more is refused."""
+    (form,) = parse(
+        "(make-functionality :name '(camera ?r) :cost 1000000000000000)\n"
+    ).functionalities
+    assert form.cost == 1e15
+    text = "(make-functionality :name '(camera ?r) :cost 1000000000000001)\n"
+    d = reader_error(text)
+    assert_rendered(d, text, 1, 46, ":cost is at most 1e+15, found 1000000000000001")
+
+
+def test_a_mediums_numbers_are_never_silently_rounded() -> None:
+    for fact, read_as in [
+        ("(medium wifi Pippi Emil 200.00000000000000000001)", "200.0"),
+        ("(medium wifi Pippi Emil 200 0.90000000000000000001)", "0.9"),
+    ]:
+        text = f"(state (robot Pippi) (robot Emil)\n  {fact})\n"
+        d = reader_error(text)
+        assert_rendered(d, text, 2, 3, "has more digits than a number keeps")
+        assert d.message.endswith(f"it would be read as {read_as}")
+
+
 def test_state_fact_that_is_not_an_atom() -> None:
     text = "(state (robot Pippi)\n       Pippi)\n"
     d = reader_error(text)
