@@ -25,6 +25,7 @@ from cfgplan.cli.options import (
     RankOpt,
     StateArg,
     choose,
+    injections,
     load_problem,
     number_of,
     parsed,
@@ -35,7 +36,6 @@ from cfgplan.configuration.cost import parse_weights
 from cfgplan.diagnostics import run_error
 from cfgplan.live.address import parse_address
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.faults import parse_injection
 from cfgplan.runtime.options import (
     BUDGET,
     CYCLES,
@@ -309,9 +309,8 @@ def launch(
         usage_error(f"goes to the coordinator, {lead}, which --robot leaves out", led[0])
     if led:
         extra[lead] += led
-    for text in inject or ():
-        aimed = parse_injection(text).robot
-        target = aimed if aimed in problem.task.agents else lead
+    for text, injection in zip(inject or (), injections(inject, problem), strict=True):
+        target = injection.robot or lead  # a state update: the coordinator plans
         if target not in extra:
             usage_error(f"aims at {target}, which --robot leaves out", "--inject")
         extra[target] += ["--inject", text]

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 
-from cfgplan.cli.app import EXIT_NONE, ONE_COMMAND, remember_source, report, say
+from cfgplan.cli.app import EXIT_NONE, ONE_COMMAND, remember_source, report, say, usage_error
 from cfgplan.configuration.cost import Weights, parse_weights
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic
@@ -32,6 +32,7 @@ from cfgplan.syntax.reader import collection_paused
 
 if TYPE_CHECKING:
     from cfgplan.planner.report import Report
+    from cfgplan.runtime.faults import Injection
 
 YOUNG = 50_000
 """New objects between two young collections of the cycle collector in a
@@ -55,6 +56,7 @@ __all__ = [
     "completing",
     "count_of",
     "errors_as_json",
+    "injections",
     "load_problem",
     "no_rank",
     "number_of",
@@ -198,6 +200,24 @@ def load_problem(
 
 _AS_JSON: ContextVar[bool] = ContextVar("errors_as_json", default=False)
 """Whether the command prints its errors on stdout as JSON (:func:`errors_as_json`)."""
+
+
+def injections(texts: Sequence[str] | None, problem: Problem) -> tuple[Injection, ...]:
+    """The ``--inject`` faults, each aimed at a robot or device of the state
+    and, for an instance, at a functionality of the domain with its arguments
+    (:func:`cfgplan.runtime.faults.misaimed`); else a usage error (exit 2) with
+    a "did you mean", as a typo would make the fault a silent no-op."""
+    from cfgplan.runtime.faults import misaimed, parse_injection
+
+    arities = {f.name.predicate: f.name.arity for f in problem.domain.functionalities}
+    out = []
+    for text in texts or ():
+        injection = parse_injection(text)
+        wrong = misaimed(injection, problem.task.agents, arities)
+        if wrong is not None:
+            usage_error(wrong.message + (f" ({wrong.hint})" if wrong.hint else ""), "--inject")
+        out.append(injection)
+    return tuple(out)
 
 
 def print_errors(diagnostics: Sequence[Diagnostic]) -> None:

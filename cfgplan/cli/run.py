@@ -36,6 +36,7 @@ from cfgplan.cli.options import (
     choice_of,
     choose,
     completing,
+    injections,
     load_problem,
     number_of,
     parsed,
@@ -45,7 +46,6 @@ from cfgplan.diagnostics import run_error
 from cfgplan.live.address import Address, parse_address
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
-from cfgplan.runtime.faults import parse_injection
 from cfgplan.runtime.main import network_options, open_transport
 from cfgplan.runtime.monitor import HOLD
 from cfgplan.runtime.options import (
@@ -262,7 +262,7 @@ def run(
         force=force,
         verbose=verbose,
     )
-    settings = Settings(tuple(parse_injection(t) for t in inject or ()), reconfigure, hold, margin)
+    settings = Settings(injections(inject, problem), reconfigure, hold, margin)
     opened: Transport | None = None
     bound = None  # --ros2-map's TopicBindings
     written: TraceFile | None = None

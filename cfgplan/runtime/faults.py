@@ -11,7 +11,9 @@
   (6.2.2: "she signals that the task is accomplished"): the configuration's
   postconditions become true and it is played out.
 * :func:`parse_injection` — scripted faults for tests and demos
-  (``cfgplan run --inject``); :mod:`cfgplan.runtime.inject` applies them.
+  (``cfgplan run --inject``); :mod:`cfgplan.runtime.inject` applies them;
+  :func:`misaimed` says when one aims at no robot or functionality of the
+  society (a typo would make a fault test a silent no-op).
 
 Injection syntax (one fault per ``--inject``)::
 
@@ -31,6 +33,7 @@ from __future__ import annotations
 
 import re
 import traceback
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from typing import Literal
 
@@ -45,6 +48,7 @@ __all__ = [
     "ResourceFailure",
     "failed",
     "fault",
+    "misaimed",
     "parse_injection",
     "term_text",
     "where",
@@ -220,3 +224,47 @@ def _when(text: str, cycle: str | None, seconds: str | None) -> tuple[int | None
             f"--inject {text!r}: the time must be seconds such as 2.5s, not {seconds!r}s"
         )
     return None, value
+
+
+def misaimed(
+    injection: Injection,
+    agents: Collection[str],
+    functionalities: Mapping[str, int] | None = None,
+) -> RunError | None:
+    """Why ``injection`` aims at nothing of the society, or ``None`` when it
+    aims well: its robot (a ``kill``'s or ``recover``'s, an instance's first
+    argument) must be one of ``agents``, the society's robots and devices; an
+    instance's name, when ``functionalities`` (name -> number of arguments) are
+    known, one of them with as many arguments. A state update (``assert``,
+    ``retract``) may name any fact."""
+    if injection.on_facts:
+        return None
+    text = f"--inject {injection.text!r}"
+    robot = injection.robot or ""
+    if robot not in agents:
+        return RunError(
+            f"{text}: no robot {robot} in this society",
+            hint=_near(robot, agents, "its robots"),
+        )
+    if injection.on_robot or functionalities is None:
+        return None
+    name, *args = injection.target
+    if name not in functionalities:
+        return RunError(
+            f"{text}: no functionality {name} in the domain",
+            hint=_near(name, functionalities, "its functionalities"),
+        )
+    if functionalities[name] != len(args):
+        return RunError(
+            f"{text}: {name} takes {functionalities[name]} argument(s), not {len(args)}",
+            hint="its robot first, as in a configuration: compass(Emil)",
+        )
+    return None
+
+
+def _near(name: str, known: Collection[str], what: str) -> str:
+    """``did you mean Emil?``, else the names known (a robot loads this only
+    for an injection that aims at nothing)."""
+    from cfgplan.diagnostics import did_you_mean
+
+    return did_you_mean(name, known) or f"{what}: {', '.join(known)}"

@@ -27,7 +27,7 @@ from typing import Any
 
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.executor import Configure, Robot
-from cfgplan.runtime.faults import Injection, parse_injection
+from cfgplan.runtime.faults import Injection, misaimed, parse_injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks, RunOptions, execute
 from cfgplan.runtime.member import Member, Membership
@@ -254,11 +254,17 @@ def society_main(
     """``python run_all.py``: run every robot in this process."""
     names = ", ".join(name for name, _ in programs)
     description = f"Run {names} in one process (cfgplan, thesis 5.3)."
-    args = parser_of(description, network=False).parse_args(argv)
+    parser = parser_of(description, network=False)
+    args = parser.parse_args(argv)
+    injections = [parse_injection(text) for text in args.inject]
+    for injection in injections:  # every robot is here: one aimed elsewhere is a typo
+        wrong = misaimed(injection, [name for name, _ in programs])
+        if wrong is not None:
+            parser.error(wrong.message + (f" ({wrong.hint})" if wrong.hint else ""))
     try:
         registry = Registry.load(args.impl)
         running = assemble(programs, registry)
-        injector = Injector([parse_injection(text) for text in args.inject], running)
+        injector = Injector(injections, running)
         hooks = Scripted(injector) if injector.pending else None
         return execute(
             running,

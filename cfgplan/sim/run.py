@@ -43,7 +43,7 @@ from cfgplan.planner.sequence import SequenceSearch
 from cfgplan.problem import Problem, load
 from cfgplan.reconfigure.local import Adaptive, adapt
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.faults import parse_injection
+from cfgplan.runtime.faults import misaimed, parse_injection
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import society
 from cfgplan.sim.onboard import simulating
@@ -187,12 +187,15 @@ def _against_world(loaded: Loaded, problem: Problem) -> list[Diagnostic]:
                 "rooms",
             )
         )
+    arities = {f.name.predicate: f.name.arity for f in problem.domain.functionalities}
     for i, text in enumerate(s.faults):
         try:
-            parse_injection(text)
+            wrong = misaimed(parse_injection(text), problem.task.agents, arities)
         except RunError as exc:
-            message = f"faults[{i}]: " + exc.message.removeprefix("--inject ")
-            out.append(Diagnostic("error", message, loaded.where("faults", i), exc.hint))
+            wrong = exc
+        if wrong is not None:
+            message = f"faults[{i}]: " + wrong.message.removeprefix("--inject ")
+            out.append(Diagnostic("error", message, loaded.where("faults", i), wrong.hint))
     return out
 
 

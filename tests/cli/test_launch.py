@@ -155,6 +155,9 @@ def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignor
     assert "Traceback" not in late.stderr
     aimed = cfgplan(*base, *shown, "--inject", "fail compass(Emil) at cycle 9")
     assert aimed.returncode == 2 and "aims at Emil" in aimed.stderr
+    typo = cfgplan(*base, *shown, "--inject", "kill Emli at cycle 9")
+    assert typo.returncode == 2 and "no robot Emli in this society" in typo.stderr
+    assert "did you mean Emil?" in typo.stderr and not typo.stdout
 
 
 def test_print_commands_needs_every_host(cfgplan) -> None:  # type: ignore[no-untyped-def]

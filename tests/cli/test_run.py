@@ -249,3 +249,21 @@ def test_max_value_bytes_is_a_run_option() -> None:
     assert "over the limit of 10 bytes (--max-value-bytes); not sent" in result.output
     bad = CliRunner().invoke(app, ["run", *ARGS, *FAST, "--max-value-bytes", "-1"])
     assert bad.exit_code == 2 and "Traceback" not in bad.output
+
+
+@pytest.mark.parametrize(
+    ("fault", "says"),
+    [
+        ("kill Emli at cycle 3", "no robot Emli in this society (did you mean Emil?)"),
+        ("fail compass(Nobody) at cycle 3", "no robot Nobody in this society"),
+        ("fail gizmo(Emil) at cycle 3", "no functionality gizmo in the domain"),
+    ],
+)
+def test_a_fault_aimed_at_nothing_is_a_usage_error(fault: str, says: str) -> None:
+    """A newcomer's ``--inject 'kill Emli at cycle 3'`` ran 30 cycles, exit 0,
+    with no console line and no ``inject`` event: the fault test tested nothing."""
+    args = [str(DOMAINS / CROSS[0]), str(DOMAINS / "cross-door/state-6.2.2-step2.lisp")]
+    args += ["--impl", str(EXAMPLE_IMPL), "--cycles", "3", "--inject", fault]
+    result = CliRunner().invoke(app, ["run", *args])
+    assert result.exit_code == 2, result.output
+    assert says in " ".join(result.output.split())

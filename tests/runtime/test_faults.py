@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.faults import Injection, parse_injection, term_text
+from cfgplan.runtime.faults import Injection, misaimed, parse_injection, term_text
 
 
 @pytest.mark.parametrize(
@@ -71,3 +71,57 @@ def test_where_and_when_an_injection_applies() -> None:
     assert fact.robot is None and fact.on_facts
     assert term_text(fail.target) == "compass(Emil)" and term_text(timed.target) == "Pippi"
     assert isinstance(fact, Injection)
+
+
+AGENTS = ("Pippi", "Emil")
+ARITIES = {"compass": 1, "camera": 1, "measure-door": 2}
+
+
+@pytest.mark.parametrize(
+    ("text", "message", "hint"),
+    [
+        ("kill Emli at cycle 3", "no robot Emli in this society", "did you mean Emil?"),
+        (
+            "recover emil at 2s",
+            "no robot emil in this society",
+            "symbols are case-sensitive: did you mean Emil?",
+        ),
+        ("fail compass(Nobody) at cycle 3", "no robot Nobody", "its robots: Pippi, Emil"),
+        ("fail compas(Emil) at cycle 3", "no functionality compas", "did you mean compass?"),
+        (
+            "recover gizmo(Emil) at cycle 3",
+            "no functionality gizmo in the domain",
+            "its functionalities: compass, camera, measure-door",
+        ),
+        ("fail compass(Emil, x) at cycle 3", "compass takes 1 argument(s), not 2", "compass(Emil)"),
+    ],
+)
+def test_a_fault_aimed_at_nothing_is_named(text: str, message: str, hint: str) -> None:
+    """A typo in --inject made the fault a silent no-op (a newcomer's ``kill
+    Emli``: no console line, no trace event, exit 0); now it says what is wrong."""
+    wrong = misaimed(parse_injection(text), AGENTS, ARITIES)
+    assert wrong is not None
+    assert wrong.message == f"--inject {text!r}: {message}" or wrong.message.startswith(
+        f"--inject {text!r}: {message}"
+    )
+    assert wrong.hint is not None and hint in wrong.hint
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "kill Emil at cycle 3",
+        "recover Pippi at 2s",
+        "fail measure-door(Emil, Door1) at cycle 3",
+        "retract (compass Anyone) at cycle 2",  # a state update may name any fact
+        "assert (door Door9) at cycle 2",
+    ],
+)
+def test_a_fault_aimed_at_the_society_passes(text: str) -> None:
+    assert misaimed(parse_injection(text), AGENTS, ARITIES) is None
+
+
+def test_without_the_domain_only_the_robot_is_checked() -> None:
+    """An emitted program knows its robots, not the domain."""
+    assert misaimed(parse_injection("fail gizmo(Emil) at cycle 3"), AGENTS) is None
+    assert misaimed(parse_injection("fail gizmo(Emli) at cycle 3"), AGENTS) is not None

@@ -155,6 +155,19 @@ def test_sigterm_and_ctrl_c_stop_cleanly_with_the_summary(emitted: Path, tmp_pat
         ]
 
 
+def test_run_all_refuses_a_fault_aimed_at_no_robot_of_it(emitted: Path) -> None:
+    """Every robot runs in run_all.py: a fault aimed at another name is a typo,
+    refused as usage (exit 2) before anything runs, not silently dropped."""
+    args = ["--impl", str(EXAMPLE_IMPL), "--rate", "0", "--cycles", "3"]
+    out = _run(emitted / "run_all.py", *args, "--inject", "kill Emli at cycle 2")
+    assert out.returncode == 2, out.stderr
+    assert "no robot Emli in this society (did you mean Emil?)" in out.stderr
+    assert out.stdout == ""
+    ok = _run(emitted / "run_all.py", *args, "--inject", "kill Emil at cycle 2")
+    assert ok.returncode == 0, ok.stderr
+    assert "inject" in ok.stdout and "kill Emil" in ok.stdout
+
+
 def test_the_trace_is_not_overwritten_without_force(emitted: Path, tmp_path: Path) -> None:
     trace = tmp_path / "trace.jsonl"
     trace.write_text("kept\n")

@@ -174,6 +174,11 @@ def test_bad_scenarios_are_errors_at_their_place(tmp_path: Path) -> None:
             'seed = 1\nfaults = ["fail compass(Emil) at noon"]',
         ): r"faults\[0\]: 'fail compass\(Emil\) at noon': not a fault",
         (
+            "seed = 1",
+            'seed = 1\nfaults = ["kill Emli at 5s"]',
+        ): r"faults\[0\]: 'kill Emli at 5s': no robot Emli in this society\n(.|\n)*"
+        r"hint: did you mean Emil\?",
+        (
             'impl = "cfgplan.sim.impl.cross_door"',
             'impl = "cfgplan.sim.impl.carry_bar"',
         ): r"impl: no implementation of functionalities camera",
