@@ -123,7 +123,7 @@ def emit(
     """Write one executable file per robot for a configuration (thesis 5.1-5.3).
 
     Exit codes: 0 written, 1 invalid input or existing files, 2 usage,
-    3 no configuration of that rank.
+    3 no admissible configuration (or none of that rank).
     """
     problem = load_problem(domain, state, goal, weights)
     texts = files(problem, choose(problem, rank), rank, lang, problem_id(problem, domain, state))

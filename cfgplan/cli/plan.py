@@ -257,6 +257,8 @@ def plan(
     """
     if rank is not None and (k is not None or all_):
         usage_error("shows one configuration; -k and --all list several: give one", "--rank")
+    if all_ and k is not None:
+        usage_error("lists that many; --all lists every one: give one", "-k")
     with errors_as_json(format_):  # input errors on stdout too, as JSON
         if output is not None:
             check_target(output, force)  # before planning, which may take long

@@ -15,15 +15,15 @@ import typer
 from cfgplan.backends.dot import configuration_dot
 from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.backends.render import render as render_dot
-from cfgplan.cli.app import EXIT_INPUT, app, report
+from cfgplan.cli.app import EXIT_INPUT, app, report, usage_error
 from cfgplan.cli.options import (
     DomainArg,
     ForceOpt,
     GoalOpt,
-    RankOpt,
     StateArg,
     WeightsOpt,
     choose,
+    count_of,
     load_problem,
 )
 from cfgplan.configuration.cost import fmt
@@ -75,7 +75,16 @@ def render(
         ),
     ],
     goal: GoalOpt = None,
-    rank: RankOpt = 1,
+    rank: Annotated[
+        int | None,
+        typer.Option(
+            "--rank",
+            metavar="N",
+            parser=count_of(1),
+            help="Which configuration, 1 being the cheapest (default 1; not with --hierarchy).",
+            show_default=False,
+        ),
+    ] = None,
     weights: WeightsOpt = None,
     hierarchy: Annotated[
         bool,
@@ -90,8 +99,10 @@ def render(
     """Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).
 
     Exit codes: 0 written, 1 invalid input or existing file, 2 usage,
-    3 no configuration of that rank.
+    3 no admissible configuration (or none of that rank).
     """
+    if hierarchy and rank is not None:
+        usage_error("picks a configuration; --hierarchy draws the methods: give one", "--rank")
     kind = output_format(output)
     try:
         check_target(output, force)
@@ -99,7 +110,7 @@ def render(
         if hierarchy:
             source = hierarchy_dot(problem.task, problem.goal_call)
         else:
-            source = configuration_source(problem, rank)
+            source = configuration_source(problem, rank or 1)
         data = source.encode("utf-8") if kind == "dot" else render_dot(source, kind)
         write_bytes(data, output, force)
     except CfgplanError as exc:

@@ -153,6 +153,11 @@ def test_usage_and_help_speak_cfgplan(cfgplan: Run, command: str) -> None:
             "it would be read as 10.0",
         ),
         (["plan", *DOCKING, "--rank", "2", "-k", "3"], "-k and --all list several"),
+        (["plan", *DOCKING, "--all", "-k", "3"], "lists that many; --all lists every one"),
+        (
+            ["render", *DOCKING, "-o", "x.svg", "--hierarchy", "--rank", "2"],
+            "--hierarchy draws the methods",
+        ),
         (["render", *DOCKING, "-o", "x.dot", "--rank", "first"], "'first' is not a whole"),
         (["emit", *DOCKING, "-o", "out", "--lang", "c"], "'c' is not a language: choose lisp"),
         (["run", *DOCKING, "--impl", "x", "--rate", "nan"], "nan: must be a finite number"),
