@@ -59,11 +59,11 @@ def check(domain: Domain, state: State | None = None, goal: Goal | None = None) 
         checker.method(method)
     if state is not None:
         check_state(checker, state)
-    if goal is not None:
-        check_goal(checker, goal)
-    elif state is not None:
-        for target in (state.goal,) if state.goal is not None else state.sequence:
-            check_goal(checker, target)
+    targets = [goal] if goal is not None else []
+    if goal is None and state is not None:
+        targets = [state.goal] if state.goal is not None else list(state.sequence)
+    for target in targets:
+        check_goal(checker, target, state)
     return checker.sorted()
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 from cfgplan.check.findings import Findings
 from cfgplan.check.messages import alternatives, sig_text
 from cfgplan.diagnostics import did_you_mean
-from cfgplan.ir.model import Atom, Domain, Goal, Negation, State
+from cfgplan.ir.model import Atom, Domain, Goal, Negation, State, is_variable
 
 
 def _tested(domain: Domain) -> dict[str, Atom]:
@@ -54,9 +54,14 @@ def check_state(findings: Findings, state: State) -> None:
             )
 
 
-def check_goal(findings: Findings, goal: Goal) -> None:
-    """The goal names a method by name and arity (4.5)."""
+def check_goal(findings: Findings, goal: Goal, state: State | None = None) -> None:
+    """The goal names a method by name and arity (4.5), and, with the
+    ``state``, each of its objects is one the state's facts name (else no
+    precondition about it can hold: ``(do-cross-door Bob Door1)``, or
+    ``PIPPI`` for ``Pippi``)."""
     call = goal.call
+    if state is not None:
+        _check_goal_objects(findings, goal, state)
     if call.signature in findings.versions:
         return
     span = call.span or goal.span
@@ -78,6 +83,27 @@ def check_goal(findings: Findings, goal: Goal) -> None:
         span,
         hint,
     )
+
+
+def _check_goal_objects(findings: Findings, goal: Goal, state: State) -> None:
+    named = {a for fact in state.facts for a in fact.args}
+    for arg in dict.fromkeys(goal.call.args):
+        if arg in named or is_variable(arg) or _is_number(arg):
+            continue
+        findings.report(
+            "warning",
+            f"the goal {goal.call} names {arg}, which no fact of the state names",
+            goal.call.span or goal.span,
+            did_you_mean(arg, named),
+        )
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 PLANNER_FACTS = frozenset({"device"})

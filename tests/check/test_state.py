@@ -90,3 +90,28 @@ def test_devices_are_read_by_the_planner_even_when_untested() -> None:
 def test_goal_spelling_hint() -> None:
     d = only(run(BASE + GOOD, STATE + "(goal (get-dor-info Pippi Door1))\n"))
     assert d.hint == "did you mean get-door-info?"
+
+
+def test_a_goal_object_no_fact_names_is_a_warning_with_a_suggestion() -> None:
+    """``check`` said ok for ``(do-cross-door Bob Door1)`` and for ``PIPPI``,
+    which ``plan`` then found no configuration for (a newcomer's report)."""
+    unknown = only(run(BASE + GOOD, STATE + "(goal (get-door-info Bob Door1))\n"), "warning")
+    assert unknown.severity == "warning"
+    assert unknown.message == (
+        "the goal (get-door-info Bob Door1) names Bob, which no fact of the state names"
+    )
+    assert unknown.hint is None and loc(unknown) == "2:7"
+    case = only(run(BASE + GOOD, STATE + "(goal (get-door-info PIPPI Door1))\n"), "warning")
+    assert case.hint == "symbols are case-sensitive: did you mean Pippi?"
+    typo = only(run(BASE + GOOD, STATE + "(goal (get-door-info Pipi Door1))\n"), "warning")
+    assert typo.hint == "did you mean Pippi?"
+
+
+def test_a_goal_object_written_twice_is_named_once_and_numbers_are_objects() -> None:
+    found = run(BASE + GOOD, STATE + "(goal (get-door-info Bob Bob))\n")
+    assert [d.message.split(" names ")[-1] for d in found if "Bob" in d.message] == [
+        "Bob, which no fact of the state names"
+    ]
+    assert [
+        d for d in run(BASE + GOOD, STATE + "(goal (get-door-info 2 Door1))\n") if "2," in d.message
+    ] == []

@@ -59,7 +59,8 @@ def test_no_near_miss_is_claimed_where_there_is_none(files: list[str], goal: str
     result = CliRunner().invoke(app, ["plan", *files, "--goal", goal])
     assert result.exit_code == 3
     assert "no fact matches (in " in result.stderr
-    assert "did you mean" not in result.stderr
+    explanation = result.stderr.split("no admissible configuration", 1)[1]
+    assert "did you mean" not in explanation
 
 
 def test_a_name_of_the_state_is_no_slip() -> None:
