@@ -43,7 +43,7 @@ from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.deployer import RETRY, RETRY_MOST, SWITCH_TIMEOUT, NetworkDeployer
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Adaptation
-from cfgplan.runtime.faults import Injection
+from cfgplan.runtime.faults import Injection, term_text
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.launch import REFUSED
@@ -174,7 +174,8 @@ class NetworkAdaptive:
 
     def _report(self, report: Report) -> None:
         """A helper's detection. It speaks only for itself: a detection made
-        on another robot is dropped (recorded). Who is in the society is the
+        on another robot is dropped (recorded), and so is one about what is not
+        the helper's own (:func:`beyond_its_own`). Who is in the society is the
         coordinator's own liveliness view: a helper's ``lost`` or ``seen``
         says only how *it* sees the network (a helper frozen a while sees
         everyone lost once it runs again; a link between two helpers that
@@ -183,6 +184,10 @@ class NetworkAdaptive:
         if detection.robot != report.robot:
             said = f"{report.robot} reported a detection made by {detection.robot!r}: dropped"
             self.deployer.member.error(said)
+            return
+        beyond = beyond_its_own(detection)
+        if beyond is not None:
+            self._once(f"{report.robot} {beyond}", f"{report.robot} reported {beyond}")
         elif detection.kind not in ("lost", "seen"):
             self.take(detection)
 
@@ -287,3 +292,26 @@ def coordinate(
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
+
+
+def beyond_its_own(detection: Detection) -> str | None:
+    """What ``detection``, reported by ``detection.robot``, says beyond that
+    robot's own business, or ``None``: a helper may report the failure,
+    recovery or accomplished task of a functionality instance that runs on
+    it (an instance's first argument is its robot, 3.2), and what it sees of
+    its own inputs (stale, fresh); a state update is the coordinator's
+    operator's alone (a helper's ``--inject assert``/``retract`` is not
+    applied where it runs). With ``--keys`` a report comes from the robot it
+    names, so this is what a compromised robot could otherwise say of others
+    (remove ``(camera Emil)``, fail ``compass(Emil)``, stop the society)."""
+    if detection.kind == "facts":
+        return "a state update (only the coordinator's operator updates the state)"
+    if detection.kind in ("failure", "recovery", "achieved"):
+        instance = detection.instance
+        if len(instance) < 2 or instance[1] != detection.robot:
+            shown = term_text(instance) if instance else "no instance"
+            what = {"failure": "the failure", "recovery": "the recovery"}.get(
+                detection.kind, "the task accomplished"
+            )
+            return f"{what} of {shown}, which does not run on it"
+    return None

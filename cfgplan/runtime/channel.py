@@ -29,7 +29,7 @@ import time
 from collections.abc import Sequence
 from typing import Literal
 
-from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.errors import RunError, printable
 from cfgplan.runtime.transport import ChannelKey, Transport
 from cfgplan.runtime.values import Envelope, encode, envelope, open_envelope
 
@@ -131,8 +131,17 @@ class Channel:
         self.refreshed = time.monotonic() if now is None else now
 
     def receive(self, payload: bytes, now: float | None = None) -> Envelope:
-        """A message from the other end: read its envelope and deliver the value."""
+        """A message from the other end: read its envelope and deliver the value.
+        One whose envelope names another sender than the channel's other end
+        is refused (:class:`RunError`), not taken under either name: the
+        channel's key names its sender, and with ``--keys`` only that robot
+        may put on it, so a false ``from`` is a robot lying in its message."""
         message = open_envelope(payload)
+        if self.other is not None and message.sender != self.other:
+            shown = printable(message.sender[:60])
+            raise RunError(
+                f"a message that says it is from {shown!r}, on the channel from {self.other}"
+            )
         self.deliver(message.value, period=message.period, now=now)
         pace = getattr(self._transport, "pace", None)
         if pace is not None:  # the rate this channel takes follows its sender's period

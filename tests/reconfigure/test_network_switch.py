@@ -251,6 +251,44 @@ def test_a_report_of_another_robots_detection_is_dropped_and_said() -> None:
     assert errors == ["Rasmus reported a detection made by 'Emil': dropped"]
 
 
+def test_a_helper_speaks_only_of_what_is_its_own() -> None:
+    """Found by a review on a keyed society: a process holding only Pippi's key
+    sent, on Pippi's key and in Pippi's name, the removal of (camera Emil) and
+    (compass Emil) (the society stopped, exit 3) and the failure of
+    compass(Emil) (a switch). A helper may report the failure, recovery or
+    achievement of an instance that runs on it and what it sees of its own
+    inputs; a state update is the coordinator's alone. Each kind of
+    overreach is said once; nothing changes."""
+    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    now = time.time()
+    forged = [
+        Detection("facts", "Rasmus", now, how="operator", removed=(("camera", "Emil"),)),
+        Detection("failure", "Rasmus", now, instance=("compass", "Emil"), how="reported"),
+        Detection("recovery", "Rasmus", now, instance=("camera", "Emil"), how="probe"),
+        Detection("achieved", "Rasmus", now, instance=("cross-door", "Pippi", "Door1")),
+        Detection("failure", "Rasmus", now, instance=(), how="reported"),
+    ]
+    for detection in forged + forged:
+        adaptive.receive(encode(Report("Rasmus", detection)), "Rasmus")
+    adaptive.coordinator.tick()
+    assert [e for e in events if e.what in ("failure", "recovery", "switch", "facts")] == []
+    assert adaptive.finished is None and network.sent == []
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == [
+        "Rasmus reported a state update (only the coordinator's operator updates the state): "
+        "dropped",
+        "Rasmus reported the failure of compass(Emil), which does not run on it: dropped",
+        "Rasmus reported the recovery of camera(Emil), which does not run on it: dropped",
+        "Rasmus reported the task accomplished of cross-door(Pippi, Door1), which does not run "
+        "on it: dropped",
+        "Rasmus reported the failure of no instance, which does not run on it: dropped",
+    ]
+    own = Detection("failure", "Rasmus", now, instance=("camera", "Rasmus"), how="reported")
+    adaptive.receive(encode(Report("Rasmus", own)), "Rasmus")
+    adaptive.coordinator.tick()
+    assert [e for e in events if e.what == "failure"] != []  # its own failure is taken
+
+
 def test_a_second_process_of_a_live_robot_is_told_to_stop() -> None:
     """Issue 33 (no split brain): Emil's ready names his process; a ready of
     another process named Emil while he is alive is answered ``duplicate``

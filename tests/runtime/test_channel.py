@@ -71,6 +71,25 @@ def test_a_message_that_is_not_an_envelope_is_refused_clearly() -> None:
     assert not ch.fresh
 
 
+def test_a_message_naming_another_sender_than_the_channels_is_refused() -> None:
+    """Found by a review on a keyed society: a process with Pippi's key put
+    ``{"from": "Mallory", ...}`` on Pippi's channel to Emil; Emil took the value
+    and traced it as received from Mallory. The channel's key names its
+    sender, so an envelope that says otherwise is refused, value untouched."""
+    transport = InProcessTransport()
+    ch = make_global_channel("Emil", "F7", "F3", ("pos",), robot="Pippi", transport=transport)
+    good = {"from": "Emil", "seq": 1, "t": 1.0, "period": 0.1, "value": [1.0, 2.0]}
+    ch.receive(json.dumps(good).encode())
+    assert ch.read() == [1.0, 2.0]
+    for sender in ("Mallory", "Pippi", "\x1b[31mred"):
+        forged = dict(good, value=[99.0, 99.0], **{"from": sender})
+        with pytest.raises(RunError, match="says it is from") as info:
+            ch.receive(json.dumps(forged).encode())
+        assert "on the channel from Emil" in info.value.message
+        assert "\x1b" not in info.value.message  # shown escaped, not sent to the terminal
+    assert ch.peek() == [1.0, 2.0] and not ch.fresh
+
+
 def test_a_value_for_a_robot_not_in_the_process_is_dropped_and_counted() -> None:
     transport = InProcessTransport()
     ch = make_global_channel("Pippi", "F1", "F2", ("x",), robot="Emil", transport=transport)
