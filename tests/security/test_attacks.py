@@ -31,6 +31,7 @@ from cfgplan.security.keys import make_society, plan_society, write_society
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
 from tests.runtime.netutil import (
     HERMETIC,
+    Record,
     endpoint,
     first,
     free_port,
@@ -277,3 +278,58 @@ def test_a_robot_cannot_forge_a_value_on_another_robots_channel(tmp_path: Path) 
             time.sleep(0.5)
             got = [p for _, p in emil_in.got]
             assert b"[666, 666]" not in got and b"Eve's report as Pippi" not in got
+
+
+@pytest.mark.slow
+def test_a_member_says_nothing_of_what_is_not_its_own(tmp_path: Path) -> None:
+    """A process holding only Pippi's key (a compromised robot) tells the
+    coordinator Emil, on Pippi's own key and in her name, that (camera Emil)
+    and (compass Emil) are gone and that compass(Emil) failed, and puts on her
+    own channel to Emil a value whose envelope says it is from Mallory. Emil
+    drops all three and says so, and his run goes on to its end, exit 0
+    (before: the fact removal stopped the society, exit 3; the failure
+    switched it; the value was taken and traced as Mallory's)."""
+    keys = _keys(tmp_path / "keys")
+    port = free_port()
+    common = ["--zenoh-config", str(hermetic_config(tmp_path)), "--lease", "1", "--keys", str(keys)]
+    with processes() as running:
+        emil, emil_trace = _robot(
+            running, tmp_path, "Emil", ["--listen", endpoint(port), *common], "--cycles", "300"
+        )
+        hers = free_port()
+        network = ["--listen", endpoint(hers), "--connect", endpoint(port), *common]
+        _robot(running, tmp_path, "Pippi", network, "--duration", "90")
+        wait_for("Emil sees Pippi", first(emil_trace, lambda r: r["event"] == "robot-seen"), LIMIT)
+        at = f"tls/127.0.0.1:{port}"
+        with (  # the console hears what Pippi puts at her end (peers do not route)
+            session(member(keys, "console", connect=(f"tls/127.0.0.1:{hers}",))) as console,
+            session(member(keys, "Pippi", connect=(at,))) as forger,
+        ):
+            inbox = Inbox()
+            console.declare_subscriber(f"{P}/Emil/ch/Pippi/**", inbox)
+            assert inbox.wait(lambda k: True, LIMIT), "Pippi sends Emil nothing"
+            channel = inbox.names()[0]
+            now = time.time()
+            for detection in (
+                {"kind": "facts", "robot": "Pippi", "t": now, "how": "operator",
+                 "removed": [["camera", "Emil"], ["compass", "Emil"]]},
+                {"kind": "failure", "robot": "Pippi", "t": now, "instance": ["compass", "Emil"],
+                 "how": "reported"},
+            ):  # fmt: skip
+                report = {"type": "report", "robot": "Pippi", "detection": detection}
+                forger.put(f"{P}/coordinator/Pippi", json.dumps(report).encode())
+            lie = {"from": "Mallory", "seq": 10**6, "t": now, "period": 0.05, "value": [99, 99]}
+            forger.put(channel, json.dumps(lie).encode())
+
+            def said(text: str) -> Callable[[], Record | None]:
+                return first(emil_trace, lambda r: r["event"] == "error" and text in str(r))
+
+            wait_for("the state update refused", said("Pippi reported a state update"), LIMIT)
+            wait_for("the failure refused", said("failure of compass(Emil), which does"), LIMIT)
+            wait_for("the forged sender refused", said("says it is from 'Mallory'"), LIMIT)
+        assert emil.wait(LIMIT) == 0, (tmp_path / "emil.log").read_text()
+    mine = read_trace(emil_trace)
+    assert [r for r in mine if r["event"] in ("facts", "switch", "failure")] == []
+    assert not [r for r in mine if r["event"] == "receive" and r.get("from") == "Mallory"]
+    crossing = [r for r in mine if r["event"] == "call" and r["functionality"] == "cross-door"]
+    assert crossing and crossing[-1]["status"] == "ran"
