@@ -84,6 +84,7 @@ class NetworkAdaptive:
     _present: set[str] = field(default_factory=set)  # robots seen (each re-synchronised once)
     _held: dict[str, Detection] = field(default_factory=dict)  # seen, not yet ready
     _instances: dict[str, str] = field(default_factory=dict)  # the process of each robot
+    _processes: dict[str, set[str]] = field(default_factory=dict)  # each robot's live ones
     _noted: set[str] = field(default_factory=set)  # strangers and rivals said (a few)
     refusal: str | None = None
     """Why this coordinator stops: another one coordinates the society."""
@@ -191,6 +192,33 @@ class NetworkAdaptive:
         elif detection.kind not in ("lost", "seen"):
             self.take(detection)
 
+    def process(self, robot: str, instance: str, alive: bool) -> None:
+        """A process of ``robot`` appeared or went (its process token, which
+        :meth:`ZenohTransport.watch_processes` reports; its ``alive`` token
+        shows two processes as one). A process that appears while the one
+        the society runs with is alive is a second one — a robot frozen past
+        the lease that comes back next to its replacement, or a second start
+        — and is told ``duplicate`` (it stops). When the one the society runs
+        with goes while another keeps the robot's name alive, the robot is
+        lost (its part with it) and the other is asked whether it is ready,
+        as a robot seen again is: otherwise the live name would hide that
+        death until its inputs went stale."""
+        if robot == self.deployer.me:
+            return
+        live = self._processes.setdefault(robot, set())
+        (live.add if alive else live.discard)(instance)
+        current = self._instances.get(robot)
+        if current is None or (instance == current and alive):
+            return
+        if alive and current in live:
+            self.deployer.refuse(robot, instance)
+            self._once(f"{robot} {instance}", f"a second process of robot {robot}")
+        elif not alive and instance == current and live:
+            me, now = self.deployer.me, time.time()
+            gone = f"its process {instance} ended; another process of {robot} runs"
+            self.take(Detection("lost", me, now, other=robot, how="process", detail=gone))
+            self.take(Detection("seen", me, now, other=robot, how="process"))
+
     def _once(self, key: str, said: str) -> None:
         """Say ``said`` (dropped), the first time for ``key``, for a few keys."""
         if key not in self._noted and len(self._noted) < 16:
@@ -204,6 +232,9 @@ class NetworkAdaptive:
         if first is None or not ready.instance or robot not in self.deployer.transport.alive:
             if ready.instance:
                 self._instances[robot] = ready.instance
+                for other in sorted(self._processes.get(robot, set()) - {ready.instance}):
+                    self.deployer.refuse(robot, other)  # its token came first: it is second
+                    self._once(f"{robot} {other}", f"a second process of robot {robot}")
             return False
         if ready.instance == first:
             return False
@@ -288,6 +319,9 @@ def coordinate(
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
+    watch = getattr(transport, "watch_processes", None)
+    if watch is not None:  # over Zenoh: each process of a robot has a token of its own
+        watch(adaptive.process)
     for other in sorted(set(task.agents) - {robot.name}):  # each robot of the state, its own key
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it

@@ -4,6 +4,7 @@ One robot program per robot; robots of one *society* share a prefix, so two
 societies on one network stay apart::
 
     cfgplan/<society>/<robot>/alive                                     the robot runs
+    cfgplan/<society>/<robot>/process/<instance>                        one process of it
     cfgplan/<society>/<robot>/ch/<sender>/<source>/<target>/<data ...>  a channel into it
     cfgplan/<society>/<robot>/configure                                 switches, to it
     cfgplan/<society>/coordinator/<robot>                               its reports, acks (5.5)
@@ -42,6 +43,9 @@ __all__ = [
     "problem_key",
     "problem_of_token",
     "problem_pattern",
+    "process_key",
+    "process_of_token",
+    "process_pattern",
     "robot_of_alive",
     "unchunk",
 ]
@@ -99,6 +103,31 @@ def alive_key(society: str, robot: str) -> str:
 def alive_pattern(society: str) -> str:
     """Every robot of ``society`` (for a liveliness subscriber)."""
     return f"{PREFIX}/{chunk(society)}/*/alive"
+
+
+def process_key(society: str, robot: str, instance: str) -> str:
+    """The liveliness token of one process of ``robot`` (``instance``: drawn
+    when it starts): two processes of a robot declare the same ``alive``
+    token, which Zenoh shows as one, but each its own of these."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/process/{chunk(instance)}"
+
+
+def process_pattern(society: str) -> str:
+    """Every process of every robot of ``society`` (for the coordinator)."""
+    return f"{PREFIX}/{chunk(society)}/*/process/*"
+
+
+def process_of_token(key: str, society: str) -> tuple[str, str] | None:
+    """The robot and instance a process token of ``society`` names, or ``None``."""
+    parts = key.split("/")
+    if len(parts) != 5 or parts[0] != PREFIX or parts[1] != chunk(society):
+        return None
+    if parts[3] != "process":
+        return None
+    try:
+        return unchunk(parts[2]), unchunk(parts[4])
+    except UnicodeDecodeError:  # not written by chunk: no robot of ours
+        return None
 
 
 def robot_of_alive(key: str, society: str) -> str | None:

@@ -131,7 +131,8 @@ class Member:
         self.leader = ""  # the robot that coordinates that run
         self._leader_gone = False  # its token went since: a new epoch may be followed
         self._rivals: set[str] = set()  # epochs of second coordinators told (a few)
-        self.instance = secrets.token_hex(8)  # this process, in its ``ready``
+        self.instance: str = getattr(network, "instance", None) or secrets.token_hex(8)
+        """This process, in its ``ready`` (and its process token over Zenoh)."""
         self.refused: str | None = None
         """Why this process may not run its robot (another one does): the run ends."""
         self.pending: dict[int, Part] = {}

@@ -3,7 +3,9 @@
 The thesis copies a global channel's data "through a socket connection"; here
 each robot program opens one Zenoh session in *peer* mode (no router) and:
 
-* declares itself with a liveliness token, ``cfgplan/<society>/<robot>/alive``;
+* declares itself with a liveliness token, ``cfgplan/<society>/<robot>/alive``,
+  and its process with another, ``.../process/<instance>`` (so that the
+  coordinator tells a second process of a robot from the first);
 * subscribes to every global channel into it (one subscriber for the
   robot's ``ch/**``; a channel attached or detached is a dictionary entry, so
   a switch declares nothing), on the keys of :mod:`cfgplan.runtime.keys`,
@@ -42,6 +44,7 @@ from __future__ import annotations
 
 import json
 import queue
+import secrets
 import threading
 import time
 from collections.abc import Callable, Collection
@@ -57,6 +60,9 @@ from cfgplan.runtime.keys import (
     problem_key,
     problem_of_token,
     problem_pattern,
+    process_key,
+    process_of_token,
+    process_pattern,
     robot_of_alive,
     unchunk,
 )
@@ -103,8 +109,13 @@ class ZenohTransport:
             self._session = z.open(config)
         except z.ZError as exc:
             raise RunError(f"cannot open the Zenoh session: {reason(exc)}") from None
+        self.instance = secrets.token_hex(8)
+        """This process among the robot's (a frozen one may come back next to its
+        replacement): its ``ready`` names it, and so does its process token."""
         try:
-            self._token = self._session.liveliness().declare_token(alive_key(self.society, robot))
+            live = self._session.liveliness()
+            self._token = live.declare_token(alive_key(self.society, robot))
+            self._process = live.declare_token(process_key(self.society, robot, self.instance))
         except z.ZError as exc:
             self._session.close()
             raise RunError(f"cannot declare {robot} alive: {reason(exc)}") from None
@@ -123,6 +134,8 @@ class ZenohTransport:
         """Robots of the society whose liveliness token is seen (after :meth:`watch`)."""
         self.presence_listeners: list[Presence] = []
         """Told of every robot of the society appearing or lost (the coordinator)."""
+        self._processes: queue.SimpleQueue[tuple[str, str, bool]] = queue.SimpleQueue()
+        self._process_watchers: list[Callable[[str, str, bool], None]] = []
         self._messages: queue.SimpleQueue[tuple[Callable[[bytes], None], bytes]] = (
             queue.SimpleQueue()
         )
@@ -281,6 +294,27 @@ class ZenohTransport:
         for name in sorted((set(partners) - before) & alive):
             self._arrivals.put((name, True))
 
+    def watch_processes(self, report: Callable[[str, str, bool], None]) -> None:
+        """Report ``(robot, instance, alive)`` for every process of the
+        society's other robots appearing or going (:func:`process_key`), on
+        the loop's thread, as :meth:`poll` hands over (the coordinator: a
+        robot's ``alive`` token shows two processes as one)."""
+        if not self._process_watchers:
+            self._subscribers.append(
+                self._session.liveliness().declare_subscriber(
+                    process_pattern(self.society), self._on_process, history=True
+                )
+            )
+        self._process_watchers.append(report)
+
+    def _on_process(self, sample: Any) -> None:
+        """On a Zenoh thread: queue a process token's change for :meth:`poll`."""
+        named = process_of_token(str(sample.key_expr), self.society)
+        if named is None or named[0] == self.robot:
+            return
+        self._processes.put((*named, sample.kind == self._z.SampleKind.PUT))
+        self._arrived.set()
+
     def _on_token(self, sample: Any) -> None:
         """On a Zenoh thread: note who is alive, queue the change for :meth:`poll`."""
         name = robot_of_alive(str(sample.key_expr), self.society)
@@ -326,6 +360,13 @@ class ZenohTransport:
                 self._watch[1](name, alive)
             for listener in self.presence_listeners:
                 listener(name, alive)
+        while True:
+            try:
+                robot, instance, present = self._processes.get_nowait()
+            except queue.Empty:
+                break
+            for watcher in self._process_watchers:
+                watcher(robot, instance, present)
 
     def _say_drops(self, drops: list[tuple[str, int, float]]) -> None:
         """Tell :attr:`notices` of the messages a flood cost (once per interval)."""
@@ -356,5 +397,6 @@ class ZenohTransport:
             return
         if self._problem_token is not None:
             self._problem_token.undeclare()
+        self._process.undeclare()
         self._token.undeclare()
         self._session.close()

@@ -37,11 +37,12 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
     (its reports and acknowledgements, 5.5); a coordinator also on
     ``P/*/configure`` (prepare, commit, abort, finish): no other robot can
     send a robot the steps of a switch;
-  - declare only its own liveliness tokens ``P/R/alive`` and
-    ``P/R/problem/**`` (the problem it runs, :mod:`cfgplan.security.identity`);
+  - declare only its own liveliness tokens ``P/R/alive``, ``P/R/process/*``
+    (one per process of R) and ``P/R/problem/**`` (the problem it runs,
+    :mod:`cfgplan.security.identity`);
   - subscribe only to its own channels ``P/R/ch/**`` and ``P/R/configure``
-    (a coordinator also to ``P/coordinator/*``), and watch ``P/*/alive`` and
-    ``P/*/problem/**``;
+    (a coordinator also to ``P/coordinator/*``), and watch ``P/*/alive``,
+    ``P/*/process/*`` and ``P/*/problem/**``;
   - be sent only those (egress): another robot's channels and switches, and
     the reports of the others, are not sent to it even when it asks.
 
@@ -156,7 +157,8 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
     rules: list[dict[str, Any]] = []
     subjects: list[dict[str, Any]] = []
     policies: list[dict[str, Any]] = []
-    alive = [f"{p}/*/alive", f"{p}/*/problem/**"]  # tokens: who runs, and which problem
+    alive = [f"{p}/*/alive", f"{p}/*/process/*", f"{p}/*/problem/**"]  # tokens: who runs,
+    # which process of it, and which problem
     for i, member in enumerate(keys.members):
         subject = f"s{i}"
         subjects.append({"id": subject, "cert_common_names": [member.common_name]})
@@ -177,7 +179,12 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
             mine = [
                 _rule(rules, "ingress", ["put"], puts),
                 _rule(rules, "ingress", ["declare_subscriber"], reads),
-                _rule(rules, "ingress", ["liveliness_token"], [f"{r}/alive", f"{r}/problem/**"]),
+                _rule(
+                    rules,
+                    "ingress",
+                    ["liveliness_token"],
+                    [f"{r}/alive", f"{r}/process/*", f"{r}/problem/**"],
+                ),
                 _rule(rules, "ingress", [*WATCH, "reply"], alive),
                 _rule(rules, "egress", ["put"], reads),
                 _rule(rules, "egress", ["declare_subscriber"], [f"{p}/**"]),

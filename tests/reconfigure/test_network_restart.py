@@ -25,7 +25,15 @@ import pytest
 
 from tests.backends.support import EXAMPLE_IMPL
 from tests.reconfigure.test_network import LIMIT, _network, _robot
-from tests.runtime.netutil import Processes, Record, processes, read_trace, wait_for
+from tests.runtime.netutil import (
+    Processes,
+    Record,
+    endpoint,
+    free_port,
+    processes,
+    read_trace,
+    wait_for,
+)
 
 SERVED = 30.0  # seconds: a process started on a loaded machine, and its first cycles
 
@@ -87,3 +95,48 @@ def test_a_helper_killed_and_started_again_serves_the_goal_again(tmp_path: Path)
     assert silent == []
     assert [r["resource"] for r in mine if r["event"] == "failure"] == ["Pippi", "Pippi"]
     assert "Traceback" not in (tmp_path / "emil.log").read_text()
+
+
+@pytest.mark.slow
+def test_a_frozen_helper_back_next_to_its_replacement_is_told_it_is_a_duplicate(
+    tmp_path: Path,
+) -> None:
+    """Found by a review: Pippi frozen past the lease, a new Pippi started in
+    her place (the society takes it), then the frozen one let go. Both ran on,
+    nothing said so, and when the new one was killed the old one's liveliness
+    token (Zenoh shows two tokens of one key as one) hid the death: no
+    ``robot Pippi lost``, only stale inputs 4 s later. Now the old process is
+    told ``duplicate`` and ends (exit status 1, saying why), the society goes
+    on with the new one, and the new one's death is seen at once."""
+    with processes() as running:
+        old, emil_trace, pippi_net = served_step2(running, tmp_path, "duplicate-test")
+        time.sleep(1.0)  # past the first switches' hold
+        stopped = time.time()
+        os.kill(old.pid, signal.SIGSTOP)  # type: ignore[attr-defined]
+        wait_for("Pippi lost", _after(emil_trace, stopped, "robot-lost"), LIMIT)
+        folder = tmp_path / "new"
+        folder.mkdir()
+        elsewhere = [*pippi_net]  # the frozen one still holds its port
+        elsewhere[elsewhere.index("--listen") + 1] = endpoint(free_port())
+        new, new_trace = _robot(running, folder, "Pippi", EXAMPLE_IMPL, elsewhere)
+        started = wait_for("the new Pippi runs", _after(new_trace, 0.0, "start"), LIMIT)
+        t = float(started["t"])  # type: ignore[arg-type]
+        wait_for("the goal, new Pippi", _after(emil_trace, t, "call", **SERVED_FIELDS), SERVED)
+        let_go = time.time()
+        os.kill(old.pid, signal.SIGCONT)  # type: ignore[attr-defined]
+        assert old.wait(timeout=LIMIT) == 1  # type: ignore[attr-defined]
+        said = (tmp_path / "pippi.log").read_text()
+        assert "another process runs robot Pippi" in said or "duplicate" in said, said
+        time.sleep(1.0)  # the society goes on with the new Pippi
+        served = wait_for(
+            "the goal after", _after(emil_trace, time.time(), "call", **SERVED_FIELDS), SERVED
+        )
+        assert new.poll() is None, "the new Pippi stopped"  # type: ignore[attr-defined]
+        killed = time.time()
+        os.kill(new.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        lost = wait_for("the new Pippi lost", _after(emil_trace, killed, "robot-lost"), LIMIT)
+        running.stop_all()
+    assert float(served["t"]) > let_go  # type: ignore[arg-type]
+    assert float(lost["t"]) - killed < 1.0, "the death was hidden"  # type: ignore[arg-type]
+    errors = [r for r in read_trace(emil_trace) if r["event"] == "error"]
+    assert any("a second process of robot Pippi" in str(r) for r in errors), errors

@@ -314,6 +314,41 @@ def test_a_second_process_of_a_live_robot_is_told_to_stop() -> None:
     assert "Emil" in adaptive.deployer.ready
 
 
+def test_a_second_process_is_told_apart_by_its_process_token() -> None:
+    """Over Zenoh two processes of a robot show as one ``alive`` token, so
+    each has a process token of its own (found by a review: a Pippi frozen
+    past the lease came back next to her replacement, unnoticed, and hid its
+    death). A process that appears while the accepted one is alive is told
+    ``duplicate``; when the accepted one goes while another keeps the name
+    alive, the robot is lost and the other asked whether it is ready; a
+    process whose token came before the ready of another is told too."""
+    adaptive, network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.receive(encode(Ready("Emil", "new")), "Emil")
+    adaptive.process("Emil", "new", True)
+    network.sent.clear()
+    adaptive.process("Emil", "old", True)  # back from its freeze
+    epoch = adaptive.deployer.epoch
+    assert [m for _, m in network.sent] == [
+        {"op": "duplicate", "from": "Pippi", "epoch": epoch, "instance": "old"}
+    ]
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == ["a second process of robot Emil: dropped"]
+    adaptive.process("Emil", "old", False)  # it stopped: nothing more
+    assert "Emil" in adaptive.deployer.ready
+    network.sent.clear()
+    adaptive.process("Emil", "third", True)
+    adaptive.process("Emil", "new", False)  # the accepted one died; "third" holds the name
+    assert "Emil" not in adaptive.deployer.ready
+    assert network.to("Emil", "hello") != []  # the other is asked whether it is ready
+    network.sent.clear()
+    adaptive.receive(encode(Ready("Emil", "third")), "Emil")
+    assert network.to("Emil", "duplicate") == [] and "Emil" in adaptive.deployer.ready
+    adaptive.process("Rasmus", "early", True)  # a token before any ready of Rasmus
+    adaptive.process("Rasmus", "late", True)
+    adaptive.receive(encode(Ready("Rasmus", "late")), "Rasmus")
+    assert [m["instance"] for m in network.to("Rasmus", "duplicate")] == ["early"]
+
+
 def test_a_coordinator_told_it_is_a_rival_stops() -> None:
     """A robot that follows another live coordinator answers this one's
     messages with ``rival``: this coordinator's run ends, refused, saying

@@ -97,6 +97,7 @@ def test_access_control_of_least_privilege(keys: Path) -> None:
     }
     assert allowed("lab/Pippi", "ingress", "liveliness_token") == {
         "cfgplan/lab/Pippi/alive",
+        "cfgplan/lab/Pippi/process/*",  # each process of hers (a second one is told apart)
         "cfgplan/lab/Pippi/problem/**",  # the problem she runs (cfgplan.security.identity)
     }
     assert allowed("lab/Pippi", "ingress", "declare_subscriber") == {
