@@ -140,7 +140,7 @@ class ZenohTransport:
             queue.SimpleQueue()
         )
         self.sent = 0
-        self._buckets = Buckets(self.options.rates)
+        self._buckets = Buckets(self.options.rates, lease=self.lease)
         self.notices: list[Callable[[str, str], None]] = []
         """Told ``(message, channel)`` of the messages a flood cost, once per
         interval (:attr:`~cfgplan.security.rates.RateLimits.report_every`): the
@@ -380,7 +380,8 @@ class ZenohTransport:
             sender = unchunk(where.split("/")[4]) if key is not None else "?"
             said = (
                 f"channel {channel} from {sender}: {count} message(s) over the rate limit "
-                f"({rate:g} per second) dropped in the last {every:g} s or more (a robot floods it)"
+                f"({rate:g} per second) dropped in the last {every:g} s or more (a robot floods "
+                "it, or a stall longer than the lease held more back)"
             )
             for notice in self.notices:
                 notice(said, channel)

@@ -18,7 +18,11 @@ anything is read, stored or woken (:class:`Buckets`):
   is the one its envelope states, :mod:`cfgplan.runtime.values`, at most
   60 s), ``ceiling`` holds;
 * it holds ``burst`` messages, so that the jitter of the network, which
-  bunches a sender's values, costs none of them;
+  bunches a sender's values, costs none of them — or, when more, as many as
+  the sender sends in a *lease* (the seconds of silence the society rides
+  out before a robot is lost, :class:`Buckets`): a receiver or a link that
+  stalls for less than that, a frozen process let go, gets what was held
+  back all at once, and that is no flood;
 * a message that finds the bucket empty is dropped, unread, and counted;
   the receiver records the count per channel once per ``report_every``
   seconds (an ``error`` event naming the channel and its sender), never
@@ -77,6 +81,8 @@ class Bucket:
     rate: float
     tokens: float
     last: float
+    size: float
+    """The most tokens it holds (:meth:`Buckets.size`)."""
     dropped: int = 0
     """Dropped since the last report."""
     total: int = 0
@@ -89,13 +95,23 @@ class Buckets:
     the transport holds its lock around every call)."""
 
     limits: RateLimits = field(default_factory=RateLimits)
+    lease: float = 0.0
+    """Seconds of silence the society rides out (the transport's lease): what a
+    sender sends in that time may arrive at once after a stall."""
     _buckets: dict[str, Bucket] = field(default_factory=dict)
     _reported: float | None = None
 
+    def size(self, rate: float) -> float:
+        """A bucket's size at ``rate``: ``burst``, or the messages its sender
+        sends in a lease (``rate`` over the allowance), whichever is more."""
+        return max(self.limits.burst, self.lease * rate / self.limits.allowance)
+
     def open(self, key: str, now: float) -> None:
-        """A channel on ``key`` is attached: a full bucket at the ceiling's rate."""
+        """A channel on ``key`` is attached: a bucket of ``burst`` tokens at the
+        ceiling's rate, until its sender states its period."""
         limits = self.limits
-        self._buckets.setdefault(key, Bucket(limits.rate(None), limits.burst, now))
+        rate = limits.rate(None)
+        self._buckets.setdefault(key, Bucket(rate, limits.burst, now, self.size(rate)))
 
     def close(self, key: str) -> None:
         """The channel is detached (its drops not yet reported are forgotten)."""
@@ -106,6 +122,7 @@ class Buckets:
         bucket = self._buckets.get(key)
         if bucket is not None:
             bucket.rate = self.limits.rate(period)
+            bucket.size = self.size(bucket.rate)
 
     def admit(self, key: str, now: float) -> bool:
         """Whether a message on ``key`` is taken (a token spent) or dropped (counted).
@@ -116,7 +133,7 @@ class Buckets:
         if not self.limits.enabled:
             return True
         elapsed = max(0.0, now - bucket.last)
-        bucket.tokens = min(self.limits.burst, bucket.tokens + elapsed * bucket.rate)
+        bucket.tokens = min(bucket.size, bucket.tokens + elapsed * bucket.rate)
         bucket.last = now
         if bucket.tokens >= 1.0:
             bucket.tokens -= 1.0

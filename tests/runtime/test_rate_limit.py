@@ -46,6 +46,32 @@ def test_a_bucket_takes_its_allowance_per_period_and_a_burst() -> None:
     assert not buckets.admit("other", 11.0)
 
 
+def test_what_a_stall_within_the_lease_held_back_is_no_flood() -> None:
+    """Found by a review: a receiver frozen 1.5 s (a link stalled as long)
+    got a 10 Hz sender's held-back values at once, and 7 were dropped and
+    reported as a flood. A bucket holds what its sender sends in a lease: a
+    sender of period 0.1 s, lease 2 s, may have 20 arrive at once once the
+    bucket has filled at its steady pace; 20 more at once, within a second, are
+    over it; and a flood is still cut to the allowance."""
+    limits = RateLimits(allowance=2.0, burst=8.0, ceiling=200.0)
+    buckets = Buckets(limits, lease=2.0)
+    buckets.open("k", 0.0)
+    buckets.pace("k", 0.1)
+    assert buckets.size(limits.rate(0.1)) == 20.0
+    assert all(buckets.admit("k", i / 10) for i in range(1, 41))  # 4 s at its pace: it fills
+    held = [buckets.admit("k", 5.5) for _ in range(15)]  # a 1.5 s stall, let go
+    assert all(held) and buckets.dropped == 0
+    again = [buckets.admit("k", 5.6) for _ in range(20)]
+    assert 0 < sum(not x for x in again) and buckets.dropped == sum(not x for x in again)
+    taken = sum(buckets.admit("k", 6.0 + i / 1000) for i in range(10_000))  # a flood, 10 s
+    assert taken <= 20 + 20 * 10 + 1  # a bucket's size, then 20 a second
+    without = Buckets(limits)  # no lease (in-process): burst only
+    without.open("k", 0.0)
+    without.pace("k", 0.1)
+    assert all(without.admit("k", i / 10) for i in range(1, 41))
+    assert sum(without.admit("k", 5.5) for _ in range(15)) == 8
+
+
 def test_drops_are_reported_once_per_interval() -> None:
     """Whatever the flood, one report per key per interval, with the count."""
     buckets = Buckets(RateLimits(allowance=1.0, burst=1.0, ceiling=10.0, report_every=1.0))
