@@ -150,14 +150,10 @@ def why_not(task: Task, tests: tuple[Test, ...], env: Bindings, params: Pattern)
         # An atom is shown with the name's variables filled in, the others listed.
         condition = atom_text(substitute(test.pattern, named))
         shown = tuple((k, v) for k, v in current.items() if k not in params and _mentions(test, k))
-    detail, near = _DETAIL[test.kind], ""
+    near = ""
     if test.kind is TestKind.ATOM:
-        hint = _case_hint(task, test.pattern, current)
-        if hint:
-            detail = f"no fact matches ({hint})"
-        else:
-            near = _near_miss(task, test.pattern, current)
-    return Failure(condition, test.span, shown, detail, near)
+        near = _near_miss(task, test.pattern, current) or _case_hint(task, test.pattern, current)
+    return Failure(condition, test.span, shown, _DETAIL[test.kind], near)
 
 
 def _mentions(test: Test, var: str) -> bool:
@@ -191,10 +187,12 @@ def _near_miss(task: Task, p: Pattern, env: Bindings) -> str:
 
 
 def _case_hint(task: Task, p: Pattern, env: Bindings) -> str:
-    """A hint when a symbol of the condition differs only in case from the state's."""
+    """``symbols are case-sensitive: did you mean Pippi?`` when a symbol of the
+    condition differs only in case from one the state names (and no single
+    fact is a near miss, :func:`_near_miss`, which says which); '' else."""
     ground = substitute(p, env)
     folded = {n.lower(): n for n in task.state_names}
     for term in ground:
         if not is_variable(term) and term not in task.state_names and term.lower() in folded:
-            return f"the state spells {term} as {folded[term.lower()]}; symbols are case-sensitive"
+            return did_you_mean(term, [folded[term.lower()]]) or ""
     return ""

@@ -58,4 +58,8 @@ def test_why_not_hints_at_a_case_slip() -> None:
     t = task("(robot a) (battery a 50) (in a Room1)")
     (method,) = t.methods[("go", 1)]
     failure = why_not(t, method.tests, {"?r": "A"}, method.params)
-    assert "the state spells A as a; symbols are case-sensitive" in failure.describe()
+    # a newcomer read "no fact matches (the state spells PIPPI as Pippi; ...) (robot PIPPI)"
+    assert failure.describe() == (
+        "no fact matches (robot A): symbols are case-sensitive: did you mean a? "
+        "the state has (robot a)"
+    )

@@ -132,4 +132,4 @@ def test_case_mismatch_is_explained(tmp_path: Path) -> None:
     configs, search = solve(p)
     assert configs == []
     text = "\n".join(explain(search.report, "go(A)"))
-    assert "the state spells A as a; symbols are case-sensitive" in text
+    assert "(robot A): symbols are case-sensitive: did you mean a?" in text

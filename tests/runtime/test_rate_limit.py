@@ -62,7 +62,7 @@ def test_what_a_stall_within_the_lease_held_back_is_no_flood() -> None:
     held = [buckets.admit("k", 5.5) for _ in range(15)]  # a 1.5 s stall, let go
     assert all(held) and buckets.dropped == 0
     again = [buckets.admit("k", 5.6) for _ in range(20)]
-    assert 0 < sum(not x for x in again) and buckets.dropped == sum(not x for x in again)
+    assert sum(not x for x in again) > 0 and buckets.dropped == sum(not x for x in again)
     taken = sum(buckets.admit("k", 6.0 + i / 1000) for i in range(10_000))  # a flood, 10 s
     assert taken <= 20 + 20 * 10 + 1  # a bucket's size, then 20 a second
     without = Buckets(limits)  # no lease (in-process): burst only
