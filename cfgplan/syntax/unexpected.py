@@ -13,6 +13,7 @@ when a keyword turns up inside a list.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from lark import Token
@@ -159,13 +160,25 @@ def _unexpected_token(exc: UnexpectedToken, filename: str, text: str) -> Cfgplan
             )
     message = f"unexpected '{tok}'; expected {_describe_expected(set(exc.expected))}"
     hint: str | None = None
-    if tok.type == "RPAR" and "RPAR" not in exc.expected:
+    empty = _EMPTY.search(text[: tok.start_pos or 0]) if tok.type == "RPAR" else None
+    if empty is not None:  # (goal) or (sequence): balanced, but nothing in it
+        hint = _EMPTY_HINTS[empty.group(1)]
+    elif tok.type == "RPAR" and "RPAR" not in exc.expected:
         hint = "there is one ')' too many, or an opening '(' is missing"
     elif tok.type == "LPAR" and "KEYWORD" in exc.expected:
         hint = "a form holds :keyword value pairs; if the form before ends here, it lacks a ')'"
     elif tok.type == "SYMBOL" and {"MAKE_FUNCTIONALITY", "STATE"} & set(exc.expected):
         hint = _form_hint(str(tok))
     return error(message, span, hint)
+
+
+_EMPTY = re.compile(r"\(\s*(goal|sequence)\s*$")
+"""A goal or a sequence opened just before the ``)`` at the end of the text."""
+
+_EMPTY_HINTS = {
+    "goal": "the goal is empty: it names a method instance, (goal (do-cross-door Pippi Door1))",
+    "sequence": "the sequence is empty: it lists goals, (sequence (do-a Pippi) (do-b Emil))",
+}
 
 
 def _unexpected_character(exc: UnexpectedCharacters, filename: str, text: str) -> CfgplanError:

@@ -366,3 +366,18 @@ def test_form_feed_does_not_start_a_line() -> None:
     # shown escaped (terminal safety), the caret still under "(robot" (column 8)
     assert rows[1] == "    1 | (state\\x0c(robot ?x))"
     assert rows[2].index("^") == rows[1].index("(robot")
+
+
+@pytest.mark.parametrize(
+    ("text", "column", "hint"),
+    [
+        ("(state (robot Pippi))\n(goal)\n", 6, "the goal is empty: it names a method instance"),
+        ("(state (robot Pippi))\n(goal  )\n", 8, "the goal is empty"),
+        ("(state (robot Pippi))\n(sequence)\n", 10, "the sequence is empty: it lists goals"),
+    ],
+)
+def test_an_empty_goal_or_sequence_is_said_to_be_empty(text: str, column: int, hint: str) -> None:
+    """Balanced, but nothing in it: a newcomer was told there was one ')' too many."""
+    d = reader_error(text)
+    assert_rendered(d, text, 2, column, "unexpected ')'")
+    assert d.hint is not None and d.hint.startswith(hint)
