@@ -18,6 +18,7 @@ from cfgplan.notation import atom_text
 from cfgplan.planner.compile import compile_task, pattern
 from cfgplan.planner.task import Ground, Task
 from cfgplan.syntax.reader import collection_paused, parse, read_domain, read_state
+from cfgplan.syntax.unexpected import unclosed
 
 GOAL_SOURCE = "--goal"
 
@@ -63,6 +64,14 @@ def parse_goal(text: str, line: int = 1) -> Goal:
             "a goal is a method instance in parentheses",
             span,
             f"add the parentheses: --goal '({words})'",
+        )
+    open_at = unclosed(text)
+    if open_at is not None:  # else "(goal " would be the '(' never closed
+        column = open_at[1] + len("(goal ")
+        raise error(
+            "a list is not closed (missing ')')",
+            Span(file=GOAL_SOURCE, line=line, column=column, end_line=line, end_column=column + 1),
+            "every '(' needs a matching ')': this one is never closed",
         )
     wrapped = "\n" * (line - 1) + f"(goal {text})"
     source = parse(wrapped, GOAL_SOURCE)

@@ -22,7 +22,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 from cfgplan.diagnostics import CfgplanError, error, lines_of
 from cfgplan.ir.model import Span
 
-__all__ = ["syntax_error"]
+__all__ = ["syntax_error", "unclosed"]
 
 _TERMINAL_NAMES = {
     "LPAR": '"("',
@@ -85,6 +85,14 @@ def _scan(text: str, upto: int | None = None) -> tuple[list[_Open], _Open | None
         elif char == ")" and stack:
             stack.pop()
     return stack, inner, outer
+
+
+def unclosed(text: str) -> tuple[int, int] | None:
+    """The line and column of the first ``(`` of ``text`` never closed, or
+    ``None`` (for a text read wrapped in a form, such as ``--goal``'s, whose
+    own ``)`` would close it)."""
+    stack, _, _ = _scan(text)
+    return (stack[0].line, stack[0].column) if stack else None
 
 
 def _at(filename: str, line: int, column: int, end_column: int | None = None) -> Span:
