@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from cfgplan.cli.app import EXIT_NONE, say
-from cfgplan.cli.formats import more_note, plain
+from cfgplan.cli.formats import NO_MEDIA, more_note, plain
 from cfgplan.cli.options import no_rank
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_dict, to_text
@@ -77,8 +77,10 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
         )
     if format_ == "lisp":
         return _lisp(problem, found, first)
-    return _table(problem, found, options.details, first) + (
-        more_note(len(found), "sequence", more) if more or more is None else ""
+    return (
+        _table(problem, found, options.details, first)
+        + (more_note(len(found), "sequence", more) if more or more is None else "")
+        + ("" if problem.state.media else f"note: {NO_MEDIA}\n")
     )
 
 
@@ -162,6 +164,8 @@ def _number(x: float) -> int | float:
 def _lisp(problem: Problem, found: list[PlannedSequence], first: int) -> str:
     goals = ", ".join(call_text(g) for g in problem.goal_calls)
     parts = [f";; cfgplan: {len(found)} sequence(s) for {goals}"]
+    if not problem.state.media:
+        parts.append(f";; {NO_MEDIA}")
     for rank, planned in enumerate(found, first):
         parts.append(f";; sequence {rank}, total cost {fmt(planned.total)}")
         for i, step in enumerate(planned.steps, 1):

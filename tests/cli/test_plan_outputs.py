@@ -120,3 +120,15 @@ def test_a_cut_list_of_sequences_says_more_exist() -> None:
     assert document["stats"]["more"] is True and len(document["sequences"]) == 2
     _, whole_json = _plan([*SEQUENCE, "-k", "4", "--format", "json"])
     assert json.loads(whole_json)["stats"]["more"] is False
+
+
+@pytest.mark.parametrize("format_", ["table", "lisp"])
+def test_a_sequence_says_communication_was_not_checked_as_one_goal_does(format_: str) -> None:
+    """language.md: without media the configurations are not checked for
+    communication, "and cfgplan says so"; a sequence's table and LISP did not."""
+    for files in (CROSS, SEQUENCE):
+        result = CliRunner().invoke(app, ["plan", *files, "--format", format_])
+        assert result.exit_code == 0, result.output
+        assert "the state declares no media: communication admissibility not checked" in (
+            result.stdout
+        ), files
