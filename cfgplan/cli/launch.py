@@ -33,7 +33,7 @@ from cfgplan.cli.options import (
 from cfgplan.cli.run import option
 from cfgplan.cli.sequence import first_step
 from cfgplan.configuration.cost import parse_weights
-from cfgplan.diagnostics import run_error
+from cfgplan.diagnostics import did_you_mean, run_error
 from cfgplan.live.address import parse_address
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.options import (
@@ -267,7 +267,10 @@ def launch(
     for name in [*(only or ()), *addresses]:
         if name not in problem.task.agents:
             raise run_error(
-                RunError(f"no robot {name} in {state} (its robots: {', '.join(known)})")
+                RunError(
+                    f"no robot {name} in {state} (its robots: {', '.join(known)})",
+                    hint=did_you_mean(name, problem.task.agents),
+                )
             )
         if name not in known:
             raise run_error(

@@ -42,7 +42,7 @@ from cfgplan.cli.options import (
     parsed,
 )
 from cfgplan.cli.sequence import first_step
-from cfgplan.diagnostics import run_error
+from cfgplan.diagnostics import did_you_mean, run_error
 from cfgplan.live.address import Address, parse_address
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
@@ -281,7 +281,10 @@ def run(
             part = next((p for p in parts if p.robot == robot), None)
             if part is None and not (reconfigure and robot in problem.task.agents):
                 names = ", ".join(p.robot for p in parts)
-                raise RunError(f"no robot {robot} in this configuration (its robots: {names})")
+                raise RunError(
+                    f"no robot {robot} in this configuration (its robots: {names})",
+                    hint=did_you_mean(robot, problem.task.agents),
+                )
             part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
             topics = None
             if ros2_map is not None:  # checked against the domain before the network opens

@@ -35,7 +35,7 @@ from typing import IO
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
 from cfgplan.configuration.model import Configuration
-from cfgplan.diagnostics import CfgplanError, Diagnostic, error
+from cfgplan.diagnostics import CfgplanError, Diagnostic, did_you_mean, error
 from cfgplan.notation import call_text
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain
@@ -78,9 +78,10 @@ def open_scenario(experiment: str) -> Loaded:
         bundled = Path(str(found))
         text = bundled.read_text("utf-8")
         return read_scenario(str(bundled), text, bundled.parent)
+    near = did_you_mean(experiment, BUNDLED)
     raise error(
         f"{experiment}: no such scenario file, nor a bundled scenario",
-        hint=f"give a scenario file, or one of {', '.join(BUNDLED)}",
+        hint=near or f"give a scenario file, or one of {', '.join(BUNDLED)}",
     )
 
 

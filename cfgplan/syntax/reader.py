@@ -217,10 +217,13 @@ def read_text_file(path: str | Path) -> tuple[str, str]:
 def domain_from(source: SourceFile) -> Domain:
     """A Domain from a parsed file; state and goal forms do not belong there."""
     for item in (*source.states, *source.goals, *(s[0] for s in source.sequences)):
+        swapped = not source.functionalities and not source.methods
         raise error(
             "a domain file holds only make-functionality and make-config-method forms",
             item.span,
-            "put (state ...) and (goal ...) in the state file",
+            "the domain comes first: cfgplan plan DOMAIN STATE"
+            if swapped
+            else "put (state ...) and (goal ...) in the state file",
         )
     span = Span(file=source.name, line=1, column=1, end_line=1, end_column=1)
     return Domain(
