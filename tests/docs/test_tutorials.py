@@ -108,6 +108,8 @@ def test_blocks_share_a_folder_and_output_is_matched_by_whole_lines(tmp_path: Pa
     assert missing(("c", "a"), out.stdout) == "a"  # in order
     assert missing(("d",), out.stdout) == "d"  # leading spaces count
     assert missing(("b  ",), out.stdout) == "b  "  # whole lines, trailing spaces stripped
+    assert missing(("...", "c", "..."), out.stdout) is None  # "..." marks lines left out
+    assert missing(("c", "...", "a"), out.stdout) == "a"  # and is no wildcard for order
     assert run(second, tmp_path).stdout == "one\n"  # the first block's file
 
 

@@ -10,7 +10,9 @@ The convention (docs/development.md):
 * a fenced block whose info string is exactly ``text`` directly after a ``sh``
   block (nothing but blank lines between) is its expected output: every
   non-blank line of it must occur in the block's stdout, in that order, each
-  as a whole line once trailing spaces are stripped;
+  as a whole line once trailing spaces are stripped; a line ``...`` says that
+  lines are left out there (a reader is not to take a part for the whole),
+  and is itself not looked for;
 * blocks with any other info string are shown, not run.
 """
 
@@ -30,6 +32,9 @@ ROOT = Path(__file__).resolve().parents[2]
 TUTORIALS = ROOT / "docs" / "tutorials"
 LIMIT = 120.0
 """Seconds one block may take."""
+
+LEFT_OUT = "..."
+"""An expected output's line for lines of the output the page leaves out."""
 
 _FENCE = re.compile(r"^(?P<indent> *)(?P<fence>`{3,}|~{3,})(?P<info>.*)$")
 
@@ -152,6 +157,8 @@ def missing(expected: tuple[str, ...], stdout: str) -> str | None:
     lines = [s.rstrip() for s in stdout.splitlines()]
     at = 0
     for want in expected:
+        if want == LEFT_OUT:
+            continue
         try:
             at = lines.index(want, at) + 1
         except ValueError:
