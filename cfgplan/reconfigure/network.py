@@ -89,6 +89,9 @@ class NetworkAdaptive:
     refusal: str | None = None
     """Why this coordinator stops: another one coordinates the society."""
     _dropped: int = 0  # messages the transport dropped, said so far
+    _last: float | None = None  # monotonic time of the last between()
+    _doubt_until: float = 0.0  # losses seen before then follow this robot's own stall
+    _doubted: dict[str, Detection] = field(default_factory=dict)  # such losses, held
     reconfigures: bool = True
 
     def before(self, cycle: int, elapsed: float) -> None:
@@ -106,8 +109,11 @@ class NetworkAdaptive:
                 f"the {most} that may wait (a robot floods it)"
             )
             self._dropped = dropped
+        self._stalled()
         for detection in self.monitor.drain():
-            self.take(detection)
+            if not self._doubt(detection):
+                self.take(detection)
+        self._settle_doubts()
         self.deployer.tick()
         me = self.deployer.me
         for robot in self.deployer.due():
@@ -128,6 +134,44 @@ class NetworkAdaptive:
                 self.deployer.member.robot.record(
                     Adaptation(robot=me, t=time.time(), what="finish", info=info)
                 )
+
+    def _stalled(self) -> None:
+        """Whether this robot's own loop stood still longer than the lease (its
+        process stopped, its machine hung): then its session, which stood
+        still too, may report robots lost that never stopped (their lease ran
+        out here, not there). That is said, and for two leases each loss is
+        held (:meth:`_doubt`) and taken only if the robot is still gone then."""
+        now, lease = time.monotonic(), self.deployer.transport.lease
+        gap, self._last = (0.0 if self._last is None else now - self._last), now
+        if gap > lease:
+            self._doubt_until = now + 2 * lease
+            self.deployer.member.error(
+                f"{self.deployer.me}'s own loop stood still {gap:.1f} s, longer than the "
+                f"lease ({lease:g} s): robots seen lost now are checked again before "
+                "anything is withdrawn"
+            )
+
+    def _doubt(self, detection: Detection) -> bool:
+        """Whether ``detection`` is held: a loss while losses are in doubt, or
+        a robot seen again whose loss is held (both are then let go)."""
+        robot = detection.other
+        if detection.kind == "lost" and time.monotonic() < self._doubt_until:
+            self._doubted.setdefault(robot, detection)
+            return True
+        if detection.kind == "seen" and robot in self._doubted:
+            del self._doubted[robot]  # it never left: its loss was this robot's stall
+            return True
+        return False
+
+    def _settle_doubts(self) -> None:
+        """Once the doubt is over, take the losses held of robots still gone."""
+        if not self._doubted or time.monotonic() < self._doubt_until:
+            return
+        held, self._doubted = self._doubted, {}
+        alive = self.deployer.transport.alive
+        for robot, lost in held.items():
+            if robot not in alive:
+                self.take(lost)
 
     def take(self, detection: Detection) -> None:
         robot = detection.other

@@ -22,7 +22,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.reconfigure.test_network import LIMIT
+from tests.backends.support import EXAMPLE_IMPL
+from tests.reconfigure.test_network import LIMIT, _network, _robot
 from tests.reconfigure.test_network_restart import SERVED_FIELDS, _after, served_step2
 from tests.runtime.netutil import processes, read_trace, wait_for
 
@@ -50,3 +51,39 @@ def test_a_helper_frozen_and_let_go_serves_the_goal_again(tmp_path: Path, frozen
     assert "Emil" not in failed, failed  # Pippi's view of Emil after her freeze
     if frozen > 1.0:  # past the lease: lost (0.8 s may be, with the silence before it)
         assert "Pippi" in failed, failed
+
+
+@pytest.mark.slow
+def test_a_coordinator_frozen_and_let_go_does_not_blame_its_helper(tmp_path: Path) -> None:
+    """Found by a review: Emil, the coordinator, frozen 4 s (his Zenoh session
+    too) came back seeing Pippi lost (her lease ran out in his stopped session,
+    not because she stopped), recorded her failure, withdrew her, found nothing
+    admissible, and took her back a cycle later. Now he says his own loop stood
+    still, checks the loss again, records no failure of Pippi, and the goal is
+    served again."""
+    emil_net, pippi_net = _network(tmp_path, "coordinator-freeze")
+    with processes() as running:
+        emil, emil_trace = _robot(
+            running, tmp_path, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120"
+        )
+        _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, pippi_net)
+        wait_for("the goal served", _after(emil_trace, 0.0, "call", **SERVED_FIELDS), LIMIT)
+        time.sleep(1.0)  # past the first switches' hold
+        stopped = time.time()
+        os.kill(emil.pid, signal.SIGSTOP)  # type: ignore[attr-defined]
+        time.sleep(4.0)
+        os.kill(emil.pid, signal.SIGCONT)  # type: ignore[attr-defined]
+        let_go = time.time()
+        wait_for("the stall said", _after(emil_trace, stopped, "error"), LIMIT)
+        again = wait_for(
+            "the goal again", _after(emil_trace, let_go, "call", **SERVED_FIELDS), LIMIT
+        )
+        time.sleep(3.0)  # two leases and more: a loss held would be taken by now
+        running.stop_all()
+    mine = read_trace(emil_trace)
+    said = [str(r) for r in mine if r["event"] == "error"]
+    assert any("own loop stood still" in s for s in said), said
+    failed = [r["resource"] for r in mine if r["event"] == "failure"]
+    assert failed == [], failed
+    assert [r for r in mine if r["event"] == "no-configuration"] == []
+    assert float(again["t"]) - let_go < HOLD + 1.0  # type: ignore[arg-type]

@@ -37,6 +37,7 @@ class Network:
     alive: set[str] = field(default_factory=lambda: {"Emil", "Pippi"})
     sent: list[tuple[str, dict[str, object]]] = field(default_factory=list)
     dropped: int = 0  # messages past the backlog (none here)
+    lease: float = 1.0  # seconds (the session's)
     options: SimpleNamespace = field(default_factory=lambda: SimpleNamespace(backlog=10_000))
 
     def publish(self, key: str, payload: bytes) -> None:

@@ -349,6 +349,35 @@ def test_a_second_process_is_told_apart_by_its_process_token() -> None:
     assert [m["instance"] for m in network.to("Rasmus", "duplicate")] == ["early"]
 
 
+def test_losses_after_the_coordinators_own_stall_are_checked_again() -> None:
+    """Found by a review: the coordinator frozen 4-5 s (its session too) came
+    back seeing its helper lost — her lease ran out *here* — recorded her
+    failure, withdrew her and found nothing admissible, then took her back a
+    cycle later. A stall of its own loop longer than the lease is said; a loss
+    seen then is held for two leases, dropped if the robot is seen again, and
+    taken if the robot is still gone at the end."""
+    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    me = adaptive.deployer.me
+    adaptive.between(0, 0.0)
+    assert adaptive._last is not None
+    adaptive._last -= 4.5  # the process was stopped 4.5 s
+    adaptive.monitor.detect(Detection("lost", me, time.time(), other="Rasmus"))
+    adaptive.monitor.detect(Detection("lost", me, time.time(), other="Emil"))
+    adaptive.between(1, 0.1)
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert len(errors) == 1 and "own loop stood still 4.5 s, longer than the lease" in errors[0]
+    adaptive.monitor.detect(Detection("seen", me, time.time(), other="Rasmus"))
+    network.alive.discard("Emil")  # Emil really went
+    adaptive.between(2, 0.2)
+    assert [e for e in events if e.what in ("failure", "recovery", "switch")] == []
+    assert {"Emil", "Rasmus"} <= adaptive.deployer.ready
+    adaptive._doubt_until = time.monotonic()  # two leases later
+    adaptive.between(3, 0.3)
+    failed = [dict(e.info).get("resource") for e in events if e.what == "failure"]
+    assert failed == ["Emil"], failed  # the one still gone; Rasmus never left
+    assert "Rasmus" in adaptive.deployer.ready
+
+
 def test_a_coordinator_told_it_is_a_rival_stops() -> None:
     """A robot that follows another live coordinator answers this one's
     messages with ``rival``: this coordinator's run ends, refused, saying
