@@ -132,12 +132,7 @@ def run(
     trace_max_bytes: Annotated[int, option(TRACE_MAX_BYTES)] = TRACE_MAX_BYTES.default,
     record: Annotated[Path | None, option(RECORD)] = None,
     record_max_bytes: Annotated[int, option(RECORD_MAX_BYTES)] = RECORD_MAX_BYTES.default,
-    force: Annotated[
-        bool,
-        typer.Option(
-            "--force", help="Overwrite the --trace FILE and the --record FILE if they exist."
-        ),
-    ] = FORCE.default,
+    force: Annotated[bool, option(FORCE)] = FORCE.default,
     verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
     inject: Annotated[list[str] | None, option(INJECT)] = None,
     ros2: Annotated[

@@ -183,7 +183,12 @@ RECORD_MAX_BYTES = Option(
     whole(0),
 )
 """Only ``cfgplan run`` and ``cfgplan simulate`` record: not in :data:`RUN_OPTIONS`."""
-FORCE = Option("--force", None, False, "Overwrite the --trace FILE if it exists.")
+FORCE = Option(
+    "--force",
+    None,
+    False,
+    "Overwrite the --trace FILE if it exists (cfgplan run: the --record FILE too).",
+)
 VERBOSE = Option(
     "--verbose",
     None,
