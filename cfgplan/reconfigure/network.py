@@ -42,8 +42,10 @@ from cfgplan.reconfigure.coordinate import Coordinator
 from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.deployer import RETRY, RETRY_MOST, SWITCH_TIMEOUT, NetworkDeployer
 from cfgplan.reconfigure.policy import Reconfigurator
+from cfgplan.reconfigure.stall import Doubts, Heartbeat
+from cfgplan.reconfigure.trust import beyond_its_own
 from cfgplan.runtime.events import Adaptation
-from cfgplan.runtime.faults import Injection, term_text
+from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.launch import REFUSED
@@ -89,9 +91,9 @@ class NetworkAdaptive:
     refusal: str | None = None
     """Why this coordinator stops: another one coordinates the society."""
     _dropped: int = 0  # messages the transport dropped, said so far
-    _last: float | None = None  # monotonic time of the last between()
-    _doubt_until: float = 0.0  # losses seen before then follow this robot's own stall
-    _doubted: dict[str, Detection] = field(default_factory=dict)  # such losses, held
+    members: frozenset[str] = frozenset()  # the state's robots (coordinate()): whose processes
+    heartbeat: Heartbeat | None = None  # tells this process's own stalls (coordinate())
+    doubts: Doubts | None = None  # the losses held after such a stall
     reconfigures: bool = True
 
     def before(self, cycle: int, elapsed: float) -> None:
@@ -136,41 +138,52 @@ class NetworkAdaptive:
                 )
 
     def _stalled(self) -> None:
-        """Whether this robot's own loop stood still longer than the lease (its
-        process stopped, its machine hung): then its session, which stood
-        still too, may report robots lost that never stopped (their lease ran
-        out here, not there). That is said, and for two leases each loss is
-        held (:meth:`_doubt`) and taken only if the robot is still gone then."""
-        now, lease = time.monotonic(), self.deployer.transport.lease
-        gap, self._last = (0.0 if self._last is None else now - self._last), now
-        if gap > lease:
-            self._doubt_until = now + 2 * lease
+        """Whether this process stood still longer than the lease since the last
+        pass (:mod:`cfgplan.reconfigure.stall`): then its session stood still
+        too and may see robots lost that never stopped. That is said, and
+        losses seen in the next two leases are held."""
+        if self.heartbeat is None or self.doubts is None:
+            return
+        pause, lease = self.heartbeat.take(), self.doubts.lease
+        if pause > lease:
+            self.doubts.stalled(time.monotonic())
             self.deployer.member.error(
-                f"{self.deployer.me}'s own loop stood still {gap:.1f} s, longer than the "
-                f"lease ({lease:g} s): robots seen lost now are checked again before "
-                "anything is withdrawn"
+                f"{self.deployer.me}'s process stood still longer than the lease: "
+                f"{pause:.1f} s (the lease is {lease:g} s); robots seen lost now are "
+                "checked again before anything is withdrawn"
             )
 
     def _doubt(self, detection: Detection) -> bool:
         """Whether ``detection`` is held: a loss while losses are in doubt, or
-        a robot seen again whose loss is held (both are then let go)."""
-        robot = detection.other
-        if detection.kind == "lost" and time.monotonic() < self._doubt_until:
-            self._doubted.setdefault(robot, detection)
+        a robot seen again by the same process whose loss is held (both are
+        let go). Seen again as another process (it was restarted meanwhile),
+        its loss is taken first, then the sighting."""
+        if self.doubts is None:
+            return False
+        if self.doubts.hold(detection, time.monotonic()):
             return True
-        if detection.kind == "seen" and robot in self._doubted:
-            del self._doubted[robot]  # it never left: its loss was this robot's stall
-            return True
+        if detection.kind == "seen":
+            lost = self.doubts.seen(detection.other)
+            if lost is not None:
+                if self._same_process(detection.other):
+                    return True  # it never left: its loss was this robot's stall
+                self.take(lost)
         return False
 
+    def _same_process(self, robot: str) -> bool:
+        """Whether ``robot``'s accepted process still runs (its process token is
+        seen; without process tokens, whether the robot is alive)."""
+        current, live = self._instances.get(robot), self._processes.get(robot)
+        if current is None or live is None:
+            return robot in self.deployer.transport.alive
+        return current in live
+
     def _settle_doubts(self) -> None:
-        """Once the doubt is over, take the losses held of robots still gone."""
-        if not self._doubted or time.monotonic() < self._doubt_until:
+        """Take the held losses whose deadline passed, of robots still gone."""
+        if self.doubts is None:
             return
-        held, self._doubted = self._doubted, {}
-        alive = self.deployer.transport.alive
-        for robot, lost in held.items():
-            if robot not in alive:
+        for lost in self.doubts.due(time.monotonic()):
+            if not self._same_process(lost.other):
                 self.take(lost)
 
     def take(self, detection: Detection) -> None:
@@ -202,7 +215,7 @@ class NetworkAdaptive:
             return
         if message.robot != sender:
             said = f"a message on {sender}'s key that says it is from {message.robot!r}"
-            self._once(f"{sender} {message.robot}", said)
+            self._once(f"{sender} names another", said)
         elif isinstance(message, Ack):
             if message.epoch == self.deployer.epoch:  # else: to the coordinator before this one
                 self.deployer.acked(message.robot, message.id, message.phase, message.reason)
@@ -232,7 +245,8 @@ class NetworkAdaptive:
             return
         beyond = beyond_its_own(detection)
         if beyond is not None:
-            self._once(f"{report.robot} {beyond}", f"{report.robot} reported {beyond}")
+            key = f"{report.robot} {detection.kind} beyond its own"  # a few kinds per robot
+            self._once(key, f"{report.robot} reported {beyond}")
         elif detection.kind not in ("lost", "seen"):
             self.take(detection)
 
@@ -247,8 +261,8 @@ class NetworkAdaptive:
         lost (its part with it) and the other is asked whether it is ready,
         as a robot seen again is: otherwise the live name would hide that
         death until its inputs went stale."""
-        if robot == self.deployer.me:
-            return
+        if robot == self.deployer.me or (self.members and robot not in self.members):
+            return  # a stranger's tokens are not kept
         live = self._processes.setdefault(robot, set())
         (live.add if alive else live.discard)(instance)
         current = self._instances.get(robot)
@@ -256,7 +270,7 @@ class NetworkAdaptive:
             return
         if alive and current in live:
             self.deployer.refuse(robot, instance)
-            self._once(f"{robot} {instance}", f"a second process of robot {robot}")
+            self._once(f"{robot} second process", f"a second process of robot {robot}")
         elif not alive and instance == current and live:
             me, now = self.deployer.me, time.time()
             gone = f"its process {instance} ended; another process of {robot} runs"
@@ -264,8 +278,10 @@ class NetworkAdaptive:
             self.take(Detection("seen", me, now, other=robot, how="process"))
 
     def _once(self, key: str, said: str) -> None:
-        """Say ``said`` (dropped), the first time for ``key``, for a few keys."""
-        if key not in self._noted and len(self._noted) < 16:
+        """Say ``said`` (dropped), the first time for ``key``, for a few keys
+        (each a robot of the state and a kind of message, so that no robot
+        can use them up for the others)."""
+        if key not in self._noted and len(self._noted) < 64:
             self._noted.add(key)
             self.deployer.member.error(f"{said}: dropped")
 
@@ -278,12 +294,12 @@ class NetworkAdaptive:
                 self._instances[robot] = ready.instance
                 for other in sorted(self._processes.get(robot, set()) - {ready.instance}):
                     self.deployer.refuse(robot, other)  # its token came first: it is second
-                    self._once(f"{robot} {other}", f"a second process of robot {robot}")
+                    self._once(f"{robot} second process", f"a second process of robot {robot}")
             return False
         if ready.instance == first:
             return False
         self.deployer.refuse(robot, ready.instance)
-        self._once(f"{robot} {ready.instance}", f"a second process of robot {robot}")
+        self._once(f"{robot} second process", f"a second process of robot {robot}")
         return True
 
     def _rival(self, rival: Rival) -> None:
@@ -296,7 +312,9 @@ class NetworkAdaptive:
                     f"{rival.robot} follows {rival.leader}; this one stops"
                 )
             return
-        self._once(rival.epoch, f"a second coordinator of the society, refused by {rival.robot}")
+        self._once(
+            f"{rival.robot} rival", f"a second coordinator of the society, refused by {rival.robot}"
+        )
 
     def _ready(self, robot: str) -> None:
         """``robot`` can be sent its part: take it back if it was seen, else
@@ -322,6 +340,8 @@ class NetworkAdaptive:
         return self.coordinator.stopped
 
     def close(self) -> None:
+        if self.heartbeat is not None:
+            self.heartbeat.stop()
         self.coordinator.close()
 
 
@@ -363,6 +383,9 @@ def coordinate(
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
+    adaptive.members = frozenset(task.agents)
+    adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(transport.lease)
+    adaptive.heartbeat.start()
     watch = getattr(transport, "watch_processes", None)
     if watch is not None:  # over Zenoh: each process of a robot has a token of its own
         watch(adaptive.process)
@@ -370,26 +393,3 @@ def coordinate(
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
-
-
-def beyond_its_own(detection: Detection) -> str | None:
-    """What ``detection``, reported by ``detection.robot``, says beyond that
-    robot's own business, or ``None``: a helper may report the failure,
-    recovery or accomplished task of a functionality instance that runs on
-    it (an instance's first argument is its robot, 3.2), and what it sees of
-    its own inputs (stale, fresh); a state update is the coordinator's
-    operator's alone (a helper's ``--inject assert``/``retract`` is not
-    applied where it runs). With ``--keys`` a report comes from the robot it
-    names, so this is what a compromised robot could otherwise say of others
-    (remove ``(camera Emil)``, fail ``compass(Emil)``, stop the society)."""
-    if detection.kind == "facts":
-        return "a state update (only the coordinator's operator updates the state)"
-    if detection.kind in ("failure", "recovery", "achieved"):
-        instance = detection.instance
-        if len(instance) < 2 or instance[1] != detection.robot:
-            shown = term_text(instance) if instance else "no instance"
-            what = {"failure": "the failure", "recovery": "the recovery"}.get(
-                detection.kind, "the task accomplished"
-            )
-            return f"{what} of {shown}, which does not run on it"
-    return None

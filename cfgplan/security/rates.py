@@ -19,10 +19,10 @@ anything is read, stored or woken (:class:`Buckets`):
   60 s), ``ceiling`` holds;
 * it holds ``burst`` messages, so that the jitter of the network, which
   bunches a sender's values, costs none of them — or, when more, as many as
-  the sender sends in a *lease* (the seconds of silence the society rides
-  out before a robot is lost, :class:`Buckets`): a receiver or a link that
-  stalls for less than that, a frozen process let go, gets what was held
-  back all at once, and that is no flood;
+  the sender's stated period makes in a *lease* (the seconds of silence the
+  society rides out before a robot is lost, :class:`Buckets`), at most
+  ``ceiling``: a receiver or a link that stalls for less than that, a frozen
+  process let go, gets what was held back all at once, and that is no flood;
 * a message that finds the bucket empty is dropped, unread, and counted;
   the receiver records the count per channel once per ``report_every``
   seconds (an ``error`` event naming the channel and its sender), never
@@ -101,17 +101,22 @@ class Buckets:
     _buckets: dict[str, Bucket] = field(default_factory=dict)
     _reported: float | None = None
 
-    def size(self, rate: float) -> float:
-        """A bucket's size at ``rate``: ``burst``, or the messages its sender
-        sends in a lease (``rate`` over the allowance), whichever is more."""
-        return max(self.limits.burst, self.lease * rate / self.limits.allowance)
+    def size(self, period: float | None) -> float:
+        """A bucket's size for a sender of ``period`` seconds: ``burst``, or
+        the messages it sends in a lease, whichever is more, and never more
+        than ``ceiling`` (a second's worth at the most that is taken); a
+        sender that states no period gets ``burst``."""
+        limits = self.limits
+        if period is None or not period > 0:
+            return limits.burst
+        return max(limits.burst, min(self.lease / period, limits.ceiling))
 
     def open(self, key: str, now: float) -> None:
         """A channel on ``key`` is attached: a bucket of ``burst`` tokens at the
         ceiling's rate, until its sender states its period."""
         limits = self.limits
-        rate = limits.rate(None)
-        self._buckets.setdefault(key, Bucket(rate, limits.burst, now, self.size(rate)))
+        bucket = Bucket(limits.rate(None), limits.burst, now, self.size(None))
+        self._buckets.setdefault(key, bucket)
 
     def close(self, key: str) -> None:
         """The channel is detached (its drops not yet reported are forgotten)."""
@@ -122,7 +127,7 @@ class Buckets:
         bucket = self._buckets.get(key)
         if bucket is not None:
             bucket.rate = self.limits.rate(period)
-            bucket.size = self.size(bucket.rate)
+            bucket.size = self.size(period)
 
     def admit(self, key: str, now: float) -> bool:
         """Whether a message on ``key`` is taken (a token spent) or dropped (counted).

@@ -221,7 +221,7 @@ def domain_from(source: SourceFile) -> Domain:
         raise error(
             "a domain file holds only make-functionality and make-config-method forms",
             item.span,
-            "the domain comes first: cfgplan plan DOMAIN STATE"
+            "the domain file comes first, then the state file (DOMAIN STATE)"
             if swapped
             else "put (state ...) and (goal ...) in the state file",
         )

@@ -35,7 +35,7 @@ IMPL = ["--impl", "examples/cross-door/impl.py"]
         (
             ["plan", CROSS[1], CROSS[0]],
             "a domain file holds only make-functionality and make-config-method forms",
-            "the domain comes first: cfgplan plan DOMAIN STATE",
+            "the domain file comes first, then the state file (DOMAIN STATE)",
         ),
     ],
     ids=["run", "launch", "simulate", "swapped"],

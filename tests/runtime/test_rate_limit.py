@@ -57,7 +57,11 @@ def test_what_a_stall_within_the_lease_held_back_is_no_flood() -> None:
     buckets = Buckets(limits, lease=2.0)
     buckets.open("k", 0.0)
     buckets.pace("k", 0.1)
-    assert buckets.size(limits.rate(0.1)) == 20.0
+    assert buckets.size(0.1) == 20.0
+    assert buckets.size(None) == 8.0  # no stated period: the burst
+    assert buckets.size(1e-6) == 200.0  # a period claimed tiny: a second at the ceiling
+    low = Buckets(RateLimits(allowance=0.1, burst=8.0, ceiling=200.0), lease=10.0)
+    assert low.size(None) == 8.0 and low.size(1e-3) == 200.0  # the allowance does not grow it
     assert all(buckets.admit("k", i / 10) for i in range(1, 41))  # 4 s at its pace: it fills
     held = [buckets.admit("k", 5.5) for _ in range(15)]  # a 1.5 s stall, let go
     assert all(held) and buckets.dropped == 0
