@@ -24,6 +24,12 @@ code): it starts with a letter and holds only letters, digits and
 name is written between bars with ``\\`` and ``|`` escaped (``'|#\\|Door1|``),
 so that no name can open a comment (``#|``), a string, a package prefix
 (``:``) or end the form. Comments show unsafe characters escaped.
+
+Of Common Lisp the file uses only :data:`RESERVED` (``'x`` reads as ``(QUOTE
+x)``): a name that folds to one of them (``list``, ``Nil``) is written between
+bars too, so that it reads as itself, not as the operator; a functionality
+named exactly ``LIST`` (or ``LET`` ...) cannot be called in this form at all,
+and is an error (emit ``--lang python``, or rename it).
 """
 
 from __future__ import annotations
@@ -33,18 +39,22 @@ from collections.abc import Sequence
 
 from cfgplan.backends.wiring import Call, RobotPart
 from cfgplan.configuration.model import Channel
-from cfgplan.diagnostics import printable
+from cfgplan.diagnostics import error, printable
 
-__all__ = ["call_form", "channel_name", "lisp_symbol", "make_channel", "to_lisp"]
+__all__ = ["RESERVED", "call_form", "channel_name", "lisp_symbol", "make_channel", "to_lisp"]
 
 _PLAIN = re.compile(r"[A-Za-z][A-Za-z0-9\-_+*/<>=!?$%&.]*|[-+]?[0-9]+(\.[0-9]+)?")
 
 
+RESERVED = frozenset({"LET", "LAMBDA", "PROGN", "LIST", "NIL", "QUOTE"})
+"""The Common Lisp symbols the form of 5.3 is made of."""
+
+
 def lisp_symbol(name: str) -> str:
     """``name`` as a Common Lisp reader reads it back: as it is when it is plain
-    (``Door1``, ``measure-door``, ``20``), else ``|...|`` with ``\\`` and ``|``
-    escaped."""
-    if _PLAIN.fullmatch(name):
+    (``Door1``, ``measure-door``, ``20``) and folds to none of :data:`RESERVED`,
+    else ``|...|`` with ``\\`` and ``|`` escaped."""
+    if _PLAIN.fullmatch(name) and (name.upper() not in RESERVED or name.isupper()):
         return name
     return "|" + name.replace("\\", "\\\\").replace("|", "\\|") + "|"
 
@@ -78,7 +88,14 @@ def _output(channels: Sequence[int]) -> str:
 
 def call_form(call: Call) -> str:
     """``(measure-door 'Door1 CH-4 (LIST CH-5) (LIST CH-6))`` (5.2.1)."""
-    parts = [lisp_symbol(call.functionality.name)]
+    name = call.functionality.name
+    if name in RESERVED:
+        raise error(
+            f"the functionality {name} cannot be called in the LISP of 5.3: "
+            f"{name} is Common Lisp's, which the form is made of",
+            hint="emit --lang python, or rename the functionality in the domain",
+        )
+    parts = [lisp_symbol(name)]
     parts += [f"'{lisp_symbol(x)}" for x in call.objects]
     parts += [_input(x) for x in call.inputs]
     parts += [_output(x) for x in call.outputs]

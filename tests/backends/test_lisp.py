@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import pytest
 
-from cfgplan.backends.lisp import to_lisp
-from cfgplan.backends.wiring import deploy
+from cfgplan.backends.lisp import call_form, to_lisp
+from cfgplan.backends.wiring import Call, deploy
 from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import (
     carry_bar_33,
@@ -100,3 +101,17 @@ def test_a_channel_the_functionality_has_no_input_for_is_an_error() -> None:
         one_robot_part([("F1", "F2", ("x", "R"))])
     with pytest.raises(CfgplanError, match=r"carries z\(R\), but F1: p\(R\) has no such output"):
         one_robot_part([("F1", "F3", ("z", "R"))])
+
+
+def test_a_functionality_named_as_the_forms_own_operator_is_an_error() -> None:
+    """``(LIST (LIST CH-1))`` would make a list, not call LIST: no form of 5.3
+    calls it, so emitting says so (Python still can)."""
+    (producer, *_rest) = one_robot_part([("F1", "F3", ("x", "R"))]).calls
+
+    def named(name: str) -> Call:
+        renamed = producer.functionality.model_copy(update={"name": name})
+        return replace(producer, functionality=renamed)
+
+    with pytest.raises(CfgplanError, match="the functionality LIST cannot be called"):
+        call_form(named("LIST"))
+    assert call_form(named("list")).startswith("(|list| ")

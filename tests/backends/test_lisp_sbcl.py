@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pytest
 
-from cfgplan.backends.lisp import _PLAIN, to_lisp
+from cfgplan.backends.lisp import _PLAIN, RESERVED, to_lisp
 from cfgplan.backends.wiring import Call, RobotPart, deploy
 from cfgplan.planner import plan
 from cfgplan.problem import load
@@ -80,8 +80,8 @@ def read_back(name: str) -> str:
     """``name`` as the Lisp reader gives it back from :func:`lisp_symbol`'s
     text, printed by the harness: a plain symbol folded to upper case, a plain
     number as a number, any other name as it is (it was written between bars)."""
-    if not _PLAIN.fullmatch(name):
-        return name
+    if not _PLAIN.fullmatch(name) or (name.upper() in RESERVED and not name.isupper()):
+        return name  # written between bars
     if re.fullmatch(r"[-+]?[0-9]+", name):
         return str(int(name))
     if re.fullmatch(r"[-+]?[0-9]+\.[0-9]+", name):
@@ -181,3 +181,29 @@ def test_the_harness_sees_a_call_out_of_place(tmp_path: Path) -> None:
     lines = run_sbcl(path)
     assert lines != expected(emil)
     assert sorted(lines) != sorted(expected(emil)), "the arguments went with the names"
+
+
+RESERVED_DOMAIN = """\
+(make-functionality :name '(list ?r) :out '((x ?r)))
+(make-functionality :name '(progn ?r ?o) :in '((x ?r)))
+(make-config-method :name '(go ?r ?o) :precond '((robot ?r) (thing ?o))
+  :channels '(((local ?r) ?a ?b (x ?r))) :body '((?a (list ?r)) (?b (progn ?r ?o))))
+"""
+
+
+def test_names_that_fold_to_the_forms_own_operators_read_as_themselves(tmp_path: Path) -> None:
+    """A functionality named ``list`` read as Common Lisp's LIST, so its call
+    made a list instead; a robot ``Nil`` read as NIL. Written between bars,
+    they read as themselves (the harness calls ``list`` and ``progn`` and
+    prints ``Nil`` and ``let``)."""
+    (tmp_path / "d.lisp").write_text(RESERVED_DOMAIN, encoding="utf-8")
+    state = "(state (robot Nil) (thing let))\n(goal (go Nil let))\n"
+    (tmp_path / "s.lisp").write_text(state, encoding="utf-8")
+    problem = load(tmp_path / "d.lisp", tmp_path / "s.lisp")
+    configs, _ = plan(problem.task, problem.goal_call, limit=1)
+    (part,) = deploy(configs[0], problem.domain)
+    path = tmp_path / "nil.lisp"
+    path.write_text(to_lisp(part), encoding="utf-8")
+    lines = run_sbcl(path)
+    assert lines == expected(part)
+    assert "call list (#1)" in lines and "call progn let #1" in lines
