@@ -209,11 +209,10 @@ def injections(texts: Sequence[str] | None, problem: Problem) -> tuple[Injection
     a "did you mean", as a typo would make the fault a silent no-op."""
     from cfgplan.runtime.faults import misaimed, parse_injection
 
-    arities = {f.name.predicate: f.name.arity for f in problem.domain.functionalities}
     out = []
     for text in texts or ():
         injection = parse_injection(text)
-        wrong = misaimed(injection, problem.task.agents, arities)
+        wrong = misaimed(injection, problem.task.agents, problem.task.functionalities)
         if wrong is not None:
             usage_error(wrong.message + (f" ({wrong.hint})" if wrong.hint else ""), "--inject")
         out.append(injection)

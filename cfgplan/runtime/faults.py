@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import re
 import traceback
-from collections.abc import Collection, Mapping
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import Literal
 
@@ -229,14 +229,14 @@ def _when(text: str, cycle: str | None, seconds: str | None) -> tuple[int | None
 def misaimed(
     injection: Injection,
     agents: Collection[str],
-    functionalities: Mapping[str, int] | None = None,
+    functionalities: Collection[tuple[str, int]] | None = None,
 ) -> RunError | None:
     """Why ``injection`` aims at nothing of the society, or ``None`` when it
     aims well: its robot (a ``kill``'s or ``recover``'s, an instance's first
     argument) must be one of ``agents``, the society's robots and devices; an
-    instance's name, when ``functionalities`` (name -> number of arguments) are
-    known, one of them with as many arguments. A state update (``assert``,
-    ``retract``) may name any fact."""
+    instance, when ``functionalities`` (their signatures, name and number of
+    arguments, as a task keys them) are known, one of them. A state update
+    (``assert``, ``retract``) may name any fact."""
     if injection.on_facts:
         return None
     text = f"--inject {injection.text!r}"
@@ -249,17 +249,19 @@ def misaimed(
     if injection.on_robot or functionalities is None:
         return None
     name, *args = injection.target
-    if name not in functionalities:
+    if (name, len(args)) in functionalities:
+        return None
+    arities = [n for known, n in functionalities if known == name]
+    if not arities:
+        names = list(dict.fromkeys(known for known, _ in functionalities))
         return RunError(
             f"{text}: no functionality {name} in the domain",
-            hint=_near(name, functionalities, "its functionalities"),
+            hint=_near(name, names, "its functionalities"),
         )
-    if functionalities[name] != len(args):
-        return RunError(
-            f"{text}: {name} takes {functionalities[name]} argument(s), not {len(args)}",
-            hint="its robot first, as in a configuration: compass(Emil)",
-        )
-    return None
+    return RunError(
+        f"{text}: {name} takes {' or '.join(map(str, arities))} argument(s), not {len(args)}",
+        hint="its robot first, as in a configuration: compass(Emil)",
+    )
 
 
 def _near(name: str, known: Collection[str], what: str) -> str:

@@ -188,10 +188,10 @@ def _against_world(loaded: Loaded, problem: Problem) -> list[Diagnostic]:
                 "rooms",
             )
         )
-    arities = {f.name.predicate: f.name.arity for f in problem.domain.functionalities}
+    task = problem.task
     for i, text in enumerate(s.faults):
         try:
-            wrong = misaimed(parse_injection(text), problem.task.agents, arities)
+            wrong = misaimed(parse_injection(text), task.agents, task.functionalities)
         except RunError as exc:
             wrong = exc
         if wrong is not None:

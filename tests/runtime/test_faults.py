@@ -74,7 +74,7 @@ def test_where_and_when_an_injection_applies() -> None:
 
 
 AGENTS = ("Pippi", "Emil")
-ARITIES = {"compass": 1, "camera": 1, "measure-door": 2}
+ARITIES = [("compass", 1), ("camera", 1), ("measure-door", 2)]
 
 
 @pytest.mark.parametrize(
