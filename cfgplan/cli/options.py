@@ -62,6 +62,7 @@ __all__ = [
     "number_of",
     "parsed",
     "print_errors",
+    "rank_option",
 ]
 
 
@@ -139,16 +140,16 @@ WeightsOpt = Annotated[
         "(the thesis's, and the default). A functionality's :cost replaces its weight.",
     ),
 ]
-RankOpt = Annotated[
-    int,
-    typer.Option(
-        "--rank",
-        metavar="N",
-        parser=count_of(1),
-        help="Which configuration, 1 being the cheapest (default 1).",
-        show_default=False,
-    ),
-]
+
+
+def rank_option(help_text: str) -> Any:
+    """The ``--rank N`` option (1 the cheapest), with its command's help."""
+    return typer.Option(
+        "--rank", metavar="N", parser=count_of(1), help=help_text, show_default=False
+    )
+
+
+RankOpt = Annotated[int, rank_option("Which configuration, 1 being the cheapest (default 1).")]
 ForceOpt = Annotated[bool, typer.Option("--force", help="Overwrite the -o file.")]
 
 

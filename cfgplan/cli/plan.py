@@ -28,6 +28,7 @@ from cfgplan.cli.options import (
     load_problem,
     no_rank,
     number_of,
+    rank_option,
 )
 from cfgplan.configuration.describe import to_json
 from cfgplan.configuration.model import Configuration
@@ -179,12 +180,7 @@ def plan(
     ] = False,
     rank: Annotated[
         int | None,
-        typer.Option(
-            "--rank",
-            metavar="N",
-            parser=count_of(1),
-            help="Only the configuration of rank N, 1 being the cheapest (instead of -k).",
-        ),
+        rank_option("Only the configuration of rank N, 1 being the cheapest (instead of -k)."),
     ] = None,
     derivations: Annotated[
         bool,

@@ -23,8 +23,8 @@ from cfgplan.cli.options import (
     StateArg,
     WeightsOpt,
     choose,
-    count_of,
     load_problem,
+    rank_option,
 )
 from cfgplan.configuration.cost import fmt
 from cfgplan.diagnostics import CfgplanError
@@ -77,13 +77,7 @@ def render(
     goal: GoalOpt = None,
     rank: Annotated[
         int | None,
-        typer.Option(
-            "--rank",
-            metavar="N",
-            parser=count_of(1),
-            help="Which configuration, 1 being the cheapest (default 1; not with --hierarchy).",
-            show_default=False,
-        ),
+        rank_option("Which configuration, 1 being the cheapest (default 1; not with --hierarchy)."),
     ] = None,
     weights: WeightsOpt = None,
     hierarchy: Annotated[
