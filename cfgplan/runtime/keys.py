@@ -119,28 +119,29 @@ def process_pattern(society: str) -> str:
 
 def process_of_token(key: str, society: str) -> tuple[str, str] | None:
     """The robot and instance a process token of ``society`` names, or ``None``."""
+    named = _token(key, society, "process", 5)
+    return None if named is None else (named[0], named[1])
+
+
+def _token(key: str, society: str, kind: str, size: int) -> list[str] | None:
+    """``cfgplan/<society>/<robot>/<kind>/...`` in ``size`` chunks: the robot
+    and the chunks after ``kind``, read back; ``None`` when ``key`` is not
+    that or a chunk was not written by :func:`chunk`."""
     parts = key.split("/")
-    if len(parts) != 5 or parts[0] != PREFIX or parts[1] != chunk(society):
+    if len(parts) != size or parts[0] != PREFIX or parts[1] != chunk(society):
         return None
-    if parts[3] != "process":
+    if parts[3] != kind:
         return None
     try:
-        return unchunk(parts[2]), unchunk(parts[4])
-    except UnicodeDecodeError:  # not written by chunk: no robot of ours
+        return [unchunk(p) for p in (parts[2], *parts[4:])]
+    except (UnicodeDecodeError, ValueError):  # not written by chunk: no robot of ours
         return None
 
 
 def robot_of_alive(key: str, society: str) -> str | None:
     """The robot a liveliness key of ``society`` names, or ``None``."""
-    parts = key.split("/")
-    if len(parts) != 4 or parts[0] != PREFIX or parts[1] != chunk(society):
-        return None
-    if parts[3] != "alive":
-        return None
-    try:
-        return unchunk(parts[2])
-    except UnicodeDecodeError:  # not written by chunk: no robot of ours
-        return None
+    named = _token(key, society, "alive", 4)
+    return None if named is None else named[0]
 
 
 def problem_key(society: str, robot: str, fingerprint: str, about: str) -> str:
@@ -161,12 +162,7 @@ MAX_PROBLEM_KEY = 2048
 def problem_of_token(key: str, society: str) -> tuple[str, str, str] | None:
     """The robot, fingerprint and description a problem token of ``society``
     names, or ``None`` (not one, too long, not written by :func:`chunk`)."""
-    parts = key.split("/")
-    if len(key) > MAX_PROBLEM_KEY or len(parts) != 6 or parts[0] != PREFIX:
+    if len(key) > MAX_PROBLEM_KEY:
         return None
-    if parts[1] != chunk(society) or parts[3] != "problem":
-        return None
-    try:
-        return unchunk(parts[2]), unchunk(parts[4]), unchunk(parts[5])
-    except (UnicodeDecodeError, ValueError):
-        return None
+    named = _token(key, society, "problem", 6)
+    return None if named is None else (named[0], named[1], named[2])

@@ -12,6 +12,8 @@ from cfgplan.runtime.keys import (
     chunk,
     configure_key,
     coordinator_key,
+    process_key,
+    process_of_token,
     robot_of_alive,
     unchunk,
 )
@@ -59,3 +61,15 @@ def test_a_token_whose_name_is_no_utf8_names_no_robot() -> None:
     """A foreign token under the society's prefix (``%FF``) is not ours: no
     UnicodeDecodeError in the liveliness callback of every robot."""
     assert robot_of_alive("cfgplan/lab/%FF/alive", "lab") is None
+
+
+def test_a_process_token_names_its_robot_and_instance() -> None:
+    """Each process of a robot declares one (the coordinator tells a second
+    process apart by it); read back as the alive and problem tokens are."""
+    key = process_key("lab", "Ro/bot*", "0f3a")
+    assert key == "cfgplan/lab/Ro%2Fbot%2A/process/0f3a"
+    assert process_of_token(key, "lab") == ("Ro/bot*", "0f3a")
+    assert process_of_token(key, "other") is None
+    assert process_of_token(alive_key("lab", "Emil"), "lab") is None
+    assert process_of_token(key + "/more", "lab") is None
+    assert process_of_token("cfgplan/lab/%FF/process/x", "lab") is None
