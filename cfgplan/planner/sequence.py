@@ -87,6 +87,29 @@ def apply(facts: Facts, effects: Sequence[tuple[bool, Ground]]) -> tuple[Facts, 
     return tuple(kept), tuple(changes)
 
 
+def changes_nothing(task: Task, goal: Ground) -> bool:
+    """No configuration of ``goal`` can change the state: no method version
+    or functionality that its expansion can reach through method bodies
+    (4.5), found by name and arity, has a postcondition. Each signature is
+    visited once, recursion included."""
+    todo = [(goal[0], len(goal) - 1)]
+    seen = set(todo)
+    while todo:
+        signature = todo.pop()
+        schema = task.functionalities.get(signature)
+        if schema is not None and schema.effects:
+            return False
+        for version in task.methods.get(signature, ()):
+            if version.effects:
+                return False
+            for _, call in version.body:
+                called = (call[0], len(call) - 1)
+                if called not in seen:
+                    seen.add(called)
+                    todo.append(called)
+    return True
+
+
 def switching(before: Configuration, after: Configuration) -> int:
     """Functionality instances and channels started or stopped between two
     configurations (labels ignored)."""
@@ -162,6 +185,12 @@ class SequenceSearch:
     _states: dict[tuple[int, ...], tuple[Facts, tuple[str, ...]]] = field(default_factory=dict)
     _remaining: dict[tuple[int, Facts], float] = field(default_factory=dict)
 
+    @cached_property
+    def _unchanging(self) -> tuple[bool, ...]:
+        """For each step, whether every configuration of it leaves the state
+        as it found it (:func:`changes_nothing`)."""
+        return tuple(changes_nothing(self.task, goal) for goal in self.goals)
+
     def ranked(self, step: int, facts: Facts) -> Ranked:
         """Step ``step``'s configurations in a state, planned once per state."""
         key = (step, facts)
@@ -209,7 +238,15 @@ class SequenceSearch:
         not counted; infinite when they cannot all be reached): the search's
         bound. Worked out over the states the steps can leave, each (step,
         state) once, a step's configurations taken cheapest first only while
-        one could still beat the best (every later step costs 0 or more)."""
+        one could still beat the best (every later step costs 0 or more).
+
+        A step whose configurations all leave the state unchanged
+        (:attr:`_unchanging`) leaves one state, so its cheapest configuration
+        is the only one that can give the least: there, one configuration is
+        planned, and a sequence of such steps costs the planning of each step
+        alone. Otherwise the work is bounded by the configurations of step i
+        that cost less than the least of the steps from i on (they may leave
+        other states: each is planned, and each new state once)."""
         done = self._remaining
         frames: list[list[object]] = [[step, facts, 0, math.inf]]
         while frames:
@@ -222,7 +259,12 @@ class SequenceSearch:
                 frames.pop()
                 continue
             config = None if i == len(self.goals) else self.ranked(i, here).get(j)
-            if i == len(self.goals) or config is None or config.cost >= best:
+            if (
+                i == len(self.goals)
+                or config is None
+                or config.cost >= best
+                or (j > 0 and self._unchanging[i])
+            ):
                 done[(i, here)] = 0.0 if i == len(self.goals) else best
                 frames.pop()
                 continue
@@ -267,12 +309,22 @@ class SequenceSearch:
         yield from self._offered(prefix, j + 1, entry.cost)
 
     def _offered(self, prefix: tuple[int, ...], j: int, cost: float) -> tuple[_Entry, ...]:
-        """The j-th configuration of the step after ``prefix``, offered, if there is one."""
+        """The j-th configuration of the step after ``prefix``, offered, if
+        there is one, priced at the prefix's cost plus its own, plus the
+        least the later steps cost where that is known for every
+        configuration of the step from j on: after a step that changes
+        nothing (:attr:`_unchanging`), from the state the prefix leaves.
+        (Priced without it, every configuration of the step cheaper than the
+        best whole sequence is planned before that sequence is listed.)"""
         facts, _ = self.state_after(prefix)
-        config = self.ranked(len(prefix), facts).get(j)
+        step = len(prefix)
+        config = self.ranked(step, facts).get(j)
         if config is None:
             return ()
-        price = self._levels.bound(cost + config.cost)
+        rest = self.remaining(step + 1, facts) if self._unchanging[step] else 0.0
+        if rest == math.inf:
+            return ()
+        price = self._levels.bound(cost + config.cost + rest)
         return (_Entry(price, (*prefix, j), True, prefix, cost),)
 
     def _deepest(self) -> tuple[int, ...]:

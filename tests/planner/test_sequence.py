@@ -14,13 +14,15 @@ from hypothesis import example, given
 from benchmarks.families import ecology
 from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.cost import Weights
+from cfgplan.configuration.model import Configuration
 from cfgplan.ir.model import Atom
 from cfgplan.notation import atom_text
 from cfgplan.planner import plan
 from cfgplan.planner.combine import Combined
 from cfgplan.planner.levels import level
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.sequence import SequenceSearch
+from cfgplan.planner.sequence import SequenceSearch, apply, changes_nothing
+from cfgplan.planner.task import Task, derive
 from cfgplan.problem import Problem, load
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
@@ -308,3 +310,83 @@ def test_a_step_with_independent_parts_is_searched_in_parts_as_a_run_is() -> Non
         problem.task, problem.goal_call, limit=5, options=SearchOptions(components=False)
     )
     assert [s.steps[0].configuration for s in listed] == plain
+
+
+def every_sequence(
+    problem: Problem, goals: tuple[tuple[str, ...], ...]
+) -> list[tuple[float, tuple[int, ...], tuple[Configuration, ...]]]:
+    """Every sequence of ``goals``, by brute force: each step's configurations
+    listed whole (``--all``) in the state the steps before it leave, every
+    combination kept; sorted as a sequence search must list them (total, then
+    each step's rank, the first step first)."""
+    found = []
+
+    def walk(
+        task: Task, step: int, ranks: tuple[int, ...], configs: tuple[Configuration, ...]
+    ) -> None:
+        if step == len(goals):
+            total = level(sum(c.cost for c in configs))
+            found.append((total, ranks, configs))
+            return
+        listed, _ = plan(task, goals[step], limit=None)
+        for j, config in enumerate(listed):
+            facts, _ = apply(task.facts, config.effects)
+            walk(derive(task, facts), step + 1, (*ranks, j), (*configs, config))
+
+    walk(problem.task, 0, (), ())
+    return sorted(found, key=lambda s: (s[0], s[1]))
+
+
+@pytest.mark.quick(20)
+@PROPERTY
+@given(generated())
+def test_sequences_are_those_of_every_step_listed_whole(example: Generated) -> None:
+    """Differential: the sequence search lists what the brute force of
+    :func:`every_sequence` lists, in its order, whether the steps change the
+    state (postconditions) or not (then a step's later configurations are
+    never planned to price its offers, :func:`changes_nothing`)."""
+    problem = sequence_of(example)
+    goals = problem.goal_calls
+    expected = every_sequence(problem, goals)[:12]
+    found = list(islice(SequenceSearch(goals, problem.task), 12))
+    assert [s.total for s in found] == [total for total, _, _ in expected]
+    listed = [tuple(s.configuration for s in p.steps) for p in found]
+    # equal totals in the order of their steps' ranks: the configurations
+    # themselves, as ranks of equal-cost configurations are the brute force's
+    assert listed == [configs for _, _, configs in expected]
+
+
+def test_a_sequence_of_steps_that_change_nothing_plans_each_step_once() -> None:
+    """Two goals whose expansions reach no postcondition: of each step's
+    configurations (3 x 3: a helper for each of two kinds) the first is
+    planned, and the next one, offered when the first is taken, before the
+    best sequence is listed (priced without the later steps, every one of
+    step 1's was planned first)."""
+    domain = """
+(make-functionality :name '(sense ?h ?k) :precond '((helper ?h)) :out '((data ?h ?k)))
+(make-functionality :name '(use ?r) :in '((data ?r k1) (data ?r k2)))
+(make-config-method :name '(get ?r ?k) :precond '((helper ?h))
+  :out '((?b (data ?r ?k)))
+  :channels '(((global ?h ?r) ?a ?b (data ?h ?k)))
+  :body '((?a (sense ?h ?k)) (?b (relay ?r ?h ?k))))
+(make-functionality :name '(relay ?r ?h ?k) :in '((data ?h ?k)) :out '((data ?r ?k)))
+(make-config-method :name '(mission ?r)
+  :channels '(((local ?r) ?a ?f (data ?r k1)) ((local ?r) ?b ?f (data ?r k2)))
+  :body '((?a (get ?r k1)) (?b (get ?r k2)) (?f (use ?r))))
+"""
+    helpers = " ".join(f"(robot H{i}) (helper H{i})" for i in range(1, 4))
+    state = f"(state (robot G1) (robot G2) {helpers}) (sequence (mission G1) (mission G2))"
+    problem = load_text(domain, state)
+    assert all(changes_nothing(problem.task, goal) for goal in problem.goal_calls)
+    searching = SequenceSearch(problem.goal_calls, problem.task)
+    (best,) = islice(searching, 1)
+    assert [len(r.found) for r in searching._ranked.values()] == [2, 2]
+    expected = every_sequence(problem, problem.goal_calls)[0]
+    assert best.total == expected[0]
+    assert tuple(s.configuration for s in best.steps) == expected[2]
+
+
+def test_a_step_with_a_postcondition_changes_something() -> None:
+    state = "(state (robot X) (ok X) (expert X)) (sequence (special A) (special B))"
+    problem = load_text(TOKEN, state)
+    assert not changes_nothing(problem.task, problem.goal_calls[0])
