@@ -48,7 +48,7 @@ from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
-from cfgplan.planner.task import Ground, Task, derive
+from cfgplan.planner.task import EffectSpec, Ground, Signature, Task, Test, derive
 
 Facts = tuple[Ground, ...]
 
@@ -87,27 +87,60 @@ def apply(facts: Facts, effects: Sequence[tuple[bool, Ground]]) -> tuple[Facts, 
     return tuple(kept), tuple(changes)
 
 
-def changes_nothing(task: Task, goal: Ground) -> bool:
-    """No configuration of ``goal`` can change the state: no method version
-    or functionality that its expansion can reach through method bodies
-    (4.5), found by name and arity, has a postcondition. Each signature is
-    visited once, recursion included."""
+@dataclass(frozen=True)
+class Touched:
+    """The predicates (name and arity) a goal's expansion can read and write:
+    read by the preconditions (atoms and negations) of every method version
+    and functionality its expansion can reach through method bodies (4.5),
+    found by name and arity; written by their postconditions."""
+
+    reads: frozenset[Signature]
+    writes: frozenset[Signature]
+
+
+AGENTS: frozenset[Signature] = frozenset({("robot", 1), ("device", 1)})
+"""Read by every plan whatever its tests: who may run a part, and how it is weighed."""
+
+
+def touched(task: Task, goal: Ground) -> Touched:
+    """What ``goal``'s expansion can read and write (:class:`Touched`); each
+    signature visited once, recursion included."""
+    reads: set[Signature] = set()
+    writes: set[Signature] = set()
+
+    def note(tests: Sequence[Test], effects: Sequence[EffectSpec]) -> None:
+        reads.update((t.pattern[0], len(t.pattern) - 1) for t in tests if t.pattern)
+        writes.update((e.pattern[0], len(e.pattern) - 1) for e in effects)
+
     todo = [(goal[0], len(goal) - 1)]
     seen = set(todo)
     while todo:
         signature = todo.pop()
         schema = task.functionalities.get(signature)
-        if schema is not None and schema.effects:
-            return False
+        if schema is not None:
+            note(schema.tests, schema.effects)
         for version in task.methods.get(signature, ()):
-            if version.effects:
-                return False
+            note(version.tests, version.effects)
             for _, call in version.body:
                 called = (call[0], len(call) - 1)
                 if called not in seen:
                     seen.add(called)
                     todo.append(called)
-    return True
+    return Touched(frozenset(reads), frozenset(writes))
+
+
+def unseen(task: Task, goals: Sequence[Ground]) -> tuple[bool, ...]:
+    """For each step, whether no configuration of it changes a fact that a
+    later step reads (:func:`touched`): then every state it can leave gives
+    the later steps the same configurations, in the same order (the facts
+    they read keep their order, :func:`apply`), at the same costs."""
+    found = [touched(task, goal) for goal in goals]
+    later: set[Signature] = set(AGENTS)
+    inert = []
+    for step in reversed(found):
+        inert.append(not (step.writes & later))
+        later |= step.reads
+    return tuple(reversed(inert))
 
 
 def switching(before: Configuration, after: Configuration) -> int:
@@ -186,10 +219,10 @@ class SequenceSearch:
     _remaining: dict[tuple[int, Facts], float] = field(default_factory=dict)
 
     @cached_property
-    def _unchanging(self) -> tuple[bool, ...]:
-        """For each step, whether every configuration of it leaves the state
-        as it found it (:func:`changes_nothing`)."""
-        return tuple(changes_nothing(self.task, goal) for goal in self.goals)
+    def _unseen(self) -> tuple[bool, ...]:
+        """For each step, whether what it changes is unseen by the later steps
+        (:func:`unseen`)."""
+        return unseen(self.task, self.goals)
 
     def ranked(self, step: int, facts: Facts) -> Ranked:
         """Step ``step``'s configurations in a state, planned once per state."""
@@ -240,13 +273,15 @@ class SequenceSearch:
         state) once, a step's configurations taken cheapest first only while
         one could still beat the best (every later step costs 0 or more).
 
-        A step whose configurations all leave the state unchanged
-        (:attr:`_unchanging`) leaves one state, so its cheapest configuration
-        is the only one that can give the least: there, one configuration is
-        planned, and a sequence of such steps costs the planning of each step
-        alone. Otherwise the work is bounded by the configurations of step i
-        that cost less than the least of the steps from i on (they may leave
-        other states: each is planned, and each new state once)."""
+        A step whose changes the later steps do not see (:attr:`_unseen`)
+        leaves them the same least whatever its configuration, so its
+        cheapest configuration is the only one that can give the least:
+        there, one configuration is planned, and a sequence of such steps
+        (independent goals, or goals whose postconditions no later step
+        reads) costs the planning of each step alone. Otherwise the work is
+        bounded by the configurations of step i that cost less than the least
+        of the steps from i on (they may leave other states: each is planned,
+        and each new state once)."""
         done = self._remaining
         frames: list[list[object]] = [[step, facts, 0, math.inf]]
         while frames:
@@ -263,7 +298,7 @@ class SequenceSearch:
                 i == len(self.goals)
                 or config is None
                 or config.cost >= best
-                or (j > 0 and self._unchanging[i])
+                or (j > 0 and self._unseen[i])
             ):
                 done[(i, here)] = 0.0 if i == len(self.goals) else best
                 frames.pop()
@@ -312,8 +347,10 @@ class SequenceSearch:
         """The j-th configuration of the step after ``prefix``, offered, if
         there is one, priced at the prefix's cost plus its own, plus the
         least the later steps cost where that is known for every
-        configuration of the step from j on: after a step that changes
-        nothing (:attr:`_unchanging`), from the state the prefix leaves.
+        configuration of the step from j on: after a step whose changes the
+        later steps do not see (:attr:`_unseen`), from the state its first
+        configuration leaves (any other of the step's gives the same: one
+        state is planned from).
         (Priced without it, every configuration of the step cheaper than the
         best whole sequence is planned before that sequence is listed.)"""
         facts, _ = self.state_after(prefix)
@@ -321,7 +358,9 @@ class SequenceSearch:
         config = self.ranked(step, facts).get(j)
         if config is None:
             return ()
-        rest = self.remaining(step + 1, facts) if self._unchanging[step] else 0.0
+        rest = 0.0
+        if self._unseen[step]:  # from the state the step's first configuration leaves
+            rest = self.remaining(step + 1, self.state_after((*prefix, 0))[0])
         if rest == math.inf:
             return ()
         price = self._levels.bound(cost + config.cost + rest)

@@ -21,7 +21,7 @@ from cfgplan.planner import plan
 from cfgplan.planner.combine import Combined
 from cfgplan.planner.levels import level
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.sequence import SequenceSearch, apply, changes_nothing
+from cfgplan.planner.sequence import SequenceSearch, apply, touched, unseen
 from cfgplan.planner.task import Task, derive
 from cfgplan.problem import Problem, load
 from tests.planner.generated import generated
@@ -344,7 +344,8 @@ def test_sequences_are_those_of_every_step_listed_whole(example: Generated) -> N
     """Differential: the sequence search lists what the brute force of
     :func:`every_sequence` lists, in its order, whether the steps change the
     state (postconditions) or not (then a step's later configurations are
-    never planned to price its offers, :func:`changes_nothing`)."""
+    never planned to price its offers when no later step reads what it
+    changes, :func:`unseen`)."""
     problem = sequence_of(example)
     goals = problem.goal_calls
     expected = every_sequence(problem, goals)[:12]
@@ -356,14 +357,15 @@ def test_sequences_are_those_of_every_step_listed_whole(example: Generated) -> N
     assert listed == [configs for _, _, configs in expected]
 
 
-def test_a_sequence_of_steps_that_change_nothing_plans_each_step_once() -> None:
-    """Two goals whose expansions reach no postcondition: of each step's
+def test_a_sequence_of_steps_whose_changes_are_unseen_plans_each_step_once() -> None:
+    """Two goals whose postconditions (a sensor was used) no step reads: of each step's
     configurations (3 x 3: a helper for each of two kinds) the first is
     planned, and the next one, offered when the first is taken, before the
     best sequence is listed (priced without the later steps, every one of
     step 1's was planned first)."""
     domain = """
-(make-functionality :name '(sense ?h ?k) :precond '((helper ?h)) :out '((data ?h ?k)))
+(make-functionality :name '(sense ?h ?k) :precond '((helper ?h)) :out '((data ?h ?k))
+  :postcond '((used ?h ?k)))
 (make-functionality :name '(use ?r) :in '((data ?r k1) (data ?r k2)))
 (make-config-method :name '(get ?r ?k) :precond '((helper ?h))
   :out '((?b (data ?r ?k)))
@@ -377,7 +379,7 @@ def test_a_sequence_of_steps_that_change_nothing_plans_each_step_once() -> None:
     helpers = " ".join(f"(robot H{i}) (helper H{i})" for i in range(1, 4))
     state = f"(state (robot G1) (robot G2) {helpers}) (sequence (mission G1) (mission G2))"
     problem = load_text(domain, state)
-    assert all(changes_nothing(problem.task, goal) for goal in problem.goal_calls)
+    assert unseen(problem.task, problem.goal_calls) == (True, True)
     searching = SequenceSearch(problem.goal_calls, problem.task)
     (best,) = islice(searching, 1)
     assert [len(r.found) for r in searching._ranked.values()] == [2, 2]
@@ -386,7 +388,10 @@ def test_a_sequence_of_steps_that_change_nothing_plans_each_step_once() -> None:
     assert tuple(s.configuration for s in best.steps) == expected[2]
 
 
-def test_a_step_with_a_postcondition_changes_something() -> None:
+def test_what_a_step_changes_is_seen_by_a_later_step_that_reads_it() -> None:
+    """The expert is no longer ok after one special job; the next job reads
+    (ok ?r): step 1's changes are seen. The last step has no later one."""
     state = "(state (robot X) (ok X) (expert X)) (sequence (special A) (special B))"
     problem = load_text(TOKEN, state)
-    assert not changes_nothing(problem.task, problem.goal_calls[0])
+    assert ("ok", 1) in touched(problem.task, problem.goal_calls[0]).writes
+    assert unseen(problem.task, problem.goal_calls) == (False, True)
