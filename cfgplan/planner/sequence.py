@@ -38,6 +38,7 @@ from functools import cached_property
 from typing import cast
 
 from cfgplan.configuration.model import Configuration
+from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.combine import Combined
@@ -48,7 +49,7 @@ from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
 from cfgplan.planner.search import BestFirst
-from cfgplan.planner.task import EffectSpec, Ground, Signature, Task, Test, derive
+from cfgplan.planner.task import EffectSpec, Ground, Pattern, Task, Test, derive
 
 Facts = tuple[Ground, ...]
 
@@ -87,46 +88,75 @@ def apply(facts: Facts, effects: Sequence[tuple[bool, Ground]]) -> tuple[Facts, 
     return tuple(kept), tuple(changes)
 
 
+ANY = "?"
+"""In a :class:`Touched` atom: any value (a variable the goal does not bind)."""
+
+
 @dataclass(frozen=True)
 class Touched:
-    """The predicates (name and arity) a goal's expansion can read and write:
-    read by the preconditions (atoms and negations) of every method version
-    and functionality its expansion can reach through method bodies (4.5),
-    found by name and arity; written by their postconditions."""
+    """The atoms a goal's expansion can read and write, as patterns whose
+    :data:`ANY` stands for any value: read by the preconditions (atoms and
+    negations) of every method version and functionality the expansion can
+    reach through method bodies (4.5), written by their postconditions; each
+    instantiated with what the goal binds (its arguments, passed down the
+    bodies), every other variable :data:`ANY`."""
 
-    reads: frozenset[Signature]
-    writes: frozenset[Signature]
+    reads: frozenset[Pattern]
+    writes: frozenset[Pattern]
 
 
-AGENTS: frozenset[Signature] = frozenset({("robot", 1), ("device", 1)})
+AGENTS: frozenset[Pattern] = frozenset({("robot", ANY), ("device", ANY)})
 """Read by every plan whatever its tests: who may run a part, and how it is weighed."""
 
 
 def touched(task: Task, goal: Ground) -> Touched:
     """What ``goal``'s expansion can read and write (:class:`Touched`); each
-    signature visited once, recursion included."""
-    reads: set[Signature] = set()
-    writes: set[Signature] = set()
+    call (its name and what is known of its arguments) visited once,
+    recursion included: the calls are finitely many, their arguments being
+    the goal's and the domain's symbols or :data:`ANY`."""
+    reads: set[Pattern] = set()
+    writes: set[Pattern] = set()
 
-    def note(tests: Sequence[Test], effects: Sequence[EffectSpec]) -> None:
-        reads.update((t.pattern[0], len(t.pattern) - 1) for t in tests if t.pattern)
-        writes.update((e.pattern[0], len(e.pattern) - 1) for e in effects)
+    def bound(params: Pattern, call: Pattern) -> dict[str, str] | None:
+        known: dict[str, str] = {}
+        for param, arg in zip(params, call[1:], strict=True):
+            if is_variable(param):
+                if arg != ANY:
+                    known[param] = arg
+            elif arg not in (ANY, param):
+                return None  # a symbol that cannot match this version's
+        return known
 
-    todo = [(goal[0], len(goal) - 1)]
+    def put(pattern: Pattern, known: dict[str, str]) -> Pattern:
+        return (pattern[0], *(known.get(t, ANY) if is_variable(t) else t for t in pattern[1:]))
+
+    def note(tests: Sequence[Test], effects: Sequence[EffectSpec], known: dict[str, str]) -> None:
+        reads.update(put(t.pattern, known) for t in tests if t.pattern)
+        writes.update(put(e.pattern, known) for e in effects)
+
+    todo: list[Pattern] = [goal]
     seen = set(todo)
     while todo:
-        signature = todo.pop()
-        schema = task.functionalities.get(signature)
-        if schema is not None:
-            note(schema.tests, schema.effects)
-        for version in task.methods.get(signature, ()):
-            note(version.tests, version.effects)
-            for _, call in version.body:
-                called = (call[0], len(call) - 1)
+        call = todo.pop()
+        schema = task.functionality(call)
+        if schema is not None and (known := bound(schema.params, call)) is not None:
+            note(schema.tests, schema.effects, known)
+        for version in task.versions(call):
+            known = bound(version.params, call)
+            if known is None:
+                continue
+            note(version.tests, version.effects, known)
+            for _, body in version.body:
+                called = put(body, known)
                 if called not in seen:
                     seen.add(called)
                     todo.append(called)
     return Touched(frozenset(reads), frozenset(writes))
+
+
+def overlap(a: Pattern, b: Pattern) -> bool:
+    """Some atom is an instance of both (:data:`ANY` matches any value)."""
+    return len(a) == len(b) and all(x == y or ANY in (x, y) for x, y in zip(a, b, strict=True))
 
 
 def unseen(task: Task, goals: Sequence[Ground]) -> tuple[bool, ...]:
@@ -135,10 +165,10 @@ def unseen(task: Task, goals: Sequence[Ground]) -> tuple[bool, ...]:
     the later steps the same configurations, in the same order (the facts
     they read keep their order, :func:`apply`), at the same costs."""
     found = [touched(task, goal) for goal in goals]
-    later: set[Signature] = set(AGENTS)
+    later: set[Pattern] = set(AGENTS)
     inert = []
     for step in reversed(found):
-        inert.append(not (step.writes & later))
+        inert.append(not any(overlap(w, r) for w in step.writes for r in later))
         later |= step.reads
     return tuple(reversed(inert))
 

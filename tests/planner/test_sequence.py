@@ -393,5 +393,36 @@ def test_what_a_step_changes_is_seen_by_a_later_step_that_reads_it() -> None:
     (ok ?r): step 1's changes are seen. The last step has no later one."""
     state = "(state (robot X) (ok X) (expert X)) (sequence (special A) (special B))"
     problem = load_text(TOKEN, state)
-    assert ("ok", 1) in touched(problem.task, problem.goal_calls[0]).writes
+    assert ("ok", "?") in touched(problem.task, problem.goal_calls[0]).writes
     assert unseen(problem.task, problem.goal_calls) == (False, True)
+
+
+MOVES = """\
+(make-functionality :name '(see ?h ?r) :precond '((helper ?h)) :out '((view ?r)))
+(make-functionality :name '(go ?r ?a ?b) :precond '((at ?r ?a)) :in '((view ?r))
+  :postcond '((not (at ?r ?a)) (at ?r ?b)))
+(make-config-method :name '(move ?r ?b) :precond '((at ?r ?a) (helper ?h))
+  :channels '(((global ?h ?r) ?s ?g (view ?r)))
+  :body '((?s (see ?h ?r)) (?g (go ?r ?a ?b))))
+"""
+
+
+@pytest.mark.parametrize(
+    ("goals", "expected"),
+    [
+        ("(move G1 Hall) (move G2 Hall)", (True, True)),  # G2's step reads (at G2 ...) only
+        ("(move G1 Hall) (move G1 Lab)", (False, True)),  # the robot that moved moves again
+    ],
+)
+def test_a_robot_that_moved_is_seen_only_by_the_steps_that_read_where_it_is(
+    goals: str, expected: tuple[bool, ...]
+) -> None:
+    helpers = " ".join(f"(robot H{i}) (helper H{i})" for i in range(1, 4))
+    state = f"(state (robot G1) (robot G2) (at G1 Dock) (at G2 Dock) {helpers}) (sequence {goals})"
+    problem = load_text(MOVES, state)
+    assert unseen(problem.task, problem.goal_calls) == expected
+    found = list(islice(SequenceSearch(problem.goal_calls, problem.task), 20))
+    brute = every_sequence(problem, problem.goal_calls)[:20]
+    assert [s.total for s in found] == [total for total, _, _ in brute]
+    assert [tuple(s.configuration for s in p.steps) for p in found] == [c for _, _, c in brute]
+    assert found[0].steps[-1].changes[-1].startswith("(at G")
