@@ -11,22 +11,26 @@ for ``python -m benchmarks.run`` and the tests:
   let each camera serve one robot;
 - ``dag(D)``, ``conversion(D)``: shared and recursive sub-derivations, one
   ground method instance under many ancestors (issue 35);
-- ``deliveries(S, R)``: a sequence of S configurations (issue 14);
+- ``deliveries(S, R)``: a sequence of S configurations; ``missions(G, H)``: a
+  sequence of G independent goals over H helpers;
+- ``any_delegation(N)``: delegation from any robot to any other, dead ends
+  found at a chain's last step;
 - :mod:`benchmarks.families.weak`: structures the search is still weak on
   (docs/explanation/planner.md, "Weak spots"), not in the benchmark table.
 """
 
 from benchmarks.families.chain import chain
-from benchmarks.families.delegation import delegation
+from benchmarks.families.delegation import any_delegation, delegation
 from benchmarks.families.ecology import ecology, media_tight
 from benchmarks.families.fusion import fusion
 from benchmarks.families.gateway import gateway
 from benchmarks.families.relay import relay
 from benchmarks.families.shared import conversion, dag
-from benchmarks.families.steps import deliveries
+from benchmarks.families.steps import deliveries, missions
 from benchmarks.families.wall import wall
 
 __all__ = [
+    "any_delegation",
     "chain",
     "conversion",
     "dag",
@@ -36,6 +40,7 @@ __all__ = [
     "fusion",
     "gateway",
     "media_tight",
+    "missions",
     "relay",
     "wall",
 ]

@@ -39,3 +39,40 @@ def delegation(n: int) -> tuple[str, str]:
     facts = [f"(robot R{i})" for i in range(1, n + 1)] + [f"(sensor R{n})", "(hub R1)"]
     state = "(state " + " ".join(facts) + ")\n(goal (task R1))\n"
     return domain, state
+
+
+def any_delegation(n: int) -> tuple[str, str]:
+    """Domain and state text with ``n`` robots: one generic ``get`` that any
+    robot may delegate to any other, which may delegate again, pruned only by
+    recursion on its own path; only R2 has a camera, and the datum must come
+    back along local channels, so every delegation chain but the direct one
+    is a dead end found at its last step. One configuration (cost 30),
+    whatever ``n``."""
+    if n < 2:
+        raise ValueError("need N >= 2")
+    domain = f""";;; Delegation to any robot (benchmarks/families/delegation.py): {n} robots.
+(make-functionality :name '(s ?r) :out '((d ?r)))
+(make-functionality :name '(p ?r ?o) :in '((d ?r)) :out '((e ?r ?o)))
+(make-functionality :name '(t ?h ?r ?o) :in '((e ?h ?o) (d ?h)) :out '((e ?r ?o)))
+(make-functionality :name '(act ?r ?o) :in '((e ?r ?o)))
+(make-config-method :name '(get ?r ?o) :precond '((cam ?r))
+  :out '((?f2 (e ?r ?o))) :channels '(((local ?r) ?f1 ?f2 (d ?r)))
+  :body '((?f1 (s ?r)) (?f2 (p ?r ?o))))
+(make-config-method :name '(get ?r ?o)
+  :precond '((robot ?h) (eval (not (eql (quote ?r) (quote ?h)))))
+  :out '((?f1 (e ?r ?o))) :body '((?f1 (get ?h ?r ?o))))
+(make-config-method :name '(get ?h ?r ?o)
+  :precond '((robot ?x) (eval (not (eql (quote ?x) (quote ?h)))))
+  :out '((?f1 (e ?r ?o))) :body '((?f1 (get ?x ?r ?o))))
+(make-config-method :name '(get ?h ?r ?o)
+  :out '((?f3 (e ?r ?o)))
+  :channels '(((local ?h) ?f1 ?f3 (e ?h ?o)) ((local ?h) ?f2 ?f3 (d ?h)))
+  :body '((?f1 (get ?h ?o)) (?f2 (s ?h)) (?f3 (t ?h ?r ?o))))
+(make-config-method :name '(do ?r ?o)
+  :precond '((robot ?h) (eval (not (eql (quote ?r) (quote ?h)))))
+  :channels '(((global ?h ?r) ?f1 ?f2 (e ?r ?o)))
+  :body '((?f1 (get ?h ?r ?o)) (?f2 (act ?r ?o))))
+"""
+    facts = [f"(robot r{i})" for i in range(1, n + 1)] + ["(cam r2)", "(object o1)"]
+    state = "(state " + " ".join(facts) + ")\n(goal (do r1 o1))\n"
+    return domain, state

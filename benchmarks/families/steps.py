@@ -36,3 +36,41 @@ def deliveries(steps: int, robots: int) -> tuple[str, str]:
     goals = " ".join(f"(deliver P{i})" for i in range(1, steps + 1))
     state = "(state " + "\n       ".join(facts) + f")\n(sequence {goals})\n"
     return DOMAIN.format(s=steps, r=robots), state
+
+
+MISSIONS = """\
+;;; Missions (benchmarks/families/steps.py): {g} goal robots, {h} helpers{moving}.
+(make-functionality :name '(sense ?h ?k) :precond '((helper ?h)) :out '((data ?h ?k)))
+(make-functionality :name '(recv ?r ?h ?k) :in '((data ?h ?k)) :out '((got ?r ?k)))
+(make-functionality :name '(fuse ?r ?a ?b) :precond '((at ?r ?a))
+  :in '((got ?r k1) (got ?r k2) (got ?r k3)){post})
+(make-config-method :name '(get ?r ?k) :precond '((helper ?h))
+  :out '((?b (got ?r ?k)))
+  :channels '(((global ?h ?r) ?a ?b (data ?h ?k)))
+  :body '((?a (sense ?h ?k)) (?b (recv ?r ?h ?k))))
+(make-config-method :name '(mission ?r ?b) :precond '((at ?r ?a))
+  :channels '(((local ?r) ?x ?f (got ?r k1)) ((local ?r) ?y ?f (got ?r k2))
+              ((local ?r) ?z ?f (got ?r k3)))
+  :body '((?x (get ?r k1)) (?y (get ?r k2)) (?z (get ?r k3)) (?f (fuse ?r ?a ?b))))
+"""
+
+
+def missions(goals: int, helpers: int, moving: bool = False) -> tuple[str, str]:
+    """Domain and state text: a sequence of ``goals`` missions, one for each
+    goal robot G1..G``goals``, each needing three kinds of data that any of
+    ``helpers`` helpers can send (the shape of a sequence that enumerated its
+    steps: independent goals). With ``moving``, each mission moves its robot
+    to the next place (a postcondition (at G P)): the later steps read where
+    the other robots are not, so the steps stay independent."""
+    if goals < 1 or helpers < 1:
+        raise ValueError("need G >= 1 goals and H >= 1 helpers")
+    post = "\n  :postcond '((not (at ?r ?a)) (at ?r ?b))" if moving else ""
+    facts = ["(place Dock)"] + [f"(place Place{i})" for i in range(1, goals + 1)]
+    facts += [f"(robot G{i}) (at G{i} Dock)" for i in range(1, goals + 1)]
+    facts += [f"(robot H{i}) (helper H{i})" for i in range(1, helpers + 1)]
+    steps = " ".join(f"(mission G{i} Place{i})" for i in range(1, goals + 1))
+    state = "(state " + "\n       ".join(facts) + f")\n(sequence {steps})\n"
+    text = MISSIONS.format(
+        g=goals, h=helpers, moving=", each moving its robot" if moving else "", post=post
+    )
+    return text, state
