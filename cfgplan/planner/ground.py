@@ -15,14 +15,16 @@ the schema: name and arity) and, for a method, the version.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner.match import Failure, bindings
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.report import Condition, DeadEnd
+from cfgplan.planner.senders import Placement
 from cfgplan.planner.task import (
     FunctionalitySchema,
     Ground,
@@ -174,6 +176,7 @@ class Grounder:
     _expansions: dict[tuple[Ground, int], tuple[Expansion | DeadEnd, ...]] = field(
         default_factory=dict
     )
+    _raw: dict[tuple[Ground, int], tuple[Expansion | DeadEnd, ...]] = field(default_factory=dict)
     _instances: dict[Ground, tuple[FunctionalityInstance, ...]] = field(default_factory=dict)
     _failures: dict[tuple[Signature, int, Ground], Failure] = field(default_factory=dict)
     numbering: Numbering = field(default_factory=Numbering)
@@ -227,17 +230,54 @@ class Grounder:
     def expansions(self, method: MethodSchema, call: Ground) -> tuple[Expansion | DeadEnd, ...]:
         """A method version instantiated for ``call`` under each binding of its
         preconditions (state order), made once: the same for every node that
-        expands ``call``, whatever its ancestors."""
+        expands ``call``, whatever its ancestors. An expansion that can never
+        be placed (:mod:`cfgplan.planner.senders`: a channel whose sending end
+        can never be on the robot it declares) is given as a dead end, in its
+        place."""
         memo = (call, method.version)
         found = self._expansions.get(memo)
         if found is None:
+            self.placement.senders(call)  # what is below call, analysed once
+            found = self._expansions[memo] = tuple(
+                self._placed(e) for e in self._instantiated(method, call)
+            )
+        return found
+
+    def _placed(self, expansion: Expansion | DeadEnd) -> Expansion | DeadEnd:
+        if isinstance(expansion, DeadEnd):
+            return expansion
+        dead = self.placement.misplaced(expansion)
+        if dead is None:
+            return expansion
+        return DeadEnd(expansion.where, dead.describe(), condition=dead.condition)
+
+    def _instantiated(self, method: MethodSchema, call: Ground) -> tuple[Expansion | DeadEnd, ...]:
+        """:meth:`expansions` before :mod:`cfgplan.planner.senders` has its say."""
+        memo = (call, method.version)
+        found = self._raw.get(memo)
+        if found is None:
             where = f"{call_text(call)}, version {method.version}"
             recursive = (method.name, len(method.params)) in self.task.recursive
-            found = self._expansions[memo] = tuple(
+            found = self._raw[memo] = tuple(
                 instantiate(method, env, where, self.numbering, recursive)
                 for env in self.method_bindings(method, call)
             )
         return found
+
+    @cached_property
+    def placement(self) -> Placement:
+        """Where each method instance can send its outputs from (made once)."""
+        task = self.task
+
+        def every(call: Ground) -> Iterator[Expansion | DeadEnd]:
+            for method in task.versions(call):
+                yield from self._instantiated(method, call)
+
+        def placeable(call: Ground) -> bool:
+            schema = task.functionality(call)
+            return schema is not None and bool(self.instances(schema, call))
+
+        return Placement(task, every, placeable)
 
     def instances(
         self, schema: FunctionalitySchema, call: Ground
