@@ -42,9 +42,10 @@ from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.combine import Combined
+from cfgplan.planner.ground import Effects
 from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.plan import Run, growing, in_parts
+from cfgplan.planner.plan import Run, growing, in_parts, parts
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
@@ -173,6 +174,45 @@ def unseen(task: Task, goals: Sequence[Ground]) -> tuple[bool, ...]:
     return tuple(reversed(inert))
 
 
+def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects | None:
+    """The postconditions every configuration of ``goal`` in ``task``'s state
+    has, when that is one and the same list (a robot that moves, whichever
+    way it is helped); else None. So it is when the expansion can reach (over
+    the graph of ground instances) at most one functionality instance with a
+    postcondition, it is in every feasible expansion of the goal (its
+    summary's, :mod:`cfgplan.planner.summary`), it has one binding of its
+    preconditions, and no method version it can reach has a postcondition."""
+    grounder, bound, _ = parts(task, options.media)
+    summary = bound.summaries.summary(goal)
+    if not summary.feasible:
+        return None
+    graph = grounder.graph(options.media)
+    found: Ground | None = None
+    todo, seen = [goal], {goal}
+    while todo:
+        clock.check()
+        for option in graph.instance(todo.pop()).options:
+            if option.expansion.effects:
+                return None
+            for child in option.children:
+                if child in seen:
+                    continue
+                seen.add(child)
+                schema = task.functionality(child)
+                if schema is None:
+                    todo.append(child)
+                elif schema.effects:
+                    if found is not None or child not in summary.functionalities:
+                        return None
+                    found = child
+    if found is None:
+        return ()
+    schema = task.functionality(found)
+    assert schema is not None
+    instances = grounder.instances(schema, found)
+    return instances[0].effects if len(instances) == 1 else None
+
+
 def switching(before: Configuration, after: Configuration) -> int:
     """Functionality instances and channels started or stopped between two
     configurations (labels ignored)."""
@@ -248,11 +288,28 @@ class SequenceSearch:
     _states: dict[tuple[int, ...], tuple[Facts, tuple[str, ...]]] = field(default_factory=dict)
     _remaining: dict[tuple[int, Facts], float] = field(default_factory=dict)
 
+    _one: dict[tuple[int, Facts], bool] = field(default_factory=dict)
+
     @cached_property
     def _unseen(self) -> tuple[bool, ...]:
         """For each step, whether what it changes is unseen by the later steps
         (:func:`unseen`)."""
         return unseen(self.task, self.goals)
+
+    def _one_state(self, step: int, facts: Facts) -> bool:
+        """Whether every configuration of ``step`` in state ``facts`` leaves the
+        later steps one state to be planned in: what it changes they do not
+        see (:attr:`_unseen`), or it changes the same for all
+        (:func:`fixed_effects`)."""
+        key = (step, facts)
+        found = self._one.get(key)
+        if found is None:
+            found = self._unseen[step] or (
+                fixed_effects(self.ranked(step, facts).task, self.goals[step], self.options)
+                is not None
+            )
+            self._one[key] = found
+        return found
 
     def ranked(self, step: int, facts: Facts) -> Ranked:
         """Step ``step``'s configurations in a state, planned once per state."""
@@ -303,8 +360,9 @@ class SequenceSearch:
         state) once, a step's configurations taken cheapest first only while
         one could still beat the best (every later step costs 0 or more).
 
-        A step whose changes the later steps do not see (:attr:`_unseen`)
-        leaves them the same least whatever its configuration, so its
+        A step whose changes the later steps do not see, or whose
+        configurations all change the same (:meth:`_one_state`), leaves
+        them the same least whatever its configuration, so its
         cheapest configuration is the only one that can give the least:
         there, one configuration is planned, and a sequence of such steps
         (independent goals, or goals whose postconditions no later step
@@ -328,7 +386,7 @@ class SequenceSearch:
                 i == len(self.goals)
                 or config is None
                 or config.cost >= best
-                or (j > 0 and self._unseen[i])
+                or (j > 0 and self._one_state(i, here))
             ):
                 done[(i, here)] = 0.0 if i == len(self.goals) else best
                 frames.pop()
@@ -377,10 +435,10 @@ class SequenceSearch:
         """The j-th configuration of the step after ``prefix``, offered, if
         there is one, priced at the prefix's cost plus its own, plus the
         least the later steps cost where that is known for every
-        configuration of the step from j on: after a step whose changes the
-        later steps do not see (:attr:`_unseen`), from the state its first
-        configuration leaves (any other of the step's gives the same: one
-        state is planned from).
+        configuration of the step from j on: after a step that leaves the
+        later steps one state (:meth:`_one_state`), from the state its first
+        configuration leaves (any other of the step's gives the same, or the
+        same least: one state is planned from).
         (Priced without it, every configuration of the step cheaper than the
         best whole sequence is planned before that sequence is listed.)"""
         facts, _ = self.state_after(prefix)
@@ -389,7 +447,7 @@ class SequenceSearch:
         if config is None:
             return ()
         rest = 0.0
-        if self._unseen[step]:  # from the state the step's first configuration leaves
+        if self._one_state(step, facts):  # from the state its first configuration leaves
             rest = self.remaining(step + 1, self.state_after((*prefix, 0))[0])
         if rest == math.inf:
             return ()

@@ -21,7 +21,7 @@ from cfgplan.planner import plan
 from cfgplan.planner.combine import Combined
 from cfgplan.planner.levels import level
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.sequence import SequenceSearch, apply, touched, unseen
+from cfgplan.planner.sequence import SequenceSearch, apply, fixed_effects, touched, unseen
 from cfgplan.planner.task import Task, derive
 from cfgplan.problem import Problem, load
 from tests.planner.generated import generated
@@ -426,3 +426,32 @@ def test_a_robot_that_moved_is_seen_only_by_the_steps_that_read_where_it_is(
     assert [s.total for s in found] == [total for total, _, _ in brute]
     assert [tuple(s.configuration for s in p.steps) for p in found] == [c for _, _, c in brute]
     assert found[0].steps[-1].changes[-1].startswith("(at G")
+
+
+def test_a_robot_that_moves_twice_leaves_one_state_whoever_helps_it() -> None:
+    """Step 2 reads where G1 is, which step 1 changes: seen. But every
+    configuration of step 1 moves G1 from Dock to Hall (the one functionality
+    with a postcondition is in every expansion, with one binding), so step 1
+    leaves one state: its first configuration, and the next one offered, are
+    the only ones planned (of 3, one a helper)."""
+    helpers = " ".join(f"(robot H{i}) (helper H{i})" for i in range(1, 4))
+    state = f"(state (robot G1) (at G1 Dock) {helpers}) (sequence (move G1 Hall) (move G1 Lab))"
+    problem = load_text(MOVES, state)
+    assert unseen(problem.task, problem.goal_calls) == (False, True)
+    assert fixed_effects(problem.task, problem.goal_calls[0], SearchOptions()) == (
+        (False, ("at", "G1", "Dock")),
+        (True, ("at", "G1", "Hall")),
+    )
+    searching = SequenceSearch(problem.goal_calls, problem.task)
+    (best,) = islice(searching, 1)
+    first = searching._ranked[(0, problem.task.facts)]
+    assert len(first.found) == 2
+    assert best.total == every_sequence(problem, problem.goal_calls)[0][0]
+
+
+def test_effects_that_depend_on_the_configuration_are_not_fixed() -> None:
+    """(special ?g) and (job ?g) may be done by X or Y: the robot no longer ok
+    depends on the configuration."""
+    state = "(state (robot X) (robot Y) (ok X) (ok Y) (expert X)) (sequence (job A) (special B))"
+    problem = load_text(TOKEN, state)
+    assert fixed_effects(problem.task, problem.goal_calls[0], SearchOptions()) is None
