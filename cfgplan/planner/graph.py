@@ -2,9 +2,9 @@
 option per feasible expansion (its method versions in domain order, the
 bindings of their preconditions in state order), every functionality
 instance with its weight. Made on demand from the grounder's expansions,
-each instance once, and kept by the grounder
-(:meth:`cfgplan.planner.ground.Grounder.graph`: one per task, as the grounder
-is, :func:`cfgplan.planner.plan.parts`), numbered by its numbering.
+each instance once, and kept with the grounder (:func:`graph_of`: one per task,
+as the grounder is, :func:`cfgplan.planner.plan.parts`), numbered by its
+numbering.
 
 The passes over it are elsewhere: what every expansion of an instance
 contains (:mod:`cfgplan.planner.summary`, the first bound), the partitioned
@@ -218,3 +218,16 @@ class Graph:
         known_sender = None if task.is_method(sender) else sender
         known_receiver = None if task.is_method(receiver) else receiver
         return self.wire(kind, data, known_sender, known_receiver)
+
+
+def graph_of(grounder: Grounder, media: bool = True) -> Graph:
+    """The AND/OR graph of ``grounder``'s ground instances, made once and kept
+    with it (:attr:`Grounder.graphs`): both bounds (the summaries and the
+    partitioned bound), the capacity caps and the independent parts are
+    passes over it. ``media``: whether an option notes what its global
+    channels need of the media (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
+    found = grounder.graphs.get(media)
+    if not isinstance(found, Graph):
+        room = Room(grounder.task, grounder.numbering, media)
+        found = grounder.graphs[media] = Graph(grounder, room, grounder.numbering)
+    return found

@@ -18,7 +18,6 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner.match import Failure, bindings
@@ -35,9 +34,6 @@ from cfgplan.planner.task import (
     Test,
 )
 from cfgplan.planner.unify import Bindings, bind_name, is_ground, substitute
-
-if TYPE_CHECKING:
-    from cfgplan.planner.graph import Graph
 
 Effects = tuple[tuple[bool, Ground], ...]
 """Postconditions P: (positive, atom); ``(not ATOM)`` is ``(False, atom)``."""
@@ -181,25 +177,10 @@ class Grounder:
     _failures: dict[tuple[Signature, int, Ground], Failure] = field(default_factory=dict)
     numbering: Numbering = field(default_factory=Numbering)
     """Numbers for the values of the task's search nodes (canonical forms, fingerprints)."""
-    _graphs: dict[bool, Graph] = field(default_factory=dict)
-
-    def graph(self, media: bool = True) -> Graph:
-        """The AND/OR graph of the task's ground instances
-        (:mod:`cfgplan.planner.graph`), made of these expansions and numbered
-        by :attr:`numbering`, once: both bounds (the summaries and the
-        partitioned bound), the capacity caps and the independent parts are
-        passes over it. ``media``: whether an
-        option notes what its global channels need of the media
-        (:attr:`cfgplan.planner.options.SearchOptions.media`)."""
-        found = self._graphs.get(media)
-        if found is None:
-            # (imported here: the graph is made of this module's expansions)
-            from cfgplan.planner.graph import Graph
-            from cfgplan.planner.room import Room
-
-            room = Room(self.task, self.numbering, media)
-            found = self._graphs[media] = Graph(self, room, self.numbering)
-        return found
+    graphs: dict[bool, object] = field(default_factory=dict)
+    """The AND/OR graphs of these expansions, one each way of noting the
+    media: :func:`cfgplan.planner.graph.graph_of` makes and keeps them here,
+    so that they go with the grounder (this module knows nothing of them)."""
 
     def method_bindings(self, method: MethodSchema, call: Ground) -> tuple[Bindings, ...]:
         """Every binding of a method version's preconditions for ``call``

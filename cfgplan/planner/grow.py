@@ -20,6 +20,7 @@ from typing import NamedTuple
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.finish import Models, admissible, build, fingerprint
+from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
@@ -164,7 +165,7 @@ class Grower:
         if not self.replays:
             return None
         if self._replays is None:
-            graph = self.grounder.graph(self.options.media)
+            graph = graph_of(self.grounder, self.options.media)
             memo: dict[tuple[tuple[Ground, ...], int, int], Replays] = (
                 self.grounder.task.memo.setdefault(
                     "replays" if self.options.media else "replays-without-media", {}

@@ -16,17 +16,15 @@ functionality keeps the label of its first instance.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from cfgplan.ir.model import Span
 from cfgplan.notation import atom_text
 from cfgplan.planner.ground import Expansion, FunctionalityInstance
+from cfgplan.planner.memory import Memory
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task
 from cfgplan.planner.wiring import Channel, ChannelKey, Port, Unwired, rewire, settle
-
-if TYPE_CHECKING:
-    from cfgplan.planner.replay import Memory
 
 Key = Ground
 """A functionality instance's identity: ``("camera", "Emil")``."""

@@ -49,6 +49,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from cfgplan.planner.capacity import Capacity
+from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.least import Least
 from cfgplan.planner.numbering import Numbering
@@ -74,7 +75,7 @@ class Partition:
 
     def __post_init__(self) -> None:
         task, self.number = self.grounder.task, self.grounder.numbering
-        self.graph = graph = self.grounder.graph(self.media)
+        self.graph = graph = graph_of(self.grounder, self.media)
         """The AND/OR graph of ground instances this bound is a pass over (the grounder's)."""
         self.room = graph.room
         self.occurrences = Occurrences(task, graph, self.number)

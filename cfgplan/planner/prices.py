@@ -8,16 +8,13 @@ of each ground instance at them is :mod:`cfgplan.planner.least`'s.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.room import Load, Need
 from cfgplan.planner.task import Ground, Task
-
-if TYPE_CHECKING:
-    from cfgplan.planner.graph import Instance
 
 Fits = Callable[[tuple[Need, ...], Load], bool]
 """Whether the media carry an expansion's needs on top of a node's load
@@ -138,8 +135,30 @@ class Prices:
         return found
 
 
+class PricedOption(Protocol):
+    """What :func:`price_options` reads of an expansion
+    (:class:`cfgplan.planner.graph.Option`)."""
+
+    @property
+    def needs(self) -> tuple[Need, ...]: ...
+    @property
+    def child_keys(self) -> tuple[int, ...]: ...
+    @property
+    def channels(self) -> tuple[Wire, ...]: ...
+    @property
+    def agents(self) -> tuple[str, ...]: ...
+
+
+class Priced(Protocol):
+    """What :func:`price_options` reads of a method instance
+    (:class:`cfgplan.planner.graph.Instance`): its expansions."""
+
+    @property
+    def options(self) -> Sequence[PricedOption]: ...
+
+
 def price_options(
-    instance: Instance,
+    instance: Priced,
     positions: Iterable[int],
     priced: list[float],
     memo: dict[int, float],

@@ -42,6 +42,7 @@ from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.combine import Combined
+from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Effects
 from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
@@ -186,7 +187,7 @@ def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects |
     summary = bound.summaries.summary(goal)
     if not summary.feasible:
         return None
-    graph = grounder.graph(options.media)
+    graph = graph_of(grounder, options.media)
     found: Ground | None = None
     todo, seen = [goal], {goal}
     while todo:

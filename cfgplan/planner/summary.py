@@ -5,7 +5,7 @@ A :class:`Summary` intersects the expansions of one ground instance (4.5:
 its method versions and precondition bindings): the functionality
 instances, robots and channels all of them hold, and the least their
 functionalities and channels can cost. It is a pass over the grounder's
-graph of ground instances (:meth:`cfgplan.planner.ground.Grounder.graph`:
+graph of ground instances (:func:`cfgplan.planner.graph.graph_of`:
 each option stands for one of the expansions the search takes), as the
 partitioned bound is. They depend only on the task, so one
 :class:`Summaries` serves every search of a task. Summaries are computed
@@ -20,6 +20,7 @@ from collections.abc import Generator, Sequence
 from dataclasses import dataclass, field, replace
 
 from cfgplan.planner import clock
+from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Expansion, Grounder
 from cfgplan.planner.match import exists
 from cfgplan.planner.partial import Key
@@ -101,7 +102,7 @@ class Summaries:
 
     task: Task
     grounder: Grounder | None = None
-    """Whose graph of ground instances is summarised (:meth:`Grounder.graph`):
+    """Whose graph of ground instances is summarised (:func:`~cfgplan.planner.graph.graph_of`):
     the search's, so that each instance is matched and instantiated once;
     None: a grounder of their own."""
     media: bool = True
@@ -115,7 +116,7 @@ class Summaries:
 
     def __post_init__(self) -> None:
         grounder = self.grounder or Grounder(self.task)
-        self._instance = grounder.graph(self.media).instance
+        self._instance = graph_of(grounder, self.media).instance
         self.reach = Reach(self.task)
         """The names each instance can reach: what names a summary's parts."""
 

@@ -9,9 +9,9 @@ The node they belong to, and the steps that call these, are
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.notation import atom_text, call_text
@@ -19,8 +19,16 @@ from cfgplan.planner import clock
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task
 
-if TYPE_CHECKING:
-    from cfgplan.planner.partial import Placed
+
+class Located(Protocol):
+    """What settling a channel reads of a functionality placed at one end
+    (:class:`cfgplan.planner.partial.Placed`): its call and its robot."""
+
+    @property
+    def call(self) -> Ground: ...
+    @property
+    def robot(self) -> str: ...
+
 
 ChannelKey = tuple[str, int, int, Ground]
 """A resolved channel's identity: kind, sender label, receiver label, data."""
@@ -100,7 +108,7 @@ def rewire(
 
 def settle(
     channels: tuple[Channel, ...],
-    located: dict[int, Placed],
+    located: Mapping[int, Located],
     touching: list[int],
     resolved: frozenset[ChannelKey],
     task: Task,
@@ -164,7 +172,7 @@ def settle(
     return tuple(out), added, resolved | new if new else resolved
 
 
-def demands(channels: Sequence[Channel], located: dict[int, Placed]) -> list[Demand | None]:
+def demands(channels: Sequence[Channel], located: Mapping[int, Located]) -> list[Demand | None]:
     """What each channel needs of the media, in order: a global channel whose
     two ends are placed on different robots needs its bandwidth; any other
     needs nothing (None)."""
@@ -178,7 +186,7 @@ def demands(channels: Sequence[Channel], located: dict[int, Placed]) -> list[Dem
     return out
 
 
-def _media(channels: list[Channel], located: dict[int, Placed], task: Task) -> DeadEnd | None:
+def _media(channels: list[Channel], located: Mapping[int, Located], task: Task) -> DeadEnd | None:
     """Communication admissibility (4.6) of the global channels whose two ends
     are placed: they are final (a merge only raises a bandwidth), so if they
     overflow the media now, every completion does (step 4 would reject it)."""
@@ -188,7 +196,7 @@ def _media(channels: list[Channel], located: dict[int, Placed], task: Task) -> D
     return DeadEnd("configuration", result.problem, None, Condition.COMMUNICATION)
 
 
-def _misplaced(ch: Channel, src: Placed, dst: Placed) -> DeadEnd:
+def _misplaced(ch: Channel, src: Located, dst: Located) -> DeadEnd:
     return DeadEnd(
         f"{ch.kind} channel {atom_text(ch.data)}",
         f"declared ({ch.kind} {' '.join(ch.robots)}) but it runs from "

@@ -10,6 +10,7 @@ import sys
 
 from benchmarks.fuzz_inputs import chain
 from cfgplan.planner import plan
+from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.summary import Summaries
 from tests.planner.problems import load_text
@@ -74,8 +75,8 @@ def test_the_grounding_memo_s_graph_gives_the_same_summaries() -> None:
         for call in [("go", "A"), ("get", "A"), ("get", "B"), ("act", "A")]:
             assert shared.summary(call) == own.summary(call)
             if problem.task.is_method(call):
-                assert call in grounder.graph().instances
-        options = grounder.graph().instances[("get", "A")].options
+                assert call in graph_of(grounder).instances
+        options = graph_of(grounder).instances[("get", "A")].options
         assert len(options) == 1 + helpers
         with_helper = problem.task.versions(("get", "A"))[1]
         assert len(grounder.method_bindings(with_helper, ("get", "A"))) == helpers
