@@ -10,7 +10,9 @@ it), with the peak resident memory of that process:
   (:func:`benchmarks.families.missions`), against the sum of its steps
   planned alone (``--goal``, one process each). Target: the sequence within
   2x that sum. ``missions moving``: each mission also moves its robot (a
-  postcondition no later step reads).
+  postcondition no later step reads). ``patrol``: one robot does every
+  mission, from place to place (each step reads where the step before left
+  it, and every configuration of a step moves it alike).
 - **any-delegation**: one generic ``get`` that any of N robots may delegate
   to any other (:func:`benchmarks.families.any_delegation`), with ``-k 1``,
   ``-k 10`` and ``--all``. Targets: 1 s, 5 s, 5 s.
@@ -109,12 +111,13 @@ def written(folder: Path, texts: tuple[str, str]) -> tuple[Path, Path]:
     return domain, state
 
 
-def mission_rows(run: Runner, moving: bool, tmp: Path, rev: str | None) -> Iterator[list[str]]:
+def mission_rows(run: Runner, kind: str, tmp: Path, rev: str | None) -> Iterator[list[str]]:
+    moving, patrol = kind in ("moving", "patrol"), kind == "patrol"
     for goals in GOALS:
         for helpers in HELPERS:
-            domain, state = written(tmp, families.missions(goals, helpers, moving))
+            domain, state = written(tmp, families.missions(goals, helpers, moving, patrol))
             whole, old = run.both(plan_command(domain, state, run.cap, "-k", "1"))
-            steps = [f"(mission G{i} Place{i})" for i in range(1, goals + 1)]
+            steps = [f"(mission G{1 if patrol else i} Place{i})" for i in range(1, goals + 1)]
             alone = [
                 measure(plan_command(domain, state, run.cap, "-k", "1", "--goal", g), ROOT, run.cap)
                 for g in steps
@@ -151,12 +154,15 @@ def main() -> None:
     parser.add_argument("--cap", type=float, default=30.0, help="seconds a run may take")
     parser.add_argument("--against", metavar="REV", help="also run cfgplan at this revision")
     parser.add_argument(
-        "--only", choices=["missions", "moving", "delegation"], action="append", help="one sweep"
+        "--only",
+        choices=["missions", "moving", "patrol", "delegation"],
+        action="append",
+        help="one sweep",
     )
     parser.add_argument("--markdown", type=Path, metavar="FILE", help="also write a page")
     parser.add_argument("--note", help="a line for the page: how loaded the machine was")
     args = parser.parse_args()
-    only = set(args.only or ["missions", "moving", "delegation"])
+    only = set(args.only or ["missions", "moving", "patrol", "delegation"])
     lines = [f"machine: {machine()}; load average {os.getloadavg()[0]:.1f} at the start", ""]
     if args.note:
         lines += [args.note, ""]
@@ -171,10 +177,10 @@ def main() -> None:
         against = checkout(rev, tmp / "against") if rev else None
         run = Runner(args.cap, against)
         (tmp / "inputs").mkdir()
-        for name, moving in (("missions", False), ("moving", True)):
+        for name in ("missions", "moving", "patrol"):
             if name not in only:
                 continue
-            title = "missions moving" if moving else "missions"
+            title = {"missions": "missions", "moving": "missions moving", "patrol": "patrol"}[name]
             head = ["goals G", "helpers H", "sequence s", "steps alone s", "ratio", "≤ 2x", "MiB"]
             if rev:
                 head += [f"sequence s {rev}", f"MiB {rev}"]
@@ -182,7 +188,7 @@ def main() -> None:
             emit("")
             emit("| " + " | ".join(head) + " |")
             emit("|" + "---|" * len(head))
-            for row in mission_rows(run, moving, tmp / "inputs", rev):
+            for row in mission_rows(run, name, tmp / "inputs", rev):
                 emit("| " + " | ".join(row) + " |")
             emit("")
         if "delegation" in only:

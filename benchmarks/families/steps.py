@@ -55,22 +55,28 @@ MISSIONS = """\
 """
 
 
-def missions(goals: int, helpers: int, moving: bool = False) -> tuple[str, str]:
+def missions(
+    goals: int, helpers: int, moving: bool = False, patrol: bool = False
+) -> tuple[str, str]:
     """Domain and state text: a sequence of ``goals`` missions, one for each
     goal robot G1..G``goals``, each needing three kinds of data that any of
     ``helpers`` helpers can send (the shape of a sequence that enumerated its
     steps: independent goals). With ``moving``, each mission moves its robot
     to the next place (a postcondition (at G P)): the later steps read where
-    the other robots are not, so the steps stay independent."""
+    the other robots are not, so the steps stay independent. With ``patrol``
+    (which implies ``moving``), one robot G1 does every mission, from place to
+    place: each step reads where the step before left it (every helper's
+    configuration moves it alike)."""
     if goals < 1 or helpers < 1:
         raise ValueError("need G >= 1 goals and H >= 1 helpers")
+    moving = moving or patrol
     post = "\n  :postcond '((not (at ?r ?a)) (at ?r ?b))" if moving else ""
+    robots = [1] * goals if patrol else list(range(1, goals + 1))
     facts = ["(place Dock)"] + [f"(place Place{i})" for i in range(1, goals + 1)]
-    facts += [f"(robot G{i}) (at G{i} Dock)" for i in range(1, goals + 1)]
+    facts += [f"(robot G{i}) (at G{i} Dock)" for i in sorted(set(robots))]
     facts += [f"(robot H{i}) (helper H{i})" for i in range(1, helpers + 1)]
-    steps = " ".join(f"(mission G{i} Place{i})" for i in range(1, goals + 1))
+    steps = " ".join(f"(mission G{r} Place{i})" for i, r in enumerate(robots, 1))
     state = "(state " + "\n       ".join(facts) + f")\n(sequence {steps})\n"
-    text = MISSIONS.format(
-        g=goals, h=helpers, moving=", each moving its robot" if moving else "", post=post
-    )
+    how = ", one robot moving from place to place" if patrol else ", each moving its robot"
+    text = MISSIONS.format(g=goals, h=helpers, moving=how if moving else "", post=post)
     return text, state
