@@ -13,6 +13,10 @@ it), with the peak resident memory of that process:
   postcondition no later step reads). ``patrol``: one robot does every
   mission, from place to place (each step reads where the step before left
   it, and every configuration of a step moves it alike).
+- **structured**: randomised fusion over shared, deep filter hierarchies
+  (:func:`benchmarks.families.structured`), over the number of pieces, three
+  seeds each, without and with media whose capacity binds. Target: 1 s
+  (no solver-based planner runs here to compare with).
 - **any-delegation**: one generic ``get`` that any of N robots may delegate
   to any other (:func:`benchmarks.families.any_delegation`), with ``-k 1``,
   ``-k 10`` and ``--all``. Targets: 1 s, 5 s, 5 s.
@@ -42,6 +46,8 @@ from benchmarks.run import ROOT, checkout, machine
 HELPERS = (10, 20, 30, 40, 50, 60)
 GOALS = (2, 5, 10)
 ROBOTS = (3, 4, 5, 6)
+PIECES = (8, 12, 16, 20, 24)
+SEEDS = (1, 2, 3)
 MODES = (("-k 1", ["-k", "1"], 1.0), ("-k 10", ["-k", "10"], 5.0), ("--all", ["--all"], 5.0))
 
 
@@ -136,6 +142,21 @@ def mission_rows(run: Runner, kind: str, tmp: Path, rev: str | None) -> Iterator
             yield row
 
 
+def structured_rows(run: Runner, tmp: Path, rev: str | None) -> Iterator[list[str]]:
+    for media in (False, True):
+        for pieces in PIECES:
+            row = [str(pieces), "yes" if media else "no"]
+            for seed in SEEDS:
+                texts = families.structured(seed, pieces=pieces, media=media)
+                domain, state = written(tmp, texts)
+                new, old = run.both(plan_command(domain, state, run.cap, "-k", "1"))
+                ok = new.seconds is not None and new.seconds <= 1.0
+                row += [new.text(run.cap), "✓" if ok else "✗", f"{new.mib:.0f}"]
+                if rev is not None:
+                    row += [old.text(run.cap) if old else "-"]
+            yield row
+
+
 def delegation_rows(run: Runner, tmp: Path, rev: str | None) -> Iterator[list[str]]:
     for robots in ROBOTS:
         domain, state = written(tmp, families.any_delegation(robots))
@@ -155,14 +176,14 @@ def main() -> None:
     parser.add_argument("--against", metavar="REV", help="also run cfgplan at this revision")
     parser.add_argument(
         "--only",
-        choices=["missions", "moving", "patrol", "delegation"],
+        choices=["missions", "moving", "patrol", "structured", "delegation"],
         action="append",
         help="one sweep",
     )
     parser.add_argument("--markdown", type=Path, metavar="FILE", help="also write a page")
     parser.add_argument("--note", help="a line for the page: how loaded the machine was")
     args = parser.parse_args()
-    only = set(args.only or ["missions", "moving", "patrol", "delegation"])
+    only = set(args.only or ["missions", "moving", "patrol", "structured", "delegation"])
     lines = [f"machine: {machine()}; load average {os.getloadavg()[0]:.1f} at the start", ""]
     if args.note:
         lines += [args.note, ""]
@@ -189,6 +210,19 @@ def main() -> None:
             emit("| " + " | ".join(head) + " |")
             emit("|" + "---|" * len(head))
             for row in mission_rows(run, name, tmp / "inputs", rev):
+                emit("| " + " | ".join(row) + " |")
+            emit("")
+        if "structured" in only:
+            head = ["pieces", "media"]
+            for seed in SEEDS:
+                head += [f"seed {seed} s", "≤ 1 s", "MiB"]
+                if rev:
+                    head += [f"seed {seed} s {rev}"]
+            emit("### structured")
+            emit("")
+            emit("| " + " | ".join(head) + " |")
+            emit("|" + "---|" * len(head))
+            for row in structured_rows(run, tmp / "inputs", rev):
                 emit("| " + " | ".join(row) + " |")
             emit("")
         if "delegation" in only:

@@ -15,6 +15,8 @@ for ``python -m benchmarks.run`` and the tests:
   sequence of G independent goals over H helpers;
 - ``any_delegation(N)``: delegation from any robot to any other, dead ends
   found at a chain's last step;
+- ``structured(seed, ...)``: randomised fusion over shared, deep filter
+  hierarchies, with media whose capacity binds;
 - :mod:`benchmarks.families.weak`: structures the search is still weak on
   (docs/explanation/planner.md, "Weak spots"), not in the benchmark table.
 """
@@ -27,6 +29,7 @@ from benchmarks.families.gateway import gateway
 from benchmarks.families.relay import relay
 from benchmarks.families.shared import conversion, dag
 from benchmarks.families.steps import deliveries, missions
+from benchmarks.families.structured import structured
 from benchmarks.families.wall import wall
 
 __all__ = [
@@ -42,5 +45,6 @@ __all__ = [
     "media_tight",
     "missions",
     "relay",
+    "structured",
     "wall",
 ]

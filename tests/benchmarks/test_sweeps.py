@@ -39,3 +39,15 @@ def test_a_measured_process_says_what_it_found(tmp_path: Path) -> None:
     assert found.best == 78 and found.seconds is not None and found.mib > 0
     stopped = measure(plan_command(domain, state, 30.0, "--bogus"), ROOT, 30.0)
     assert stopped.seconds is None and stopped.best is None
+
+
+def test_structured_domains_are_the_same_for_a_seed_and_plan() -> None:
+    """The randomised generator is deterministic for its arguments, differs by
+    seed, and what it writes reads, checks and plans (media included)."""
+    assert families.structured(3, pieces=4) == families.structured(3, pieces=4)
+    assert families.structured(3, pieces=4) != families.structured(4, pieces=4)
+    for media in (False, True):
+        problem = load_text(*families.structured(3, pieces=4, depth=2, media=media))
+        configs, _ = plan(problem.task, problem.goal_call, limit=1)
+        assert configs and configs[0].agents[0] == "G"
+        assert (len(problem.task.media) > 0) == media
