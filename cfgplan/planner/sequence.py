@@ -189,23 +189,32 @@ def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects |
         return None
     graph = graph_of(grounder, options.media)
     found: Ground | None = None
-    todo, seen = [goal], {goal}
+    todo: list[Ground] = []
+    seen: set[Ground] = set()
+
+    def meet(call: Ground) -> bool:
+        """Note ``call``; False when it makes the postconditions differ."""
+        nonlocal found
+        seen.add(call)
+        schema = task.functionality(call)
+        if schema is None:
+            todo.append(call)
+        elif schema.effects:
+            if found is not None or call not in summary.functionalities:
+                return False
+            found = call
+        return True
+
+    if not meet(goal):
+        return None
     while todo:
         clock.check()
         for option in graph.instance(todo.pop()).options:
             if option.expansion.effects:
                 return None
             for child in option.children:
-                if child in seen:
-                    continue
-                seen.add(child)
-                schema = task.functionality(child)
-                if schema is None:
-                    todo.append(child)
-                elif schema.effects:
-                    if found is not None or child not in summary.functionalities:
-                        return None
-                    found = child
+                if child not in seen and not meet(child):
+                    return None
     if found is None:
         return ()
     schema = task.functionality(found)
