@@ -10,7 +10,7 @@ for ``python -m benchmarks.run`` and the tests:
   covering with ``:cost``, long plateaus of equal cost, recursion, media that
   let each camera serve one robot;
 - ``dag(D)``, ``conversion(D)``: shared and recursive sub-derivations, one
-  ground method instance under many ancestors (issue 35);
+  ground method instance under many ancestors;
 - ``deliveries(S, R)``: a sequence of S configurations; ``missions(G, H)``: a
   sequence of G independent goals over H helpers;
 - ``any_delegation(N)``: delegation from any robot to any other, dead ends
