@@ -20,12 +20,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from cfgplan.ros2.rmw_zenoh import _typestore
+from cfgplan.ros2.rmw_zenoh import ARRAY, NAME, SEQUENCE, _typestore, decode_cdr
 
 __all__ = ["cdr_of_value", "known_type", "message_of_value", "value_of_cdr", "value_of_message"]
-
-NAME, ARRAY, SEQUENCE = 2, 3, 4
-"""rosbags's ``Nodetype`` values (BASE is 1): a nested message, ``T[n]``, ``T[]``/``T[<=n]``."""
 
 _NUMPY = {
     "bool": "bool",
@@ -145,7 +142,6 @@ def value_of_message(message: Any) -> Any:
 
 
 def value_of_cdr(msg_type: str, payload: bytes) -> Any:
-    """A CDR payload of ``msg_type`` (with its header) as a dict of its fields."""
-    if payload[:2] not in (b"\x00\x00", b"\x00\x01"):
-        raise ValueError(f"not a plain CDR payload: header {payload[:4].hex()}")
-    return value_of_message(_typestore().deserialize_cdr(payload, msg_type))
+    """A CDR payload of ``msg_type`` (with its header, any padding after the
+    message ignored: :func:`~cfgplan.ros2.rmw_zenoh.decode_cdr`) as a dict of its fields."""
+    return value_of_message(decode_cdr(payload, msg_type))
