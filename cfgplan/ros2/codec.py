@@ -20,7 +20,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from cfgplan.ros2.rmw_zenoh import ARRAY, NAME, SEQUENCE, _typestore, decode_cdr
+from cfgplan.ros2.rmw_zenoh import (
+    ARRAY,
+    EMPTY_MEMBER,
+    NAME,
+    SEQUENCE,
+    _typestore,
+    decode_cdr,
+)
 
 __all__ = ["cdr_of_value", "known_type", "message_of_value", "value_of_cdr", "value_of_message"]
 
@@ -127,12 +134,16 @@ def cdr_of_value(msg_type: str, value: Any) -> bytes:
 
 
 def value_of_message(message: Any) -> Any:
-    """A rosbags message (or a field of one) as plain JSON-ready values."""
+    """A rosbags message (or a field of one) as plain JSON-ready values: its
+    fields only (not the type's constants, ``NavSatStatus.STATUS_FIX``, which
+    rosbags's classes carry as attributes too, nor the member an empty
+    message has on the wire)."""
     if hasattr(message, "__msgtype__"):
+        _, fields = _typestore().fielddefs[message.__msgtype__]
         return {
             name: value_of_message(getattr(message, name))
-            for name in message.__dataclass_fields__
-            if name != "__msgtype__"
+            for name, _ in fields
+            if name != EMPTY_MEMBER
         }
     if hasattr(message, "tolist"):  # a numpy array or scalar
         return message.tolist()

@@ -170,6 +170,10 @@ NAME, ARRAY, SEQUENCE = 2, 3, 4
 """rosbags's ``Nodetype`` values (BASE is 1): a nested message, ``T[n]``, ``T[]``/``T[<=n]``."""
 
 
+EMPTY_MEMBER = "structure_needs_at_least_one_member"
+"""The one ``uint8`` member rosidl gives a message without fields (std_msgs/msg/Empty)."""
+
+
 def _type_description(msg_type: str, fielddefs: Any) -> dict[str, Any]:
     """The REP-2016 type description of ``msg_type`` (its ``type_description``
     and ``referenced_type_descriptions``, sorted by name), the fields as
@@ -210,9 +214,7 @@ def _type_description(msg_type: str, fielddefs: Any) -> dict[str, Any]:
     def describe(name: str) -> dict[str, Any]:
         if name not in referenced:
             # an empty message has one uint8 member (rosidl's IDL of an empty .msg)
-            fields = fielddefs[name][1] or [
-                ("structure_needs_at_least_one_member", (1, ("uint8", 0)))
-            ]
+            fields = fielddefs[name][1] or [(EMPTY_MEMBER, (1, ("uint8", 0)))]
             referenced[name] = {"type_name": name, "fields": [field(n, d) for n, d in fields]}
         return referenced[name]
 

@@ -202,3 +202,15 @@ def test_the_runtime_and_run_command_do_not_import_the_ros2_extra() -> None:
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
     )
     assert out.stdout.strip() == "[]"
+
+
+def test_a_decoded_message_has_its_fields_only() -> None:
+    """A type's constants (sensor_msgs/msg/NavSatStatus's STATUS_FIX, ...) are
+    attributes of rosbags's classes but no fields of the message, and the one
+    byte an empty message has on the wire is none either: the value is what
+    rclpy's message holds (tests/ros2/test_jazzy_wire.py compares every type)."""
+    status = "sensor_msgs/msg/NavSatStatus"
+    got = codec.value_of_cdr(status, codec.cdr_of_value(status, {"status": 2, "service": 1}))
+    assert got == {"status": 2, "service": 1}
+    empty = "std_msgs/msg/Empty"
+    assert codec.value_of_cdr(empty, codec.cdr_of_value(empty, {})) == {}
