@@ -142,7 +142,7 @@ def run(
         bool,
         typer.Option(
             "--ros2",
-            help="Announce the robot as a ROS 2 node over rmw_zenoh and publish its switches, "
+            help="Make the robot a ROS 2 node (see --ros2-via) and publish its switches, "
             "failures and recoveries on /cfgplan/events, and each global channel it sends on "
             "/cfgplan/channel/... (needs --robot; pip install 'cfgplan[ros2]').",
         ),
