@@ -30,8 +30,10 @@ What a ROS 2 engineer expects of the node (:class:`RosNode`):
   robots lost and seen, start and stop), the configuration running on
   ``/cfgplan/configuration`` (``std_msgs/msg/String``, JSON: its cost,
   functionalities and channels; transient local, depth 1: a late ``ros2
-  topic echo`` still gets it), and each global channel it sends on
-  ``/cfgplan/channel/...`` as the rmw_zenoh layout does;
+  topic echo`` still gets it), its status on ``/cfgplan/status``
+  (``std_msgs/msg/String``, JSON, once a second: each functionality's last
+  call, ``ran``, ``waiting``, ``stale``, ...), and each global channel it
+  sends on ``/cfgplan/channel/...`` as the rmw_zenoh layout does;
 * **not a lifecycle node**: when a cfgplan robot runs, which functionalities
   are active is the society's decision (the coordinator's switches, 5.5), not
   a lifecycle manager's; a managed node that a launch file could deactivate
@@ -61,13 +63,22 @@ from cfgplan.ros2 import rmw_zenoh as wire
 from cfgplan.ros2.bindings import Bindings
 from cfgplan.ros2.topics import Binding, TopicMap
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.events import Adaptation, Event, Lifecycle, Presence, Staleness, Transfer
+from cfgplan.runtime.events import (
+    Adaptation,
+    Call,
+    Event,
+    Lifecycle,
+    Presence,
+    Staleness,
+    Transfer,
+)
 from cfgplan.runtime.transport import ChannelKey
 from cfgplan.runtime.values import MAX_VALUE_BYTES
 
 __all__ = [
     "CONFIGURATION_TOPIC",
     "EVENT_KINDS",
+    "STATUS_TOPIC",
     "VIA",
     "VIA_ENV",
     "NodeOptions",
@@ -82,6 +93,7 @@ VIA_ENV = "CFGPLAN_ROS2_VIA"
 """The environment's choice of :data:`VIA` when ``--ros2-via`` is not given
 (``cfgplan launch`` passes its environment to every robot)."""
 CONFIGURATION_TOPIC = "/cfgplan/configuration"
+STATUS_TOPIC = "/cfgplan/status"
 EVENT_KINDS = frozenset(
     {
         "switch", "failure", "recovery", "no-configuration", "inject", "achieved", "stale",
@@ -301,13 +313,19 @@ class RclpyEvents:
         robot: str,
         config: Configuration | None = None,
         topic: str = "/cfgplan/events",
+        status_period: float = 1.0,
     ) -> None:
         self.ros = ros
         self.robot = robot
+        self.status_period = status_period
+        """Seconds between two messages of ``/cfgplan/status``."""
+        self._calls: dict[str, dict[str, object]] = {}
+        self._status_at = 0.0
         self.running: Callable[[], Configuration | None] | None = None
         string = message_class(wire.STRING)
         node = ros.node
         self._events = node.create_publisher(string, topic, ros.profile(wire.PUBLISHER_QOS))
+        self._status = node.create_publisher(string, STATUS_TOPIC, ros.profile(wire.PUBLISHER_QOS))
         latched = wire.QoS(durability=1, depth=1)  # transient local: a late subscriber gets it
         self._configuration = node.create_publisher(
             string, CONFIGURATION_TOPIC, ros.profile(latched)
@@ -336,7 +354,9 @@ class RclpyEvents:
         from cfgplan.ros2.bridge import channel_topic
 
         try:
-            if isinstance(event, Adaptation | Staleness | Presence | Lifecycle):
+            if isinstance(event, Call):
+                self._called(event)
+            elif isinstance(event, Adaptation | Staleness | Presence | Lifecycle):
                 if event.kind in EVENT_KINDS:
                     self._put(self._events, event)
                 if event.kind in ("switch", "no-configuration") and self.running is not None:
@@ -352,6 +372,19 @@ class RclpyEvents:
                 self._put(self._channels[topic], event)
         except Exception:  # a node shutting down (the run ending): counted, not raised
             self.failed += 1
+
+    def _called(self, event: Call) -> None:
+        """Keep the call's outcome; at most every :attr:`status_period` seconds,
+        publish every functionality's last outcome on ``/cfgplan/status``."""
+        self._calls[event.label] = {
+            "functionality": f"{event.name}({', '.join(event.args)})",
+            "status": event.status,
+            "cycle": event.cycle,
+        }
+        if event.t - self._status_at >= self.status_period:
+            self._status_at = event.t
+            status = {"robot": self.robot, "t": event.t, "cycle": event.cycle}
+            self._publish(self._status, {**status, "calls": dict(sorted(self._calls.items()))})
 
     def _put(self, publisher: Any, event: Event) -> None:
         self._publish(publisher, event.record())

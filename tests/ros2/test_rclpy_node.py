@@ -12,8 +12,9 @@ events and the configuration. ``cfgplan run --robot Pippi --ros2-map ...
 
 * the robot's Twist reaches the observer with what ``avoid`` computed from
   the laser's scans (0.5 m/s, 0.1 rad/s), so the functionality read ``/scan``;
-* the robot is the node ``/Pippi/cfgplan`` in the graph, and its configuration
-  is on the latched ``/cfgplan/configuration``;
+* the robot is the node ``/Pippi/cfgplan`` in the graph, its status (the
+  laser's calls ran) on ``/cfgplan/status``, and its configuration on the
+  latched ``/cfgplan/configuration``;
 * the fault: the laser's node is killed (SIGKILL). The observer sees the
   laser's failure and the switch to the sonar's configuration on
   ``/cfgplan/events``, the switch within a second of the robot making it (its
@@ -104,6 +105,7 @@ def test_a_robot_is_a_ros_2_node_on_dds_and_switches_when_its_laser_dies(tmp_pat
     started = Started(tmp_path, realros.ros_env(domain))
     seen, trace = tmp_path / "observed.jsonl", tmp_path / "trace.jsonl"
     node_args = [str(NODE), "observe", str(seen), "/cfgplan/events", "/cfgplan/configuration"]
+    node_args.append("/cfgplan/status")
     robot_args = [
         "-m", "cfgplan", "run", str(DATA / "fallback.lisp"), str(DATA / "fallback-state.lisp"),
         "--impl", str(DATA / "drive_impl.py"), "--robot", "Pippi",
@@ -128,6 +130,14 @@ def test_a_robot_is_a_ros_2_node_on_dds_and_switches_when_its_laser_dies(tmp_pat
             lambda: any("/Pippi/cfgplan" in r.get("nodes", []) for r in _seen(seen)),
             started,
         )
+        status = [r["data"] for r in _seen(seen) if r["topic"] == "/cfgplan/status"]
+        assert (
+            status
+            and {"functionality": "laser(Pippi)", "status": "ran"}.items()
+            <= next(
+                c for c in status[-1]["calls"].values() if c["functionality"] == "laser(Pippi)"
+            ).items()
+        ), status[-1:]
         configured = [r["data"] for r in _seen(seen) if r["topic"] == "/cfgplan/configuration"]
         assert configured and "laser(Pippi)" in " ".join(configured[-1]["functionalities"])
 
