@@ -299,3 +299,26 @@ def test_the_way_of_speaking_ros_2_is_chosen_as_documented(monkeypatch: pytest.M
     assert "ros2-rclpy" in (caught.value.hint or "")
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: object())
     assert choose_via(None, {}) == "rclpy"
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--ros2-via", "rclpy"], "--ros2-via"),
+        (["--use-sim-time"], "--use-sim-time"),
+        (["--ros2", "--ros2-via", "dds"], "'dds': give rclpy or zenoh"),
+    ],
+)
+def test_the_ways_options_are_usage_errors_where_they_mean_nothing(
+    flags: list[str], message: str
+) -> None:
+    """--ros2-via and --use-sim-time without --ros2 or --ros2-map, or a way
+    that is not rclpy or zenoh: exit 2, said, before anything runs."""
+    done = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "run",
+         str(DATA / "drive.lisp"), str(DATA / "drive-state.lisp"),
+         "--impl", str(DATA / "drive_impl.py"), "--robot", "Pippi", *flags],
+        capture_output=True, text=True, timeout=120, cwd=ROOT,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert message in done.stderr and "Traceback" not in done.stderr
