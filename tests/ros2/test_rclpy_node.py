@@ -200,3 +200,31 @@ def test_a_robot_is_a_ros_2_node_on_dds_and_switches_when_its_laser_dies(tmp_pat
         )
     finally:
         started.stop()
+
+
+def test_the_node_is_the_robots_with_use_sim_time_and_closes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``/<robot>/cfgplan`` in the domain given; ``use_sim_time`` is the node's
+    parameter, and with it (and no ``/clock`` yet) the stamps are sim time's 0,
+    without it the wall clock's; close() shuts the node's own context down,
+    twice is once."""
+    realros.rclpy()
+    import time as wall
+
+    from cfgplan.ros2.node import NodeOptions, RosNode
+
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    simulated = RosNode("Pippi", NodeOptions(domain_id=realros.domain(), use_sim_time=True))
+    real = RosNode("Emil", NodeOptions(domain_id=realros.domain()))
+    try:
+        assert simulated.name == "/Pippi/cfgplan" and real.name == "/Emil/cfgplan"
+        assert simulated.node.get_parameter("use_sim_time").value is True
+        assert real.node.get_parameter("use_sim_time").value is False
+        assert simulated.now_ns() == 0
+        assert abs(real.now_ns() - wall.time_ns()) < 5 * 10**9
+    finally:
+        simulated.close()
+        real.close()
+    assert not simulated.context.ok() and not real.context.ok()
+    simulated.close()  # once is enough
