@@ -61,9 +61,15 @@ from cfgplan.runtime.options import (
 from cfgplan.runtime.spawn import Launch, commands, free_port
 
 HERMETIC = (
-    "{ // cfgplan launch: robots meet only through the endpoints given\n"
-    "  scouting: { multicast: { enabled: false }, gossip: { enabled: false } },\n}\n"
+    "{ // cfgplan launch: robots meet only through the endpoints given, and what they\n"
+    "  // learn over them: gossip on, as cfgplan run's, so that behind a --connect\n"
+    "  // router (rmw_zenohd) its ROS 2 peers and the robots find each other\n"
+    "  scouting: { multicast: { enabled: false }, gossip: { enabled: true } },\n}\n"
 )
+"""The Zenoh configuration of the launched robots when no --zenoh-config is given:
+no multicast scouting (nothing off this host is found), gossip as Zenoh's default
+(it spreads only the locators of sessions already connected: the robots' own
+loopback endpoints, and what a --connect router knows)."""
 DEFAULT_PORT = 7447
 """Zenoh's port: each robot's with --print-commands, the next for a second robot on a host."""
 

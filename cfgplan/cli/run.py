@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -77,6 +77,9 @@ from cfgplan.runtime.part import Part
 from cfgplan.runtime.tracefile import TraceFile, open_trace
 from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.security.identity import problem_id
+
+if TYPE_CHECKING:
+    from cfgplan.ros2.bindings import Bindings
 
 TRANSPORTS = ("zenoh", "inprocess")
 
@@ -139,7 +142,7 @@ def run(
         bool,
         typer.Option(
             "--ros2",
-            help="Announce the robot as a ROS 2 node over rmw_zenoh and publish its switches, "
+            help="Make the robot a ROS 2 node (see --ros2-via) and publish its switches, "
             "failures and recoveries on /cfgplan/events, and each global channel it sends on "
             "/cfgplan/channel/... (needs --robot; pip install 'cfgplan[ros2]').",
         ),
@@ -153,6 +156,25 @@ def run(
             "[[bind]] tables say (needs --robot; docs: Use cfgplan with ROS 2).",
         ),
     ] = None,
+    ros2_via: Annotated[
+        str | None,
+        typer.Option(
+            "--ros2-via",
+            metavar="rclpy|zenoh",
+            help="How --ros2 and --ros2-map speak ROS 2: rclpy, a real node on your ROS 2's "
+            "middleware (DDS by default, RMW_IMPLEMENTATION honoured), or zenoh, rmw_zenoh's "
+            "layout over the robot's own Zenoh session (default: CFGPLAN_ROS2_VIA if set, else "
+            "rclpy where it can be imported, else zenoh).",
+            show_default=False,
+        ),
+    ] = None,
+    use_sim_time: Annotated[
+        bool,
+        typer.Option(
+            "--use-sim-time",
+            help="The rclpy node's use_sim_time parameter: headers are stamped with /clock.",
+        ),
+    ] = False,
     ros_domain_id: Annotated[
         int | None,
         typer.Option(
@@ -247,6 +269,11 @@ def run(
         )
     if ros_domain_id is not None and not (ros2 or ros2_map):
         usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
+    if ros2_via not in (None, "rclpy", "zenoh"):
+        usage_error(f"{ros2_via!r}: give rclpy or zenoh", "--ros2-via")
+    for flag, given in (("--ros2-via", ros2_via is not None), ("--use-sim-time", use_sim_time)):
+        if given and not (ros2 or ros2_map):
+            usage_error("says how --ros2 and --ros2-map speak ROS 2: give one of them", flag)
     problem = load_problem(domain, state, goal, weights, sequence=True, lasting=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p) for p in deploy(config, problem.domain)]
@@ -264,7 +291,9 @@ def run(
     )
     settings = Settings(injections(inject, problem), reconfigure, hold, margin)
     opened: Transport | None = None
-    bound = None  # --ros2-map's TopicBindings
+    bound: Bindings | None = None  # --ros2-map's
+    ros_node = None  # the rclpy node of --ros2 / --ros2-map (--ros2-via rclpy)
+    ros_events = None  # its listener of the society's events (--ros2)
     written: TraceFile | None = None
     recording = None
     fox = None
@@ -299,15 +328,37 @@ def run(
                 problem=problem_id(problem, domain, state),
                 allowance=rate_allowance,
             )
-            opened = open_transport(robot, kind, zenoh)
-            if topics is not None:  # bound functionalities read and publish ROS 2 topics
-                from cfgplan.ros2.bindings import open_bindings
+            via = None
+            if ros2 or topics is not None:  # rclpy is imported only if so chosen
+                from cfgplan.ros2.node import choose_via
 
-                bound = open_bindings(opened, robot, topics, ros_domain_id, max_value_bytes)
+                via = choose_via(ros2_via)
+            opened = open_transport(robot, kind, zenoh)
+            if via == "rclpy":  # a real ROS 2 node (cfgplan.ros2.node)
+                from cfgplan.ros2.bridge import domain_id_of
+                from cfgplan.ros2.node import NodeOptions, RosNode
+
+                ros_node = RosNode(
+                    robot, NodeOptions(domain_id_of(ros_domain_id), use_sim_time=use_sim_time)
+                )
+            if topics is not None:  # bound functionalities read and publish ROS 2 topics
+                if ros_node is not None:
+                    from cfgplan.ros2.node import RclpyBindings
+
+                    bound = RclpyBindings(ros_node, robot, topics, max_value_bytes)
+                else:
+                    from cfgplan.ros2.bindings import open_bindings
+
+                    bound = open_bindings(opened, robot, topics, ros_domain_id, max_value_bytes)
                 registry = bound.registry(registry)
             shared = opened if isinstance(opened, InProcessTransport) else None
             running = Society([build(part, registry, opened)], shared)
-            if ros2:  # its Adaptation events on /cfgplan/events (cfgplan.ros2)
+            if ros2 and ros_node is not None:  # the society's events on the node's topics
+                from cfgplan.ros2.node import RclpyEvents
+
+                ros_events = RclpyEvents(ros_node, robot, config)
+                running.subscribe(ros_events)
+            elif ros2:  # its Adaptation events on /cfgplan/events (cfgplan.ros2)
                 from cfgplan.ros2.bridge import open_bridge
 
                 running.subscribe(open_bridge(opened, robot, ros_domain_id))
@@ -316,6 +367,8 @@ def run(
         adapting = hooks(
             running, registry, problem, config, parts, settings, written, whole=robot is None
         )
+        if ros_events is not None:  # /cfgplan/configuration follows the coordinator's
+            ros_events.follow(adapting)
         names = ", ".join(r.name for r in running.robots)
         lasting = how_long(options.cycles, options.duration)
         from cfgplan.reconfigure.local import coordinator_of
@@ -354,12 +407,16 @@ def run(
                 fox.stop()
             if recording is not None:
                 recording.close()
+            if ros_node is not None:  # destroyed at the end, SIGINT and SIGTERM too
+                ros_node.close()
         for line in [] if bound is None else bound.summary():  # after the run's own
             print(f"ros2: {line}")
         if recording is not None and recording.failed:
             print(f"cfgplan: error: {recording.failed}", file=sys.stderr)
             code = code or 1
     except RunError as exc:
+        if ros_node is not None:
+            ros_node.close()
         if opened is not None:
             opened.close()
         if written is not None:

@@ -1,4 +1,9 @@
-"""ROS 2 interoperation over rmw_zenoh, from plain zenoh-python (issue 36).
+"""ROS 2 interoperation: a robot as a real rclpy node, or over rmw_zenoh from plain zenoh-python.
+
+:mod:`cfgplan.ros2.node` makes a robot a real ROS 2 node through rclpy, on
+the user's middleware (DDS by default), where rclpy can be imported; the rest
+speaks rmw_zenoh's layout over the robot's own Zenoh session, where it cannot.
+One topic map (:mod:`cfgplan.ros2.topics`) and one codec serve both.
 
 :mod:`cfgplan.ros2.rmw_zenoh` is the wire format of ROS 2's Zenoh middleware
 (key expressions, liveliness tokens, attachment, CDR payloads) as pure

@@ -52,7 +52,7 @@ from cfgplan.runtime.outputs import split
 from cfgplan.runtime.registry import Implementation, Registry
 from cfgplan.runtime.values import MAX_VALUE_BYTES
 
-__all__ = ["Latest", "TopicBindings", "open_bindings"]
+__all__ = ["Bindings", "Latest", "TopicBindings", "open_bindings"]
 
 NODE_ID = 1
 """The node id of the bindings' node (the events bridge's node is 0)."""
@@ -100,73 +100,44 @@ class Latest:
         return self._decoded[1]
 
 
-class TopicBindings:
-    """One robot's bound topics on its Zenoh session (see the module)."""
+class Bindings:
+    """One robot's bound topics, whatever carries them (see the module): the
+    newest message of each subscription, the messages published, and the
+    functionalities wrapped. :class:`TopicBindings` puts them on the robot's
+    Zenoh session (the rmw_zenoh layout), :class:`cfgplan.ros2.node.RclpyBindings`
+    on an rclpy node; each gives :meth:`_send` and calls :meth:`_received`."""
 
-    def __init__(
-        self,
-        session: Any,
-        robot: str,
-        bindings: TopicMap,
-        domain_id: int = 0,
-        max_bytes: int = MAX_VALUE_BYTES,
-    ) -> None:
+    def __init__(self, robot: str, bindings: TopicMap, max_bytes: int = MAX_VALUE_BYTES) -> None:
         self.max_bytes = max_bytes
         """A bound topic's message over this many bytes is dropped unread (0: no limit)."""
         self.robot = robot
         self.bindings = bindings.of(robot)
-        self.node = wire.node_name_of(f"cfgplan_{robot}_topics")
-        self.domain_id = domain_id
         self.latest: dict[Binding, Latest] = {}
         self.published: dict[Binding, int] = {}
         self.delivered: dict[Binding, int] = {}
         """Per subscribed input: the calls that received the topic's message."""
-        self._session = session
-        self._lock = threading.Lock()
-        self._declared: list[Any] = []
-        self._publishers: dict[Binding, tuple[Any, bytes]] = {}
-        self._sequence = 1
-        zid = str(session.zid())
-        try:
-            self._token(wire.node_token(domain_id, zid, NODE_ID, self.node))
-            for entity, binding in enumerate(self.bindings, start=1):
-                type_name = wire.dds_type_name(binding.msg_type)
-                hash_ = wire.type_hash(binding.msg_type)
-                fields = (domain_id, zid, NODE_ID, entity, self.node, binding.topic, type_name)
-                if binding.mode == "subscribe":
-                    self._token(wire.subscriber_token(*fields, hash_))
-                    key = wire.topic_key_expr(domain_id, binding.topic, type_name, "*")
-                    latest = self.latest[binding] = Latest()
-                    self.delivered[binding] = 0
-                    self._declared.append(
-                        session.declare_subscriber(key, self._receiver(binding, latest))
-                    )
-                else:
-                    token = wire.publisher_token(*fields, hash_)
-                    self._token(token)
-                    key = wire.topic_key_expr(domain_id, binding.topic, type_name, hash_)
-                    publisher = session.declare_publisher(key)
-                    self._declared.append(publisher)
-                    self._publishers[binding] = (publisher, wire.gid(token))
-                    self.published[binding] = 0
-        except RunError:
-            raise
-        except Exception as exc:  # zenoh.ZError; zenoh is not imported here
-            raise RunError(f"cannot declare the ROS 2 node {self.node}: {exc}") from None
+        for binding in self.bindings:
+            if binding.mode == "subscribe":
+                self.latest[binding] = Latest()
+                self.delivered[binding] = 0
+            else:
+                self.published[binding] = 0
 
-    def _token(self, token: str) -> None:
-        self._declared.append(self._session.liveliness().declare_token(token))
+    def _received(self, latest: Latest, size: int, payload: Callable[[], bytes]) -> None:
+        """A message of ``size`` bytes came (on the middleware's thread: no decoding here)."""
+        if self.max_bytes and size > self.max_bytes:
+            latest.oversized += 1
+            return
+        latest.raw, latest.at = payload(), time.monotonic()
+        latest.received += 1
 
-    def _receiver(self, binding: Binding, latest: Latest) -> Callable[[Any], None]:
-        def receive(sample: Any) -> None:  # on Zenoh's thread: no decoding here
-            payload = sample.payload
-            if self.max_bytes and len(payload) > self.max_bytes:
-                latest.oversized += 1
-                return
-            latest.raw, latest.at = payload.to_bytes(), time.monotonic()
-            latest.received += 1
+    def _send(self, binding: Binding, payload: bytes) -> None:
+        """Put a CDR ``payload`` (its header included) on the binding's topic."""
+        raise NotImplementedError
 
-        return receive
+    def _now_ns(self) -> int:
+        """The stamp of a message published now, ns (a ROS node's clock: sim time too)."""
+        return time.time_ns()
 
     def publish(self, binding: Binding, values: Sequence[Any]) -> None:
         """Put the binding's port ``values`` on its topic as its message type
@@ -174,16 +145,11 @@ class TopicBindings:
         if binding.fields is None:
             message = values[0]
         else:
-            stamp = time.time_ns()
+            stamp = self._now_ns()
             message = message_of_ports(
                 binding.msg_type, binding.fields, values, stamp, binding.frame_id
             )
-        payload = codec.cdr_of_value(binding.msg_type, message)
-        publisher, gid = self._publishers[binding]
-        with self._lock:
-            number = self._sequence
-            self._sequence += 1
-        publisher.put(payload, attachment=wire.attachment(number, time.time_ns(), gid))
+        self._send(binding, codec.cdr_of_value(binding.msg_type, message))
         self.published[binding] += 1
 
     def read(self, binding: Binding) -> list[Any] | None:
@@ -271,6 +237,72 @@ class TopicBindings:
             if impl is not None:
                 found.append(impl)
         return Registry(found, source=base.source)
+
+    def close(self) -> None:
+        """Withdraw what was declared."""
+
+
+class TopicBindings(Bindings):
+    """One robot's bound topics on its Zenoh session, in rmw_zenoh's layout."""
+
+    def __init__(
+        self,
+        session: Any,
+        robot: str,
+        bindings: TopicMap,
+        domain_id: int = 0,
+        max_bytes: int = MAX_VALUE_BYTES,
+    ) -> None:
+        super().__init__(robot, bindings, max_bytes)
+        self.node = wire.node_name_of(f"cfgplan_{robot}_topics")
+        self.domain_id = domain_id
+        self._session = session
+        self._lock = threading.Lock()
+        self._declared: list[Any] = []
+        self._publishers: dict[Binding, tuple[Any, bytes]] = {}
+        self._sequence = 1
+        zid = str(session.zid())
+        try:
+            self._token(wire.node_token(domain_id, zid, NODE_ID, self.node))
+            for entity, binding in enumerate(self.bindings, start=1):
+                type_name = wire.dds_type_name(binding.msg_type)
+                hash_ = wire.type_hash(binding.msg_type)
+                fields = (domain_id, zid, NODE_ID, entity, self.node, binding.topic, type_name)
+                qos = binding.qos
+                if binding.mode == "subscribe":
+                    self._token(wire.subscriber_token(*fields, hash_, qos))
+                    key = wire.topic_key_expr(domain_id, binding.topic, type_name, "*")
+                    self._declared.append(
+                        session.declare_subscriber(key, self._receiver(self.latest[binding]))
+                    )
+                else:
+                    token = wire.publisher_token(*fields, hash_, qos)
+                    self._token(token)
+                    key = wire.topic_key_expr(domain_id, binding.topic, type_name, hash_)
+                    publisher = session.declare_publisher(key)
+                    self._declared.append(publisher)
+                    self._publishers[binding] = (publisher, wire.gid(token))
+        except RunError:
+            raise
+        except Exception as exc:  # zenoh.ZError; zenoh is not imported here
+            raise RunError(f"cannot declare the ROS 2 node {self.node}: {exc}") from None
+
+    def _token(self, token: str) -> None:
+        self._declared.append(self._session.liveliness().declare_token(token))
+
+    def _receiver(self, latest: Latest) -> Callable[[Any], None]:
+        def receive(sample: Any) -> None:  # on Zenoh's thread
+            payload = sample.payload
+            self._received(latest, len(payload), payload.to_bytes)
+
+        return receive
+
+    def _send(self, binding: Binding, payload: bytes) -> None:
+        publisher, gid = self._publishers[binding]
+        with self._lock:
+            number = self._sequence
+            self._sequence += 1
+        publisher.put(payload, attachment=wire.attachment(number, time.time_ns(), gid))
 
     def close(self) -> None:
         """Withdraw the tokens, subscribers and publishers (closing the session does too)."""

@@ -20,12 +20,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from cfgplan.ros2.rmw_zenoh import _typestore
+from cfgplan.ros2.rmw_zenoh import (
+    ARRAY,
+    EMPTY_MEMBER,
+    NAME,
+    SEQUENCE,
+    _typestore,
+    decode_cdr,
+)
 
 __all__ = ["cdr_of_value", "known_type", "message_of_value", "value_of_cdr", "value_of_message"]
-
-NAME, ARRAY, SEQUENCE = 2, 3, 4
-"""rosbags's ``Nodetype`` values (BASE is 1): a nested message, ``T[n]``, ``T[]``/``T[<=n]``."""
 
 _NUMPY = {
     "bool": "bool",
@@ -130,12 +134,16 @@ def cdr_of_value(msg_type: str, value: Any) -> bytes:
 
 
 def value_of_message(message: Any) -> Any:
-    """A rosbags message (or a field of one) as plain JSON-ready values."""
+    """A rosbags message (or a field of one) as plain JSON-ready values: its
+    fields only (not the type's constants, ``NavSatStatus.STATUS_FIX``, which
+    rosbags's classes carry as attributes too, nor the member an empty
+    message has on the wire)."""
     if hasattr(message, "__msgtype__"):
+        _, fields = _typestore().fielddefs[message.__msgtype__]
         return {
             name: value_of_message(getattr(message, name))
-            for name in message.__dataclass_fields__
-            if name != "__msgtype__"
+            for name, _ in fields
+            if name != EMPTY_MEMBER
         }
     if hasattr(message, "tolist"):  # a numpy array or scalar
         return message.tolist()
@@ -145,7 +153,6 @@ def value_of_message(message: Any) -> Any:
 
 
 def value_of_cdr(msg_type: str, payload: bytes) -> Any:
-    """A CDR payload of ``msg_type`` (with its header) as a dict of its fields."""
-    if payload[:2] not in (b"\x00\x00", b"\x00\x01"):
-        raise ValueError(f"not a plain CDR payload: header {payload[:4].hex()}")
-    return value_of_message(_typestore().deserialize_cdr(payload, msg_type))
+    """A CDR payload of ``msg_type`` (with its header, any padding after the
+    message ignored: :func:`~cfgplan.ros2.rmw_zenoh.decode_cdr`) as a dict of its fields."""
+    return value_of_message(decode_cdr(payload, msg_type))

@@ -27,15 +27,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from cfgplan.ros2.rmw_zenoh import _typestore
+from cfgplan.ros2.rmw_zenoh import NAME, _typestore
 
 __all__ = ["QUATERNION", "FieldMap", "check_path", "message_of_ports", "ports_of_message"]
 
 QUATERNION = "geometry_msgs/msg/Quaternion"
 HEADER = "std_msgs/msg/Header"
 YAW = "yaw"
-NAME = 2
-"""rosbags's ``Nodetype.NAME``: a nested message."""
 
 
 @dataclass(frozen=True)

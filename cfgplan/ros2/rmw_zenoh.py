@@ -3,8 +3,12 @@
 Everything here follows rmw_zenoh's design document (``docs/design.md`` of
 ros2/rmw_zenoh) and its sources under ``rmw_zenoh_cpp/src/detail/``
 (``liveliness_utils.cpp``, ``attachment_helpers.cpp``,
-``rmw_publisher_data.cpp``, ``qos.cpp``), as released since rmw_zenoh 0.6
-(ROS 2 Jazzy, Kilted, Rolling):
+``rmw_publisher_data.cpp``, ``qos.cpp``), as released for ROS 2 Jazzy from
+rmw_zenoh 0.2.4 (2025-04-20, the Jazzy series is 0.2.x) and for Rolling and
+Kilted from 0.6.0: the releases whose ``attachment_helpers.cpp`` writes the
+attachment as three values without keys ("Change serialization format",
+the Jazzy backport of Rolling's change). Jazzy's 0.2.0 to 0.2.3 wrote
+string keys before each value, which :func:`parse_attachment` refuses:
 
 * a topic is the Zenoh key expression ``<domain_id>/<fully qualified name
   without its leading slash>/<type name>/<type hash>`` (design.md, "Topic and
@@ -47,6 +51,7 @@ __all__ = [
     "attachment",
     "check_name",
     "dds_type_name",
+    "decode_cdr",
     "gid",
     "mangle",
     "node_name_of",
@@ -132,11 +137,106 @@ def _typestore() -> Any:
     return typesys.get_typestore(typesys.Stores.ROS2_JAZZY)
 
 
+FIELD_TYPE_IDS = {
+    "nested": 1,
+    "int8": 2,
+    "uint8": 3,
+    "int16": 4,
+    "uint16": 5,
+    "int32": 6,
+    "uint32": 7,
+    "int64": 8,
+    "uint64": 9,
+    "float32": 10,
+    "float64": 11,
+    "bool": 15,
+    "byte": 16,
+    "string": 17,
+    "wstring": 18,
+    "bounded_string": 21,
+    "bounded_wstring": 22,
+}
+"""The ``type_id`` of each field type in a type description
+(type_description_interfaces/msg/FieldType.msg); an array adds 48, a bounded
+sequence 96, an unbounded one 144."""
+
+MSG_AS_IDL = {"char": "uint8"}
+"""A ``.msg`` base type that rosidl turns into another IDL type before it
+describes it: a ``.msg`` ``char`` is an IDL ``uint8`` (rosidl_adapter's
+``MSG_TYPE_TO_IDL``), so its ``type_id`` is 3, not FieldType's ``CHAR``
+(13), which only an IDL ``char`` has. (``byte`` is an IDL ``octet``: 16.)"""
+
+NAME, ARRAY, SEQUENCE = 2, 3, 4
+"""rosbags's ``Nodetype`` values (BASE is 1): a nested message, ``T[n]``, ``T[]``/``T[<=n]``."""
+
+
+EMPTY_MEMBER = "structure_needs_at_least_one_member"
+"""The one ``uint8`` member rosidl gives a message without fields (std_msgs/msg/Empty)."""
+
+
+def _type_description(msg_type: str, fielddefs: Any) -> dict[str, Any]:
+    """The REP-2016 type description of ``msg_type`` (its ``type_description``
+    and ``referenced_type_descriptions``, sorted by name), the fields as
+    rosidl_generator_type_description writes them, from rosbags's field
+    definitions ``fielddefs``."""
+    referenced: dict[str, dict[str, Any]] = {}
+
+    def field(name: str, desc: Any) -> dict[str, Any]:
+        kind, rest = desc
+        increment = capacity = string_capacity = 0
+        if kind == ARRAY:
+            increment, (element, capacity) = 48, rest
+            kind, rest = element
+        elif kind == SEQUENCE:
+            element, bound = rest
+            increment, capacity = (96, bound) if bound else (144, 0)
+            kind, rest = element
+        nested = ""
+        if kind == NAME:
+            type_id, nested = FIELD_TYPE_IDS["nested"], rest
+            describe(nested)
+        else:
+            base, bound = rest
+            base = MSG_AS_IDL.get(base, base)
+            if base in ("string", "wstring") and bound:
+                base, string_capacity = f"bounded_{base}", bound
+            type_id = FIELD_TYPE_IDS[base]
+        return {
+            "name": name,
+            "type": {
+                "type_id": increment + type_id,
+                "capacity": capacity,
+                "string_capacity": string_capacity,
+                "nested_type_name": nested,
+            },
+        }
+
+    def describe(name: str) -> dict[str, Any]:
+        if name not in referenced:
+            # an empty message has one uint8 member (rosidl's IDL of an empty .msg)
+            fields = fielddefs[name][1] or [(EMPTY_MEMBER, (1, ("uint8", 0)))]
+            referenced[name] = {"type_name": name, "fields": [field(n, d) for n, d in fields]}
+        return referenced[name]
+
+    top = describe(msg_type)
+    return {
+        "type_description": top,
+        "referenced_type_descriptions": [
+            described for name, described in sorted(referenced.items()) if name != msg_type
+        ],
+    }
+
+
 def type_hash(msg_type: str) -> str:
     """The REP-2016 hash of ``msg_type``, ``RIHS01_<64 hex digits>``, as
-    rosidl generates it (design.md: ``<type_hash>``), computed by rosbags from
-    its ROS 2 Jazzy type definitions."""
-    return str(_typestore().hash_rihs01(msg_type))
+    rosidl generates it (design.md: ``<type_hash>``): SHA-256 of the JSON of
+    its type description (:func:`_type_description`, from rosbags's ROS 2
+    Jazzy type definitions), written as rosidl's ``json.dumps`` does."""
+    import hashlib
+    import json
+
+    described = _type_description(msg_type, _typestore().fielddefs)
+    return "RIHS01_" + hashlib.sha256(json.dumps(described).encode()).hexdigest()
 
 
 def topic_key_expr(domain_id: int, topic: str, type_name: str, hash_: str) -> str:
@@ -304,7 +404,8 @@ def attachment(sequence_number: int, source_timestamp: int, gid_: bytes) -> byte
 
 def parse_attachment(data: bytes) -> Attachment:
     """The fields of a 33-byte attachment (:func:`attachment`); ``ValueError``
-    for another layout (rmw_zenoh before 0.6 used string keys)."""
+    for another layout (rmw_zenoh before Jazzy's 0.2.4 and Rolling's 0.6.0
+    put string keys before the values)."""
     if len(data) != ATTACHMENT_BYTES or data[16] != GID_BYTES:
         raise ValueError(f"not an rmw_zenoh attachment of {ATTACHMENT_BYTES} bytes: {data.hex()}")
     sequence_number, source_timestamp = struct.unpack_from("<qq", data)
@@ -323,8 +424,29 @@ def string_cdr(text: str) -> bytes:
     return bytes(store.serialize_cdr(message, STRING))
 
 
-def string_of_cdr(payload: bytes) -> str:
-    """The text of a CDR ``std_msgs/msg/String`` (:func:`string_cdr`), read by rosbags."""
+def decode_cdr(payload: bytes, msg_type: str) -> Any:
+    """The rosbags message of type ``msg_type`` in a CDR payload (with its
+    4-byte encapsulation header, big or little endian); ``ValueError`` for
+    another header or a payload too short or malformed for the type.
+
+    Bytes after the message are padding and are ignored, as every ROS 2
+    middleware's deserializer (Fast CDR) ignores them: rclpy's
+    ``serialize_message`` pads its buffer (a ``sensor_msgs/msg/JointState`` to
+    8 bytes more than its fields), which rosbags's own ``deserialize_cdr``
+    refuses as a "size mismatch" past 3 bytes."""
     if payload[:2] not in (b"\x00\x00", b"\x00\x01"):
         raise ValueError(f"not a plain CDR payload: header {payload[:4].hex()}")
-    return str(_typestore().deserialize_cdr(payload, STRING).data)
+    store = _typestore()
+    definition = store.get_msgdef(msg_type)
+    read = definition.deserialize_cdr_le if payload[1] else definition.deserialize_cdr_be
+    errors = _module("rosbags.serde").SerdeError
+    try:
+        message, _ = read(memoryview(payload)[4:], 0, definition.cls, store)
+    except (errors, struct.error, UnicodeDecodeError, ValueError, IndexError) as exc:
+        raise ValueError(f"not a CDR {msg_type}: {exc}") from None
+    return message
+
+
+def string_of_cdr(payload: bytes) -> str:
+    """The text of a CDR ``std_msgs/msg/String`` (:func:`string_cdr`), read by rosbags."""
+    return str(decode_cdr(payload, STRING).data)

@@ -12,6 +12,9 @@ to a ROS 2 topic and message type::
     robot = "Pippi"                    # optional: only on this robot (default: any)
     timeout = 1.0                      # optional (an output): seconds without a
                                        # message before the sensor has failed
+    reliability = "best_effort"        # optional QoS: reliable (default) or best_effort,
+    durability = "volatile"            # volatile (default) or transient_local,
+    depth = 5                          # keep last N (default 10)
 
 * an **output** is read from the topic (``mode = "subscribe"``, its
   default): the value the functionality outputs there is the newest message,
@@ -44,6 +47,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from cfgplan.ros2.fields import FieldMap, check_path
+from cfgplan.ros2.rmw_zenoh import QoS
 from cfgplan.runtime.errors import RunError
 
 __all__ = ["DEFAULT_TIMEOUT", "Binding", "TopicMap", "load_map", "parse_map"]
@@ -53,9 +57,15 @@ DEFAULT_TIMEOUT = 1.0
 
 KEYS = (
     "functionality", "input", "output", "mode", "topic", "type", "fields", "frame_id", "robot",
-    "timeout",
+    "timeout", "reliability", "durability", "depth",
 )  # fmt: skip
 MODES = ("subscribe", "publish")
+RELIABILITY = {"reliable": 1, "best_effort": 2}
+"""The ``reliability`` of a binding's QoS, as rmw numbers it (rmw/types.h)."""
+DURABILITY = {"volatile": 2, "transient_local": 1}
+"""The ``durability`` of a binding's QoS, as rmw numbers it."""
+DEFAULT_DEPTH = 10
+"""A binding's history depth (keep last) unless ``depth`` says: rclcpp's and rclpy's default."""
 
 
 @dataclass(frozen=True)
@@ -81,6 +91,15 @@ class Binding:
     fields: FieldMap | None = None
     """Which fields of the message each port is (``None``: one port, the whole message)."""
     frame_id: str = ""
+    reliability: str = "reliable"
+    durability: str = "volatile"
+    depth: int = DEFAULT_DEPTH
+    """The QoS of the binding's publisher or subscription (keep last ``depth``)."""
+
+    @property
+    def qos(self) -> QoS:
+        """The binding's QoS in rmw's numbers (a token's QoS field; rclpy's profile)."""
+        return QoS(RELIABILITY[self.reliability], DURABILITY[self.durability], 1, self.depth)
 
     @property
     def port(self) -> str:
@@ -258,6 +277,19 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
             or timeout <= 0
         ):
             raise fail(f"timeout {timeout!r} is not a number of seconds above 0", "timeout")
+        qos: dict[str, Any] = {}
+        for key, choices in (("reliability", RELIABILITY), ("durability", DURABILITY)):
+            if key in table:
+                if table[key] not in choices:
+                    raise fail(f"{key} {table[key]!r} is not one of: {', '.join(choices)}", key)
+                qos[key] = table[key]
+        if "depth" in table:
+            depth = table["depth"]
+            if isinstance(depth, bool) or not isinstance(depth, int) or not 1 <= depth <= 10_000:
+                raise fail(
+                    f"depth {depth!r} is not a whole number of messages, 1 to 10000", "depth"
+                )
+            qos["depth"] = depth
         for port in chosen:
             bound = (name, direction, port, robot)
             if bound in seen:
@@ -282,6 +314,7 @@ def parse_map(text: str, source: str, domain: Any, agents: Sequence[str] = ()) -
                 mode,
                 fields,
                 frame_id,
+                **qos,
             )
         )
     return TopicMap(tuple(out), source)

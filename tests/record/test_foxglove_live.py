@@ -161,3 +161,38 @@ def test_without_the_sdk_foxglove_says_what_to_install(monkeypatch: pytest.Monke
         open_foxglove(Address("127.0.0.1", 0), None, None, None, (), "")  # type: ignore[arg-type]
     assert "--foxglove needs the foxglove-sdk package" in str(caught.value)
     assert caught.value.hint == "pip install 'cfgplan[foxglove]'"
+
+
+def test_the_subprotocol_the_server_speaks_is_the_one_the_docs_name() -> None:
+    """foxglove-sdk 0.30's server accepts a client offering ``foxglove.sdk.v1``
+    and refuses one offering only the older ``foxglove.websocket.v1`` (HTTP
+    400): the how-to names both, so a user of an older client knows why it
+    cannot connect."""
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+    from websockets.typing import Subprotocol
+
+    from cfgplan.cli.options import choose, load_problem
+    from cfgplan.record.foxglove_live import serve
+
+    docs = (ROOT / "docs" / "how-to" / "record-a-run.md").read_text("utf-8")
+    named = re.search(r"subprotocol\s+`(foxglove\.[a-z]+\.v\d+)`", docs)
+    assert named is not None, "the how-to names no subprotocol"
+    assert "`foxglove.websocket.v1`" in docs
+    problem = load_problem(
+        CROSS / "domain.lisp", CROSS / "state-6.2.2-step2.lisp", None, None, sequence=True
+    )
+    live = serve(Address("127.0.0.1", 0), "subprotocol", choose(problem, 1))
+    try:
+        url = f"ws://127.0.0.1:{live.server.port}"
+        with connect(url, subprotocols=[Subprotocol(named[1])], open_timeout=10) as ws:
+            assert ws.subprotocol == named[1] == SUBPROTOCOL
+            assert json.loads(ws.recv(timeout=10))["op"] == "serverInfo"
+        with (
+            pytest.raises(InvalidStatus) as refused,
+            connect(url, subprotocols=[Subprotocol("foxglove.websocket.v1")], open_timeout=10),
+        ):
+            pass
+        assert refused.value.response.status_code == 400
+    finally:
+        live.stop()

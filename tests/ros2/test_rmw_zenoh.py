@@ -1,7 +1,9 @@
 """rmw_zenoh's wire format (:mod:`cfgplan.ros2.rmw_zenoh`), checked against the
-examples of rmw_zenoh's design document (ros2/rmw_zenoh ``docs/design.md``,
-rolling as of rmw_zenoh 0.6+) and its sources (``liveliness_utils.cpp``,
-``attachment_helpers.cpp``, ``qos.cpp``). No ROS 2 installation is needed."""
+examples of rmw_zenoh's design document (ros2/rmw_zenoh ``docs/design.md``)
+and its sources (``liveliness_utils.cpp``, ``attachment_helpers.cpp``,
+``qos.cpp``) as released for Jazzy from 0.2.4 (Rolling and Kilted from 0.6.0),
+and the attachment against zenoh-ext's own serializer. No ROS 2 installation
+is needed: tests/ros2/test_jazzy_wire.py checks the same against real Jazzy."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import pytest
 import xxhash
 from rosbags.typesys import Stores, get_typestore
 
+from cfgplan.ros2 import codec
 from cfgplan.ros2 import rmw_zenoh as wire
 from cfgplan.runtime.errors import RunError
 from tests.backends.support import ROOT
@@ -28,6 +31,23 @@ def test_the_type_name_and_hash_of_a_string_are_the_design_documents() -> None:
     assert wire.type_hash("std_msgs/msg/String") == STRING_HASH
     with pytest.raises(ValueError, match="not a ROS 2 type name"):
         wire.dds_type_name("String")
+
+
+CHAR_HASH = "RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9"
+"""std_msgs/msg/Char's type hash in Jazzy's own share/std_msgs/msg/Char.json."""
+
+
+def test_a_char_field_is_described_as_uint8_as_rosidl_does() -> None:
+    """A ``.msg`` ``char`` is an IDL ``uint8`` (rosidl_adapter), type id 3: Jazzy's
+    hash of std_msgs/msg/Char. rosbags's own ``hash_rihs01`` gives it the IDL
+    ``char``'s id, 13, and a hash no real node has (``8914cecc...``)."""
+    assert wire.type_hash("std_msgs/msg/Char") == CHAR_HASH
+    described = wire._type_description("std_msgs/msg/Char", wire._typestore().fielddefs)
+    assert described["type_description"]["fields"][0]["type"]["type_id"] == 3
+    store = get_typestore(Stores.ROS2_JAZZY)
+    # every type without a char field hashes as rosbags hashes it
+    for name in ("std_msgs/msg/String", "sensor_msgs/msg/LaserScan", "nav_msgs/msg/Odometry"):
+        assert wire.type_hash(name) == store.hash_rihs01(name)
 
 
 def test_topic_key_expressions_mirror_the_chatter_examples() -> None:
@@ -103,6 +123,19 @@ def test_the_attachment_has_the_documented_33_bytes() -> None:
         wire.parse_attachment(data[:-1])
 
 
+def test_the_attachment_is_zenoh_exts_serialization_of_rmw_zenohs_fields() -> None:
+    """attachment_helpers.cpp (Jazzy 0.2.4 on, "Change serialization format"):
+    ``zenoh::ext::Serializer`` of an int64, an int64 and a ``std::array<uint8_t,
+    16>`` (a sequence: its length first). zenoh-python's ``z_serialize`` of the
+    same values gives the same bytes."""
+    ext = pytest.importorskip("zenoh.ext")
+    gid = bytes(range(100, 116))
+    expected = ext.z_serialize(
+        (ext.Int64(7), ext.Int64(1_700_000_000_123_456_789), [ext.UInt8(b) for b in gid])
+    ).to_bytes()
+    assert wire.attachment(7, 1_700_000_000_123_456_789, gid) == expected
+
+
 def test_the_gid_is_xxh3_128_of_the_token_low_half_first() -> None:
     """liveliness_utils.cpp: the GID is XXH3-128 of the liveliness key expression,
     ``low64`` then ``high64`` copied from memory (little endian): the reverse of
@@ -129,6 +162,23 @@ def test_a_string_is_cdr_with_the_encapsulation_header() -> None:
         wire.string_of_cdr(b"\x01\x02\x00\x00")
 
 
+def test_bytes_after_the_message_are_padding_and_ignored() -> None:
+    """rclpy's ``serialize_message`` pads a sensor_msgs/msg/JointState with 8
+    bytes past its last field (not zeros: what was in the buffer); Fast CDR reads
+    the message and ignores them, and so does the decoder (rosbags's own
+    ``deserialize_cdr`` refused it: "CDR message size mismatch"). A payload
+    cut short is still an error."""
+    joint = "sensor_msgs/msg/JointState"
+    value = {"name": ["a"], "position": [1.0]}
+    payload = codec.cdr_of_value(joint, value)
+    padded = payload + bytes.fromhex("7c02a6030000ab03")
+    got = codec.value_of_cdr(joint, padded)
+    assert got["name"] == ["a"] and got["position"] == [1.0] and got["effort"] == []
+    assert wire.string_of_cdr(wire.string_cdr("hi") + bytes(5)) == "hi"
+    with pytest.raises(ValueError, match="not a CDR sensor_msgs/msg/JointState"):
+        codec.value_of_cdr(joint, payload[:-9])
+
+
 def test_a_missing_extra_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
     """Without rosbags or xxhash, the error names ``pip install 'cfgplan[ros2]'``."""
     monkeypatch.setitem(sys.modules, "xxhash", None)  # type: ignore[arg-type]
@@ -152,3 +202,15 @@ def test_the_runtime_and_run_command_do_not_import_the_ros2_extra() -> None:
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
     )
     assert out.stdout.strip() == "[]"
+
+
+def test_a_decoded_message_has_its_fields_only() -> None:
+    """A type's constants (sensor_msgs/msg/NavSatStatus's STATUS_FIX, ...) are
+    attributes of rosbags's classes but no fields of the message, and the one
+    byte an empty message has on the wire is none either: the value is what
+    rclpy's message holds (tests/ros2/test_jazzy_wire.py compares every type)."""
+    status = "sensor_msgs/msg/NavSatStatus"
+    got = codec.value_of_cdr(status, codec.cdr_of_value(status, {"status": 2, "service": 1}))
+    assert got == {"status": 2, "service": 1}
+    empty = "std_msgs/msg/Empty"
+    assert codec.value_of_cdr(empty, codec.cdr_of_value(empty, {})) == {}

@@ -181,6 +181,30 @@ def test_the_example_map_binds_the_laser_and_the_drive() -> None:
             "timeout nan is not a number of seconds above 0",
             7,
         ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            type = "sensor_msgs/msg/LaserScan"
+            reliability = "best-effort"
+            """,
+            "reliability 'best-effort' is not one of: reliable, best_effort",
+            7,
+        ),
+        (
+            """
+            [[bind]]
+            functionality = "laser"
+            output = "scan"
+            topic = "/scan"
+            depth = 0
+            type = "sensor_msgs/msg/LaserScan"
+            """,
+            "depth 0 is not a whole number of messages, 1 to 10000",
+            6,
+        ),
     ],
 )
 def test_a_wrong_binding_is_said_with_its_file_and_line(text: str, message: str, line: int) -> None:
@@ -223,3 +247,78 @@ def test_values_and_cdr_round_trip_and_wrong_fields_are_named() -> None:
         cdr_of_value("geometry_msgs/msg/Twist", {"linear": {"x": "fast"}})
     with pytest.raises(ValueError, match="has no field speed"):
         cdr_of_value("geometry_msgs/msg/Twist", {"speed": 1})
+
+
+def test_a_bindings_qos_is_the_maps_in_rmws_numbers() -> None:
+    """reliability, durability and depth of a [[bind]] are its QoS (rmw's
+    enumerations, as a token and rclpy's profile take them); left out, rclcpp's
+    default: reliable, volatile, keep last 10 (the rmw_zenoh token's as before)."""
+    from cfgplan.ros2 import rmw_zenoh as wire
+
+    laser, drive = _parse(
+        """
+        [[bind]]
+        functionality = "laser"
+        output = "scan"
+        topic = "/scan"
+        type = "sensor_msgs/msg/LaserScan"
+        reliability = "best_effort"
+        durability = "transient_local"
+        depth = 5
+
+        [[bind]]
+        functionality = "drive"
+        input = "cmd"
+        topic = "/cmd_vel"
+        type = "geometry_msgs/msg/Twist"
+        """
+    )
+    assert laser.qos == wire.QoS(reliability=2, durability=1, history=1, depth=5)
+    assert drive.qos == wire.PUBLISHER_QOS
+    assert wire.qos_key_expr(laser.qos) == "2:1:,5:,:,:,,"
+
+
+def test_the_way_of_speaking_ros_2_is_chosen_as_documented(monkeypatch: pytest.MonkeyPatch) -> None:
+    """--ros2-via, else CFGPLAN_ROS2_VIA, else rclpy where it imports, else
+    zenoh; rclpy asked for where it is missing says how to get it."""
+    import importlib.util
+
+    from cfgplan.ros2.node import choose_via
+
+    assert choose_via("zenoh", {"CFGPLAN_ROS2_VIA": "rclpy"}) == "zenoh"
+    assert choose_via(None, {"CFGPLAN_ROS2_VIA": "zenoh"}) == "zenoh"
+    with pytest.raises(RunError, match="give one of rclpy, zenoh"):
+        choose_via(None, {"CFGPLAN_ROS2_VIA": "dds"})
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "rclpy" else real(name, *a)
+    )
+    assert choose_via(None, {}) == "zenoh"
+    with pytest.raises(RunError, match="rclpy cannot be imported") as caught:
+        choose_via("rclpy", {})
+    assert "ros2-rclpy" in (caught.value.hint or "")
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: object())
+    assert choose_via(None, {}) == "rclpy"
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--ros2-via", "rclpy"], "--ros2-via"),
+        (["--use-sim-time"], "--use-sim-time"),
+        (["--ros2", "--ros2-via", "dds"], "'dds': give rclpy or zenoh"),
+    ],
+)
+def test_the_ways_options_are_usage_errors_where_they_mean_nothing(
+    flags: list[str], message: str
+) -> None:
+    """--ros2-via and --use-sim-time without --ros2 or --ros2-map, or a way
+    that is not rclpy or zenoh: exit 2, said, before anything runs."""
+    done = subprocess.run(
+        [sys.executable, "-m", "cfgplan", "run",
+         str(DATA / "drive.lisp"), str(DATA / "drive-state.lisp"),
+         "--impl", str(DATA / "drive_impl.py"), "--robot", "Pippi", *flags],
+        capture_output=True, text=True, timeout=120, cwd=ROOT,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert message in done.stderr and "Traceback" not in done.stderr

@@ -1,0 +1,2 @@
+(state (robot Pippi) (laser Pippi) (sonar Pippi))
+(goal (do-drive Pippi))
