@@ -1,7 +1,8 @@
 """The structures the search is still weak on (benchmarks/families/weak.py and
 structured.py, docs/explanation/planner.md, "Weak spots") are slow at size,
-never wrong: at sizes the depth-first oracle can list, the ten cheapest derivations, best first with both bounds on
-every node, are the oracle's first ten."""
+never wrong: at sizes the depth-first oracle can list, the ten cheapest
+derivations, best first with both bounds on every node, are the oracle's
+first ten."""
 
 from __future__ import annotations
 
