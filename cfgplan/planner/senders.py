@@ -51,7 +51,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text, call_text
@@ -129,8 +129,7 @@ class Placement:
     def _solve(self, root: Ground) -> None:
         """The least fixpoint over the method instances below ``root`` not yet
         analysed (those already analysed are final: what is below them was)."""
-        task = self.task
-        found: dict[Ground, list[Body]] = {}
+        found: dict[Ground, list[_Step]] = {}
         callers: dict[Ground, set[Ground]] = {}
         todo = [root]
         while todo:
@@ -138,11 +137,16 @@ class Placement:
             call = todo.pop()
             if call in found:
                 continue
-            bodies = [b for b in self.expansions(call) if not isinstance(b, DeadEnd)]
-            found[call] = bodies
-            for body in bodies:
-                for child in body.body:
-                    if task.is_method(child) and child not in self._senders:
+            steps = found[call] = []
+            for body in self.expansions(call):
+                if isinstance(body, DeadEnd):
+                    continue
+                step = self._step(body)
+                if step is None:
+                    continue
+                steps.append(step)
+                for child in step.methods:
+                    if child not in self._senders:
                         callers.setdefault(child, set()).add(call)
                         if child not in found:
                             todo.append(child)
@@ -157,7 +161,7 @@ class Placement:
             clock.check()
             call = queue.pop()
             waiting.discard(call)
-            value = self._value(found[call], known)
+            value = _value(found[call], known)
             if value != values[call]:
                 values[call] = value
                 for caller in callers.get(call, ()):
@@ -166,40 +170,33 @@ class Placement:
                         queue.append(caller)
         self._senders.update(values)
 
-    def _value(self, bodies: list[Body], known: Known) -> Value:
-        """A method instance's senders from its expansions, given ``known``."""
-        value: dict[Ground, set[str]] | None = None
-        for body in bodies:
-            if not self._fits(body, known):
-                continue
-            if value is None:
-                value = {}
-            for data, (offset, _) in body.outputs.items():
-                robots = self._from(body.body[offset], data, known)
-                if robots:
-                    value.setdefault(data, set()).update(robots)
-        return None if value is None else {d: frozenset(r) for d, r in value.items()}
-
-    def _from(self, call: Ground, data: Ground, known: Known) -> frozenset[str]:
-        """The robots ``call``'s producer of ``data`` can be on."""
-        if not self.task.is_method(call):
-            return frozenset({call[1]}) if len(call) > 1 else frozenset()
-        senders = known(call)
-        return frozenset() if senders is None else senders.get(data, frozenset())
-
-    def _fits(self, body: Body, known: Known) -> bool:
-        """Whether ``body``'s expansion can be placed, given ``known``."""
+    def _step(self, body: Body) -> _Step | None:
+        """What the fixpoint reads of an expansion, worked out once; None when
+        it can never be placed whatever the methods below it send (a
+        functionality of its body without a binding, or on another robot
+        than a channel from it declares)."""
         task = self.task
+        methods: list[Ground] = []
         for child in body.body:
             if task.is_method(child):
-                if known(child) is None:
-                    return False
+                methods.append(child)
             elif task.functionality(child) is not None and not self.placeable(child):
-                return False
-        return all(
-            robots[0] in self._from(body.body[source], data, known)
-            for _, robots, source, _, data, _ in self._checked(body)
-        )
+                return None
+        checks: list[tuple[str, Ground, Ground]] = []
+        for _, robots, source, _, data, _ in self._checked(body):
+            sender = body.body[source]
+            if task.is_method(sender):
+                checks.append((robots[0], sender, data))
+            elif len(sender) < 2 or sender[1] != robots[0]:
+                return None
+        outputs: list[tuple[Ground, Ground | None, frozenset[str]]] = []
+        for data, (offset, _) in body.outputs.items():
+            producer = body.body[offset]
+            if task.is_method(producer):
+                outputs.append((data, producer, frozenset()))
+            elif len(producer) > 1:
+                outputs.append((data, None, frozenset({producer[1]})))
+        return _Step(tuple(dict.fromkeys(methods)), tuple(checks), tuple(outputs))
 
     @staticmethod
     def _checked(body: Body) -> Iterator[Spec]:
@@ -209,6 +206,41 @@ class Placement:
             kind, robots = spec[0], spec[1]
             if kind in ("local", "global") and robots and not is_variable(robots[0]):
                 yield spec
+
+
+class _Step(NamedTuple):
+    """An expansion as the fixpoint reads it (:meth:`Placement._step`)."""
+
+    methods: tuple[Ground, ...]
+    """The method instances of its body: each must be placeable."""
+    checks: tuple[tuple[str, Ground, Ground], ...]
+    """(robot, method instance, data): a channel from it must start on robot."""
+    outputs: tuple[tuple[Ground, Ground | None, frozenset[str]], ...]
+    """(data, the method instance producing it, or None and the robot of the
+    functionality that does)."""
+
+
+def _value(steps: list[_Step], known: Known) -> Value:
+    """A method instance's senders from its expansions, given ``known``."""
+    value: dict[Ground, set[str]] | None = None
+    for step in steps:
+        if not all(known(m) is not None for m in step.methods):
+            continue
+        if not all(robot in _sent(known, m, d) for robot, m, d in step.checks):
+            continue
+        if value is None:
+            value = {}
+        for data, producer, robots in step.outputs:
+            sent = robots if producer is None else _sent(known, producer, data)
+            if sent:
+                value.setdefault(data, set()).update(sent)
+    return None if value is None else {d: frozenset(r) for d, r in value.items()}
+
+
+def _sent(known: Known, call: Ground, data: Ground) -> frozenset[str]:
+    """The robots method instance ``call`` can send ``data`` from, given ``known``."""
+    senders = known(call)
+    return frozenset() if senders is None else senders.get(data, frozenset())
 
 
 def _unsendable(
