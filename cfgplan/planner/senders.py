@@ -120,7 +120,9 @@ class Placement:
         for kind, robots, source, _, data, _ in self._checked(body):
             sender = body.body[source]
             if self.task.is_method(sender):
-                value = self._senders[sender]
+                # (not analysed: the expansion is ruled out by a functionality
+                # of its body, left to the search to say)
+                value = self._senders.get(sender)
                 senders = frozenset() if value is None else value.get(data, frozenset())
                 if senders and robots[0] not in senders:
                     return _unsendable(kind, robots, sender, data, senders)
