@@ -15,12 +15,8 @@ def _tested(domain: Domain) -> dict[str, Atom]:
     """The predicates the domain's preconditions test (negated or not), each
     with the first atom that tests it."""
     tested: dict[str, Atom] = {}
-    conds = [c for f in domain.functionalities for c in f.precond]
-    conds += [c for m in domain.methods for c in m.precond]
-    for cond in conds:
-        atom = cond.atom if isinstance(cond, Negation) else cond
-        if isinstance(atom, Atom):
-            tested.setdefault(atom.predicate, atom)
+    for atom in _conditions(domain):
+        tested.setdefault(atom.predicate, atom)
     return tested
 
 
@@ -52,6 +48,53 @@ def check_state(findings: Findings, state: State) -> None:
                 atom.span,
                 f"symbols are case-sensitive: the state writes {' and '.join(close)}",
             )
+    _check_object_case(findings, state)
+
+
+def _check_object_case(findings: Findings, state: State) -> None:
+    """A fact's object written in another case than everywhere else
+    (``(camera alpha)`` where the other facts and the domain write ``Alpha``):
+    the fact is about another object, which no precondition is likely to ask
+    for. Of the spellings of one name, the one written most often (in the
+    state's facts, its goals and the domain's conditions; ties: the first written) is
+    taken as meant; each fact writing another is pointed out (4.4)."""
+    counts: dict[str, int] = {}
+    for fact in state.facts:
+        for arg in fact.args:
+            counts[arg] = counts.get(arg, 0) + 1
+    goals = [g.call for g in (state.goal, *state.sequence) if g is not None]
+    for atom in [*_conditions(findings.domain), *goals]:
+        for arg in atom.args:
+            if not is_variable(arg):
+                counts[arg] = counts.get(arg, 0) + 1
+    meant: dict[str, str] = {}
+    for name, n in counts.items():  # in the order first written
+        best = meant.get(name.lower())
+        if best is None or n > counts[best]:
+            meant[name.lower()] = name
+    for fact in state.facts:
+        for arg in dict.fromkeys(fact.args):
+            other = meant.get(arg.lower(), arg)
+            if other != arg and not _is_number(arg):
+                findings.report(
+                    "warning",
+                    f"the fact {fact} names {arg}, which differs only in case from {other} "
+                    "(written elsewhere)",
+                    fact.span,
+                    f"symbols are case-sensitive: did you mean {other}?",
+                )
+
+
+def _conditions(domain: Domain) -> list[Atom]:
+    """The atoms of the domain's preconditions (negated or not)."""
+    out: list[Atom] = []
+    conds = [c for f in domain.functionalities for c in f.precond]
+    conds += [c for m in domain.methods for c in m.precond]
+    for cond in conds:
+        atom = cond.atom if isinstance(cond, Negation) else cond
+        if isinstance(atom, Atom):
+            out.append(atom)
+    return out
 
 
 def check_goal(findings: Findings, goal: Goal, state: State | None = None) -> None:

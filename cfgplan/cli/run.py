@@ -249,7 +249,7 @@ def run(
         usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
     problem = load_problem(domain, state, goal, weights, sequence=True, lasting=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
-    parts = [runtime_part(p) for p in deploy(config, problem.domain)]
+    parts = [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
     options = RunOptions(
         rate=rate,
         cycles=cycles,

@@ -80,8 +80,11 @@ class Robot:
         *,
         clock: Callable[[], float] = time.monotonic,
         keep: int = EVENTS_KEPT,
+        cost: float | None = None,
     ) -> None:
         self.name = name
+        self.cost = cost
+        """The cost of the configuration it starts with, if known (its ``start`` event says it)."""
         self.registry = registry
         self.transport: Transport = transport if transport is not None else InProcessTransport()
         self.clock = clock
@@ -211,6 +214,7 @@ class Robot:
                     ("transport", type(self.transport).__name__),
                     ("partners", self.partners),
                     ("rate", rate),
+                    *(() if self.cost is None else (("cost", self.cost),)),
                 ),
             )
         )
@@ -347,7 +351,7 @@ def build(
     emitted module), on ``clock``."""
     from cfgplan.runtime.install import install
 
-    robot = Robot(part.robot, registry, transport, clock=clock)
+    robot = Robot(part.robot, registry, transport, clock=clock, cost=part.cost)
     install(robot, part)
     return robot
 
