@@ -247,6 +247,7 @@ def test_bandwidth_is_shown_with_the_data() -> None:
     assert 'label="orient(Pippi, Door1)\\nbandwidth 10"' in dot
 
 
+@pytest.mark.slow
 def test_dot_is_deterministic_across_hash_seeds(tmp_path: Path) -> None:
     """The same input gives the same bytes, whatever the hash seed."""
     code = "import cfgplan.cli.render; from cfgplan.cli.app import main; main()"

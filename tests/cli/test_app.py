@@ -52,6 +52,7 @@ def test_version(cfgplan: Run) -> None:
     assert out.stdout == f"cfgplan {version('cfgplan')}\n"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["", *COMMANDS])
 def test_h_is_help_everywhere(cfgplan: Run, command: str) -> None:
     words = [command] if command else []
@@ -73,6 +74,7 @@ def _modules_after(args: list[str]) -> set[str]:
     return set(json.loads(out.stdout))
 
 
+@pytest.mark.slow
 def test_a_command_loads_its_own_module_only() -> None:
     """``cfgplan plan`` does not load the runtime, Graphviz or the simulator;
     help, completion and unknown commands load every command (typer lists them)."""
@@ -85,6 +87,7 @@ def test_a_command_loads_its_own_module_only() -> None:
         assert others <= _modules_after(args)
 
 
+@pytest.mark.slow
 def test_shell_completion_as_typer_offers_it(cfgplan: Run) -> None:
     def complete(words: str) -> list[str]:
         env = {
@@ -230,6 +233,7 @@ def _console(args: list[str]) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow
 def test_a_planning_command_leaves_at_once_with_its_output_whole(cfgplan: Run) -> None:
     """``plan`` (a QUICK_EXIT command) ends without the interpreter's teardown
     (app._leave: no exit handler runs), yet what it printed through the pipe

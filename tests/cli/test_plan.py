@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from tests.cli.conftest import ROOT, Run
 
 CROSS = ("domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp")
@@ -64,6 +66,7 @@ def test_json_without_media_leaves_the_media_keys_out(cfgplan: Run) -> None:
     assert all(ch["medium"] is None for c in doc["configurations"] for ch in c["channels"])
 
 
+@pytest.mark.slow
 def test_json_is_byte_identical_across_runs(cfgplan: Run) -> None:
     """Determinism: the same input gives the same bytes, whatever the hash seed."""
     a = cfgplan("plan", *WALL, "--all", "--format", "json", env={"PYTHONHASHSEED": "1"})
@@ -126,6 +129,7 @@ def test_goal_option_overrides_the_state(cfgplan: Run) -> None:
     assert json.loads(out.stdout)["goal"] == "do-cross-door(Emil, Door1)"
 
 
+@pytest.mark.slow
 def test_bad_goal_is_input_error_with_caret(cfgplan: Run) -> None:
     """The '(' never closed is the user's, not the one of the (goal ...) the
     option is read in (a newcomer was pointed at "the '(' at line 1, column 1")."""
@@ -163,6 +167,7 @@ def test_missing_file_is_input_error(cfgplan: Run) -> None:
     assert "no such file: nope.lisp" in out.stderr
 
 
+@pytest.mark.slow
 def test_output_file_is_not_overwritten_without_force(cfgplan: Run, tmp_path: Path) -> None:
     target = tmp_path / "out.json"
     target.write_text("keep me")

@@ -54,6 +54,7 @@ def _plan(args: list[str]) -> tuple[int, str]:
     return result.exit_code, result.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("format_", FORMATS)
 @pytest.mark.parametrize(("problem", "choice"), CASES)
 def test_stdout_is_what_the_output_file_holds(

@@ -108,6 +108,7 @@ def test_run_a_rank_that_does_not_exist_exits_3() -> None:
     assert result.exit_code == 3
 
 
+@pytest.mark.slow
 def test_a_broken_implementation_file_is_shown_with_a_caret(tmp_path: Path) -> None:
     """Issue 9, item 6: the implementation's fault, file:line:col, no traceback."""
     impl = tmp_path / "impl.py"

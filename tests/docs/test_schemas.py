@@ -108,6 +108,7 @@ FAULTS = (
 )
 
 
+@pytest.mark.slow
 def test_a_run_trace_matches_the_schema(tmp_path: Path) -> None:
     """Cross-door step 2 (6.2.2) in one process: Emil's compass fails (a switch to
     47), recovers, the operator changes the state, Pippi is killed (nothing is

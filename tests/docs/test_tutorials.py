@@ -33,11 +33,8 @@ def test_every_experiment_tutorial_has_commands_to_run() -> None:
 
 @pytest.mark.parametrize(
     "page",
-    [  # the tutorials that start several processes or simulate are in the slow set
-        pytest.param(p, marks=pytest.mark.slow)
-        if p.stem in {"failure-and-switch", "run-two-processes", "simulate"}
-        else p
-        for p in PAGES
+    [  # the plan tutorial runs in the fast set, every other one in the slow set
+        pytest.param(p, marks=pytest.mark.slow) if p.stem != "plan" else p for p in PAGES
     ],
     ids=[p.stem for p in PAGES],
 )

@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL
+from tests.programs import program
 from tests.runtime.netutil import (
     endpoint,
     first,
@@ -30,17 +31,12 @@ from tests.runtime.netutil import (
 
 pytestmark = pytest.mark.slow
 
-CHROMIUM = os.environ.get("CFGPLAN_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
 SCREENSHOT = os.environ.get("CFGPLAN_LIVE_SCREENSHOT")
 """Where to save the page's picture as well (docs/images/live-page.png is made so)."""
 
 
 def _browser() -> object:
-    if not Path(CHROMIUM).exists():
-        pytest.fail(
-            f"no Chromium at {CHROMIUM}: the live page's test needs the system's browser "
-            "(apt-get install -y chromium, or CFGPLAN_CHROMIUM=/path/to/chromium)"
-        )
+    program("chromium", "CFGPLAN_CHROMIUM")  # skipped with how to install it, failed in CI
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
@@ -66,7 +62,8 @@ def _follow(page_url: str, trace: Path, picture: Path) -> None:
     sync_playwright = _browser()
     with sync_playwright() as playwright:  # type: ignore[operator]
         browser = playwright.chromium.launch(
-            executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"]
+            executable_path=program("chromium", "CFGPLAN_CHROMIUM"),
+            args=["--no-sandbox", "--disable-gpu"],
         )
         try:
             page = browser.new_page(viewport={"width": 1500, "height": 950})

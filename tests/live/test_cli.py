@@ -38,6 +38,7 @@ def test_a_bad_address_is_a_usage_error() -> None:
     assert "a port is a whole number from 0 to 65535" in result.output
 
 
+@pytest.mark.slow
 def test_a_port_in_use_is_a_clear_error() -> None:
     """Exit 1 with the address and the reason, no traceback."""
     with socket.socket() as taken:

@@ -164,6 +164,7 @@ def test_a_robot_that_cannot_run_its_part_aborts_the_switch_for_everyone(
     assert stop["cause"] == "Pippi failed"
 
 
+@pytest.mark.slow
 def test_an_emitted_robot_program_follows_the_coordinator(tmp_path: Path) -> None:
     """Pippi runs the module ``cfgplan emit`` wrote (no planner); Emil, from the
     domain, coordinates: when his compass fails Pippi's program installs its

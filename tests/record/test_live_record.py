@@ -84,6 +84,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return trace, record
 
 
+@pytest.mark.slow
 def test_the_recording_holds_the_switch_with_its_schema(recorded: tuple[Path, Path]) -> None:
     """The switch is on /cfgplan/switches, schema cfgplan.trace.SwitchEvent, 44 -> 47;
     every channel has its kind's JSON Schema; the file's metadata counts the events."""

@@ -114,6 +114,7 @@ def test_the_fast_path_check_can_fail(tmp_path: Path) -> None:
     assert {"typer", "cfgplan.cli.root", "cfgplan.cli.plan"} <= set(loaded)
 
 
+@pytest.mark.slow
 def test_a_json_plan_loads_no_table_library(tmp_path: Path) -> None:
     """rich draws tables: ``plan --format json`` (what a tool reads) does without it,
     nor does planning load the reconfiguration (only ``--fallbacks`` needs it)."""

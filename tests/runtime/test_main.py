@@ -204,6 +204,7 @@ def test_a_robot_alone_over_zenoh_waits_and_stops_after_its_duration(
     assert "waits for global-orient(Pippi)" in out.stdout
 
 
+@pytest.mark.slow
 def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None:
     """stdout to a full disk, or to a pipe closed early: no traceback."""
     args = [str(emitted / "run_all.py"), "--impl", str(EXAMPLE_IMPL), "--rate", "0"]

@@ -76,6 +76,7 @@ def test_renew_replaces_one_members_files_and_names_its_generation(tmp_path: Pat
     assert _cn(keys / "pippi.pem") == "renew-test/Pippi@3"
 
 
+@pytest.mark.slow
 def test_renew_refuses_clearly(tmp_path: Path) -> None:
     """An unknown member, a folder without ca.key (a robot's host), or no keys
     at all: exit 1, a message and no traceback; no name: usage, exit 2."""

@@ -52,6 +52,7 @@ def test_overlaps_sees_two_labels_that_meet() -> None:
     assert overlaps(fig) == [("44: cross-door", "compass(Emil) fails")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_no_label_meets_another_in_the_timeline(bundled: dict[str, Run], name: str) -> None:
     """Every text of the timeline (steps, bars, switches, failures, ticks, key):
