@@ -39,7 +39,7 @@ from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import printable
-from cfgplan.emission import write_emission
+from cfgplan.emission import RECORD, write_emission
 from cfgplan.notation import call_text
 from cfgplan.problem import Problem
 from cfgplan.security.identity import ProblemId, problem_id
@@ -130,7 +130,7 @@ def emit(
     removed = write_emission(
         output, {name: text.encode("utf-8") for name, text in texts.items()}, force
     )
-    for name in texts:
+    for name in [*texts, RECORD]:  # the record too: what --force may replace (emission.py)
         say(f"wrote {output / name}")
     for path in removed:
         say(f"removed {path} (from the earlier emission)")

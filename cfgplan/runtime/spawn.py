@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from typing import IO, Any, TextIO
 
 from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.options import LAUNCHED
 
 __all__ = [
     "STYLES",
@@ -267,7 +268,7 @@ class Launch:
                 stdin=subprocess.DEVNULL,
                 stdout=subprocess.PIPE,
                 stderr=subprocess.STDOUT,
-                env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                env={**os.environ, "PYTHONUNBUFFERED": "1", LAUNCHED: "1"},
                 start_new_session=True,  # Ctrl-C reaches the launch, which stops them in order
                 preexec_fn=self._death,
             )

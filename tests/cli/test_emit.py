@@ -44,6 +44,11 @@ def test_emit_lisp_writes_one_file_per_robot_and_the_description(tmp_path: Path)
 def test_emit_python_writes_modules_and_run_all(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
+    # every file it wrote is listed, its record too (it was left out)
+    assert result.stderr.splitlines() == [
+        f"wrote {tmp_path / name}"
+        for name in ("pippi.py", "emil.py", "run_all.py", "configuration.txt", RECORD)
+    ]
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         RECORD,
         "configuration.txt",

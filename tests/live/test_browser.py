@@ -10,6 +10,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -163,3 +164,50 @@ def test_the_coordinators_page_follows_a_society_over_zenoh(tmp_path: Path) -> N
     assert drawn.returncode == 0, drawn.stderr
     assert (report / "timeline.png").stat().st_size > 10_000
     assert "compass(Emil) failed" in (report / "report.html").read_text(encoding="utf-8")
+
+
+def test_once_the_run_is_gone_the_page_claims_no_robot_runs(tmp_path: Path) -> None:
+    """The run ends (SIGTERM, as a user's Ctrl-C would): the page says
+    "disconnected", and its robots' table no longer shows them "running, 0.0 s
+    ago" (it did, frozen at the last update): their state is unknown, and the
+    time since each was last heard from counts on."""
+    sync_playwright = _browser()
+    domain, state = CROSS
+    log = tmp_path / "run.log"
+    args = ["-m", "cfgplan", "run", str(DOMAINS / domain), str(DOMAINS / state)]
+    args += ["--impl", str(EXAMPLE_IMPL), "--rate", "20", "--live", "0"]
+    with processes() as running:
+        run = running.start(args, log)
+        page_url = _url(log, run)
+        with sync_playwright() as playwright:  # type: ignore[operator]
+            browser = playwright.chromium.launch(
+                executable_path=program("chromium", "CFGPLAN_CHROMIUM"),
+                args=["--no-sandbox", "--disable-gpu"],
+            )
+            try:
+                page = browser.new_page()
+                page.goto(page_url, timeout=20_000)
+                page.wait_for_selector("#robots span.state.running", timeout=30_000)
+                run.send_signal(signal.SIGTERM)
+                assert run.wait(timeout=30) == 0, log.read_text(encoding="utf-8")
+                page.wait_for_function(
+                    "document.querySelector('#connection').textContent.includes('disconnected')",
+                    timeout=20_000,
+                )
+
+                def ages() -> list[float]:
+                    texts = page.eval_on_selector_all(
+                        "#robots tbody tr td:nth-child(4)", "cells => cells.map(c => c.textContent)"
+                    )
+                    return [float(t.split()[0]) for t in texts]
+
+                # the ages tick on: at least 1.5 s since the end, without an update
+                wait_for("the ages to count on", lambda: {} if min(ages()) >= 1.5 else None, 20)
+                states = page.eval_on_selector_all(
+                    "#robots span.state", "spans => spans.map(s => [s.className, s.textContent])"
+                )
+                assert len(states) == 2, states
+                for name, text in states:
+                    assert name == "state unknown" and text.startswith("unknown (was "), states
+            finally:
+                browser.close()

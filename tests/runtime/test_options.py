@@ -14,11 +14,13 @@ from cfgplan.cli import commands  # noqa: F401  (registers the commands)
 from cfgplan.cli.app import app
 from cfgplan.runtime.main import parser_of
 from cfgplan.runtime.options import (
+    LAUNCHED,
     NETWORK_OPTIONS,
     RUN_OPTIONS,
     UNTIL,
     Option,
     how_long,
+    launched,
 )
 
 
@@ -89,3 +91,30 @@ def test_a_bad_value_is_refused_alike(
     with pytest.raises(typer.BadParameter) as refused:
         param.process_value(typer.Context(typer.main.get_command(app)), value)
     assert message in refused.value.format_message()
+
+
+def test_a_robot_the_launch_started_does_not_claim_ctrl_c(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The robots of cfgplan launch run in sessions of their own: Ctrl-C reaches
+    the launch, which stops them. They said "until interrupted (Ctrl-C)"."""
+    import subprocess
+
+    from cfgplan.runtime import spawn
+
+    seen: list[dict[str, str]] = []
+
+    def popen(*args: object, **kwargs: object) -> object:
+        env = kwargs["env"]
+        assert isinstance(env, dict)
+        seen.append(env)
+        raise OSError("not started in this test")
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    launch = spawn.Launch([spawn.RobotCommand("Pippi", ("run",), "127.0.0.1", spawn.free_port())])
+    with pytest.raises(OSError):
+        launch.start()
+    assert seen and seen[0][LAUNCHED] == "1"
+    monkeypatch.setenv(LAUNCHED, "1")
+    assert launched() and how_long(0, None) == "until the launch stops it"
+    assert how_long(5, None) == "5 cycle(s)"
+    monkeypatch.delenv(LAUNCHED)
+    assert how_long(0, None) == "until interrupted (Ctrl-C)"

@@ -89,6 +89,20 @@ def test_the_printer_shows_a_functionalitys_first_failures_then_counts() -> None
     assert printer.failed
 
 
+def test_a_failure_placed_in_the_implementations_file_names_it_once() -> None:
+    """ "(impl.py:11 in localise) [impl.py]" named the file twice; the tag stays
+    where the place is elsewhere (a module the implementations import) or unknown."""
+    out, err = io.StringIO(), io.StringIO()
+    printer = Printer(verbose=False, source="/x/impl.py", out=out, err=err)
+    printer(_call(status="error", error="the implementation raised E: no (/x/impl.py:11 in f)"))
+    printer(
+        _call(label="F4", status="error", error="the implementation raised E (/x/lib.py:3 in g)")
+    )
+    first, second = err.getvalue().splitlines()
+    assert first.endswith("failed: the implementation raised E: no (/x/impl.py:11 in f)")
+    assert second.endswith("failed: the implementation raised E (/x/lib.py:3 in g) [/x/impl.py]")
+
+
 def test_the_printer_says_what_a_functionality_waits_for_then_that_it_runs_again() -> None:
     """Issue 10: after WAIT_NOTICE calls in a row without its data, once; and
     when the data comes, once; a short wait is not worth a line."""
