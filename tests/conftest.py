@@ -1,4 +1,4 @@
-"""The fast loop and the slow set (issue 32).
+"""The fast loop and the slow set.
 
 ``python -m pytest`` runs the fast set: pyproject's ``addopts`` deselects the
 tests marked ``slow`` (long property, differential, fuzz, scale and

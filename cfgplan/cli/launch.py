@@ -1,4 +1,4 @@
-"""``cfgplan launch DOMAIN STATE --impl IMPL``: a whole society in one command (issue 36).
+"""``cfgplan launch DOMAIN STATE --impl IMPL``: a whole society in one command.
 
 Every robot and device of the state (with ``--no-reconfigure``: of the
 configuration) runs its own ``cfgplan run --robot NAME`` process on this

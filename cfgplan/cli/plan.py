@@ -37,10 +37,10 @@ from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
 from cfgplan.problem import Problem
 
-if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (issue 32: start-up)
+if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-up)
     from cfgplan.reconfigure.fallbacks import Fallback
 
-# Loaded only when needed (issue 32: start-up): cfgplan.cli.sequence for several
+# Loaded only when needed (start-up): cfgplan.cli.sequence for several
 # goals, cfgplan.cli.fallbacks for --fallbacks, cfgplan.planner.explain when
 # nothing is found.
 
@@ -103,7 +103,7 @@ def _nothing(
 
 class _Asked(NamedTuple):
     """What to print, once the configurations are found (a named tuple: a
-    frozen dataclass takes about four times as long to define, issue 32)."""
+    frozen dataclass takes about four times as long to define)."""
 
     format: str
     details: bool

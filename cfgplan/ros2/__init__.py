@@ -1,4 +1,4 @@
-"""ROS 2 interoperation over rmw_zenoh, from plain zenoh-python (issue 36).
+"""ROS 2 interoperation over rmw_zenoh, from plain zenoh-python.
 
 :mod:`cfgplan.ros2.rmw_zenoh` is the wire format of ROS 2's Zenoh middleware
 (key expressions, liveliness tokens, attachment, CDR payloads) as pure

@@ -1,4 +1,4 @@
-"""A whole society started on this machine, one process per robot (``cfgplan launch``, issue 36).
+"""A whole society started on this machine, one process per robot (``cfgplan launch``).
 
 Each robot (and device) of a state runs its own ``cfgplan run --robot NAME``
 process, as each ran on its own body in the thesis (5.2.2), here side by side

@@ -1,5 +1,5 @@
 """Which problem a robot runs: its fingerprint, so that two societies under one name refuse
-each other instead of mixing their values (issue 34).
+each other instead of mixing their values.
 
 A society's name (``--society``, ``default`` unless given) is all that keeps
 two societies on one network apart (:mod:`cfgplan.runtime.keys`); two teams

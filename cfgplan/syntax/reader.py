@@ -207,7 +207,7 @@ def parse(
             items = lark_parser.parse(text).children
             failed = transformer.failed
     except UnexpectedInput as exc:
-        from cfgplan.syntax.unexpected import syntax_error  # for a wrong file only (issue 32)
+        from cfgplan.syntax.unexpected import syntax_error  # for a wrong file only
 
         raise syntax_error(exc, filename, text) from None
     except RecursionError:  # pragma: no cover - the grammar and transformer are iterative

@@ -1,4 +1,4 @@
-"""Names the reader accepts but that are hostile to files and code (issue 9, items 1-2).
+"""Names the reader accepts but that are hostile to files and code.
 
 A robot or object name is any symbol: ``../../escaped``, ``/abs``, ``a\\b``, a
 NUL, ``CON``, 300 characters, ``#|Door1``, ESC sequences. Whatever it is,

@@ -80,7 +80,7 @@ def test_unused_state_predicate_without_case_twin_is_silent() -> None:
 
 
 def test_a_misspelt_fact_is_a_warning_with_a_suggestion() -> None:
-    """Issue 10: (camrea Pippi) is tested by nothing; camera is close."""
+    """(camrea Pippi) is tested by nothing; camera is close."""
     d = only(run(BASE + GOOD, "(state (camrea Pippi) (door Door1))\n"), "warning")
     assert d.message == (
         "no precondition tests (camrea ...), so the fact (camrea Pippi) is never used"

@@ -1,4 +1,4 @@
-"""The ``cfgplan`` command line as a whole (issue 10): --version, -h, shell
+"""The ``cfgplan`` command line as a whole: --version, -h, shell
 completion, whole one-line summaries, usage lines, cfgplan's own wording for
 bad values (never typer's, click's or pydantic's), one wording for a --rank
 past the last configuration, a hint for a --goal without parentheses."""

@@ -1,11 +1,11 @@
-"""Deep method chains: no stage recurses on the depth of the input (issue 9, item 4).
+"""Deep method chains: no stage recurses on the depth of the input.
 
 ``(top ?r)`` expands through ``m0 -> m1 -> ... -> m{n-1} -> (sense ?r)``: the
 configuration is two functionalities, but the method hierarchy is ``n`` levels
 deep. The issue found 330 levels enough to make ``plan``, ``emit`` and ``run``
 die with RecursionError in ``planner/bound.py`` and about 500 to do it in
 ``render --hierarchy``. Every command is run on such a chain (the planner's
-bound summarises without recursion since issue 8).
+bound summarises without recursion).
 """
 
 from __future__ import annotations

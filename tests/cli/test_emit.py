@@ -63,7 +63,7 @@ def test_emit_python_writes_modules_and_run_all(tmp_path: Path) -> None:
 
 
 def test_emit_never_overwrites_a_file_it_did_not_write(tmp_path: Path) -> None:
-    """Issue 10: a file of the user's in the way is refused, even with --force,
+    """A file of the user's in the way is refused, even with --force,
     and named; nothing at all is written."""
     (tmp_path / "emil.lisp").write_text("mine\n")
     for force in ([], ["--force"]):
@@ -92,7 +92,7 @@ def test_emit_refuses_an_earlier_emission_without_force(tmp_path: Path) -> None:
 
 
 def test_emit_force_replaces_the_earlier_emission_whole(tmp_path: Path) -> None:
-    """Issue 10: LISP then Python into one folder with --force: no .lisp robot
+    """LISP then Python into one folder with --force: no .lisp robot
     file of the earlier emission remains; the user's own notes stay."""
     assert CliRunner().invoke(app, [*LISP, "-o", str(tmp_path)]).exit_code == 0
     (tmp_path / "notes.txt").write_text("my notes\n")
@@ -147,7 +147,7 @@ def test_emit_a_rank_that_does_not_exist_exits_3(tmp_path: Path) -> None:
 
 
 def test_emit_without_lang_writes_runnable_python(tmp_path: Path) -> None:
-    """Issue 32: without --lang, emit wrote LISP, which nothing here runs; now
+    """Without --lang, emit wrote LISP, which nothing here runs; now
     it writes the Python of ``--lang python`` (byte for byte), and
     ``run_all.py`` runs the configuration."""
     out = tmp_path / "out"

@@ -1,4 +1,4 @@
-"""Hostile and odd input at the command line (issue 9, items 1, 5, 7, 8, 9).
+"""Hostile and odd input at the command line.
 
 Each case ends with a clear message and exit code, never a traceback, a hang
 or a silently wrong answer: outputs that cannot be written (``> /dev/full``),

@@ -1,4 +1,4 @@
-"""``cfgplan launch``: a whole society in one command, one process per robot (issue 36).
+"""``cfgplan launch``: a whole society in one command, one process per robot.
 
 The slow tests launch cross-door step 2 (6.2.2) for real: the coordinator's
 compass fails, the society switches 44 -> 47 and Emil keeps crossing; a

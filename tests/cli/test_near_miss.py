@@ -1,4 +1,4 @@
-"""A goal that fails on a near-miss fact (issue 32): the "no configuration"
+"""A goal that fails on a near-miss fact: the "no configuration"
 explanation names the fact the failed precondition was likely meant to
 match, in the words of every "did you mean" of cfgplan."""
 

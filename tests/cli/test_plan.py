@@ -1,4 +1,4 @@
-"""``cfgplan plan``: formats, exit codes, determinism (thesis 4.4-4.6, issue 3)."""
+"""``cfgplan plan``: formats, exit codes, determinism (thesis 4.4-4.6)."""
 
 from __future__ import annotations
 
@@ -209,7 +209,7 @@ def test_readme_quick_start_example_exists() -> None:
 
 
 def test_self_loop_is_a_cycle_not_a_traceback(cfgplan: Run, tmp_path: Path) -> None:
-    """Issue 8: a channel from a method instance to itself (``?f1 ?f1``) is
+    """A channel from a method instance to itself (``?f1 ?f1``) is
     re-wired at both ends into a functionality feeding itself: a cycle (5.1),
     so nothing is admissible: exit 3 and the cycle named (before: a KeyError
     traceback with exit 1)."""
@@ -224,7 +224,7 @@ def test_self_loop_is_a_cycle_not_a_traceback(cfgplan: Run, tmp_path: Path) -> N
 
 
 def test_json_when_nothing_is_admissible_is_still_a_document(cfgplan: Run) -> None:
-    """Issue 10: one JSON document on stdout, the explanation as data, exit 3."""
+    """One JSON document on stdout, the explanation as data, exit 3."""
     out = cfgplan(
         "plan",
         "domains/cross-door/domain.lisp",

@@ -1,4 +1,4 @@
-"""The fast path of ``cfgplan --version`` and the top-level help (issue 32):
+"""The fast path of ``cfgplan --version`` and the top-level help:
 answered without typer, from a text pre-rendered from the typer app, which
 must stay what typer prints (what each loads: tests/runtime/test_imports.py)."""
 

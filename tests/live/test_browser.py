@@ -116,7 +116,7 @@ def test_a_switch_reaches_the_page_within_a_second(tmp_path: Path) -> None:
 
 
 def test_the_coordinators_page_follows_a_society_over_zenoh(tmp_path: Path) -> None:
-    """Issue 37's whole loop. Two processes over Zenoh (loopback, scouting
+    """The live page's whole loop. Two processes over Zenoh (loopback, scouting
     off): the page of the coordinator (Emil, who owns do-cross-door(Emil,
     Door1)) shows the switch the failure of Emil's compass causes within 1 s;
     his ``--record`` holds the switch; ``cfgplan report`` draws the recording

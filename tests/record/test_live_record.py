@@ -1,5 +1,5 @@
 """``--record FILE.mcap`` on ``cfgplan run`` and ``cfgplan simulate``: a run
-written to MCAP as it happens, read back with the ``mcap`` package (issue 37).
+written to MCAP as it happens, read back with the ``mcap`` package.
 
 The run is cross-door step 2 (6.2.2), Emil's compass failing: a switch from
 cost 44 to 47. The recording must hold what ``cfgplan record`` makes of the

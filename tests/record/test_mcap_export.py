@@ -1,5 +1,5 @@
 """``cfgplan record``: a real run's trace as an MCAP file, read back with the
-``mcap`` package (issue 37).
+``mcap`` package.
 
 The trace is cross-door step 2 (6.2.2) in one process, Emil's compass failing
 at cycle 20: a switch from cost 44 to 47. The recording must have one channel

@@ -1,7 +1,7 @@
 """A robot needs cfgplan installed, but ``import cfgplan.runtime`` must stay light:
 no planner, IR, pydantic, lark, backends, CLI or Zenoh (its time is measured by
 ``python -m benchmarks.imports``); nor may ``cfgplan --version`` and the top-level
-help load any of it (issue 32; ``python -m benchmarks.startup`` measures them)."""
+help load any of it (``python -m benchmarks.startup`` measures them)."""
 
 from __future__ import annotations
 
@@ -100,7 +100,7 @@ def _loaded_by(args: list[str], tmp_path: Path) -> list[str]:
 
 @pytest.mark.parametrize("args", [["--version"], ["--help"], ["-h"], []])
 def test_version_and_help_load_no_library(args: list[str], tmp_path: Path) -> None:
-    """``cfgplan --version`` and the top-level help answer at once (issue 32):
+    """``cfgplan --version`` and the top-level help answer at once:
     no typer, click, rich, pydantic or Lark, none of cfgplan's stages."""
     loaded = _loaded_by(args, tmp_path)
     assert "cfgplan.cli.app" in loaded

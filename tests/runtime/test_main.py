@@ -237,7 +237,7 @@ def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None
 
 
 def test_a_robot_alone_says_what_it_waits_for(emitted: Path) -> None:
-    """Issue 10: run alone, Emil never gets Pippi's compass reading; his program
+    """Run alone, Emil never gets Pippi's compass reading; his program
     says so after WAIT_NOTICE calls instead of looking hung, and says first how
     long it runs, as cfgplan run does."""
     out = _run(

@@ -375,7 +375,7 @@ def test_a_channel_attached_twice_is_refused_as_on_one_machine(tmp_path: Path) -
 
 
 def test_switch_messages_past_the_backlog_are_dropped_and_counted(tmp_path: Path) -> None:
-    """Issue 34: a robot flooding the coordinator's key grew its queue without
+    """A robot flooding the coordinator's key grew its queue without
     bound. Past ``backlog`` messages waiting for the robot's loop, more are
     dropped and counted; the coordinator says so (an ``error`` event)."""
     config = str(hermetic_config(tmp_path))

@@ -78,7 +78,7 @@ def test_require_names_every_missing_implementation() -> None:
     )
 
 
-# Issue 9, item 6: these used to escape registry.py as tracebacks.
+# These used to escape registry.py as tracebacks.
 
 
 def test_a_syntax_error_names_file_line_and_column(tmp_path: Path) -> None:
@@ -124,7 +124,7 @@ def test_an_exception_in_an_imported_module_by_name(
     sys.modules.pop("impl_raising_by_name", None)
 
 
-# -- signatures, checked before anything runs (issue 10) ----------------------------
+# -- signatures, checked before anything runs ----------------------------
 
 
 def test_an_implementation_that_cannot_take_the_call_is_refused_naming_both() -> None:

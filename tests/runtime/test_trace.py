@@ -35,7 +35,7 @@ def test_show_is_compact_and_deterministic() -> None:
     assert show((1,)) == "(1,)"
 
 
-# Issue 9, item 6: these used to raise out of the trace printer.
+# These used to raise out of the trace printer.
 
 
 def test_a_value_that_contains_itself_is_shown_with_dots() -> None:
@@ -104,7 +104,7 @@ def test_a_failure_placed_in_the_implementations_file_names_it_once() -> None:
 
 
 def test_the_printer_says_what_a_functionality_waits_for_then_that_it_runs_again() -> None:
-    """Issue 10: after WAIT_NOTICE calls in a row without its data, once; and
+    """After WAIT_NOTICE calls in a row without its data, once; and
     when the data comes, once; a short wait is not worth a line."""
     out, err = io.StringIO(), io.StringIO()
     printer = Printer(verbose=False, source="impl.py", out=out, err=err)
@@ -168,7 +168,7 @@ def test_trace_lines_follow_the_schema(tmp_path: Path) -> None:
     }
 
 
-# Issue 9, item 1 for traces: where --trace may write.
+# For traces: where --trace may write.
 
 
 def test_an_existing_trace_is_never_overwritten_without_force(tmp_path: Path) -> None:

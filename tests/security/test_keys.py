@@ -1,5 +1,5 @@
 """``cfgplan keys new``: a society's CA and its members' keys, owner-only, never
-overwritten without --force, nothing secret printed (issue 34)."""
+overwritten without --force, nothing secret printed."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """``cfgplan keys renew NAME -o DIR``: one member's key rotated with the society's own
-authority; where the new society.json is, the old certificate can do nothing (issue 34).
+authority; where the new society.json is, the old certificate can do nothing.
 
 The sessions are configured as robot programs configure theirs (hermetic:
 loopback, free ports, scouting off, bounded waits)."""

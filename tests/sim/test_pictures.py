@@ -1,6 +1,6 @@
 """The simulator's pictures, measured: labels that never overlap (as the
 renderer reports their extents), marks on the right rows and robots, and the
-measures the thesis's experiments are about (issue 37)."""
+measures the thesis's experiments are about."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The reader's shortcuts build what the long way builds (issue 35: reading a
+"""The reader's shortcuts build what the long way builds (reading a
 big domain faster, cfgplan/syntax/reader.py).
 
 - Lark's inlined rules (``_expr``, ``_quoted``, the repetitions) are passed up
