@@ -49,7 +49,6 @@ __all__ = [
     "Cycle",
     "Listener",
     "Robot",
-    "build",
     "wired",
 ]
 
@@ -338,22 +337,6 @@ class Robot:
 
 Configure = Callable[[Robot], Cycle]
 """What emitted code provides: create a robot's channels and wrappers, return its cycle."""
-
-
-def build(
-    part: Part,
-    registry: Registry,
-    transport: Transport | None = None,
-    *,
-    clock: Callable[[], float] = time.monotonic,
-) -> Robot:
-    """A robot configured from its part of a configuration (the same as its
-    emitted module), on ``clock``."""
-    from cfgplan.runtime.install import install
-
-    robot = Robot(part.robot, registry, transport, clock=clock, cost=part.cost)
-    install(robot, part)
-    return robot
 
 
 def wired(robot: Robot, part: Part, channels: Sequence[Channel]) -> Cycle:

@@ -75,7 +75,7 @@ def clip_about(text: str) -> str:
     """``text`` printable and at most :data:`MAX_ABOUT` characters."""
     # Here, not at the top: the runtime imports this module as it starts, and
     # this module may be imported first (cfgplan emit).
-    from cfgplan.runtime.errors import printable
+    from cfgplan.run_errors import printable
 
     text = printable(text)
     return text if len(text) <= MAX_ABOUT else text[: MAX_ABOUT - 1] + "…"

@@ -39,7 +39,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from cfgplan.runtime.errors import RunError
+from cfgplan.run_errors import RunError
 
 __all__ = ["Bucket", "Buckets", "RateLimits"]
 
