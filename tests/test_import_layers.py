@@ -56,3 +56,27 @@ def test_the_security_package_does_not_import_the_runtime() -> None:
     assert any(
         _reaches(graph, m, "cfgplan.security") for m in graph if m.startswith("cfgplan.runtime")
     )
+
+
+def test_the_command_line_has_one_map_of_commands_and_no_cycle() -> None:
+    """The commands are one map, name -> module:function (cli/registry.py),
+    which imports nothing of the command line; the root group loads a command
+    from it when asked (click's lazy subcommands). Before, app -> root ->
+    commands -> app: each command module registered itself on the app."""
+    graph = imports()
+    cli = [m for m in graph if m.startswith("cfgplan.cli.")]
+    assert not [m for m in graph["cfgplan.cli.registry"] if m.startswith("cfgplan.cli")]
+    assert not _reaches(graph, "cfgplan.cli.root", "cfgplan.cli.app")
+    assert not _reaches(graph, "cfgplan.cli.commands", "cfgplan.cli.app")
+    registering = [  # the entry point runs the app; no other module takes it
+        m
+        for m in cli
+        if m != "cfgplan.cli.app"
+        and ("cfgplan.cli.app.app" in graph[m] or "cfgplan.cli.root.app" in graph[m])
+    ]
+    assert not registering  # no module takes the app to add itself to it
+    from cfgplan.cli.registry import COMMANDS, SETTINGS, load
+
+    for name in COMMANDS:
+        target = load(name)
+        assert hasattr(target, SETTINGS) or name == "keys", name

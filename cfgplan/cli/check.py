@@ -11,8 +11,9 @@ import typer
 
 from cfgplan.check import check as run_checks
 from cfgplan.check.messages import by_position
-from cfgplan.cli.app import EXIT_INPUT, app, report
+from cfgplan.cli.app import EXIT_INPUT, report
 from cfgplan.cli.options import DomainArg, choice_of, completing, errors_as_json, print_errors
+from cfgplan.cli.registry import command
 from cfgplan.diagnostics import CfgplanError, Diagnostic, printable
 from cfgplan.ir.model import Domain, State
 from cfgplan.syntax.reader import (
@@ -82,7 +83,7 @@ def read_and_check(
     return parsed, world, by_position([*read.errors, *found], files)
 
 
-@app.command(short_help="Check a domain (and a state with its goal) without planning.")
+@command(short_help="Check a domain (and a state with its goal) without planning.")
 def check(
     domain: DomainArg,
     state: Annotated[

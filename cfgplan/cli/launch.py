@@ -18,7 +18,8 @@ from typing import Annotated, Any
 
 import typer
 
-from cfgplan.cli.app import app, usage_error
+from cfgplan.cli import registry
+from cfgplan.cli.app import usage_error
 from cfgplan.cli.options import (
     DomainArg,
     GoalsOpt,
@@ -95,7 +96,7 @@ def trace_of(path: str, robot: str) -> str:
     return str(p.with_name(f"{p.stem}-{name}{p.suffix}"))
 
 
-@app.command(short_help="Start a whole society here, one process per robot (5.2.2).")
+@registry.command(short_help="Start a whole society here, one process per robot (5.2.2).")
 def launch(
     domain: DomainArg,
     state: StateArg,

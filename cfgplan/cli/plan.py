@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, NamedTuple, NoReturn
 import typer
 
 from cfgplan.cli import formats
-from cfgplan.cli.app import EXIT_NONE, app, say, usage_error, write_output
+from cfgplan.cli.app import EXIT_NONE, say, usage_error, write_output
 from cfgplan.cli.options import (
     DomainArg,
     ForceOpt,
@@ -30,6 +30,7 @@ from cfgplan.cli.options import (
     number_of,
     rank_option,
 )
+from cfgplan.cli.registry import command
 from cfgplan.configuration.describe import to_json
 from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
@@ -161,7 +162,7 @@ def _print(
     write_output(text, asked.output, asked.force)
 
 
-@app.command(short_help="Plan ranked admissible configurations (4.5), or sequences of them.")
+@command(short_help="Plan ranked admissible configurations (4.5), or sequences of them.")
 def plan(
     domain: DomainArg,
     state: StateArg,

@@ -21,8 +21,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from cfgplan.cli.app import EXIT_INPUT, app, say
+from cfgplan.cli.app import EXIT_INPUT, say
 from cfgplan.cli.app import report as report_diagnostics
+from cfgplan.cli.registry import command
 from cfgplan.diagnostics import CfgplanError, error, run_error
 from cfgplan.runtime.errors import RunError
 
@@ -86,7 +87,7 @@ def _make(run: list[Path], out: Path, replay: bool, force: bool) -> Made:
         raise error(f"cannot write in {out}: {exc.strerror}") from None
 
 
-@app.command(short_help="Draw any run (a trace or an MCAP recording): pictures and a page.")
+@command(short_help="Draw any run (a trace or an MCAP recording): pictures and a page.")
 def report(
     run: Annotated[
         list[Path],

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.render  # noqa: F401  (registers the command)
+import cfgplan.cli.render  # noqa: F401  (loads the command module)
 from cfgplan.backends.dot import (
     GLOBAL_EDGE,
     LOCAL_EDGE,

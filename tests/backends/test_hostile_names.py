@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.commands  # noqa: F401  (registers the commands)
+import cfgplan.cli.commands  # noqa: F401  (loads every command module)
 from cfgplan.backends.lisp import lisp_symbol
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import printable

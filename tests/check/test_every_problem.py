@@ -8,7 +8,7 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from tests.backends.support import DOMAINS
 from tests.check.checking import BASE, GOOD, loc, only, run

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from cfgplan.ir.model import Atom, Goal
 from tests.check.test_checker import BASE, GOOD, at, loc, only, run

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
-import cfgplan.cli.emit  # noqa: F401  (registers the command)
+import cfgplan.cli.emit  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.emission import RECORD

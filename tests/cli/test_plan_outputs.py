@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.plan  # noqa: F401  (registers the command)
+import cfgplan.cli.plan  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from tests.cli.conftest import ROOT
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT, cross_door_44

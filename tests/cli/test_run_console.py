@@ -16,7 +16,7 @@ import re
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime import Call, Presence
 from cfgplan.runtime.console import Printer

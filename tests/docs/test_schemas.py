@@ -44,7 +44,7 @@ def _domain(state: Path) -> Path:
 
 def _plan(*args: str) -> tuple[int, str]:
     """``cfgplan plan ARGS`` in this process: the exit code and stdout."""
-    import cfgplan.cli.commands  # noqa: F401  (registers every command)
+    import cfgplan.cli.commands  # noqa: F401  (loads every command module)
     from cfgplan.cli.app import app
 
     out = CliRunner().invoke(app, ["plan", *args], catch_exceptions=False)

@@ -11,7 +11,7 @@ import threading
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
 

@@ -171,7 +171,7 @@ def test_an_emitted_robot_program_follows_the_coordinator(tmp_path: Path) -> Non
     part of 47 too."""
     from typer.testing import CliRunner
 
-    import cfgplan.cli.emit  # noqa: F401  (registers the command)
+    import cfgplan.cli.emit  # noqa: F401  (loads the command module)
     from cfgplan.cli.app import app
 
     out = tmp_path / "emitted"

@@ -24,7 +24,7 @@ from mcap.reader import make_reader
 from typer.testing import CliRunner
 
 import cfgplan.cli.run  # registers the command
-import cfgplan.cli.simulate  # noqa: F401  (registers the command)
+import cfgplan.cli.simulate  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.record import channels, mcap_export
 from cfgplan.record.live import open_recording, salvage

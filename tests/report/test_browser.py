@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from tests.report.test_cli_report import run_trace
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from cfgplan.report.source import read_run
 from cfgplan.report.story import from_records

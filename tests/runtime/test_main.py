@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.emit  # noqa: F401  (registers the command)
+import cfgplan.cli.emit  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime.console import WAIT_NOTICE
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.emit  # noqa: F401  (registers the command)
+import cfgplan.cli.emit  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime import (
     ChannelKey,

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 import typer
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime.main import parser_of
 from cfgplan.runtime.options import (
@@ -27,7 +27,8 @@ from cfgplan.runtime.options import (
 def _run_params() -> dict[str, Any]:
     group = typer.main.get_command(app)
     assert isinstance(group, typer.core.TyperGroup)
-    command = group.commands["run"]
+    command = group.get_command(typer.Context(group, info_name="cfgplan"), "run")
+    assert command is not None
     return {opt: p for p in command.params for opt in getattr(p, "opts", [])}
 
 
@@ -61,7 +62,10 @@ def test_both_run_until_interrupted_by_default() -> None:
     assert how_long(defaults.cycles, defaults.duration) == "until interrupted (Ctrl-C)"
     assert how_long(3, 2.5) == "3 cycle(s) or 2.5 s"
     assert UNTIL in (ROBOT.description or "") and UNTIL in (SOCIETY.description or "")
-    run = typer.main.get_command(app).commands["run"]  # type: ignore[attr-defined]
+    group = typer.main.get_command(app)
+    assert isinstance(group, typer.core.TyperGroup)
+    run = group.get_command(typer.Context(group, info_name="cfgplan"), "run")
+    assert run is not None and run.help is not None
     assert "Runs until interrupted (Ctrl-C or SIGTERM)" in run.help
 
 
