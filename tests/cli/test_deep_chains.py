@@ -72,7 +72,8 @@ def test_check(files: dict[str, str], levels: str) -> None:
     assert f"{int(levels) + 1} methods" in out
 
 
-@pytest.mark.parametrize("levels", ["330", pytest.param("1500", marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("levels", ["330", "1500"])
 def test_render_hierarchy(files: dict[str, str], levels: str) -> None:
     output = Path(files["out"] + ".dot")
     ok(run("render", files[levels], files["state"], "--hierarchy", "-o", str(output)))
@@ -85,17 +86,20 @@ def test_plan(files: dict[str, str]) -> None:
     assert "sense(Pippi)" in out and "act(Pippi)" in out
 
 
+@pytest.mark.slow  # check and plan of the deep chain stay in the fast loop
 @pytest.mark.parametrize("lang", ["lisp", "python"])
 def test_emit(files: dict[str, str], lang: str) -> None:
     ok(run("emit", files["330"], files["state"], "--lang", lang, "-o", files["out"]))
     assert (Path(files["out"]) / "configuration.txt").exists()
 
 
+@pytest.mark.slow
 def test_run(files: dict[str, str]) -> None:
     out = ok(run("run", files["330"], files["state"], "--impl", files["impl"], "--cycles", "2"))
     assert "act" in out
 
 
+@pytest.mark.slow
 def test_render(files: dict[str, str]) -> None:
     output = Path(files["out"] + ".dot")
     ok(run("render", files["330"], files["state"], "-o", str(output)))
