@@ -1,4 +1,4 @@
-"""The conditions of the fault benchmark, each one trial against real processes (5.5, issue 33).
+"""The conditions of the fault benchmark, each one trial against real processes (5.5).
 
 A trial starts one ``cfgplan run --robot`` process per robot over Zenoh —
 across the lossy link of :mod:`benchmarks.lossy_link` — waits until the

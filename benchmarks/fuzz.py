@@ -1,4 +1,4 @@
-"""Fuzzing cfgplan end to end (issue 9): ``python -m benchmarks.fuzz --inputs 100000``.
+"""Fuzzing cfgplan end to end: ``python -m benchmarks.fuzz --inputs 100000``.
 
 Each input (:mod:`benchmarks.fuzz_inputs`: mutated bundled files, problems
 generated from the grammar, deep chains) is written to a domain and a state

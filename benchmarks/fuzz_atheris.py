@@ -1,4 +1,4 @@
-"""Coverage-guided fuzzing of the reader, the checker and the diagnostics (issue 9).
+"""Coverage-guided fuzzing of the reader, the checker and the diagnostics.
 
 Optional: needs ``pip install atheris`` (wheels for Linux x86_64; not part of
 the test extra). libFuzzer mutates the bundled domain and state files, guided

@@ -1,10 +1,10 @@
 """The instances the benchmark suite plans (``python -m benchmarks.run``).
 
 The thesis's three experiments; the ``wall`` and ``relay`` families the search
-was first tuned on; and the structures it was not (issue 11): ``ecology``,
+was first tuned on; and the structures it was not: ``ecology``,
 ``media-tight``, ``fusion``, ``chain``, ``delegation`` and ``gateway``
 (:mod:`benchmarks.families`); and shared and recursive sub-derivations
-(issue 35): ``dag`` and ``conversion``. Small ones are also run by the naive baseline.
+``dag`` and ``conversion``. Small ones are also run by the naive baseline.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ class Instance:
     args: tuple[object, ...]
     baseline: bool = True  # small enough for the naive baseline
     all_distinct: bool = True  # small enough to list every distinct configuration
-    sequence: bool = False  # a sequence of goals (issue 14): ranked sequences
+    sequence: bool = False  # a sequence of goals: ranked sequences
 
 
 def _file(name: str, domain: str, state: str) -> Instance:
@@ -56,7 +56,7 @@ INSTANCES = [
     Instance("fusion M=4 V=3 P=4 H=3", "fusion", (4, 3, 4, 3)),
     _big("fusion M=14 V=3 P=6 H=6", "fusion", 14, 3, 6, 6),
     _big("fusion M=30 V=3 P=6 H=6", "fusion", 30, 3, 6, 6),
-    _big("fusion M=60 V=3 P=6 H=6", "fusion", 60, 3, 6, 6),  # issue 35's CP-SAT anchor: 2.0 s
+    _big("fusion M=60 V=3 P=6 H=6", "fusion", 60, 3, 6, 6),  # the CP-SAT comparison planner: 2.0 s
     Instance("chain D=8", "chain", (8,)),
     _big("chain D=30", "chain", 30),
     _big("chain D=100", "chain", 100),
@@ -65,7 +65,7 @@ INSTANCES = [
     Instance("delegation N=4", "delegation", (4,)),
     Instance("delegation N=5", "delegation", (5,), baseline=False),
     Instance("delegation N=6", "delegation", (6,), baseline=False),
-    # Shared and recursive sub-derivations (issue 35; benchmarks/families/shared.py).
+    # Shared and recursive sub-derivations (benchmarks/families/shared.py).
     # The issue's CP-SAT anchor, process start to exit: dag D=18 0.9 s, D=24 2.2 s,
     # D=30 2.3 s; conversion D=28 0.8 s, D=40 1.3 s.
     Instance("dag D=5", "dag", (5,)),

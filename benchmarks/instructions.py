@@ -1,4 +1,4 @@
-"""Instructions per warm planning run (issue 35: "instruction counts where
+"""Instructions per warm planning run ("instruction counts where
 timing is noise"): ``python -m benchmarks.instructions`` prints a table.
 
 For each instance, two fresh processes run under valgrind's callgrind, each

@@ -1,4 +1,4 @@
-"""A lossy link for the fault benchmark, without a kernel module (issue 33).
+"""A lossy link for the fault benchmark, without a kernel module.
 
 Two ways, chosen by what the machine allows:
 

@@ -1,4 +1,4 @@
-"""How long reading takes (issue 35): ``python -m benchmarks.reading`` prints a table.
+"""How long reading takes: ``python -m benchmarks.reading`` prints a table.
 
 For each instance, :func:`cfgplan.syntax.reader.read_domain` and
 :func:`~cfgplan.syntax.reader.read_state` are timed in-process and warm (one

@@ -18,7 +18,6 @@ from cfgplan.notation import atom_text
 from cfgplan.planner.compile import compile_task, pattern
 from cfgplan.planner.task import Ground, Task
 from cfgplan.syntax.reader import collection_paused, parse, read_domain, read_state
-from cfgplan.syntax.unexpected import unclosed
 
 GOAL_SOURCE = "--goal"
 
@@ -65,6 +64,8 @@ def parse_goal(text: str, line: int = 1) -> Goal:
             span,
             f"add the parentheses: --goal '({words})'",
         )
+    from cfgplan.syntax.unexpected import unclosed  # --goal only: not on plan's common path
+
     open_at = unclosed(text)
     if open_at is not None:  # else "(goal " would be the '(' never closed
         column = open_at[1] + len("(goal ")

@@ -1,4 +1,4 @@
-"""The fast loop and the slow set (issue 32).
+"""The fast loop and the slow set.
 
 ``python -m pytest`` runs the fast set: pyproject's ``addopts`` deselects the
 tests marked ``slow`` (long property, differential, fuzz, scale and
@@ -19,6 +19,8 @@ from collections.abc import Generator
 
 import pytest
 from hypothesis import settings
+
+from tests.programs import program
 
 QUICK = "quick"
 """The marker of a property test that also runs, with fewer examples, in the fast set."""
@@ -88,3 +90,22 @@ def pytest_runtest_call(item: pytest.Item) -> Generator[None, object, object]:
         return (yield)
     finally:
         test._hypothesis_internal_use_settings = full
+
+
+@pytest.fixture
+def sbcl() -> str:
+    """SBCL's path (a test of the emitted LISP); skipped with the install command
+    where it is missing, failed under CI (tests/programs.py)."""
+    return program("sbcl")
+
+
+@pytest.fixture
+def chromium() -> str:
+    """Chromium's path (``CFGPLAN_CHROMIUM``, else on PATH), as :func:`sbcl`."""
+    return program("chromium", "CFGPLAN_CHROMIUM")
+
+
+@pytest.fixture
+def valgrind() -> str:
+    """valgrind's path (the instruction counts of benchmarks.instructions), as :func:`sbcl`."""
+    return program("valgrind")

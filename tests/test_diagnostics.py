@@ -1,4 +1,4 @@
-"""Diagnostics are safe for a terminal (cfgplan/diagnostics.py; issue 9, item 3).
+"""Diagnostics are safe for a terminal (cfgplan/diagnostics.py).
 
 Whatever bytes a domain holds, an error message shows no raw control or
 format character (ESC, BEL, NUL, a bidirectional override), and a line of
@@ -134,7 +134,7 @@ def test_names_with_escape_sequences_are_escaped_in_tables_and_summaries(tmp_pat
         assert "\\x1b[31mEvil\\x07\\x1b[2J" in out
 
 
-# -- did you mean (issue 32: one rule for the checker and the planner) ------------
+# -- did you mean (one rule for the checker and the planner) ------------
 
 
 def test_did_you_mean_prefers_a_slip_in_case() -> None:

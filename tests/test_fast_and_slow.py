@@ -1,4 +1,4 @@
-"""The fast loop and the slow set (tests/conftest.py, issue 32): a property test
+"""The fast loop and the slow set (tests/conftest.py): a property test
 marked ``quick(N)`` runs with ``N`` examples in the fast set and with all of its
 own in the slow set; ``slow`` tests are left out of ``python -m pytest``."""
 

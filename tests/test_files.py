@@ -1,4 +1,4 @@
-"""Reading the user's files and writing cfgplan's (cfgplan/files.py; issue 9, items 1, 5, 9)."""
+"""Reading the user's files and writing cfgplan's (cfgplan/files.py)."""
 
 from __future__ import annotations
 

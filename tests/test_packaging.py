@@ -134,6 +134,7 @@ def test_wheel_ships_every_module_and_the_grammar(wheel: Path) -> None:
     assert not missing, f"modules left out of the wheel (add their packages): {missing}"
 
 
+@pytest.mark.slow
 def test_installed_wheel_imports_and_parses_outside_the_repo(
     venv_python: Path, tmp_path: Path
 ) -> None:

@@ -1,4 +1,4 @@
-"""Safe file names for names from the input (cfgplan/safe_names.py; issue 9, item 1)."""
+"""Safe file names for names from the input (cfgplan/safe_names.py)."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ for ``python -m benchmarks.run`` and the tests:
 - ``wall(K, N, L)``, ``relay(D, W, V)``: the shapes the search was first tuned on;
 - ``ecology(N, R, C)``, ``media_tight(N, R, C)``, ``fusion(M, V, P, H)``,
   ``chain(D)``, ``delegation(N)``, ``gateway(N, D)``: structures it was not
-  (issue 11): covering with shared robots and devices, tight media, weighted
+ : covering with shared robots and devices, tight media, weighted
   covering with ``:cost``, long plateaus of equal cost, recursion, media that
   let each camera serve one robot;
 - ``dag(D)``, ``conversion(D)``: shared and recursive sub-derivations, one

@@ -1,4 +1,4 @@
-"""Shared and recursive sub-derivations (issue 35): shapes where one ground
+"""Shared and recursive sub-derivations: shapes where one ground
 method instance occurs under many ancestors.
 
 - ``dag(D)``: D levels; level i either refines level i-1 (one functionality

@@ -1,4 +1,4 @@
-"""``deliveries(S, R)``: a sequence of S steps for R robots (issue 14).
+"""``deliveries(S, R)``: a sequence of S steps for R robots.
 
 Step i delivers parcel Pi: some robot carries it, sensing its way with its
 own sonar (cheap) — which wears it: it is ``(fresh ?r)`` no more — or, once

@@ -13,8 +13,9 @@ from cfgplan.runtime.part import CallSpec, ChannelSpec, Part
 __all__ = ["runtime_part"]
 
 
-def runtime_part(part: RobotPart) -> Part:
-    """``part`` as plain data: channels in order (CH-1 first), calls in sorted order."""
+def runtime_part(part: RobotPart, cost: float | None = None) -> Part:
+    """``part`` as plain data: channels in order (CH-1 first), calls in sorted
+    order; ``cost``, its configuration's, if given (:attr:`Part.cost`)."""
     robot = part.robot
     channels = tuple(
         ChannelSpec(
@@ -39,4 +40,4 @@ def runtime_part(part: RobotPart) -> Part:
         )
         for c in part.calls
     )
-    return Part(robot, channels, calls)
+    return Part(robot, channels, calls, cost)

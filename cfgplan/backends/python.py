@@ -213,7 +213,7 @@ def to_python(part: RobotPart, title: str, problem: ProblemId | None = None) -> 
 
 
 def _problem(problem: ProblemId) -> list[str]:
-    """``PROBLEM = ProblemId(...)``: what the robot announces (issue 34)."""
+    """``PROBLEM = ProblemId(...)``: what the robot announces."""
     args = f"{_str(problem.fingerprint)}, {_str(problem.about)}"
     return _statement("", "PROBLEM = ProblemId", args)
 

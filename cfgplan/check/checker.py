@@ -28,6 +28,7 @@ from cfgplan.diagnostics import Diagnostic
 from cfgplan.ir.model import (
     Atom,
     BodyItem,
+    ChannelSpec,
     Condition,
     Domain,
     Eval,
@@ -167,6 +168,7 @@ class _Checker(Findings):
                     )
                 else:
                     self._flow(labels[label], ch.data, side, "channel data", ch.span)
+            self._channel_robots(ch, labels)
         sides: list[tuple[Side, tuple[Port, ...]]] = [("in", m.inputs), ("out", m.outputs)]
         for side, ports in sides:
             for port in ports:
@@ -194,6 +196,31 @@ class _Checker(Findings):
                 seen[key] = port.span
         self._method_variables(m)
         self._conditions(m.name, m.precond)
+
+    def _channel_robots(self, ch: ChannelSpec, labels: dict[str, BodyItem]) -> None:
+        """``((global ?from ?to) ?f1 ?f2 ...)`` whose robots are written the other
+        way round: ?f1 a functionality on ?to, ?f2 one on ?from (a functionality
+        runs on its first argument, 3.2). The planner finds no placement for it
+        and drops the method's configurations without a word."""
+        if ch.kind == "local" or len(ch.robots) != 2 or ch.robots[0] == ch.robots[1]:
+            return
+        ends = [labels.get(ch.source), labels.get(ch.target)]
+        on = [
+            e.call.args[0]
+            if e is not None and e.call.signature in self.funcs and e.call.args
+            else None
+            for e in ends
+        ]
+        first, second = ch.robots
+        if on == [second, first]:
+            self.report(
+                "warning",
+                f"the channel {ch.source} -> {ch.target} is ({ch.kind} {first} {second}), but "
+                f"{ch.source} runs on {second} and {ch.target} on {first}",
+                ch.span,
+                f"the robots are the source's, then the target's: did you mean "
+                f"({ch.kind} {second} {first})?",
+            )
 
     def _call(self, item: BodyItem) -> None:
         """A body entry names a functionality or method by name and arity (4.5)."""

@@ -10,7 +10,8 @@ answered by :func:`main` before typer, pydantic or Lark are imported (the help
 text is pre-rendered from the typer app, :mod:`cfgplan.cli.help_text`); any
 other command line loads the typer app (:mod:`cfgplan.cli.root`, also reached
 as ``cfgplan.cli.app.app``) and the module of the command it names
-(:func:`register`), and the libraries that command needs, as it runs.
+(:func:`register`, by the one map of commands, :mod:`cfgplan.cli.registry`),
+and the libraries that command needs, as it runs.
 """
 
 from __future__ import annotations
@@ -21,6 +22,10 @@ import importlib
 import os
 import sys
 from contextvars import ContextVar
+
+from cfgplan.cli.registry import COMMANDS, QUICK_EXIT, module_of, version_line
+
+__all__ = ["COMMANDS", "QUICK_EXIT", "command_of", "console", "main", "register", "version_line"]
 
 TYPE_CHECKING = False  # as typing.TYPE_CHECKING, without importing typing (3 ms)
 if TYPE_CHECKING:
@@ -156,28 +161,6 @@ def _run() -> int | str | None:
     return status
 
 
-COMMANDS = (
-    "check",
-    "emit",
-    "keys",
-    "launch",
-    "plan",
-    "record",
-    "render",
-    "report",
-    "run",
-    "simulate",
-)
-"""Every command, each defined (and registered on :data:`app`) by the module
-of its name, ``cfgplan.cli.<name>``; :mod:`cfgplan.cli.commands` imports them all."""
-
-
-QUICK_EXIT = frozenset({"check", "emit", "plan", "render"})
-"""The commands that hold nothing open once they return (their files written
-and closed, no thread, no network session, no recording): the console script
-ends them without tearing the interpreter down (:func:`_leave`)."""
-
-
 def command_of(args: list[str]) -> str | None:
     """The command a command line names: its first word that is not an option."""
     return next((a for a in args if not a.startswith("-")), None)
@@ -186,21 +169,11 @@ def command_of(args: list[str]) -> str | None:
 def register(args: list[str]) -> None:
     """Import the module of the command ``args`` name, and only that one: ``cfgplan
     plan`` need not load the runtime, Graphviz or the simulator (a fifth of its
-    start-up). Every command for anything else: help, shell completion, a
-    mistyped name (typer lists the commands)."""
+    start-up). Help, shell completion and a mistyped name load what they need
+    as they run (the root group loads commands lazily: :mod:`cfgplan.cli.registry`)."""
     name = command_of(args)
     if name in COMMANDS and "_CFGPLAN_COMPLETE" not in os.environ:
-        importlib.import_module(f"cfgplan.cli.{name}")
-    else:
-        importlib.import_module("cfgplan.cli.commands")
-
-
-def version_line() -> str:
-    """What ``cfgplan --version`` prints (without its line break): the version
-    is :data:`cfgplan.__version__`, which the package metadata is built from."""
-    from cfgplan import __version__
-
-    return f"cfgplan {__version__}"
+        importlib.import_module(module_of(name))
 
 
 def _fast(args: list[str]) -> int | None:

@@ -1,11 +1,10 @@
-"""Importing this module registers every command on the typer app,
-:data:`cfgplan.cli.root.app`: it imports the module of each command named in
-:data:`cfgplan.cli.app.COMMANDS`, the one list of them (a command line that
-names one loads that one only, :func:`cfgplan.cli.app.register`)."""
+"""Every command module, imported: for a program or a test that wants them all
+loaded at once (the root group loads a command as it is asked for,
+:mod:`cfgplan.cli.registry`; importing a command module registers nothing)."""
 
 import importlib
 
-from cfgplan.cli.app import COMMANDS
+from cfgplan.cli.registry import COMMANDS, module_of
 
 for _name in COMMANDS:
-    importlib.import_module(f"cfgplan.cli.{_name}")
+    importlib.import_module(module_of(_name))

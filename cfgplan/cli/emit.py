@@ -23,7 +23,7 @@ import typer
 from cfgplan.backends.lisp import to_lisp
 from cfgplan.backends.python import run_all, to_python
 from cfgplan.backends.wiring import RobotPart, deploy
-from cfgplan.cli.app import app, say
+from cfgplan.cli.app import say
 from cfgplan.cli.options import (
     DomainArg,
     GoalOpt,
@@ -35,11 +35,12 @@ from cfgplan.cli.options import (
     completing,
     load_problem,
 )
+from cfgplan.cli.registry import command
 from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.describe import to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import printable
-from cfgplan.emission import write_emission
+from cfgplan.emission import RECORD, write_emission
 from cfgplan.notation import call_text
 from cfgplan.problem import Problem
 from cfgplan.security.identity import ProblemId, problem_id
@@ -93,7 +94,7 @@ def _lisp(part: RobotPart, head: str) -> str:
     return to_lisp(part, comments)
 
 
-@app.command(short_help="Write one executable file per robot for a configuration (5.1-5.3).")
+@command(short_help="Write one executable file per robot for a configuration (5.1-5.3).")
 def emit(
     domain: DomainArg,
     state: StateArg,
@@ -130,7 +131,7 @@ def emit(
     removed = write_emission(
         output, {name: text.encode("utf-8") for name, text in texts.items()}, force
     )
-    for name in texts:
+    for name in [*texts, RECORD]:  # the record too: what --force may replace (emission.py)
         say(f"wrote {output / name}")
     for path in removed:
         say(f"removed {path} (from the earlier emission)")

@@ -16,7 +16,7 @@ from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text
 
-if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (issue 32: start-up)
+if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-up)
     from cfgplan.reconfigure.fallbacks import Fallback
 
 __all__ = ["fallback_lisp", "fallback_table"]
@@ -41,7 +41,7 @@ def _single_points(found: list[Fallback]) -> str:
 
 def fallback_table(config: Configuration, found: list[Fallback], rank: int = 1) -> str:
     """The report on ``config`` (of ``rank``) as a table, then the single points of failure."""
-    from rich.table import Table  # loaded for tables only (issue 32: start-up)
+    from rich.table import Table  # loaded for tables only (start-up)
 
     title = f"Fallbacks of rank {rank} (cost {fmt(config.cost)}): if one resource fails"
     table = Table(title=title)

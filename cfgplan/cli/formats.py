@@ -22,7 +22,7 @@ from cfgplan.notation import call_text
 from cfgplan.planner import Run
 from cfgplan.problem import Problem
 
-if TYPE_CHECKING:  # rich is loaded for tables only (issue 32: start-up)
+if TYPE_CHECKING:  # rich is loaded for tables only (start-up)
     from rich.table import Table
 
 __all__ = ["jsonl", "lisp", "more_note", "plain", "stats", "streamed", "summary", "table"]
@@ -65,7 +65,7 @@ def plain(shown: Table, width: int) -> str:
     """A rich table as text ``width`` columns wide, without colour or styles;
     every cell and the title as written, neither rich markup nor emoji codes
     read in them (a name ``[b]x`` or ``x:smile:`` prints as itself), which
-    also spares loading rich's table of emoji (issue 32: start-up)."""
+    also spares loading rich's table of emoji (start-up)."""
     from rich.console import Console
 
     buffer = io.StringIO()
@@ -85,7 +85,7 @@ def table(
 ) -> str:
     """The table for people: names with control characters escaped (a name
     holding ESC cannot drive the terminal)."""
-    from rich.table import Table  # loaded for tables only (issue 32: start-up)
+    from rich.table import Table  # loaded for tables only (start-up)
 
     shown = Table(title=printable(f"Configurations for {call_text(problem.goal_call)}"))
     shown.add_column("rank", justify="right")

@@ -22,7 +22,7 @@ from typing import Annotated
 
 import typer
 
-from cfgplan.cli.app import app, usage_error
+from cfgplan.cli.app import usage_error
 from cfgplan.cli.options import count_of, load_problem
 from cfgplan.cli.root import Command, Group
 from cfgplan.diagnostics import printable, run_error
@@ -34,11 +34,13 @@ keys_app = typer.Typer(
     no_args_is_help=True,
     help="Make a society's keys: TLS with mutual authentication for its robots; renew one "
     "robot's key.",
+    short_help="Make or renew a society's keys for TLS with mutual authentication.",
     context_settings={"help_option_names": ["-h", "--help"]},
+    add_completion=False,  # as the root's subcommand: completion is the root's
+    rich_markup_mode=None,
+    pretty_exceptions_enable=False,
 )
-app.add_typer(
-    keys_app, short_help="Make or renew a society's keys for TLS with mutual authentication."
-)
+"""``cfgplan keys``: the root group loads it by name (:data:`cfgplan.cli.registry.COMMANDS`)."""
 
 DEFAULT_DAYS = 730
 

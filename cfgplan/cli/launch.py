@@ -1,4 +1,4 @@
-"""``cfgplan launch DOMAIN STATE --impl IMPL``: a whole society in one command (issue 36).
+"""``cfgplan launch DOMAIN STATE --impl IMPL``: a whole society in one command.
 
 Every robot and device of the state (with ``--no-reconfigure``: of the
 configuration) runs its own ``cfgplan run --robot NAME`` process on this
@@ -18,7 +18,8 @@ from typing import Annotated, Any
 
 import typer
 
-from cfgplan.cli.app import app, usage_error
+from cfgplan.cli import registry
+from cfgplan.cli.app import usage_error
 from cfgplan.cli.options import (
     DomainArg,
     GoalsOpt,
@@ -101,7 +102,7 @@ def trace_of(path: str, robot: str) -> str:
     return str(p.with_name(f"{p.stem}-{name}{p.suffix}"))
 
 
-@app.command(short_help="Start a whole society here, one process per robot (5.2.2).")
+@registry.command(short_help="Start a whole society here, one process per robot (5.2.2).")
 def launch(
     domain: DomainArg,
     state: StateArg,

@@ -263,7 +263,7 @@ def no_rank(what: str, found: int, rank: int, kind: str = "configuration") -> No
 
 def nothing(report_: Report, goal: str) -> NoReturn:
     """No admissible configuration: why, on stderr; exit 3."""
-    from cfgplan.planner.explain import explain  # only when nothing is found (issue 32)
+    from cfgplan.planner.explain import explain  # only when nothing is found
 
     say("\n".join(explain(report_, goal)))
     raise typer.Exit(EXIT_NONE)

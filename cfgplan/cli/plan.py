@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, NamedTuple, NoReturn
 import typer
 
 from cfgplan.cli import formats
-from cfgplan.cli.app import EXIT_NONE, app, say, usage_error, write_output
+from cfgplan.cli.app import EXIT_NONE, say, usage_error, write_output
 from cfgplan.cli.options import (
     DomainArg,
     ForceOpt,
@@ -30,6 +30,7 @@ from cfgplan.cli.options import (
     number_of,
     rank_option,
 )
+from cfgplan.cli.registry import command
 from cfgplan.configuration.describe import to_json
 from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
@@ -37,10 +38,10 @@ from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
 from cfgplan.problem import Problem
 
-if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (issue 32: start-up)
+if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-up)
     from cfgplan.reconfigure.fallbacks import Fallback
 
-# Loaded only when needed (issue 32: start-up): cfgplan.cli.sequence for several
+# Loaded only when needed (start-up): cfgplan.cli.sequence for several
 # goals, cfgplan.cli.fallbacks for --fallbacks, cfgplan.planner.explain when
 # nothing is found.
 
@@ -103,7 +104,7 @@ def _nothing(
 
 class _Asked(NamedTuple):
     """What to print, once the configurations are found (a named tuple: a
-    frozen dataclass takes about four times as long to define, issue 32)."""
+    frozen dataclass takes about four times as long to define)."""
 
     format: str
     details: bool
@@ -161,7 +162,7 @@ def _print(
     write_output(text, asked.output, asked.force)
 
 
-@app.command(short_help="Plan ranked admissible configurations (4.5), or sequences of them.")
+@command(short_help="Plan ranked admissible configurations (4.5), or sequences of them.")
 def plan(
     domain: DomainArg,
     state: StateArg,

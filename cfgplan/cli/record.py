@@ -17,8 +17,9 @@ from typing import Annotated
 
 import typer
 
-from cfgplan.cli.app import app, say
+from cfgplan.cli.app import say
 from cfgplan.cli.options import ForceOpt
+from cfgplan.cli.registry import command
 from cfgplan.diagnostics import error, run_error
 from cfgplan.files import check_target, write_file
 from cfgplan.runtime.errors import RunError
@@ -44,7 +45,7 @@ def load_exporter() -> ModuleType:
     return mcap_export
 
 
-@app.command(short_help="Turn a run's trace into an MCAP file that Foxglove opens.")
+@command(short_help="Turn a run's trace into an MCAP file that Foxglove opens.")
 def record(
     trace: Annotated[
         Path,

@@ -15,7 +15,7 @@ import typer
 from cfgplan.backends.dot import configuration_dot
 from cfgplan.backends.dot_hierarchy import hierarchy_dot
 from cfgplan.backends.render import render as render_dot
-from cfgplan.cli.app import EXIT_INPUT, app, report, usage_error
+from cfgplan.cli.app import EXIT_INPUT, report, usage_error
 from cfgplan.cli.options import (
     DomainArg,
     ForceOpt,
@@ -26,6 +26,7 @@ from cfgplan.cli.options import (
     load_problem,
     rank_option,
 )
+from cfgplan.cli.registry import command
 from cfgplan.configuration.cost import fmt
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.files import check_target, write_file
@@ -61,7 +62,7 @@ def configuration_source(problem: Problem, rank: int) -> str:
     return configuration_dot(config, title=title, first=problem.goal_call[1:])
 
 
-@app.command(short_help="Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).")
+@command(short_help="Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).")
 def render(
     domain: DomainArg,
     state: StateArg,

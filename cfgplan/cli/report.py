@@ -1,7 +1,10 @@
-"""``cfgplan report RUN -o DIR``: the pictures and one HTML page of any run.
+"""``cfgplan report RUN [-o DIR]``: the pictures and one HTML page of any run.
 
 RUN is what ``cfgplan run --trace`` or ``cfgplan simulate`` wrote (a trace,
-several robots' traces, a simulation's folder) or an MCAP recording. The
+several robots' traces, a simulation's folder) or an MCAP recording. DIR is by
+default beside the run (:func:`default_folder`): ``run.jsonl`` is drawn in
+``run-report/``, a simulation's folder ``out/cross-door`` in
+``out/cross-door/report/``. The
 work is :mod:`cfgplan.report` (matplotlib, from the ``sim`` extra; ``mcap``
 for recordings), imported only as the command runs.
 
@@ -18,8 +21,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from cfgplan.cli.app import EXIT_INPUT, app, say
+from cfgplan.cli.app import EXIT_INPUT, say
 from cfgplan.cli.app import report as report_diagnostics
+from cfgplan.cli.registry import command
 from cfgplan.diagnostics import CfgplanError, error, run_error
 from cfgplan.runtime.errors import RunError
 
@@ -59,6 +63,17 @@ def _prepare(folder: Path, force: bool) -> None:
         raise error(f"cannot write in {folder}: {exc.strerror}") from None
 
 
+def default_folder(run: list[Path]) -> Path:
+    """Where a report goes without ``-o``: for a folder (a simulation's), its
+    ``report`` sub-folder; for a file, ``NAME-report`` beside the first one
+    (``logs/run.jsonl``: ``logs/run-report``), so that a report never lands in
+    whatever folder the command happened to be typed in."""
+    first = run[0]
+    if first.is_dir():
+        return first / "report"
+    return first.with_name(f"{first.stem or first.name}-report")
+
+
 def _make(run: list[Path], out: Path, replay: bool, force: bool) -> Made:
     _need_matplotlib()
     from cfgplan.report.make import ReportOptions, make_report
@@ -72,7 +87,7 @@ def _make(run: list[Path], out: Path, replay: bool, force: bool) -> Made:
         raise error(f"cannot write in {out}: {exc.strerror}") from None
 
 
-@app.command(short_help="Draw any run (a trace or an MCAP recording): pictures and a page.")
+@command(short_help="Draw any run (a trace or an MCAP recording): pictures and a page.")
 def report(
     run: Annotated[
         list[Path],
@@ -84,9 +99,16 @@ def report(
         ),
     ],
     out: Annotated[
-        Path,
-        typer.Option("--out", "-o", metavar="DIR", help="Folder for the pictures and report.html."),
-    ],
+        Path | None,
+        typer.Option(
+            "--out",
+            "-o",
+            metavar="DIR",
+            help="Folder for the pictures and report.html  [default: RUN-report beside a "
+            "trace or a recording, RUN/report for a simulation's folder]",
+            show_default=False,
+        ),
+    ] = None,
     replay: Annotated[
         bool,
         typer.Option(
@@ -106,6 +128,7 @@ def report(
     Exit codes: 0 written, 1 a file that cannot be read or is not a trace or a
     recording, or DIR holding a report without --force; 2 usage.
     """
+    out = default_folder(run) if out is None else out
     try:
         made = _make(run, out, replay, force)
     except CfgplanError as exc:

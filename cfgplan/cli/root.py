@@ -3,8 +3,12 @@ class every subcommand uses, and the ``--version`` option.
 
 Importing this module loads typer (and with it click); :mod:`cfgplan.cli.app`
 imports it only when a command runs, so that ``cfgplan --version`` and the
-top-level ``--help`` answer without it (:mod:`cfgplan.cli.help_text`). Each
-command module adds its command here (``@app.command``).
+top-level ``--help`` answer without it (:mod:`cfgplan.cli.help_text`). The
+root group finds its commands in the one map of them,
+:data:`cfgplan.cli.registry.COMMANDS`, and imports a command's module only
+when it is asked for that command (click's lazily loaded subcommands): no
+command module registers itself, and this module imports none of them, nor
+:mod:`cfgplan.cli.app`.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from typing import Annotated, Any, TypeVar
 import typer
 from typer.core import TyperCommand, TyperGroup
 
-from cfgplan.cli.app import version_line
+from cfgplan.cli.registry import COMMANDS, SETTINGS, load, version_line
 
 HELP_WIDTH = 80
 """The terminal width the top-level help is rendered at for the fast path:
@@ -35,13 +39,49 @@ class Command(TyperCommand):
 
 
 class Group(TyperGroup):
-    """The root command: its help lists the commands by name, not in the order
-    their modules happened to be imported (a test, or a future command module
-    importing another, would reorder typer's list), so the help is the same in
-    every process and matches the pre-rendered :mod:`cfgplan.cli.help_text`."""
+    """A group of commands whose help lists them by name, not in the order
+    they were registered, so that the help is the same in every process and
+    matches the pre-rendered :mod:`cfgplan.cli.help_text` (``keys`` is one)."""
 
     def list_commands(self, ctx: Any) -> list[str]:
         return sorted(self.commands)
+
+
+class Root(Group):
+    """The root command: its commands are those of the one map of them
+    (:data:`~cfgplan.cli.registry.COMMANDS`), each loaded when it is first
+    asked for (click's lazily loaded subcommands)."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        return sorted({*COMMANDS, *self.commands})
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        found = self.commands.get(cmd_name)
+        if found is None and cmd_name in COMMANDS:
+            found = self.commands[cmd_name] = _click_command(cmd_name)
+        return found
+
+    def resolve_command(self, ctx: Any, args: list[str]) -> Any:
+        """As typer's; a name that is no command's first loads every command,
+        so that typer's "Did you mean" is drawn from them all."""
+        if args and args[0] not in COMMANDS and args[0] not in self.commands:
+            for name in COMMANDS:
+                self.get_command(ctx, name)
+        return super().resolve_command(ctx, args)
+
+
+def _click_command(name: str) -> Any:
+    """The click command of ``name``: its function, marked with
+    :func:`~cfgplan.cli.registry.command`, made a typer command; or its
+    typer app of subcommands."""
+    target = load(name)
+    if isinstance(target, typer.Typer):
+        return typer.main.get_command(target)
+    if not callable(target) or not hasattr(target, SETTINGS):
+        raise TypeError(f"{COMMANDS[name]} is not marked with cfgplan.cli.registry.command")
+    one = _Typer(add_completion=False, pretty_exceptions_enable=False, rich_markup_mode=None)
+    one.command(name=name, **getattr(target, SETTINGS))(target)
+    return typer.main.get_command(one)
 
 
 _F = TypeVar("_F", bound=Callable[..., Any])
@@ -57,7 +97,7 @@ class _Typer(typer.Typer):
 
 app = _Typer(
     name="cfgplan",
-    cls=Group,
+    cls=Root,
     help="Plan-based configuration of robot societies (R. Lundh, 2006).",
     no_args_is_help=True,
     add_completion=True,
@@ -89,10 +129,8 @@ def _options(
 def render_help(columns: int = HELP_WIDTH) -> str:
     """The top-level help as typer prints it on a terminal ``columns`` wide
     (click reads the width as :func:`shutil.get_terminal_size` does, ``COLUMNS``
-    first), every command registered (it imports them all), with its line break."""
+    first), with its line break; listing the commands loads them all."""
     from unittest import mock
-
-    import cfgplan.cli.commands  # noqa: F401  (registers every command)
 
     group = typer.main.get_command(app)
     with (
@@ -117,7 +155,7 @@ def write_help_module() -> str:
     )
 
 
-if __name__ == "__main__":  # run as a script: the commands register on cfgplan.cli.root.app
+if __name__ == "__main__":  # run as a script: rewrite help_text.py
     from pathlib import Path
 
     from cfgplan.cli import root

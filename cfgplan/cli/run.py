@@ -25,7 +25,7 @@ import typer
 
 from cfgplan.backends.part import runtime_part
 from cfgplan.backends.wiring import deploy
-from cfgplan.cli.app import app, usage_error
+from cfgplan.cli.app import usage_error
 from cfgplan.cli.emit import title
 from cfgplan.cli.options import (
     DomainArg,
@@ -41,6 +41,7 @@ from cfgplan.cli.options import (
     number_of,
     parsed,
 )
+from cfgplan.cli.registry import command
 from cfgplan.cli.sequence import first_step
 from cfgplan.diagnostics import did_you_mean, run_error
 from cfgplan.live.address import Address, parse_address
@@ -93,7 +94,7 @@ def option(spec: Option[Any]) -> Any:
     )
 
 
-@app.command(short_help="Run a configuration: all robots here, or one on the network (5.2).")
+@command(short_help="Run a configuration: all robots here, or one on the network (5.2).")
 def run(
     domain: DomainArg,
     state: StateArg,
@@ -276,7 +277,7 @@ def run(
             usage_error("says how --ros2 and --ros2-map speak ROS 2: give one of them", flag)
     problem = load_problem(domain, state, goal, weights, sequence=True, lasting=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
-    parts = [runtime_part(p) for p in deploy(config, problem.domain)]
+    parts = [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
     options = RunOptions(
         rate=rate,
         cycles=cycles,

@@ -26,7 +26,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.notation import call_text
 from cfgplan.problem import Problem
 
-if TYPE_CHECKING:  # loaded by the two functions that search (issue 32: start-up)
+if TYPE_CHECKING:  # loaded by the two functions that search (start-up)
     from cfgplan.planner.sequence import PlannedSequence, SequenceSearch
 
 
@@ -106,7 +106,7 @@ def first_step(problem: Problem, rank: int) -> Configuration:
 
 def _impossible(problem: Problem, search: SequenceSearch) -> None:
     """Say which step has no admissible configuration, and why."""
-    from cfgplan.planner.explain import explain  # only when nothing is found (issue 32)
+    from cfgplan.planner.explain import explain  # only when nothing is found
 
     blocked = search.blocked()
     if blocked is None:
@@ -176,7 +176,7 @@ def _lisp(problem: Problem, found: list[PlannedSequence], first: int) -> str:
 
 
 def _table(problem: Problem, found: list[PlannedSequence], details: bool, first: int) -> str:
-    from rich.table import Table  # loaded for tables only (issue 32: start-up)
+    from rich.table import Table  # loaded for tables only (start-up)
 
     table = Table(title=f"Sequences for {_goals(problem)}")
     table.add_column("rank", justify="right")

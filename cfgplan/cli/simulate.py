@@ -22,8 +22,9 @@ from typing import Annotated, TextIO, cast
 
 import typer
 
-from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, app, report
+from cfgplan.cli.app import EXIT_INPUT, EXIT_NONE, report
 from cfgplan.cli.options import count_of, number_of
+from cfgplan.cli.registry import command
 from cfgplan.diagnostics import CfgplanError, error, run_error
 from cfgplan.runtime.options import RECORD, RECORD_MAX_BYTES
 
@@ -42,7 +43,7 @@ def _need_extra() -> None:
             ) from None
 
 
-@app.command(short_help="Run a thesis experiment in the 2-D simulator (chapter 6).")
+@command(short_help="Run a thesis experiment in the 2-D simulator (chapter 6).")
 def simulate(
     experiment: Annotated[
         Path,

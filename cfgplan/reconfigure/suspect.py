@@ -12,7 +12,7 @@ upstream's ``fresh`` and its own may arrive in two messages, and between
 them it must not look failed). :class:`Suspicions` keeps them for the
 :class:`~cfgplan.reconfigure.coordinate.Coordinator`.
 
-**Blame what failed** (5.5, issue 33): a functionality is suspected only on
+**Blame what failed** (5.5): a functionality is suspected only on
 evidence about *it*. When every channel from one robot into another is stale
 at once, nothing tells a silent computation from a silent robot or a link
 that stalls (a lost packet is retransmitted after 200 ms or more: at 10 %

@@ -1,6 +1,7 @@
-"""What a helper may say to the coordinator in its own name (5.5; issue 34's
-threat model): the rule the coordinator applies to every report
-(:mod:`cfgplan.reconfigure.network`), whoever holds the helper's key."""
+"""What a helper may say to the coordinator in its own name (5.5; the threat
+model of a secured society, docs/how-to/secure-a-society.md): the rule the
+coordinator applies to every report (:mod:`cfgplan.reconfigure.network`),
+whoever holds the helper's key."""
 
 from __future__ import annotations
 

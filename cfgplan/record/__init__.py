@@ -1,4 +1,4 @@
-"""Recordings of a run, and the run served to Foxglove live (issue 37).
+"""Recordings of a run, and the run served to Foxglove live.
 
 * :mod:`~cfgplan.record.channels` — the one definition of the topics, JSON
   Schemas and message times that every writer below uses;

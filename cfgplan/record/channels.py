@@ -1,4 +1,4 @@
-"""The channels and schemas of a recorded or served run: one definition (issue 37).
+"""The channels and schemas of a recorded or served run: one definition.
 
 A trace line (:mod:`cfgplan.runtime.schema`) is one message, its JSON bytes as
 they are (message encoding ``json``), on the topic of its kind of event

@@ -1,4 +1,4 @@
-"""``cfgplan run ... --foxglove [HOST:]PORT``: the run served to Foxglove live (issue 37).
+"""``cfgplan run ... --foxglove [HOST:]PORT``: the run served to Foxglove live.
 
 The foxglove-sdk's WebSocket server (``foxglove.start_server``, the Foxglove
 WebSocket protocol) on its own context, so that nothing else this process

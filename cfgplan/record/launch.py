@@ -1,4 +1,4 @@
-"""``--record FILE.mcap`` and ``--foxglove [HOST:]PORT`` beside a run (issue 37).
+"""``--record FILE.mcap`` and ``--foxglove [HOST:]PORT`` beside a run.
 
 The command line calls these; each imports its package (``mcap``, or
 ``foxglove-sdk``) only when its option is given, and says which extra to

@@ -1,4 +1,4 @@
-"""``--record FILE.mcap``: a run written to MCAP as it happens (issue 37).
+"""``--record FILE.mcap``: a run written to MCAP as it happens.
 
 A :class:`LiveRecorder` is a listener of the society (``Society.subscribe``)
 on ``cfgplan run``, or the other end of a simulation's trace (:class:`Tee`,

@@ -1,4 +1,4 @@
-"""A run's trace as an MCAP file: what Foxglove opens (issue 37).
+"""A run's trace as an MCAP file: what Foxglove opens.
 
 The trace of ``cfgplan run --trace FILE`` (or a robot program's, or a
 simulation's ``trace.jsonl``) is one JSON object per event

@@ -1,4 +1,4 @@
-"""How ``--record FILE.mcap`` writes: how often, how much (issue 37).
+"""How ``--record FILE.mcap`` writes: how often, how much.
 
 Light: no ``mcap`` here, so the command line can say the defaults without
 loading the recorder. The policy, documented in "Record a run for Foxglove":

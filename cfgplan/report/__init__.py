@@ -1,4 +1,4 @@
-"""Reports of any run (issue 37): ``cfgplan report RUN -o DIR``.
+"""Reports of any run: ``cfgplan report RUN [-o DIR]``.
 
 RUN is an MCAP recording or JSON-lines traces, of ``cfgplan run`` or
 ``cfgplan simulate``. One module a part:

@@ -1,4 +1,4 @@
-"""The whole report of a run, picture by picture (``cfgplan report RUN -o DIR``).
+"""The whole report of a run, picture by picture (``cfgplan report RUN [-o DIR]``).
 
 DIR receives ``timeline.png`` and ``configuration-N.png`` for every run;
 ``trajectories.png`` (and ``bar.png`` with a bar) when the run is a

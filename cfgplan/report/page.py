@@ -16,8 +16,7 @@ import html
 import re
 from dataclasses import dataclass
 
-from cfgplan.configuration.cost import fmt
-from cfgplan.report.story import Story, role
+from cfgplan.report.story import Story, cost_text, role
 
 __all__ = ["Figure", "inline_svg", "page"]
 
@@ -104,7 +103,7 @@ def _configurations(story: Story) -> str:
         times = ", ".join(f"{s.start:g}–{s.end:g} s" for s in story.spans if s.number == number)
         rows.append(
             f'<tr><td><a href="#configuration-{number}">#{number}</a></td>'
-            f"<td>{fmt(span.config.cost)}</td><td>{html.escape(span.goal)}</td>"
+            f"<td>{cost_text(span.config)}</td><td>{html.escape(span.goal)}</td>"
             f"<td>{html.escape(times)}</td><td>{html.escape(roles)}</td></tr>"
         )
     head = "<tr><th>#</th><th>cost</th><th>goal</th><th>ran</th><th>robots</th></tr>"

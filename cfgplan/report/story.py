@@ -20,14 +20,26 @@ another's inputs) and its sends (the global channels).
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Channel, Configuration, FunctionalityInstance
 
-__all__ = ["Mark", "Span", "Step", "Story", "configuration_of", "from_records", "owner", "role"]
+__all__ = [
+    "Mark",
+    "Span",
+    "Step",
+    "Story",
+    "configuration_of",
+    "cost_text",
+    "from_records",
+    "owner",
+    "role",
+]
 
 Record = dict[str, Any]
 
@@ -202,8 +214,35 @@ def _from_calls(records: Sequence[Record], until: float) -> Configuration | None
     return configuration_of(fs.values(), channels)
 
 
+UNKNOWN = math.nan
+"""The cost of a configuration the trace does not give (a trace of emitted
+programs, which do not know their configuration's cost): shown as ``?``."""
+
+
 def _cost(value: object) -> float:
-    return float(value) if isinstance(value, int | float) else 0.0
+    return float(value) if isinstance(value, int | float) else UNKNOWN
+
+
+def cost_text(config: Configuration) -> str:
+    """A span's cost as the report writes it: ``44``, or ``?`` when the trace
+    does not give it (never a made-up 0)."""
+    return "?" if math.isnan(config.cost) else fmt(config.cost)
+
+
+def _first_cost(records: Sequence[Record], switches: Sequence[Record]) -> float:
+    """The cost of the configuration a run started with: the first switch's
+    ``from_cost``, else the ``cost`` its robots' ``start`` events record."""
+    if switches and switches[0].get("from_cost") is not None:
+        return _cost(switches[0].get("from_cost"))
+    until = float(switches[0]["t"]) if switches else math.inf
+    costs = [
+        float(r["cost"])
+        for r in records
+        if r.get("event") == "start"
+        and float(r.get("t", 0)) <= until
+        and isinstance(r.get("cost"), int | float)
+    ]
+    return costs[0] if costs else UNKNOWN
 
 
 def from_records(
@@ -239,15 +278,13 @@ def from_records(
         goal = steps_goals[0]
     start = 0.0
     current: Configuration | None = None
-    cost: float = 0.0
+    cost = _first_cost(records, switches)
     if switches and isinstance(switches[0].get("kept"), dict):
         current = configuration_of(*_parts(switches[0], "kept", "stopped"))
     elif switches and switches[0].get("from_cost") is not None:
         current = _from_calls(records, float(switches[0]["t"]))
     elif not switches:
         current = _from_calls(records, float("inf"))
-    if switches:
-        cost = _cost(switches[0].get("from_cost"))
 
     def close(until: float) -> None:
         if current is None:

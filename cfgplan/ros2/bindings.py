@@ -1,4 +1,4 @@
-"""Functionalities whose inputs or outputs are ROS 2 topics, over rmw_zenoh (issue 36).
+"""Functionalities whose inputs or outputs are ROS 2 topics, over rmw_zenoh.
 
 :class:`TopicBindings` puts the bindings of a map (:mod:`cfgplan.ros2.topics`)
 that apply on one robot on that robot's Zenoh session, as one ROS 2 node,

@@ -1,4 +1,4 @@
-"""A robot's reconfiguration events as the ROS 2 topic ``/cfgplan/events`` (issue 36).
+"""A robot's reconfiguration events as the ROS 2 topic ``/cfgplan/events``.
 
 ``cfgplan run ... --robot NAME --ros2`` makes the robot's Zenoh session a ROS
 2 node for rmw_zenoh (:mod:`cfgplan.ros2.rmw_zenoh`): it declares the node's

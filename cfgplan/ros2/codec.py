@@ -1,4 +1,4 @@
-"""ROS 2 messages as plain values: CDR bytes to a dict and back (issue 36).
+"""ROS 2 messages as plain values: CDR bytes to a dict and back.
 
 A functionality bound to a ROS 2 topic (:mod:`cfgplan.ros2.topics`) sees a
 message as the value of one of its inputs or outputs: a dict of the

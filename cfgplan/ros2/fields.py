@@ -1,4 +1,4 @@
-"""Ports to message fields and back: one ROS 2 message carrying several ports (issue 36).
+"""Ports to message fields and back: one ROS 2 message carrying several ports.
 
 A ``[[bind]]`` of the topic map (:mod:`cfgplan.ros2.topics`) may bind several
 ports of one functionality to one message, each to a field of it::

@@ -1,4 +1,4 @@
-"""The ROS 2 topic map: which functionality input or output is which topic (issue 36).
+"""The ROS 2 topic map: which functionality input or output is which topic.
 
 ``cfgplan run ... --robot NAME --ros2-map FILE`` reads a TOML file of
 ``[[bind]]`` tables, each binding one port of one functionality of the domain

@@ -32,9 +32,9 @@ from cfgplan.runtime.events import (
     Staleness,
     Transfer,
 )
-from cfgplan.runtime.executor import Configure, Cycle, Listener, Robot, build
+from cfgplan.runtime.executor import Configure, Cycle, Listener, Robot
 from cfgplan.runtime.faults import ACHIEVED, ResourceFailure
-from cfgplan.runtime.install import Installed, install
+from cfgplan.runtime.install import Installed, build, install
 from cfgplan.runtime.launch import RunOptions, execute
 from cfgplan.runtime.main import robot_main, society_main
 from cfgplan.runtime.part import CallSpec, ChannelSpec, Part

@@ -49,7 +49,6 @@ __all__ = [
     "Cycle",
     "Listener",
     "Robot",
-    "build",
     "wired",
 ]
 
@@ -80,8 +79,11 @@ class Robot:
         *,
         clock: Callable[[], float] = time.monotonic,
         keep: int = EVENTS_KEPT,
+        cost: float | None = None,
     ) -> None:
         self.name = name
+        self.cost = cost
+        """The cost of the configuration it starts with, if known (its ``start`` event says it)."""
         self.registry = registry
         self.transport: Transport = transport if transport is not None else InProcessTransport()
         self.clock = clock
@@ -211,6 +213,7 @@ class Robot:
                     ("transport", type(self.transport).__name__),
                     ("partners", self.partners),
                     ("rate", rate),
+                    *(() if self.cost is None else (("cost", self.cost),)),
                 ),
             )
         )
@@ -334,22 +337,6 @@ class Robot:
 
 Configure = Callable[[Robot], Cycle]
 """What emitted code provides: create a robot's channels and wrappers, return its cycle."""
-
-
-def build(
-    part: Part,
-    registry: Registry,
-    transport: Transport | None = None,
-    *,
-    clock: Callable[[], float] = time.monotonic,
-) -> Robot:
-    """A robot configured from its part of a configuration (the same as its
-    emitted module), on ``clock``."""
-    from cfgplan.runtime.install import install
-
-    robot = Robot(part.robot, registry, transport, clock=clock)
-    install(robot, part)
-    return robot
 
 
 def wired(robot: Robot, part: Part, channels: Sequence[Channel]) -> Cycle:

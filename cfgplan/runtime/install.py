@@ -27,14 +27,18 @@ already runs changes nothing; installing an empty part stops everything
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from cfgplan.notation import instance_text
 from cfgplan.runtime.channel import Channel
 from cfgplan.runtime.executor import Robot, wired
 from cfgplan.runtime.part import ChannelSpec, Part
+from cfgplan.runtime.registry import Registry
+from cfgplan.runtime.transport import Transport
 
-__all__ = ["Installed", "crash", "install"]
+__all__ = ["Installed", "build", "crash", "install"]
 
 ChannelIdentity = tuple[str, str, str, tuple[str, ...], str | None]
 
@@ -95,6 +99,22 @@ def runnable(robot: Robot, part: Part) -> None:
             len(call.objects),
             len(call.inputs),
         )
+
+
+def build(
+    part: Part,
+    registry: Registry,
+    transport: Transport | None = None,
+    *,
+    clock: Callable[[], float] = time.monotonic,
+) -> Robot:
+    """A robot configured from its part of a configuration (the same as its
+    emitted module), on ``clock``: a new robot, its part installed. Here, not
+    in :mod:`cfgplan.runtime.executor`, which knows nothing of installing: the
+    robot is the lower layer, installing (and switching) is built on it."""
+    robot = Robot(part.robot, registry, transport, clock=clock, cost=part.cost)
+    install(robot, part)
+    return robot
 
 
 def install(robot: Robot, part: Part) -> Installed:

@@ -26,8 +26,7 @@ any other character becomes ``%XX`` per UTF-8 byte (so ``/``, ``*``, ``$``,
 
 from __future__ import annotations
 
-import re
-
+from cfgplan.key_chunks import PREFIX, chunk, unchunk
 from cfgplan.runtime.transport import ChannelKey
 
 __all__ = [
@@ -49,27 +48,6 @@ __all__ = [
     "robot_of_alive",
     "unchunk",
 ]
-
-PREFIX = "cfgplan"
-_SAFE = re.compile(r"[A-Za-z0-9_.\-+=,:~]")
-_ESCAPED = re.compile(r"(?:%[0-9A-F]{2})+")
-
-
-def chunk(text: str) -> str:
-    """One key chunk for ``text``: percent-encoded, never empty."""
-    if not text:
-        return "%"  # not a valid escape, so it cannot be confused with a name
-    return "".join(
-        c if _SAFE.fullmatch(c) else "".join(f"%{b:02X}" for b in c.encode()) for c in text
-    )
-
-
-def unchunk(part: str) -> str:
-    """The text a chunk stands for (the inverse of :func:`chunk`);
-    ``UnicodeDecodeError`` when its escapes are not UTF-8 (``%FF``)."""
-    if part == "%":
-        return ""
-    return _ESCAPED.sub(lambda m: bytes.fromhex(m.group(0).replace("%", "")).decode(), part)
 
 
 def channel_key(society: str, robot: str, key: ChannelKey, sender: str) -> str:

@@ -13,6 +13,7 @@ Light, like the rest of :mod:`cfgplan.runtime`: no typer, no pydantic.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
@@ -35,6 +36,7 @@ __all__ = [
     "IMPL",
     "INJECT",
     "KEYS",
+    "LAUNCHED",
     "LEASE",
     "LISTEN",
     "MAX_VALUE_BYTES",
@@ -56,6 +58,7 @@ __all__ = [
     "endpoint",
     "how_long",
     "injection",
+    "launched",
     "number",
     "whole",
 ]
@@ -291,12 +294,29 @@ NETWORK_OPTIONS: tuple[Option[Any], ...] = (
 """A robot on the network: ``cfgplan run --robot`` and a robot's module."""
 
 
-def how_long(cycles: int, duration: float | None) -> str:
+LAUNCHED = "CFGPLAN_LAUNCHED"
+"""The environment variable ``cfgplan launch`` sets for the robots it starts
+(:mod:`cfgplan.runtime.spawn`): they run in a session of their own, so Ctrl-C
+reaches the launch, not them, and the launch stops them."""
+
+
+def launched() -> bool:
+    """Whether this process is a robot ``cfgplan launch`` started."""
+    return os.environ.get(LAUNCHED) == "1"
+
+
+def how_long(cycles: int, duration: float | None, *, by_launch: bool | None = None) -> str:
     """``3 cycle(s)``, ``2.5 s``, or ``until interrupted (Ctrl-C)``: what a run
-    says when it starts."""
+    says when it starts. A robot ``cfgplan launch`` started (``by_launch``; by
+    default :func:`launched`) does not take Ctrl-C: it runs until the launch
+    stops it."""
     limits = []
     if cycles:
         limits.append(f"{cycles} cycle(s)")
     if duration is not None:
         limits.append(f"{duration:g} s")
-    return " or ".join(limits) if limits else "until interrupted (Ctrl-C)"
+    if limits:
+        return " or ".join(limits)
+    if launched() if by_launch is None else by_launch:
+        return "until the launch stops it"
+    return "until interrupted (Ctrl-C)"

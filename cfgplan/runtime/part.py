@@ -50,6 +50,11 @@ class Part:
     robot: str
     channels: tuple[ChannelSpec, ...]
     calls: tuple[CallSpec, ...]
+    cost: float | None = None
+    """The cost of the configuration this part belongs to (3.5), when the one
+    who made the part knows it: recorded in the robot's ``start`` event, so
+    that a report of the run can name it (not sent with a part at a switch:
+    the ``switch`` event names the new cost)."""
 
 
 def part_to_json(part: Part) -> dict[str, Any]:

@@ -163,12 +163,8 @@ class Registry:
         """The implementation of ``name``; a clear error when there is none."""
         impl = self._by_name.get(name)
         if impl is None:
-            where = f" in {self.source}" if self.source else ""
-            have = ", ".join(self.names()) or "none"
-            raise RunError(
-                f"no implementation of functionality {name}{where} (implemented: {have})",
-                hint=f'declare one with @functionality("{name}") from cfgplan.runtime',
-            )
+            self.require([name])
+        assert impl is not None  # require raised
         return impl
 
     @classmethod
@@ -201,11 +197,17 @@ class Registry:
         """Fail at once, naming every functionality without implementation."""
         missing = sorted({n for n in names if n not in self._by_name})
         if missing:
+            from cfgplan.diagnostics import did_you_mean  # light: no pydantic, no planner
+
             where = f" in {self.source}" if self.source else ""
+            hint = f'declare one with @functionality("{missing[0]}") from cfgplan.runtime'
+            near = did_you_mean(missing[0], self.names())
+            if near is not None:  # localize for localise: the domain's spelling is the name
+                hint = f"{near} (the domain names it {missing[0]}: {hint})"
             raise RunError(
                 f"no implementation of functionalit{'y' if len(missing) == 1 else 'ies'} "
                 f"{', '.join(missing)}{where} (implemented: {', '.join(self.names()) or 'none'})",
-                hint=f'declare one with @functionality("{missing[0]}") from cfgplan.runtime',
+                hint=hint,
             )
 
 

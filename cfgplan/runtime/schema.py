@@ -137,6 +137,11 @@ class Start(Base):
     transport: str
     partners: list[str] = Field(description="The robots it exchanges data with.")
     rate: float
+    cost: Number | None = Field(
+        default=None,
+        description="The cost of the configuration it starts with (`cfgplan run`, "
+        "`cfgplan launch`, `cfgplan simulate`; not the emitted programs, which do not know it).",
+    )
 
 
 class Stop(Base):

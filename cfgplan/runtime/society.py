@@ -32,8 +32,8 @@ from cfgplan.runtime.executor import (
     Configure,
     Listener,
     Robot,
-    build,
 )
+from cfgplan.runtime.install import build
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.transport import InProcessTransport, Transport

@@ -1,4 +1,4 @@
-"""A whole society started on this machine, one process per robot (``cfgplan launch``, issue 36).
+"""A whole society started on this machine, one process per robot (``cfgplan launch``).
 
 Each robot (and device) of a state runs its own ``cfgplan run --robot NAME``
 process, as each ran on its own body in the thesis (5.2.2), here side by side
@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from typing import IO, Any, TextIO
 
 from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.options import LAUNCHED
 
 __all__ = [
     "STYLES",
@@ -267,7 +268,7 @@ class Launch:
                 stdin=subprocess.DEVNULL,
                 stdout=subprocess.PIPE,
                 stderr=subprocess.STDOUT,
-                env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                env={**os.environ, "PYTHONUNBUFFERED": "1", LAUNCHED: "1"},
                 start_new_session=True,  # Ctrl-C reaches the launch, which stops them in order
                 preexec_fn=self._death,
             )

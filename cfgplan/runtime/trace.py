@@ -246,8 +246,15 @@ def adaptation(event: Adaptation) -> str | None:
 
 def fault(event: Call, source: str) -> str:
     """A functionality's failure (stderr), tagged with what is to blame: the
-    implementations' file, or ``injected`` for a scripted fault (``--inject``)."""
-    return f"cfgplan: {describe(event)} [{'injected' if event.failure == 'injected' else source}]"
+    implementations' file, or ``injected`` for a scripted fault (``--inject``).
+    A failure whose place is already in that file (``(impl.py:11 in localise)``)
+    names it once: the tag would only repeat it."""
+    text = describe(event)
+    if event.failure == "injected":
+        return f"cfgplan: {text} [injected]"
+    if source and f"({source}:" in text:
+        return f"cfgplan: {text}"
+    return f"cfgplan: {text} [{source}]"
 
 
 def further_faults(event: Call) -> str:

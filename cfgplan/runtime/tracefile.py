@@ -10,7 +10,7 @@ followed while the robot runs (``tail -f``) and survives the process being
 killed. When writing fails later (a full disk), tracing stops, the robot
 goes on, and the failure is reported.
 
-Bounded (issue 33): a value whose JSON is longer than ``elide`` characters
+Bounded: a value whose JSON is longer than ``elide`` characters
 (:data:`ELIDE`, 4096) is recorded by its size and digest
 (:func:`~cfgplan.runtime.values.elide`, the rule the simulator's trace
 follows too), and the file is capped at ``max_bytes`` (:data:`MAX_BYTES`,

@@ -154,7 +154,7 @@ def envelope(sender: str, seq: int, t: float, period: float | None, encoded: str
 MAX_PERIOD = 60.0
 """The longest period (seconds) a message may claim for its sender: a
 staleness limit is a few periods, and a forged ``1e9`` would switch
-detection off (issue 34). A functionality slower than once a minute is not
+detection off. A functionality slower than once a minute is not
 what a configuration's channels are for."""
 
 

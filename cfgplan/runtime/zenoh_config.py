@@ -1,5 +1,5 @@
 """A robot's Zenoh session configuration: cfgplan's defaults, a file's, the
-command line's options (5.2.2; issue 33's timing, issue 34's keys).
+command line's options (5.2.2; the timing a bad network needs, the keys of a secured society).
 
 :func:`zenoh_config` builds it in layers: cfgplan's :data:`DEFAULTS` (peer
 mode, the connection retry, the lease, the time to open a link), then a
@@ -45,7 +45,7 @@ stall a link 1.4 s. With a 1 s lease that happened in one of three 30 s runs at
 10 % loss (the robot reported lost, the society stopped 0.4 s); with 2 s, four
 losses in a row are needed. A robot that dies is seen at once all the same
 (its connection closes); only a frozen robot or a cut link waits for the lease
-(issue 33; ``python -m benchmarks.faults``)."""
+(``python -m benchmarks.faults``)."""
 
 DEFAULT_SOCIETY = "default"
 RETRY = '{"period_init_ms": 250, "period_max_ms": 500, "period_increase_factor": 2}'
@@ -56,7 +56,7 @@ OPEN_TIMEOUT_MS = 1500
 """Milliseconds one attempt to open a link may take before it is given up and
 retried. Zenoh's default, 10 s, bounds the TCP connect as well, and a connect
 whose SYN was lost to a bad link waits for the kernel's resends (after 1 s, then
-2 s, 4 s, ...) however long ago the link came back (issue 33: 2.8 s to reconnect
+2 s, 4 s, ...) however long ago the link came back (2.8 s to reconnect
 after 50 % loss cleared). Given up after 1.5 s (past the first resend), and
 retried :data:`RETRY` 0.5 s later, an attempt goes out on the link at least
 every second. A link that needs longer to open (a TLS handshake over a link of

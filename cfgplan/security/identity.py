@@ -1,5 +1,5 @@
 """Which problem a robot runs: its fingerprint, so that two societies under one name refuse
-each other instead of mixing their values (issue 34).
+each other instead of mixing their values.
 
 A society's name (``--society``, ``default`` unless given) is all that keeps
 two societies on one network apart (:mod:`cfgplan.runtime.keys`); two teams
@@ -75,7 +75,7 @@ def clip_about(text: str) -> str:
     """``text`` printable and at most :data:`MAX_ABOUT` characters."""
     # Here, not at the top: the runtime imports this module as it starts, and
     # this module may be imported first (cfgplan emit).
-    from cfgplan.runtime.errors import printable
+    from cfgplan.run_errors import printable
 
     text = printable(text)
     return text if len(text) <= MAX_ABOUT else text[: MAX_ABOUT - 1] + "…"

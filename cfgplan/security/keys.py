@@ -45,8 +45,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.keys import chunk
+from cfgplan.key_chunks import chunk
+from cfgplan.run_errors import RunError
 from cfgplan.safe_names import file_stems
 
 __all__ = [

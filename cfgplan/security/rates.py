@@ -1,4 +1,4 @@
-"""Bounding the rate of what a robot receives: a token bucket per sender and channel (issue 34).
+"""Bounding the rate of what a robot receives: a token bucket per sender and channel.
 
 A robot's global channels hold one item (5.2.2): what it computes depends on
 the newest value each channel brought since its last cycle. A robot that
@@ -39,7 +39,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from cfgplan.runtime.errors import RunError
+from cfgplan.run_errors import RunError
 
 __all__ = ["Bucket", "Buckets", "RateLimits"]
 

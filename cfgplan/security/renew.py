@@ -30,7 +30,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from cfgplan.runtime.errors import RunError
+from cfgplan.run_errors import RunError
 from cfgplan.security.keys import (
     CA_STEM,
     MANIFEST,

@@ -67,8 +67,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.keys import PREFIX, chunk
+from cfgplan.key_chunks import PREFIX, chunk
+from cfgplan.run_errors import RunError
 from cfgplan.security.keys import CA_STEM, Member, SocietyKeys, read_society
 
 __all__ = [

@@ -16,10 +16,9 @@ from pathlib import Path
 
 from cfgplan.backends.dot import configuration_dot
 from cfgplan.backends.render import render
-from cfgplan.configuration.cost import fmt
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import call_text
-from cfgplan.report.story import Story
+from cfgplan.report.story import Story, cost_text
 from cfgplan.sim.record import Segment
 
 __all__ = ["diagram_source", "draw_configurations", "draw_story"]
@@ -30,7 +29,7 @@ _GOAL = re.compile(r"^[^()]+\((?P<args>.*)\)$")
 def diagram_source(config: Configuration, number: int, goal: str, start: float) -> str:
     """The DOT source of configuration ``number``, titled with its goal, cost and start."""
     what = goal or f"configuration {number}"
-    title = f"{what}: cost {fmt(config.cost)}, from {start:g} s"
+    title = f"{what}: cost {cost_text(config)}, from {start:g} s"
     found = _GOAL.match(goal)
     first = [a.strip() for a in found.group("args").split(",")] if found else []
     return configuration_dot(config, title=title, first=first)

@@ -291,7 +291,7 @@ def simulate(
     if config is None:
         return Run(loaded, problem, world, recorder, steps, "none", True, why)
     steps[0].started = 0.0
-    parts = [runtime_part(p) for p in deploy(config, problem.domain)]
+    parts = [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
     running = society(parts, registry, clock=world.clock, paced=False)
     running.subscribe(recorder)
     injections = tuple(parse_injection(f) for f in s.faults)

@@ -25,8 +25,7 @@ from typing import Any
 
 from matplotlib.figure import Figure
 
-from cfgplan.configuration.cost import fmt
-from cfgplan.report.story import Story, role
+from cfgplan.report.story import Story, cost_text, role
 from cfgplan.sim.drawing import CONFIG_COLOURS, Placer, figure, save, shades
 
 __all__ = ["draw_timeline", "timeline_figure"]
@@ -48,7 +47,7 @@ def _key(story: Story) -> list[str]:
     out = []
     for number, span in sorted(story.configurations().items()):
         roles = "; ".join(f"{r}: {role(span.config, r)}" for r in span.config.agents)
-        line = f"#{number}  cost {fmt(span.config.cost)}"
+        line = f"#{number}  cost {cost_text(span.config)}"
         line += f" ({span.goal})" if span.goal else ""
         out.append(textwrap.shorten(f"{line} — {roles}", 150))
     return out
@@ -120,7 +119,7 @@ def timeline_figure(story: Story) -> Figure:
                 edgecolor="#555555",
                 lw=0.8,
             )
-            cost = fmt(span.config.cost)
+            cost = cost_text(span.config)
             texts = [
                 f"#{span.number} · {cost} · {role(span.config, robot)}",
                 f"#{span.number} · {cost}",

@@ -12,7 +12,7 @@ import re
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple, TypeVar
 
-from cfgplan.diagnostics import error
+from cfgplan.diagnostics import CfgplanError, did_you_mean, error
 from cfgplan.ir.model import (
     MAX_WEIGHT,
     Atom,
@@ -74,6 +74,9 @@ def _options(
             continue
         if opt.keyword not in allowed:
             hint = f"{form} takes " + ", ".join(allowed)
+            near = did_you_mean(opt.keyword, allowed)
+            if near is not None:  # :ouput: did you mean :out? make-functionality takes ...
+                hint = f"{near} {hint}"
             if opt.keyword.lower() in allowed:
                 hint = f"keywords are case-sensitive: write {opt.keyword.lower()}"
             raise error(f"unknown keyword {opt.keyword} in {form}", opt.span, hint)
@@ -288,6 +291,19 @@ def _name(opts: dict[str, Option], form: str) -> Atom:
             name.span,
         )
     return name
+
+
+def declared(children: Sequence[Any]) -> str | None:
+    """The name a form's ``:name`` declares (``camera`` for ``:name '(camera
+    ?r)``), read even when the rest of the form is wrong; None when it does
+    not read either."""
+    for opt in children:
+        if isinstance(opt, Option) and opt.keyword == ":name":
+            try:
+                return atom(opt.value).predicate
+            except CfgplanError:
+                return None
+    return None
 
 
 def functionality(span: Span, children: Sequence[Any]) -> Functionality:

@@ -26,7 +26,7 @@ import lark
 from lark import Lark
 from lark.exceptions import UnexpectedInput
 
-from cfgplan.diagnostics import error
+from cfgplan.diagnostics import CfgplanError, error
 from cfgplan.files import read_source
 from cfgplan.ir.model import Domain, Functionality, Goal, Method, Span, State
 from cfgplan.syntax.transform import GoalSequence, ToIR
@@ -36,6 +36,17 @@ from cfgplan.syntax.transform import GoalSequence, ToIR
 def grammar_text() -> str:
     """The grammar, read from the installed package data ``cfgplan.grammar``."""
     return resources.files("cfgplan.grammar").joinpath("cfgplan.lark").read_text("utf-8")
+
+
+@dataclass
+class FormErrors(CfgplanError):
+    """Forms of a file that are wrong: every one of them (``diagnostics``, in
+    file order), with what the file holds besides (``source``: the forms that
+    read) and the names the wrong ones declare (``unread``), so that ``cfgplan
+    check`` can check the rest and report every problem at once."""
+
+    source: SourceFile | None = None
+    unread: tuple[str, ...] = ()
 
 
 @dataclass
@@ -196,14 +207,14 @@ def parse(
             items = lark_parser.parse(text).children
             failed = transformer.failed
     except UnexpectedInput as exc:
-        from cfgplan.syntax.unexpected import syntax_error  # for a wrong file only (issue 32)
+        from cfgplan.syntax.unexpected import syntax_error  # for a wrong file only
 
         raise syntax_error(exc, filename, text) from None
     except RecursionError:  # pragma: no cover - the grammar and transformer are iterative
         raise error("input too deeply nested") from None
-    if failed is not None:
-        raise failed
     source.add(items)
+    if failed:
+        raise FormErrors([d for exc in failed for d in exc.diagnostics], source, transformer.unread)
     return source
 
 

@@ -74,7 +74,12 @@ class ToIR(Transformer[Token, Any]):
     as when the whole tree was read first."""
 
     filename = "<text>"
-    failed: CfgplanError | None = None
+    failed: tuple[CfgplanError, ...] = ()
+    """Every form found wrong, in file order (the others are read all the same)."""
+    unread: tuple[str, ...] = ()
+    deep = False
+    """A list of the form being read nests too deep (said once, not again by the form)."""
+    """The names those of them declare, where their :name reads (:func:`forms.declared`)."""
     atoms: re.Pattern[str] | None = None
     """What finds the atoms of an ``ATOMS`` token (:meth:`use`)."""
 
@@ -106,18 +111,20 @@ class ToIR(Transformer[Token, Any]):
         self.atoms = atom_scanner(parser)
 
     def begin(self, filename: str) -> None:
-        self.filename, self.failed = filename, None
+        self.filename, self.failed, self.unread, self.deep = filename, (), (), False
 
-    def _fail(self, exc: CfgplanError) -> None:
-        if self.failed is None:
-            self.failed = exc
-
-    def _build(self, build: Callable[[], T]) -> T | None:
-        """``build()``, or None when it finds the form wrong (noted)."""
+    def _build(self, build: Callable[[], T], children: Sequence[Any] = ()) -> T | None:
+        """``build()``, or None when it finds the form wrong (noted, with the
+        name the form's ``children`` declare)."""
+        deep, self.deep = self.deep, False
         try:
             return build()
         except CfgplanError as exc:
-            self._fail(exc)
+            if not deep:  # a list nested too deep inside said it (its items are gone)
+                self.failed += (exc,)
+            name = forms.declared(children)
+            if name is not None:
+                self.unread += (name,)
             return None
 
     def _span(self, first: Token, last: Token | Sx) -> Span:
@@ -173,13 +180,15 @@ class ToIR(Transformer[Token, Any]):
     def _list(self, span: Span, items: Sequence[Any]) -> Sx:
         depth = 1 + max((i.depth for i in items), default=0)
         if depth > MAX_NESTING:
-            self._fail(
-                error(
-                    f"lists nest more than {MAX_NESTING} levels deep here",
-                    span,
-                    "domains and states need only a few levels; check for a runaway '('",
+            self.deep = True
+            if depth == MAX_NESTING + 1:  # said once, where the nesting first goes too deep
+                self.failed += (
+                    error(
+                        f"lists nest more than {MAX_NESTING} levels deep here",
+                        span,
+                        "domains and states need only a few levels; check for a runaway '('",
+                    ),
                 )
-            )
             items = ()  # nothing deeper is kept: no check ever walks it
         return Sx("list", span, items=tuple(items), depth=depth)
 
@@ -202,11 +211,11 @@ class ToIR(Transformer[Token, Any]):
 
     def functionality(self, children: Sequence[Any]) -> Functionality | None:
         span = self._span(children[0], children[-1])
-        return self._build(lambda: forms.functionality(span, children[2:-1]))
+        return self._build(lambda: forms.functionality(span, children[2:-1]), children[2:-1])
 
     def method(self, children: Sequence[Any]) -> Method | None:
         span = self._span(children[0], children[-1])
-        return self._build(lambda: forms.method(span, children[2:-1]))
+        return self._build(lambda: forms.method(span, children[2:-1]), children[2:-1])
 
     def state(self, children: Sequence[Any]) -> State | None:
         span = self._span(children[0], children[-1])

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from cfgplan.diagnostics import CfgplanError, error, lines_of
+from cfgplan.diagnostics import CfgplanError, did_you_mean, error, lines_of
 from cfgplan.ir.model import Span
 
 __all__ = ["syntax_error", "unclosed"]
@@ -210,6 +210,9 @@ def _form_hint(word: str) -> str:
     for k in known:
         if word.lower() == k:
             return f"symbols are case-sensitive: write {k}"
+    near = did_you_mean(word, known)
+    if near is not None:  # make-functonality
+        return near
     return (
         "a file holds (make-functionality ...), (make-config-method ...), (state ...) or (goal ...)"
     )

@@ -52,7 +52,7 @@ def _app() -> Any:
     the objects are used by what they do, not by their class)."""
     import typer
 
-    import cfgplan.cli.commands  # noqa: F401  (registers every command)
+    import cfgplan.cli.commands  # noqa: F401  (loads every command module)
     from cfgplan.cli.app import app
 
     return typer.main.get_command(app)

@@ -1,4 +1,4 @@
-"""Implementations for running the cross-door domain as a sequence (issue 14).
+"""Implementations for running the cross-door domain as a sequence.
 
 The same as ``impl.py``, whose functionalities it takes, except the action:
 here ``cross-door`` takes :data:`CROSSING` calls with the door's pose, then

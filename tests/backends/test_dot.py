@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.render  # noqa: F401  (registers the command)
+import cfgplan.cli.render  # noqa: F401  (loads the command module)
 from cfgplan.backends.dot import (
     GLOBAL_EDGE,
     LOCAL_EDGE,
@@ -141,7 +141,7 @@ def test_golden_cross_door_hierarchy(tmp_path: Path) -> None:
 def test_every_functionality_is_a_box_in_its_robots_cluster(paths: tuple[str, str]) -> None:
     """Fig. 4.3 / 6.11: one box per functionality, coloured by its robot (one
     colour and one cluster per robot), showing its name and ``label : (args)``
-    in the case they were written (issue 10: names are case-sensitive)."""
+    in the case they were written (names are case-sensitive)."""
     problem, config = planned(paths)
     dot = configuration_dot(config, first=problem.goal_call[1:])
     boxes = nodes(dot)
@@ -189,7 +189,7 @@ def test_global_channels_bold_black_local_thin_grey(paths: tuple[str, str]) -> N
 
 @pytest.mark.parametrize("paths", [CROSS, CARRY, WALL], ids=["fig4.3", "fig6.8", "fig6.11"])
 def test_local_channels_are_drawn_inside_their_robots_cluster(paths: tuple[str, str]) -> None:
-    """Issue 10: a local channel's arrow, and so its label, belongs to its
+    """A local channel's arrow, and so its label, belongs to its
     robot's cluster; a global channel's arrow to no cluster."""
     problem, config = planned(paths)
     dot = configuration_dot(config, first=problem.goal_call[1:])
@@ -247,6 +247,7 @@ def test_bandwidth_is_shown_with_the_data() -> None:
     assert 'label="orient(Pippi, Door1)\\nbandwidth 10"' in dot
 
 
+@pytest.mark.slow
 def test_dot_is_deterministic_across_hash_seeds(tmp_path: Path) -> None:
     """The same input gives the same bytes, whatever the hash seed."""
     code = "import cfgplan.cli.render; from cfgplan.cli.app import main; main()"
@@ -330,7 +331,7 @@ def test_recursive_method_ends(tmp_path: Path) -> None:
 
 
 def test_hierarchy_draws_a_method_call_once() -> None:
-    """Issue 10: build-wall's hierarchy uses get-block-data(robserv, b, w) under
+    """Build-wall's hierarchy uses get-block-data(robserv, b, w) under
     all four versions of do-push; it is drawn once, and each caller points to
     it, so the picture stays readable. Functionalities stay leaves under each
     method that uses them, as in Fig. 4.4."""

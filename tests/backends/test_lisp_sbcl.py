@@ -21,7 +21,6 @@ CI installs SBCL from Debian (``.ci/run``); where it is missing these tests skip
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -33,7 +32,7 @@ from cfgplan.planner import plan
 from cfgplan.problem import load
 from tests.backends.support import bundled_pairs, cross_door_44, one_robot_part
 
-pytestmark = pytest.mark.skipif(shutil.which("sbcl") is None, reason="SBCL is not installed")
+pytestmark = pytest.mark.usefixtures("sbcl")  # skipped, with how to install it, or failed in CI
 
 HARNESS = r"""
 (defpackage :emitted (:use) (:import-from :cl #:let #:lambda #:progn #:list #:nil))

@@ -47,7 +47,7 @@ def _emit(parts: tuple[RobotPart, ...], title: str, where: Path) -> None:
 )
 def test_golden(case: str, planned: Planned, goal: str, files: tuple[str, str]) -> None:
     """One module per robot and run_all.py; each compiles and stays within 100 columns;
-    each robot announces the problem it was planned for (issue 34: PROBLEM, the
+    each robot announces the problem it was planned for (PROBLEM, the
     fingerprint of the domain, the state and the goal)."""
     problem, config = planned()
     parts = deploy(config, problem.domain)

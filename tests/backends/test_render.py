@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.render  # noqa: F401  (registers the command)
+import cfgplan.cli.render  # noqa: F401  (loads the command module)
 from cfgplan.backends import render as engine
 from cfgplan.backends.render import render
 from cfgplan.cli.app import app

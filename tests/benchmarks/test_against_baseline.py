@@ -29,7 +29,7 @@ FAMILIES = [
     pytest.param("wall", (3, 4, 2), marks=pytest.mark.slow),
     ("relay", (2, 3, 2)),
     ("relay", (3, 3, 3)),
-    # Shared and recursive sub-derivations (issue 35): one ground method
+    # Shared and recursive sub-derivations: one ground method
     # instance under several ancestors, expanded its own way at each.
     ("dag", (3,)),
     ("dag", (5,)),

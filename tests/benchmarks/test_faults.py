@@ -1,4 +1,4 @@
-"""The fault benchmark's link and one condition end to end (benchmarks/faults.py, issue 33).
+"""The fault benchmark's link and one condition end to end (benchmarks/faults.py).
 
 The lossy link is measured through itself: UDP echoes from one namespace to
 the other (the share lost, the round trip of a delay, a cut that lets

@@ -1,4 +1,4 @@
-"""The fuzzer of issue 9 (benchmarks/fuzz.py) at a small budget, and its own parts.
+"""The end-to-end fuzzer (benchmarks/fuzz.py) at a small budget, and its own parts.
 
 A few hundred inputs run here on every test run; ``python -m benchmarks.fuzz
 --inputs 100000`` is the big budget (README, "Fuzzing"). The harness is

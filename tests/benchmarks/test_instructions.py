@@ -4,15 +4,13 @@ out), and it repeats, which a time on a shared machine does not."""
 
 from __future__ import annotations
 
-import shutil
-
 import pytest
 
 from benchmarks.instructions import Options, count
 
 pytestmark = [
     pytest.mark.slow,
-    pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is not installed"),
+    pytest.mark.usefixtures("valgrind"),  # skipped, with how to install it, or failed in CI
 ]
 
 

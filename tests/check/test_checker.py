@@ -63,7 +63,7 @@ def test_body_calls_undefined_name() -> None:
 
 
 def test_body_call_misspelt_gets_did_you_mean() -> None:
-    """Issue 32: a misspelt call in a method body names the functionality or
+    """A misspelt call in a method body names the functionality or
     method it is close to, as a misspelt goal does (one rule:
     :func:`cfgplan.diagnostics.did_you_mean`); before, only a slip in case did."""
     detect = (
@@ -210,7 +210,7 @@ def test_diagnostics_are_sorted_by_position() -> None:
 
 
 def test_no_goal_hint_names_a_method_of_this_domain(tmp_path: Path) -> None:
-    """Issue 10: the hint names the top method of the domain at hand."""
+    """The hint names the top method of the domain at hand."""
     from cfgplan.diagnostics import CfgplanError
     from cfgplan.problem import load
 

@@ -147,7 +147,7 @@ def test_two_out_ports_with_same_descriptor() -> None:
 
 
 def test_channel_variable_bound_by_nothing_is_an_error() -> None:
-    """Issue 10: the planner cannot instantiate the channel, so every expansion
+    """The planner cannot instantiate the channel, so every expansion
     of the method fails and configurations are lost without a word."""
     text = BASE + GOOD.replace("((local ?r) ?f1", "((local ?x) ?f1")
     d = only(run(text))

@@ -4,6 +4,12 @@ reports."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from typer.testing import CliRunner
+
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
+from cfgplan.cli.app import app
 from cfgplan.ir.model import Atom, Goal
 from tests.check.test_checker import BASE, GOOD, at, loc, only, run
 
@@ -74,7 +80,7 @@ def test_unused_state_predicate_without_case_twin_is_silent() -> None:
 
 
 def test_a_misspelt_fact_is_a_warning_with_a_suggestion() -> None:
-    """Issue 10: (camrea Pippi) is tested by nothing; camera is close."""
+    """(camrea Pippi) is tested by nothing; camera is close."""
     d = only(run(BASE + GOOD, "(state (camrea Pippi) (door Door1))\n"), "warning")
     assert d.message == (
         "no precondition tests (camrea ...), so the fact (camrea Pippi) is never used"
@@ -115,3 +121,34 @@ def test_a_goal_object_written_twice_is_named_once_and_numbers_are_objects() -> 
     assert [
         d for d in run(BASE + GOOD, STATE + "(goal (get-door-info 2 Door1))\n") if "2," in d.message
     ] == []
+
+
+def test_a_fact_object_differing_in_case_from_everywhere_else_is_pointed_out() -> None:
+    """``(camera pippi)`` where the other facts and the goal write ``Pippi``:
+    the fact is about another object (check said ok, plan said only "no fact
+    matches (camera Pippi)"); language.md promises the case is pointed out."""
+    state = "(state (robot Pippi) (camera pippi) (door Door1))\n"
+    d = only(run(BASE + GOOD, state + "(goal (get-door-info Pippi Door1))\n"), "warning")
+    assert d.message == (
+        "the fact (camera pippi) names pippi, which differs only in case from Pippi "
+        "(written elsewhere)"
+    )
+    assert d.hint == "symbols are case-sensitive: did you mean Pippi?"
+    assert loc(d) == "1:22"
+    # One spelling everywhere: nothing to say.
+    assert run(BASE + GOOD, STATE + "(goal (get-door-info Pippi Door1))\n") == []
+
+
+def test_plan_points_out_a_fact_object_differing_in_case(tmp_path: Path) -> None:
+    """``cfgplan plan`` prints the warning before saying no configuration is admissible."""
+    domain = tmp_path / "d.lisp"
+    domain.write_text(BASE + GOOD, "utf-8")
+    state = tmp_path / "s.lisp"
+    state.write_text(
+        "(state (robot Pippi) (camera pippi) (door Door1))\n(goal (get-door-info Pippi Door1))\n",
+        "utf-8",
+    )
+    result = CliRunner().invoke(app, ["plan", str(domain), str(state)])
+    assert result.exit_code == 3, result.output
+    assert "names pippi, which differs only in case from Pippi" in result.stderr
+    assert "did you mean Pippi?" in result.stderr

@@ -1,11 +1,11 @@
-"""Deep method chains: no stage recurses on the depth of the input (issue 9, item 4).
+"""Deep method chains: no stage recurses on the depth of the input.
 
 ``(top ?r)`` expands through ``m0 -> m1 -> ... -> m{n-1} -> (sense ?r)``: the
 configuration is two functionalities, but the method hierarchy is ``n`` levels
 deep. The issue found 330 levels enough to make ``plan``, ``emit`` and ``run``
 die with RecursionError in ``planner/bound.py`` and about 500 to do it in
 ``render --hierarchy``. Every command is run on such a chain (the planner's
-bound summarises without recursion since issue 8).
+bound summarises without recursion).
 """
 
 from __future__ import annotations
@@ -72,7 +72,8 @@ def test_check(files: dict[str, str], levels: str) -> None:
     assert f"{int(levels) + 1} methods" in out
 
 
-@pytest.mark.parametrize("levels", ["330", pytest.param("1500", marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("levels", ["330", "1500"])
 def test_render_hierarchy(files: dict[str, str], levels: str) -> None:
     output = Path(files["out"] + ".dot")
     ok(run("render", files[levels], files["state"], "--hierarchy", "-o", str(output)))
@@ -85,17 +86,20 @@ def test_plan(files: dict[str, str]) -> None:
     assert "sense(Pippi)" in out and "act(Pippi)" in out
 
 
+@pytest.mark.slow  # check and plan of the deep chain stay in the fast loop
 @pytest.mark.parametrize("lang", ["lisp", "python"])
 def test_emit(files: dict[str, str], lang: str) -> None:
     ok(run("emit", files["330"], files["state"], "--lang", lang, "-o", files["out"]))
     assert (Path(files["out"]) / "configuration.txt").exists()
 
 
+@pytest.mark.slow
 def test_run(files: dict[str, str]) -> None:
     out = ok(run("run", files["330"], files["state"], "--impl", files["impl"], "--cycles", "2"))
     assert "act" in out
 
 
+@pytest.mark.slow
 def test_render(files: dict[str, str]) -> None:
     output = Path(files["out"] + ".dot")
     ok(run("render", files["330"], files["state"], "-o", str(output)))

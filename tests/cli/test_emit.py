@@ -9,7 +9,7 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
-import cfgplan.cli.emit  # noqa: F401  (registers the command)
+import cfgplan.cli.emit  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.emission import RECORD
@@ -44,6 +44,11 @@ def test_emit_lisp_writes_one_file_per_robot_and_the_description(tmp_path: Path)
 def test_emit_python_writes_modules_and_run_all(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["emit", *ARGS, "--lang", "python", "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
+    # every file it wrote is listed, its record too (it was left out)
+    assert result.stderr.splitlines() == [
+        f"wrote {tmp_path / name}"
+        for name in ("pippi.py", "emil.py", "run_all.py", "configuration.txt", RECORD)
+    ]
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         RECORD,
         "configuration.txt",
@@ -58,7 +63,7 @@ def test_emit_python_writes_modules_and_run_all(tmp_path: Path) -> None:
 
 
 def test_emit_never_overwrites_a_file_it_did_not_write(tmp_path: Path) -> None:
-    """Issue 10: a file of the user's in the way is refused, even with --force,
+    """A file of the user's in the way is refused, even with --force,
     and named; nothing at all is written."""
     (tmp_path / "emil.lisp").write_text("mine\n")
     for force in ([], ["--force"]):
@@ -87,7 +92,7 @@ def test_emit_refuses_an_earlier_emission_without_force(tmp_path: Path) -> None:
 
 
 def test_emit_force_replaces_the_earlier_emission_whole(tmp_path: Path) -> None:
-    """Issue 10: LISP then Python into one folder with --force: no .lisp robot
+    """LISP then Python into one folder with --force: no .lisp robot
     file of the earlier emission remains; the user's own notes stay."""
     assert CliRunner().invoke(app, [*LISP, "-o", str(tmp_path)]).exit_code == 0
     (tmp_path / "notes.txt").write_text("my notes\n")
@@ -142,7 +147,7 @@ def test_emit_a_rank_that_does_not_exist_exits_3(tmp_path: Path) -> None:
 
 
 def test_emit_without_lang_writes_runnable_python(tmp_path: Path) -> None:
-    """Issue 32: without --lang, emit wrote LISP, which nothing here runs; now
+    """Without --lang, emit wrote LISP, which nothing here runs; now
     it writes the Python of ``--lang python`` (byte for byte), and
     ``run_all.py`` runs the configuration."""
     out = tmp_path / "out"

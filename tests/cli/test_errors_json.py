@@ -1,4 +1,4 @@
-"""Input errors as JSON (issue 32): with ``--format json`` or ``jsonl`` every
+"""Input errors as JSON: with ``--format json`` or ``jsonl`` every
 input error prints one :class:`ErrorDocument` on stdout, the human message
 stays on stderr and the exit code is unchanged; ``cfgplan check --format
 json`` prints the same document, or a :class:`CheckDocument` when the input

@@ -1,4 +1,4 @@
-"""Hostile and odd input at the command line (issue 9, items 1, 5, 7, 8, 9).
+"""Hostile and odd input at the command line.
 
 Each case ends with a clear message and exit code, never a traceback, a hang
 or a silently wrong answer: outputs that cannot be written (``> /dev/full``),
@@ -92,6 +92,7 @@ JOIN = """\
 """
 
 
+@pytest.mark.slow
 def test_running_out_of_memory_is_reported(tmp_path: Path) -> None:
     """A method whose preconditions join four robots out of 40 has 2.5 million
     bindings, kept while it is expanded: far more than a 140 MiB address space."""
@@ -199,6 +200,7 @@ def test_output_through_a_dangling_link_is_refused(tmp_path: Path, args: tuple[s
 # -- item 9: emit writes everything or nothing ---------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("lang", ["python", "lisp"])
 def test_emit_that_fails_half_way_writes_nothing(tmp_path: Path, lang: str) -> None:
     """With a file size limit (as on a full disk) one file cannot be written: the

@@ -1,4 +1,4 @@
-"""``cfgplan launch``: a whole society in one command, one process per robot (issue 36).
+"""``cfgplan launch``: a whole society in one command, one process per robot.
 
 The slow tests launch cross-door step 2 (6.2.2) for real: the coordinator's
 compass fails, the society switches 44 -> 47 and Emil keeps crossing; a
@@ -139,6 +139,7 @@ def test_the_coordinator_serves_the_live_page_and_every_robot_records(cfgplan) -
     assert bad.returncode == 2 and "--live" in bad.stderr
 
 
+@pytest.mark.slow
 def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignore[no-untyped-def]
     """--robot Pippi alone (the coordinator, Emil, runs elsewhere): Pippi's
     command, marked as no coordinator's; options that go to the coordinator,

@@ -1,4 +1,4 @@
-"""A goal that fails on a near-miss fact (issue 32): the "no configuration"
+"""A goal that fails on a near-miss fact: the "no configuration"
 explanation names the fact the failed precondition was likely meant to
 match, in the words of every "did you mean" of cfgplan."""
 
@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.plan  # noqa: F401  (registers the command)
+import cfgplan.cli.plan  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from tests.cli.conftest import ROOT
 

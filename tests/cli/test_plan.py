@@ -1,9 +1,11 @@
-"""``cfgplan plan``: formats, exit codes, determinism (thesis 4.4-4.6, issue 3)."""
+"""``cfgplan plan``: formats, exit codes, determinism (thesis 4.4-4.6)."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+
+import pytest
 
 from tests.cli.conftest import ROOT, Run
 
@@ -64,6 +66,7 @@ def test_json_without_media_leaves_the_media_keys_out(cfgplan: Run) -> None:
     assert all(ch["medium"] is None for c in doc["configurations"] for ch in c["channels"])
 
 
+@pytest.mark.slow
 def test_json_is_byte_identical_across_runs(cfgplan: Run) -> None:
     """Determinism: the same input gives the same bytes, whatever the hash seed."""
     a = cfgplan("plan", *WALL, "--all", "--format", "json", env={"PYTHONHASHSEED": "1"})
@@ -126,6 +129,7 @@ def test_goal_option_overrides_the_state(cfgplan: Run) -> None:
     assert json.loads(out.stdout)["goal"] == "do-cross-door(Emil, Door1)"
 
 
+@pytest.mark.slow
 def test_bad_goal_is_input_error_with_caret(cfgplan: Run) -> None:
     """The '(' never closed is the user's, not the one of the (goal ...) the
     option is read in (a newcomer was pointed at "the '(' at line 1, column 1")."""
@@ -163,6 +167,7 @@ def test_missing_file_is_input_error(cfgplan: Run) -> None:
     assert "no such file: nope.lisp" in out.stderr
 
 
+@pytest.mark.slow
 def test_output_file_is_not_overwritten_without_force(cfgplan: Run, tmp_path: Path) -> None:
     target = tmp_path / "out.json"
     target.write_text("keep me")
@@ -204,7 +209,7 @@ def test_readme_quick_start_example_exists() -> None:
 
 
 def test_self_loop_is_a_cycle_not_a_traceback(cfgplan: Run, tmp_path: Path) -> None:
-    """Issue 8: a channel from a method instance to itself (``?f1 ?f1``) is
+    """A channel from a method instance to itself (``?f1 ?f1``) is
     re-wired at both ends into a functionality feeding itself: a cycle (5.1),
     so nothing is admissible: exit 3 and the cycle named (before: a KeyError
     traceback with exit 1)."""
@@ -219,7 +224,7 @@ def test_self_loop_is_a_cycle_not_a_traceback(cfgplan: Run, tmp_path: Path) -> N
 
 
 def test_json_when_nothing_is_admissible_is_still_a_document(cfgplan: Run) -> None:
-    """Issue 10: one JSON document on stdout, the explanation as data, exit 3."""
+    """One JSON document on stdout, the explanation as data, exit 3."""
     out = cfgplan(
         "plan",
         "domains/cross-door/domain.lisp",

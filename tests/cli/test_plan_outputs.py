@@ -1,5 +1,5 @@
 """``cfgplan plan``: stdout holds exactly what ``-o FILE`` holds, in every
-format and for every choice of ``-k``, ``--rank`` and ``--all`` (issue 32),
+format and for every choice of ``-k``, ``--rank`` and ``--all``,
 and the table never claims more configurations than are known to exist.
 
 In process (typer's runner): the streaming of jsonl and lisp to stdout is
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.plan  # noqa: F401  (registers the command)
+import cfgplan.cli.plan  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from tests.cli.conftest import ROOT
 
@@ -54,12 +54,13 @@ def _plan(args: list[str]) -> tuple[int, str]:
     return result.exit_code, result.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("format_", FORMATS)
 @pytest.mark.parametrize(("problem", "choice"), CASES)
 def test_stdout_is_what_the_output_file_holds(
     problem: list[str], format_: str, choice: list[str], tmp_path: Path
 ) -> None:
-    """Before issue 32, ``--format jsonl --rank 2`` printed only the summary
+    """Before, ``--format jsonl --rank 2`` printed only the summary
     line and ``--format lisp --rank 1`` nothing (``_print`` took them for
     streamed), and the streamed lisp header differed from the file's."""
     args = [*problem, "--format", format_, *choice]
@@ -94,7 +95,7 @@ def test_rank_prints_that_configuration(format_: str) -> None:
 def test_the_table_claims_no_count_it_does_not_know() -> None:
     """Cross-door 6.2.2 step 1 has exactly 2 configurations: ``-k 1`` knows
     that one more exists (it plans one more than it lists), not how many.
-    Before issue 32 it said ``-k 11 more``, as if eleven more existed."""
+    Before, it said ``-k 11 more``, as if eleven more existed."""
     _, cut = _plan([*CROSS, "--details", "-k", "1"])
     assert "note: at least one more configuration exists: " in cut
     assert "-k 11 more" not in cut

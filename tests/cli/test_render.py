@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.render  # noqa: F401  (registers the command)
+import cfgplan.cli.render  # noqa: F401  (loads the command module)
 from cfgplan.backends import render as engine
 from cfgplan.cli.app import app
 from cfgplan.planner import plan

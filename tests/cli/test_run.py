@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT, cross_door_44
@@ -108,8 +108,9 @@ def test_run_a_rank_that_does_not_exist_exits_3() -> None:
     assert result.exit_code == 3
 
 
+@pytest.mark.slow
 def test_a_broken_implementation_file_is_shown_with_a_caret(tmp_path: Path) -> None:
-    """Issue 9, item 6: the implementation's fault, file:line:col, no traceback."""
+    """The implementation's fault, file:line:col, no traceback."""
     impl = tmp_path / "impl.py"
     impl.write_text("import math\nPOSE = (1.0, 2.0\n")
     out = subprocess.run(
@@ -127,7 +128,7 @@ def test_a_broken_implementation_file_is_shown_with_a_caret(tmp_path: Path) -> N
 
 
 def test_an_implementation_of_the_wrong_arity_is_refused_before_the_run(tmp_path: Path) -> None:
-    """Issue 10: refused at start, naming the functionality and the function
+    """Refused at start, naming the functionality and the function
     with its file and line, not on the first call; the emitted run_all.py too."""
     impl = tmp_path / "impl.py"
     text = EXAMPLE_IMPL.read_text(encoding="utf-8")
@@ -166,7 +167,7 @@ THREE = """(state robot(Pippi), robot(Emil), robot(Rasmus), door(Door1),
 
 
 def test_cycles_count_the_goal_robot_after_a_robot_joins(tmp_path: Path) -> None:
-    """Issue 32: with a rate, ``--cycles 40`` stopped after 40 passes of the loop,
+    """With a rate, ``--cycles 40`` stopped after 40 passes of the loop,
     and a robot that joins on a switch (Rasmus, on a beat of his own) made
     passes outnumber Pippi's cycles (25 of 40). Now Pippi runs 40 cycles."""
     state = tmp_path / "three.lisp"
@@ -195,7 +196,7 @@ import time as _time
 
 from cfgplan.runtime import Implementation as _Implementation
 
-for _name, _value in list(globals().items()):  # every stop hook blocks (issue 33)
+for _name, _value in list(globals().items()):  # every stop hook blocks
     if isinstance(_value, _Implementation):
         globals()[_name] = _dataclasses.replace(_value, stop=lambda *objects: _time.sleep(3600))
 """
@@ -205,7 +206,7 @@ for _name, _value in list(globals().items()):  # every stop hook blocks (issue 3
 def test_a_stop_hook_that_blocks_neither_freezes_the_switch_nor_outlives_sigterm(
     tmp_path: Path,
 ) -> None:
-    """Issue 33: a switch whose stop hook blocks froze the run for good, and
+    """A switch whose stop hook blocks froze the run for good, and
     SIGTERM did not end it. Now the hook is abandoned after the call budget,
     its functionality is reported failed, the switch goes on, and SIGTERM ends
     the process."""
@@ -229,7 +230,7 @@ def test_a_stop_hook_that_blocks_neither_freezes_the_switch_nor_outlives_sigterm
 
 
 def test_the_trace_is_capped_and_rotates_once(tmp_path: Path) -> None:
-    """Issue 33: traces grew without a cap. ``--trace-max-bytes`` caps FILE;
+    """Traces grew without a cap. ``--trace-max-bytes`` caps FILE;
     past it FILE becomes FILE.1 and a new FILE begins."""
     trace = tmp_path / "run.jsonl"
     args = ["run", *ARGS, *FAST, "--cycles", "60", "--trace", str(trace)]

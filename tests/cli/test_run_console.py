@@ -1,4 +1,4 @@
-"""``cfgplan run``'s console (issue 32): what matters, not a line per cycle.
+"""``cfgplan run``'s console: what matters, not a line per cycle.
 
 By default a run shows a compact status and every loss, stale input, failure
 and switch with its cause; an action's data when it starts to receive it (and
@@ -16,7 +16,7 @@ import re
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime import Call, Presence
 from cfgplan.runtime.console import Printer
@@ -94,7 +94,7 @@ def test_text_from_another_process_cannot_drive_the_terminal() -> None:
 
 
 def test_errors_of_one_kind_are_shown_three_times_then_counted() -> None:
-    """Issue 33: 500 oversized messages on one channel printed 500 lines. Now
+    """500 oversized messages on one channel printed 500 lines. Now
     each kind of error (its text before the first ``": "``: the channel) is
     shown three times, then counted in the status; a flood of kinds from the
     network is told apart only up to a bound."""

@@ -1,4 +1,4 @@
-"""The fast path of ``cfgplan --version`` and the top-level help (issue 32):
+"""The fast path of ``cfgplan --version`` and the top-level help:
 answered without typer, from a text pre-rendered from the typer app, which
 must stay what typer prints (what each loads: tests/runtime/test_imports.py)."""
 
@@ -61,6 +61,7 @@ def test_the_help_lists_the_commands_whatever_was_imported_first() -> None:
     assert out.returncode == 0, out.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "status", "stream"), [(["--help"], 0, 1), (["-h"], 0, 1), ([], 2, 2)]
 )
@@ -82,6 +83,7 @@ def test_a_narrow_terminal_gets_typers_own_help(cfgplan: Run) -> None:
     assert out.stdout == render_help(60) != help_text.HELP
 
 
+@pytest.mark.slow
 def test_the_fast_version_is_typers(cfgplan: Run) -> None:
     out = cfgplan("--version")
     assert (out.returncode, out.stdout, out.stderr) == (0, f"cfgplan {__version__}\n", "")
@@ -102,6 +104,7 @@ def _gc_after(code: str) -> list[object]:
     return found
 
 
+@pytest.mark.slow
 def test_what_a_command_loads_is_frozen_once() -> None:
     """The modules a command loads are frozen out of the garbage collector's
     work (:func:`cfgplan.cli.app._load`), once a process; the collector is left
@@ -119,6 +122,7 @@ def test_what_a_command_loads_is_frozen_once() -> None:
     assert off == [False]
 
 
+@pytest.mark.slow
 def test_what_one_command_reads_is_frozen_and_many_commands_freeze_nothing() -> None:
     """The console script (one command, then exit: ``app.ONE_COMMAND``)
     freezes the problem it read (:func:`cfgplan.cli.options.load_problem`),
@@ -142,6 +146,7 @@ def test_what_one_command_reads_is_frozen_and_many_commands_freeze_nothing() -> 
     assert abs(many[1] - many[0]) < 100  # (frozen objects die, a few move)
 
 
+@pytest.mark.slow
 def test_a_command_that_plans_and_exits_collects_young_objects_less_often() -> None:
     """After reading, a one-command process that plans and exits makes the
     cycle collector's young collections rarer (:data:`cfgplan.cli.options.YOUNG`

@@ -2,7 +2,7 @@
 tables rendered as plain text by :func:`cfgplan.cli.formats.plain`: what the
 input names is printed as written, never read as rich markup or emoji codes
 (a symbol may hold ``[``, ``]`` and ``:``), and rich's emoji table is not
-loaded for it (issue 32: start-up)."""
+loaded for it (start-up)."""
 
 from __future__ import annotations
 

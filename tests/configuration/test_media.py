@@ -72,7 +72,7 @@ def test_assigns_exactly_when_some_assignment_exists(
 
 
 def test_eleven_channels_into_ten_full_media_fail_at_once() -> None:
-    """Issue 11: 11 channels of 10 into 10 media of 10 took 101 s by trying
+    """11 channels of 10 into 10 media of 10 took 101 s by trying
     orders; they need 110 where the media carry 100."""
     media = [Medium(type="wifi", sender="A", receiver="B", capacity=10)] * 10
     result = assign([Demand("A", "B", 10)] * 11, media)

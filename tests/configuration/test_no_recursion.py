@@ -1,4 +1,4 @@
-"""Searches over the user's input without recursion (issue 9, item 4).
+"""Searches over the user's input without recursion.
 
 :func:`cfgplan.configuration.media.assign` backtracks over the global channels
 and :func:`cfgplan.configuration.matching.satisfying` over the atoms of a
@@ -23,7 +23,7 @@ FUZZ = settings(max_examples=300, derandomize=True, database=None, deadline=None
 
 
 def reference_assign(demands: Sequence[Demand | None], media: Sequence[Medium]) -> MediaResult:
-    """The recursive search cfgplan had before issue 9."""
+    """The recursive search cfgplan had before it was made iterative."""
     todo = [i for i, d in enumerate(demands) if d is not None]
     for i in todo:
         d = demands[i]

@@ -1,4 +1,4 @@
-"""The planner page's diagram (docs/explanation/planner.md, issue 35: the graph,
+"""The planner page's diagram (docs/explanation/planner.md: the graph,
 the strategies and the ranking in one picture) is laid out from its source,
 docs/images/planner.dot, by the Graphviz that pygraphviz bundles: the SVG the
 page shows must be what the source lays out now, so that an edit of the source

@@ -44,7 +44,7 @@ def _domain(state: Path) -> Path:
 
 def _plan(*args: str) -> tuple[int, str]:
     """``cfgplan plan ARGS`` in this process: the exit code and stdout."""
-    import cfgplan.cli.commands  # noqa: F401  (registers every command)
+    import cfgplan.cli.commands  # noqa: F401  (loads every command module)
     from cfgplan.cli.app import app
 
     out = CliRunner().invoke(app, ["plan", *args], catch_exceptions=False)
@@ -108,6 +108,7 @@ FAULTS = (
 )
 
 
+@pytest.mark.slow
 def test_a_run_trace_matches_the_schema(tmp_path: Path) -> None:
     """Cross-door step 2 (6.2.2) in one process: Emil's compass fails (a switch to
     47), recovers, the operator changes the state, Pippi is killed (nothing is

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.docs.tutorials import TUTORIALS, Step, blocks, missing, run, scratch, steps
+from tests.docs.tutorials import ROOT, TUTORIALS, Step, blocks, missing, run, scratch, steps
 
 PAGES = sorted(TUTORIALS.glob("*.md"))
 ROS2 = {"ros2-base"}
@@ -35,13 +35,13 @@ def test_every_experiment_tutorial_has_commands_to_run() -> None:
 
 @pytest.mark.parametrize(
     "page",
-    [  # the tutorials that start several processes or simulate are in the slow set,
-        # the one with a real ROS 2 node in the ros2 set (it needs rclpy: .ci/run installs it)
-        pytest.param(p, marks=pytest.mark.slow)
-        if p.stem in {"failure-and-switch", "run-two-processes", "simulate"}
+    [  # the plan tutorial runs in the fast set, the one with a real ROS 2 node in the
+        # ros2 set (it needs rclpy: .ci/run installs it), every other one in the slow set
+        p
+        if p.stem == "plan"
         else pytest.param(p, marks=pytest.mark.ros2)
         if p.stem in ROS2
-        else p
+        else pytest.param(p, marks=pytest.mark.slow)
         for p in PAGES
     ],
     ids=[p.stem for p in PAGES],
@@ -59,6 +59,19 @@ def test_tutorial_runs(page: Path, tmp_path: Path) -> None:
         lost = missing(step.expected, out.stdout)
         if lost is not None:
             pytest.fail(_report(page, step, f"expected line not printed: {lost!r}", out), False)
+    # What the page made, run from the top of a clone, is not left for git status.
+    made = sorted(
+        p.name + ("/" if p.is_dir() else "")
+        for p in folder.iterdir()
+        if p.name not in ("domains", "examples")
+    )
+    if made:
+        ignored = subprocess.run(
+            ["git", "-C", str(ROOT), "check-ignore", "--no-index", *made],
+            capture_output=True,
+            text=True,
+        ).stdout.split()
+        assert ignored == made, f"{page.name} leaves files git does not ignore: {made}"
 
 
 # -- the runner itself --------------------------------------------------------
@@ -75,6 +88,7 @@ fi
 
 ```text
 a
+...
 c
   d
 ```
@@ -105,7 +119,7 @@ def test_blocks_and_expected_lines() -> None:
         "cat f.txt\n",
         "echo four\n",
     ]
-    assert [s.expected for s in found] == [("a", "c", "  d"), (), ()]
+    assert [s.expected for s in found] == [("a", "...", "c", "  d"), (), ()]
     assert [b.info for b in blocks(PAGE)] == ["sh", "text", "text", "console", "sh", "sh"]
 
 
@@ -119,6 +133,13 @@ def test_blocks_share_a_folder_and_output_is_matched_by_whole_lines(tmp_path: Pa
     assert missing(("b  ",), out.stdout) == "b  "  # whole lines, trailing spaces stripped
     assert missing(("...", "c", "..."), out.stdout) is None  # "..." marks lines left out
     assert missing(("c", "...", "a"), out.stdout) == "a"  # and is no wildcard for order
+    # every line left out is marked: b between a and c, everything before c, after a
+    unmarked = "output lines the page leaves out without a '...' line:\n"
+    assert missing(("a", "c", "  d"), out.stdout) == unmarked + "  b"
+    assert missing(("c", "  d"), out.stdout) == unmarked + "  a\n  b"
+    assert missing(("a", "..."), out.stdout) is None
+    assert missing(("a",), out.stdout) == unmarked + "  b\n  c\n    d"
+    assert missing(("a", "...", "b", "c", "  d"), out.stdout) is None  # "...": any number
     assert run(second, tmp_path).stdout == "one\n"  # the first block's file
 
 

@@ -10,9 +10,9 @@ The convention (docs/development.md):
 * a fenced block whose info string is exactly ``text`` directly after a ``sh``
   block (nothing but blank lines between) is its expected output: every
   non-blank line of it must occur in the block's stdout, in that order, each
-  as a whole line once trailing spaces are stripped; a line ``...`` says that
-  lines are left out there (a reader is not to take a part for the whole),
-  and is itself not looked for;
+  as a whole line once trailing spaces are stripped, and the output's other
+  non-blank lines must be where a line ``...`` says that lines are left out
+  (at the start and end too: a reader is not to take a part for the whole);
 * blocks with any other info string are shown, not run.
 """
 
@@ -152,15 +152,61 @@ def _kill(group: int) -> None:
 
 
 def missing(expected: tuple[str, ...], stdout: str) -> str | None:
-    """The first expected line not found in ``stdout`` (as a whole line, in
-    order after the previous one), or ``None`` when every one is there."""
-    lines = [s.rstrip() for s in stdout.splitlines()]
+    """What is wrong with ``stdout`` against the page's ``expected`` lines, or
+    ``None``: every expected line occurs as a whole line (trailing spaces
+    stripped), in order, and the output's other non-blank lines are where the
+    page says ``...`` (at its start and end too), so that a reader never takes
+    a part for the whole. An expected block with no line expects nothing."""
+    if not expected:
+        return None
+    lines = [s.rstrip() for s in stdout.splitlines() if s.strip()]
     at = 0
-    for want in expected:
+    for want in expected:  # first: a line not printed at all, in order
         if want == LEFT_OUT:
             continue
         try:
             at = lines.index(want, at) + 1
         except ValueError:
             return want
-    return None
+    if _fits(expected, lines):
+        return None
+    return f"output lines the page leaves out without a {LEFT_OUT!r} line:\n" + "\n".join(
+        _unmarked(expected, lines)
+    )
+
+
+def _fits(expected: tuple[str, ...], lines: list[str]) -> bool:
+    """Whether ``lines`` are ``expected`` with each ``...`` standing for any
+    number of lines (a glob over lines: a run that prints a line one time and
+    not the next does not fail where the page marks a gap)."""
+    n, m = len(expected), len(lines)
+    # can[i][j]: expected[i:] fits lines[j:]
+    can = [[False] * (m + 1) for _ in range(n + 1)]
+    can[n][m] = True
+    for i in range(n - 1, -1, -1):
+        for j in range(m, -1, -1):
+            if expected[i] == LEFT_OUT:
+                can[i][j] = any(can[i + 1][k] for k in range(j, m + 1))
+            else:
+                can[i][j] = j < m and expected[i] == lines[j] and can[i + 1][j + 1]
+    return can[0][0]
+
+
+def _unmarked(expected: tuple[str, ...], lines: list[str]) -> list[str]:
+    """The output's lines that neither an expected line nor a ``...`` accounts
+    for, where the in-order match places the expected ones (for the message)."""
+    placed: list[int | None] = []
+    at = 0
+    for want in expected:
+        if want == LEFT_OUT:
+            placed.append(None)
+        else:
+            at = lines.index(want, at) + 1
+            placed.append(at - 1)
+    covered = {w for w in placed if w is not None}
+    for k, where in enumerate(placed):
+        if where is None:  # a "...": the lines between its neighbours
+            before = next((w for w in reversed(placed[:k]) if w is not None), -1)
+            after = next((w for w in placed[k + 1 :] if w is not None), len(lines))
+            covered.update(range(before + 1, after))
+    return [f"  {lines[i]}" for i in range(len(lines)) if i not in covered][:5]

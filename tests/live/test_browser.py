@@ -10,6 +10,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -18,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL
+from tests.programs import program
 from tests.runtime.netutil import (
     endpoint,
     first,
@@ -30,17 +32,12 @@ from tests.runtime.netutil import (
 
 pytestmark = pytest.mark.slow
 
-CHROMIUM = os.environ.get("CFGPLAN_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
 SCREENSHOT = os.environ.get("CFGPLAN_LIVE_SCREENSHOT")
 """Where to save the page's picture as well (docs/images/live-page.png is made so)."""
 
 
 def _browser() -> object:
-    if not Path(CHROMIUM).exists():
-        pytest.fail(
-            f"no Chromium at {CHROMIUM}: the live page's test needs the system's browser "
-            "(apt-get install -y chromium, or CFGPLAN_CHROMIUM=/path/to/chromium)"
-        )
+    program("chromium", "CFGPLAN_CHROMIUM")  # skipped with how to install it, failed in CI
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
@@ -66,7 +63,8 @@ def _follow(page_url: str, trace: Path, picture: Path) -> None:
     sync_playwright = _browser()
     with sync_playwright() as playwright:  # type: ignore[operator]
         browser = playwright.chromium.launch(
-            executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"]
+            executable_path=program("chromium", "CFGPLAN_CHROMIUM"),
+            args=["--no-sandbox", "--disable-gpu"],
         )
         try:
             page = browser.new_page(viewport={"width": 1500, "height": 950})
@@ -118,7 +116,7 @@ def test_a_switch_reaches_the_page_within_a_second(tmp_path: Path) -> None:
 
 
 def test_the_coordinators_page_follows_a_society_over_zenoh(tmp_path: Path) -> None:
-    """Issue 37's whole loop. Two processes over Zenoh (loopback, scouting
+    """The live page's whole loop. Two processes over Zenoh (loopback, scouting
     off): the page of the coordinator (Emil, who owns do-cross-door(Emil,
     Door1)) shows the switch the failure of Emil's compass causes within 1 s;
     his ``--record`` holds the switch; ``cfgplan report`` draws the recording
@@ -166,3 +164,50 @@ def test_the_coordinators_page_follows_a_society_over_zenoh(tmp_path: Path) -> N
     assert drawn.returncode == 0, drawn.stderr
     assert (report / "timeline.png").stat().st_size > 10_000
     assert "compass(Emil) failed" in (report / "report.html").read_text(encoding="utf-8")
+
+
+def test_once_the_run_is_gone_the_page_claims_no_robot_runs(tmp_path: Path) -> None:
+    """The run ends (SIGTERM, as a user's Ctrl-C would): the page says
+    "disconnected", and its robots' table no longer shows them "running, 0.0 s
+    ago" (it did, frozen at the last update): their state is unknown, and the
+    time since each was last heard from counts on."""
+    sync_playwright = _browser()
+    domain, state = CROSS
+    log = tmp_path / "run.log"
+    args = ["-m", "cfgplan", "run", str(DOMAINS / domain), str(DOMAINS / state)]
+    args += ["--impl", str(EXAMPLE_IMPL), "--rate", "20", "--live", "0"]
+    with processes() as running:
+        run = running.start(args, log)
+        page_url = _url(log, run)
+        with sync_playwright() as playwright:  # type: ignore[operator]
+            browser = playwright.chromium.launch(
+                executable_path=program("chromium", "CFGPLAN_CHROMIUM"),
+                args=["--no-sandbox", "--disable-gpu"],
+            )
+            try:
+                page = browser.new_page()
+                page.goto(page_url, timeout=20_000)
+                page.wait_for_selector("#robots span.state.running", timeout=30_000)
+                run.send_signal(signal.SIGTERM)
+                assert run.wait(timeout=30) == 0, log.read_text(encoding="utf-8")
+                page.wait_for_function(
+                    "document.querySelector('#connection').textContent.includes('disconnected')",
+                    timeout=20_000,
+                )
+
+                def ages() -> list[float]:
+                    texts = page.eval_on_selector_all(
+                        "#robots tbody tr td:nth-child(4)", "cells => cells.map(c => c.textContent)"
+                    )
+                    return [float(t.split()[0]) for t in texts]
+
+                # the ages tick on: at least 1.5 s since the end, without an update
+                wait_for("the ages to count on", lambda: {} if min(ages()) >= 1.5 else None, 20)
+                states = page.eval_on_selector_all(
+                    "#robots span.state", "spans => spans.map(s => [s.className, s.textContent])"
+                )
+                assert len(states) == 2, states
+                for name, text in states:
+                    assert name == "state unknown" and text.startswith("unknown (was "), states
+            finally:
+                browser.close()

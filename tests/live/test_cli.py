@@ -11,7 +11,7 @@ import threading
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.diagnostics import CfgplanError
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT
@@ -38,6 +38,7 @@ def test_a_bad_address_is_a_usage_error() -> None:
     assert "a port is a whole number from 0 to 65535" in result.output
 
 
+@pytest.mark.slow
 def test_a_port_in_use_is_a_clear_error() -> None:
     """Exit 1 with the address and the reason, no traceback."""
     with socket.socket() as taken:

@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from benchmarks.families import wall
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import plan
@@ -95,6 +97,7 @@ def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+@pytest.mark.slow
 def test_ctrl_c_returns_what_was_found(tmp_path: Path) -> None:
     """Listing every configuration of a huge instance never ends: after the
     progress line appears, Ctrl-C (SIGINT) stops it and the answer so far is printed."""

@@ -47,7 +47,7 @@ from tests.planner.oracle import depth_first
 from tests.planner.problems import FIRST_NODE, PROPERTY, Generated, load_generated, run, solve
 
 
-@pytest.mark.quick(20)
+@pytest.mark.quick(5)
 @PROPERTY
 @given(generated())
 def test_limit_k_is_a_prefix_of_all(example: Generated) -> None:
@@ -84,7 +84,7 @@ def test_distinct_is_derivations_without_repeats(example: Generated) -> None:
     assert unnumbered(distinct) == unnumbered(expected)
 
 
-@pytest.mark.quick(20)
+@pytest.mark.quick(5)
 @PROPERTY
 @given(generated())
 def test_ranked_by_cost_then_derivation(example: Generated) -> None:
@@ -138,7 +138,7 @@ def test_reliability_ranks_as_depth_first(example: Generated, k: int) -> None:
     assert [(c.cost, c.identity()) for c in first] == oracle[:k]
 
 
-@pytest.mark.quick(20)
+@pytest.mark.quick(5)
 @PROPERTY
 @given(generated(), st.integers(1, 6))
 def test_the_bounds_change_nothing_found(example: Generated, k: int) -> None:
@@ -153,7 +153,7 @@ def test_the_bounds_change_nothing_found(example: Generated, k: int) -> None:
     assert distinct == run(problem, distinct=True)[:k]
 
 
-@pytest.mark.quick(20)
+@pytest.mark.quick(5)
 @PROPERTY
 @given(generated(), st.integers(1, 4))
 def test_all_in_windows_lists_everything(example: Generated, held: int) -> None:
@@ -191,7 +191,7 @@ def ranked(configs: list[Configuration]) -> tuple[list[float], Counter[tuple[flo
     return [c.cost for c in configs], Counter((c.cost, c.identity()) for c in configs)
 
 
-@pytest.mark.quick(20)
+@pytest.mark.quick(5)
 @PROPERTY
 @given(generated(), st.randoms(use_true_random=False))
 def test_fact_order_changes_no_configuration(example: Generated, order: Random) -> None:

@@ -173,7 +173,7 @@ def tight_media(draw: st.DrawFn) -> tuple[str, str]:
     return domain, re.sub(r"(\(medium wifi \S+ \S+) 40\)", redraw, state)
 
 
-@pytest.mark.quick(10)
+@pytest.mark.quick(3)
 @settings(PROPERTY, max_examples=40)
 @given(tight_media())
 def test_with_any_media_the_cheapest_is_branch_and_bounds_and_the_list_unchanged(

@@ -76,14 +76,16 @@ def branch_and_bound(problem: Problem) -> float | None:
 @pytest.mark.parametrize(
     "texts",
     [
-        ecology(10, 3, 2),
+        pytest.param(ecology(10, 3, 2), marks=pytest.mark.slow),
         media_tight(5, 2, 1),
         # the media test of room.py prunes here
         pytest.param(media_tight(7, 4, 4), marks=pytest.mark.slow),
-        fusion(5, 3, 4, 3),
+        pytest.param(fusion(5, 3, 4, 3), marks=pytest.mark.slow),
         pytest.param(chain(12), marks=pytest.mark.slow),
         wall(3, 6, 3),
-        gateway(5),  # the media cap on sharing (capacity.py) makes the root's bound exact
+        pytest.param(
+            gateway(5), marks=pytest.mark.slow
+        ),  # the media cap on sharing (capacity.py) makes the root's bound exact
         # ... and only a lower bound: two views a camera, two own cameras
         pytest.param(gateway(6, 4, 60), marks=pytest.mark.slow),
     ],
@@ -232,6 +234,7 @@ JOIN = """\
 """
 
 
+@pytest.mark.slow
 def test_the_time_limit_holds_inside_one_expansion(tmp_path: Path) -> None:
     """Issue 11: one method whose preconditions join four robots out of 60
     (13 million bindings, none valid) kept a run going long after its time

@@ -263,7 +263,7 @@ def test_installing_a_configuration_keeps_what_is_shared() -> None:
 
 def test_a_robot_seen_again_brings_back_what_its_silence_blamed() -> None:
     """Pippi freezes: her output to Emil goes stale and, before her lease runs
-    out, the computation on her is blamed (issue 33: a silent robot looks like
+    out, the computation on her is blamed (a silent robot looks like
     a silent computation at first); every configuration of step 2 needs her,
     so the society stops. Her loss is then noticed and, once she is seen
     again, what her silence blamed recovers with her: the society runs again

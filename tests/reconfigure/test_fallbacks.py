@@ -25,7 +25,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.commands  # noqa: F401  (registers the commands)
+import cfgplan.cli.commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from tests.backends.support import ROOT, check_golden
 

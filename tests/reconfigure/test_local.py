@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
 
@@ -55,6 +55,7 @@ def _gap(calls: list[Record], after: int) -> int:
     raise AssertionError("the action never received data again")
 
 
+@pytest.mark.slow
 def test_the_compass_of_step_3_fails_and_the_camera_configuration_takes_over(
     tmp_path: Path,
 ) -> None:
@@ -201,6 +202,7 @@ def test_an_implementation_reporting_its_failure_is_switched_out(tmp_path: Path)
     assert [s["to_cost"] for s in _events(trace, "switch")] == [47]
 
 
+@pytest.mark.slow
 def test_a_compass_that_falls_silent_is_found_by_staleness(tmp_path: Path) -> None:
     impl = _impl(
         tmp_path,

@@ -1,5 +1,5 @@
 """A link cut for 5 s through a TCP proxy: the society serves its goal again by
-itself within hold + 1 s of the link coming back (5.5, issue 33).
+itself within hold + 1 s of the link coming back (5.5).
 
 Cross-door step 2 (6.2.2), each robot its own process: Emil owns the goal and
 coordinates, Pippi helps and reaches him only through a TCP proxy on

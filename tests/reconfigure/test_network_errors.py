@@ -1,5 +1,5 @@
 """A helper's failing implementation is explained on the coordinator's console
-(5.5, issue 33): before, the coordinator said only that its input from the
+(5.5): before, the coordinator said only that its input from the
 helper went stale ("(stale)"), while the helper's own terminal had the error
 with its file and line. Hermetic: loopback, free ports, scouting off, bounded
 waits, every process stopped by its pid (:mod:`tests.runtime.netutil`)."""

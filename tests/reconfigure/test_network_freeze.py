@@ -1,4 +1,4 @@
-"""A helper frozen and let go: the society serves its goal again by itself (5.5, issue 33).
+"""A helper frozen and let go: the society serves its goal again by itself (5.5).
 
 Cross-door step 2 (6.2.2), each robot its own process: Emil owns the goal and
 coordinates, Pippi helps (every configuration needs her). Pippi is frozen

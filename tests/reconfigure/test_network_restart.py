@@ -1,4 +1,4 @@
-"""A helper killed and started again rejoins its society (5.5, issue 33).
+"""A helper killed and started again rejoins its society (5.5).
 
 Cross-door step 2 (6.2.2) with each robot its own process: Emil owns the goal
 and coordinates, Pippi helps (both configurations need her). Pippi's process

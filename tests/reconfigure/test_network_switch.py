@@ -108,7 +108,7 @@ def test_a_refusal_after_the_commit_rolls_nothing_back() -> None:
 def test_a_robot_back_is_sent_nothing_of_a_switch_before_it_is_ready() -> None:
     """Pippi's process dies and comes back. Her token appears before her
     subscriber is known: a part or a prepare sent on the token alone was lost
-    (issue 33: a spurious "silent" failure and seconds without the goal after
+    (a spurious "silent" failure and seconds without the goal after
     a restart). She is greeted, less and less often, until she says she is
     ready; then she is sent the running configuration's part and taken back:
     the society switches to 47 with her."""
@@ -210,7 +210,7 @@ def test_robots_silent_in_one_switch_start_one_switch_not_one_each() -> None:
 
 
 def test_a_helpers_failed_call_is_said_on_the_coordinators_console() -> None:
-    """Issue 33: the coordinator said only "(stale)" when a helper's
+    """The coordinator said only "(stale)" when a helper's
     implementation raised; now its error event (printed on its console) has
     the helper's own message."""
     adaptive, _network, _clock, _events = _society()
@@ -292,7 +292,7 @@ def test_a_helper_speaks_only_of_what_is_its_own() -> None:
 
 
 def test_a_second_process_of_a_live_robot_is_told_to_stop() -> None:
-    """Issue 33 (no split brain): Emil's ready names his process; a ready of
+    """Emil's ready names his process; a ready of
     another process named Emil while he is alive is answered ``duplicate``
     with that process's instance, and nothing else happens. Once Emil's token
     went away, a new process (a restart) is taken."""

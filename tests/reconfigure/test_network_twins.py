@@ -1,5 +1,5 @@
 """No split brain: a second process of a live robot, or a second coordinator,
-is refused and ends; the society goes on (5.5, issue 33).
+is refused and ends; the society goes on (5.5).
 
 Cross-door step 2 (6.2.2), each robot its own process: Emil owns the goal and
 coordinates, Pippi helps. A second process started as Pippi ends with exit

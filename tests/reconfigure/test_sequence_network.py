@@ -1,6 +1,6 @@
 """A sequence of configurations run across processes over Zenoh ends well for every robot.
 
-Issue 32: in the 6.2.2 sequence run with each robot its own process, Pippi
+In the 6.2.2 sequence run with each robot its own process, Pippi
 (who owns the first goal) coordinates; when Emil's crossing, the last step,
 is accomplished she told Emil to finish and left at once, so Emil's terminal
 never said the task was accomplished and its last line was ``robot Pippi

@@ -1,4 +1,4 @@
-"""Running a sequence of configurations (issue 14, thesis 6.2.2 as one run).
+"""Running a sequence of configurations (thesis 6.2.2 as one run).
 
 ``cfgplan run`` on the 6.2.2 sequence with the cross-door example (a crossing
 takes ``CROSSING`` calls with data, then the action reports its task

@@ -1,4 +1,4 @@
-"""Blame what failed (5.5, issue 33): a stale link is waited for, a silent
+"""Blame what failed (5.5): a stale link is waited for, a silent
 computation is not.
 
 Robot X runs ``a(X)`` and ``b(X)``, each sending to ``c(Y)`` on robot Y over

@@ -1,4 +1,4 @@
-"""``cfgplan run ... --foxglove [HOST:]PORT``: the run served to Foxglove live (issue 37).
+"""``cfgplan run ... --foxglove [HOST:]PORT``: the run served to Foxglove live.
 
 A WebSocket client (the ``websockets`` package, speaking the Foxglove
 WebSocket protocol as Foxglove does: subprotocol ``foxglove.sdk.v1``,

@@ -1,5 +1,5 @@
 """``--record FILE.mcap`` on ``cfgplan run`` and ``cfgplan simulate``: a run
-written to MCAP as it happens, read back with the ``mcap`` package (issue 37).
+written to MCAP as it happens, read back with the ``mcap`` package.
 
 The run is cross-door step 2 (6.2.2), Emil's compass failing: a switch from
 cost 44 to 47. The recording must hold what ``cfgplan record`` makes of the
@@ -24,7 +24,7 @@ from mcap.reader import make_reader
 from typer.testing import CliRunner
 
 import cfgplan.cli.run  # registers the command
-import cfgplan.cli.simulate  # noqa: F401  (registers the command)
+import cfgplan.cli.simulate  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.record import channels, mcap_export
 from cfgplan.record.live import open_recording, salvage
@@ -84,6 +84,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return trace, record
 
 
+@pytest.mark.slow
 def test_the_recording_holds_the_switch_with_its_schema(recorded: tuple[Path, Path]) -> None:
     """The switch is on /cfgplan/switches, schema cfgplan.trace.SwitchEvent, 44 -> 47;
     every channel has its kind's JSON Schema; the file's metadata counts the events."""

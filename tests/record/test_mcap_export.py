@@ -1,5 +1,5 @@
 """``cfgplan record``: a real run's trace as an MCAP file, read back with the
-``mcap`` package (issue 37).
+``mcap`` package.
 
 The trace is cross-door step 2 (6.2.2) in one process, Emil's compass failing
 at cycle 20: a switch from cost 44 to 47. The recording must have one channel
@@ -104,6 +104,7 @@ def test_every_kind_of_event_has_a_topic() -> None:
     assert len(set(mcap_export.TOPICS.values())) == len(models)
 
 
+@pytest.mark.slow
 def test_channels_schemas_and_counts(trace: Path, recorded: Path) -> None:
     """One channel per kind of event (per robot, per global channel and way),
     JSON messages, each with the JSON Schema of its model; as many messages on
@@ -205,6 +206,7 @@ def test_a_rotated_trace_is_read_whole(trace: Path, recorded: Path, tmp_path: Pa
     assert output.read_bytes() == recorded.read_bytes()
 
 
+@pytest.mark.slow
 def test_a_bad_line_is_named_by_file_and_line(trace: Path, tmp_path: Path) -> None:
     """A line that is not JSON, or JSON but not an event, is refused with its
     file:line (exit 1, no traceback) and nothing is written."""
@@ -230,6 +232,7 @@ def test_a_bad_line_is_named_by_file_and_line(trace: Path, tmp_path: Path) -> No
     assert out.returncode == 1 and "no such trace file" in out.stderr, out.stderr
 
 
+@pytest.mark.slow
 def test_an_existing_file_is_kept_without_force(trace: Path, tmp_path: Path) -> None:
     """``-o`` names a file there already: exit 1, untouched; ``--force`` replaces it,
     unless it is the trace itself."""

@@ -5,28 +5,22 @@ and finds the switch in the page and every picture drawn with a size."""
 
 from __future__ import annotations
 
-import os
-import shutil
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from tests.report.test_cli_report import run_trace
 
 pytestmark = pytest.mark.slow
 
-CHROMIUM = os.environ.get("CFGPLAN_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
 
-
-def test_the_report_opens_offline_and_shows_the_switch(tmp_path: Path) -> None:
+def test_the_report_opens_offline_and_shows_the_switch(tmp_path: Path, chromium: str) -> None:
     """The events table has the switch and its cause; the timeline and both
     diagrams are SVGs the browser lays out (a width and a height); no request
     leaves the file."""
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"no Chromium at {CHROMIUM} (apt-get install -y chromium)")
     try:
         from playwright.sync_api import Route, sync_playwright
     except ImportError:
@@ -47,7 +41,7 @@ def test_the_report_opens_offline_and_shows_the_switch(tmp_path: Path) -> None:
 
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(
-            executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"]
+            executable_path=chromium, args=["--no-sandbox", "--disable-gpu"]
         )
         try:
             page = browser.new_page(viewport={"width": 1300, "height": 900})

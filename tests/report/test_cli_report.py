@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from cfgplan.report.source import read_run
 from cfgplan.report.story import from_records
@@ -189,3 +189,40 @@ def test_an_earlier_report_is_kept_without_force(tmp_path: Path) -> None:
     code, text = _report(str(trace), "-o", str(out), "--force")
     assert code == 0, text
     assert "Robots: Pippi" in (out / "report.html").read_text("utf-8")
+
+
+def test_a_run_that_never_switched_names_its_cost_and_is_drawn_beside_its_trace(
+    tmp_path: Path,
+) -> None:
+    """The configuration a run started with is drawn with its cost (cross-door's
+    step 3 has only the camera one, 47), taken from the robots' start events: a
+    run that never switched has no switch event to read it from, and the report
+    said "cost 0". Without -o the report goes beside the trace (run-report/)."""
+    trace = tmp_path / "run.jsonl"
+    domain = DOMAINS / "cross-door" / "domain.lisp"
+    state = DOMAINS / "cross-door" / "state-6.2.2-step3.lisp"
+    args = ["run", str(domain), str(state), "--impl", str(EXAMPLE_IMPL), "--cycles", "3"]
+    result = CliRunner().invoke(app, [*args, "--rate", "50", "--trace", str(trace)])
+    assert result.exit_code == 0, result.stdout + result.stderr
+    starts = [json.loads(line) for line in trace.read_text("utf-8").splitlines()]
+    assert {r["cost"] for r in starts if r["event"] == "start"} == {47}
+    story = from_records(read_run([trace]).records)
+    assert [(s.number, s.config.cost) for s in story.spans] == [(1, 47)]
+    code, text = _report(str(trace))
+    assert code == 0, text
+    assert f"in {tmp_path / 'run-report'}" in text
+    page = (tmp_path / "run-report" / "report.html").read_text("utf-8")
+    assert "#1</a></td><td>47</td>" in page
+    # A trace of emitted programs, which do not know the cost: "?", not 0.
+    unknown = tmp_path / "emitted.jsonl"
+    unknown.write_text(
+        "".join(
+            json.dumps({k: v for k, v in r.items() if k != "cost"}) + "\n"
+            for r in starts
+            if r["event"] != "switch"
+        ),
+        "utf-8",
+    )
+    code, text = _report(str(unknown), "-o", str(tmp_path / "u"))
+    assert code == 0, text
+    assert "#1</a></td><td>?</td>" in (tmp_path / "u" / "report.html").read_text("utf-8")

@@ -1,6 +1,6 @@
 """The story of a trace: configurations rebuilt from switch events and from
 calls, numbered like the diagrams, failures and recoveries on the row of the
-robot whose resource it is (issue 37)."""
+robot whose resource it is."""
 
 from __future__ import annotations
 

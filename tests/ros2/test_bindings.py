@@ -1,4 +1,4 @@
-"""Functionalities bound to ROS 2 topics, against a plain zenoh-python "ROS 2 node" (issue 36).
+"""Functionalities bound to ROS 2 topics, against a plain zenoh-python "ROS 2 node".
 
 The test's ROS side is written from rmw_zenoh's design document alone: the key
 expressions, the attachment and the token prefix are spelled out literally

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.run  # noqa: F401  (registers the command)
+import cfgplan.cli.run  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.ros2 import rmw_zenoh as wire
 from cfgplan.ros2.bridge import BridgeOptions, EventBridge, domain_id_of, open_bridge

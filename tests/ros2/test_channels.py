@@ -1,4 +1,4 @@
-"""Global channels as ROS 2 topics (``--ros2``, issue 36), seen by a plain zenoh-python node.
+"""Global channels as ROS 2 topics (``--ros2``), seen by a plain zenoh-python node.
 
 The robot's side is :class:`~cfgplan.ros2.bridge.EventBridge` on a real
 Zenoh session, given the sends of a global channel as the runtime records

@@ -1,4 +1,5 @@
-"""Issue 36's example end to end: cross-door over ROS 2 topics, in one command (slow).
+"""The ROS 2 example (examples/cross-door/ros2-map.toml) end to end:
+cross-door over ROS 2 topics, in one command (slow).
 
 ``cfgplan launch`` starts cross-door step 1 (Pippi crosses, Emil helps) with
 examples/cross-door/ros2-map.toml and ``--ros2``. The test's ROS side, a

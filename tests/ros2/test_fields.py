@@ -1,4 +1,4 @@
-"""Several ports in one ROS 2 message, published outputs and subscribed inputs (issue 36).
+"""Several ports in one ROS 2 message, published outputs and subscribed inputs.
 
 Offline: the cross-door example map (examples/cross-door/ros2-map.toml) read
 against the domain; ports to PoseStamped fields and back (the yaw of a

@@ -1,4 +1,4 @@
-"""Against a real ROS 2 installation with rmw_zenoh (issue 36): skipped where ``ros2`` is absent.
+"""Against a real ROS 2 installation with rmw_zenoh: skipped where ``ros2`` is absent.
 
 Where the ``ros2`` command and ``rmw_zenoh_cpp`` exist (a sourced ROS 2
 Jazzy or later), this starts an ``rmw_zenohd`` router on a free loopback port

@@ -1,4 +1,4 @@
-"""The ROS 2 topic map (``--ros2-map FILE``): read, and checked against the domain (issue 36)."""
+"""The ROS 2 topic map (``--ros2-map FILE``): read, and checked against the domain."""
 
 from __future__ import annotations
 

@@ -169,7 +169,7 @@ def _blocking(release: threading.Event) -> Registry:
 
 
 def test_a_stop_hook_that_blocks_is_abandoned_after_its_budget() -> None:
-    """Issue 33: a hook that blocks froze the switch, and the robot, for good.
+    """A hook that blocks froze the switch, and the robot, for good.
     Now it has the budget of a call: the switch goes on after it, and the
     functionality's failure is reported (a call ``timeout``, the install's problems)."""
     before, after = _switch()

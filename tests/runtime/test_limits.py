@@ -1,4 +1,4 @@
-"""Everything bounded (issue 33): a value over the size limit is refused on
+"""Everything bounded: a value over the size limit is refused on
 send and dropped unread on receipt (5.2.2: a global channel copies data to
 another robot; the limit keeps one robot's output from swamping the others)."""
 
@@ -105,7 +105,7 @@ def test_a_message_over_the_limit_is_dropped_unread(well_formed: bool) -> None:
 
 
 def test_a_trace_records_large_values_by_size_and_digest(tmp_path: Path) -> None:
-    """Issue 33: 24 MB values grew the trace by 96 MB in 12 s. A value over
+    """24 MB values grew the trace by 96 MB in 12 s. A value over
     :data:`ELIDE` characters is recorded by its type, size and the SHA-256 of
     its JSON, the same on the sending and the receiving robot."""
     value = "x" * 2 * MIB

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.emit  # noqa: F401  (registers the command)
+import cfgplan.cli.emit  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime.console import WAIT_NOTICE
 from tests.backends.support import CROSS, DOMAINS, EXAMPLE_IMPL, ROOT
@@ -204,6 +204,7 @@ def test_a_robot_alone_over_zenoh_waits_and_stops_after_its_duration(
     assert "waits for global-orient(Pippi)" in out.stdout
 
 
+@pytest.mark.slow
 def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None:
     """stdout to a full disk, or to a pipe closed early: no traceback."""
     args = [str(emitted / "run_all.py"), "--impl", str(EXAMPLE_IMPL), "--rate", "0"]
@@ -236,7 +237,7 @@ def test_a_console_that_cannot_be_written_to_is_said_once(emitted: Path) -> None
 
 
 def test_a_robot_alone_says_what_it_waits_for(emitted: Path) -> None:
-    """Issue 10: run alone, Emil never gets Pippi's compass reading; his program
+    """Run alone, Emil never gets Pippi's compass reading; his program
     says so after WAIT_NOTICE calls instead of looking hung, and says first how
     long it runs, as cfgplan run does."""
     out = _run(

@@ -175,7 +175,7 @@ def test_a_coordinator_started_again_is_followed_from_its_first_id() -> None:
 
 
 def test_a_second_coordinator_is_told_it_is_a_rival_and_not_followed() -> None:
-    """Issue 33 (no split brain): while the coordinator it follows is alive, a
+    """While the coordinator it follows is alive, a
     robot ignores another coordinator's messages — a commit, a finish, a
     hello — and tells it once that it is a rival (it then stops); the
     console says so once. Once its coordinator is gone, a new one is followed."""
@@ -209,7 +209,7 @@ def test_a_second_process_of_a_robot_stops_when_told_it_is_a_duplicate() -> None
 
 
 def test_told_to_finish_a_robot_says_so_answers_and_takes_no_one_for_lost() -> None:
-    """Issue 32: a robot told the task is accomplished records ``finish`` (the
+    """A robot told the task is accomplished records ``finish`` (the
     console's "the task is accomplished" line), answers ``finished`` so that
     the coordinator may leave, and the coordinator leaving is no loss."""
     emil, member, network, _ = _member()
@@ -226,7 +226,7 @@ def test_told_to_finish_a_robot_says_so_answers_and_takes_no_one_for_lost() -> N
 
 
 def test_a_robot_says_it_is_ready_when_it_can_receive_and_when_greeted() -> None:
-    """Issue 33: the coordinator sends a robot nothing of a switch before it
+    """The coordinator sends a robot nothing of a switch before it
     says it is ready (its subscriber exists); a coordinator that sees its
     token without that word (started after it) greets it, and it answers."""
     emil, member, network, _ = _member()  # _member checks the first word: ready
@@ -240,7 +240,7 @@ def test_a_robot_says_it_is_ready_when_it_can_receive_and_when_greeted() -> None
 
 
 def test_a_call_that_fails_is_told_to_the_coordinator_once_a_run_with_its_message() -> None:
-    """Issue 33: a helper's implementation raised and the coordinator's console
+    """A helper's implementation raised and the coordinator's console
     said only that its input went stale; now it gets the helper's own message
     (its file and line), once for each run of failed calls, clipped."""
     emil, member, network, _ = _member()

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import cfgplan.cli.emit  # noqa: F401  (registers the command)
+import cfgplan.cli.emit  # noqa: F401  (loads the command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime import (
     ChannelKey,
@@ -76,6 +76,7 @@ def _call(name: str, status: str) -> object:
     return lambda r: r["event"] == "call" and r["functionality"] == name and r["status"] == status
 
 
+@pytest.mark.slow
 def test_two_processes_cross_the_door_and_a_killed_robot_is_reported(
     emitted: Path, tmp_path: Path
 ) -> None:
@@ -156,6 +157,7 @@ def test_two_processes_cross_the_door_and_a_killed_robot_is_reported(
     assert (last["event"], last["reason"]) == ("stop", "terminated")
 
 
+@pytest.mark.slow
 def test_a_frozen_robot_is_lost_after_the_lease_and_seen_again(
     emitted: Path, tmp_path: Path
 ) -> None:
@@ -285,6 +287,7 @@ class Lossy:
         self.inner.close()
 
 
+@pytest.mark.slow
 def test_losing_a_fifth_of_the_messages_cross_door_still_receives(
     emitted: Path, tmp_path: Path
 ) -> None:
@@ -302,6 +305,7 @@ def test_losing_a_fifth_of_the_messages_cross_door_still_receives(
     assert not [c for c in running.calls if c.status == "error"]
 
 
+@pytest.mark.slow
 def test_two_societies_on_one_network_stay_apart(emitted: Path, tmp_path: Path) -> None:
     running, _ = _two_robots(emitted, tmp_path, ("left", "right"))
     try:
@@ -371,7 +375,7 @@ def test_a_channel_attached_twice_is_refused_as_on_one_machine(tmp_path: Path) -
 
 
 def test_switch_messages_past_the_backlog_are_dropped_and_counted(tmp_path: Path) -> None:
-    """Issue 34: a robot flooding the coordinator's key grew its queue without
+    """A robot flooding the coordinator's key grew its queue without
     bound. Past ``backlog`` messages waiting for the robot's loop, more are
     dropped and counted; the coordinator says so (an ``error`` event)."""
     config = str(hermetic_config(tmp_path))

@@ -10,22 +10,25 @@ from typing import Any
 import pytest
 import typer
 
-from cfgplan.cli import commands  # noqa: F401  (registers the commands)
+from cfgplan.cli import commands  # noqa: F401  (loads every command module)
 from cfgplan.cli.app import app
 from cfgplan.runtime.main import parser_of
 from cfgplan.runtime.options import (
+    LAUNCHED,
     NETWORK_OPTIONS,
     RUN_OPTIONS,
     UNTIL,
     Option,
     how_long,
+    launched,
 )
 
 
 def _run_params() -> dict[str, Any]:
     group = typer.main.get_command(app)
     assert isinstance(group, typer.core.TyperGroup)
-    command = group.commands["run"]
+    command = group.get_command(typer.Context(group, info_name="cfgplan"), "run")
+    assert command is not None
     return {opt: p for p in command.params for opt in getattr(p, "opts", [])}
 
 
@@ -59,7 +62,10 @@ def test_both_run_until_interrupted_by_default() -> None:
     assert how_long(defaults.cycles, defaults.duration) == "until interrupted (Ctrl-C)"
     assert how_long(3, 2.5) == "3 cycle(s) or 2.5 s"
     assert UNTIL in (ROBOT.description or "") and UNTIL in (SOCIETY.description or "")
-    run = typer.main.get_command(app).commands["run"]  # type: ignore[attr-defined]
+    group = typer.main.get_command(app)
+    assert isinstance(group, typer.core.TyperGroup)
+    run = group.get_command(typer.Context(group, info_name="cfgplan"), "run")
+    assert run is not None and run.help is not None
     assert "Runs until interrupted (Ctrl-C or SIGTERM)" in run.help
 
 
@@ -89,3 +95,30 @@ def test_a_bad_value_is_refused_alike(
     with pytest.raises(typer.BadParameter) as refused:
         param.process_value(typer.Context(typer.main.get_command(app)), value)
     assert message in refused.value.format_message()
+
+
+def test_a_robot_the_launch_started_does_not_claim_ctrl_c(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The robots of cfgplan launch run in sessions of their own: Ctrl-C reaches
+    the launch, which stops them. They said "until interrupted (Ctrl-C)"."""
+    import subprocess
+
+    from cfgplan.runtime import spawn
+
+    seen: list[dict[str, str]] = []
+
+    def popen(*args: object, **kwargs: object) -> object:
+        env = kwargs["env"]
+        assert isinstance(env, dict)
+        seen.append(env)
+        raise OSError("not started in this test")
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    launch = spawn.Launch([spawn.RobotCommand("Pippi", ("run",), "127.0.0.1", spawn.free_port())])
+    with pytest.raises(OSError):
+        launch.start()
+    assert seen and seen[0][LAUNCHED] == "1"
+    monkeypatch.setenv(LAUNCHED, "1")
+    assert launched() and how_long(0, None) == "until the launch stops it"
+    assert how_long(5, None) == "5 cycle(s)"
+    monkeypatch.delenv(LAUNCHED)
+    assert how_long(0, None) == "until interrupted (Ctrl-C)"

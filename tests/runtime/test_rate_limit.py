@@ -1,5 +1,5 @@
 """A robot flooding its channels neither starves the receiver nor gets more than
-its allowance through (issue 34; :mod:`cfgplan.security.rates`).
+its allowance through (:mod:`cfgplan.security.rates`).
 
 The buckets are tested on a clock of the test's own; the flood is a peer
 holding Pippi's valid certificate, against a society started with --keys

@@ -78,7 +78,7 @@ def test_require_names_every_missing_implementation() -> None:
     )
 
 
-# Issue 9, item 6: these used to escape registry.py as tracebacks.
+# These used to escape registry.py as tracebacks.
 
 
 def test_a_syntax_error_names_file_line_and_column(tmp_path: Path) -> None:
@@ -124,7 +124,7 @@ def test_an_exception_in_an_imported_module_by_name(
     sys.modules.pop("impl_raising_by_name", None)
 
 
-# -- signatures, checked before anything runs (issue 10) ----------------------------
+# -- signatures, checked before anything runs ----------------------------
 
 
 def test_an_implementation_that_cannot_take_the_call_is_refused_naming_both() -> None:
@@ -181,3 +181,19 @@ def test_every_example_implementation_fits_its_domain() -> None:
     fits = {"camera": (0, 0), "measure-door": (1, 1), "transform-info": (2, 4)}
     for name, (objects, inputs) in fits.items():
         registry.lookup(name).check(name, objects, inputs)
+
+
+def test_an_implementation_spelt_otherwise_than_the_domain_is_pointed_at() -> None:
+    """The file implements localize where the domain says localise: a "did you
+    mean", at configuration time (require) and at a look-up alike."""
+    registry = Registry([functionality("localize")(lambda: 1)], source="impl.py")
+    for fail in (lambda: registry.require(["localise"]), lambda: registry.lookup("localise")):
+        with pytest.raises(RunError) as caught:
+            fail()
+        assert str(caught.value) == (
+            "no implementation of functionality localise in impl.py (implemented: localize)"
+        )
+        assert caught.value.hint == (
+            "did you mean localize? (the domain names it localise: declare one with "
+            '@functionality("localise") from cfgplan.runtime)'
+        )

@@ -1,5 +1,5 @@
 """Two problems under one society name detect each other and refuse, naming both
-(issue 34); robots of one problem still join. The fingerprint's rules
+(a secured society's rule); robots of one problem still join. The fingerprint's rules
 (:mod:`cfgplan.security.identity`) are tested without a network; the
 processes are hermetic (loopback, free ports, scouting off, bounded waits,
 stopped by pid)."""

@@ -1,8 +1,8 @@
-"""A helper whose stop hook blocks, across processes over Zenoh (5.5, issue 33).
+"""A helper whose stop hook blocks, across processes over Zenoh (5.5).
 
 Emil coordinates cross-door step 2 (6.2.2); his compass fails and the
 society switches 44 -> 47, which stops two of Pippi's functionalities. Pippi's
-stop hooks block for good. Before issue 33 Pippi froze in the first hook
+stop hooks block for good. Before, Pippi froze in the first hook
 (the switch never completed there, her trace called it nothing) and SIGTERM
 did not end her. Now each hook is abandoned after the call budget, reported
 as a failure of its functionality on Pippi's terminal and in her trace, the

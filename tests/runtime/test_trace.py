@@ -35,7 +35,7 @@ def test_show_is_compact_and_deterministic() -> None:
     assert show((1,)) == "(1,)"
 
 
-# Issue 9, item 6: these used to raise out of the trace printer.
+# These used to raise out of the trace printer.
 
 
 def test_a_value_that_contains_itself_is_shown_with_dots() -> None:
@@ -89,8 +89,22 @@ def test_the_printer_shows_a_functionalitys_first_failures_then_counts() -> None
     assert printer.failed
 
 
+def test_a_failure_placed_in_the_implementations_file_names_it_once() -> None:
+    """ "(impl.py:11 in localise) [impl.py]" named the file twice; the tag stays
+    where the place is elsewhere (a module the implementations import) or unknown."""
+    out, err = io.StringIO(), io.StringIO()
+    printer = Printer(verbose=False, source="/x/impl.py", out=out, err=err)
+    printer(_call(status="error", error="the implementation raised E: no (/x/impl.py:11 in f)"))
+    printer(
+        _call(label="F4", status="error", error="the implementation raised E (/x/lib.py:3 in g)")
+    )
+    first, second = err.getvalue().splitlines()
+    assert first.endswith("failed: the implementation raised E: no (/x/impl.py:11 in f)")
+    assert second.endswith("failed: the implementation raised E (/x/lib.py:3 in g) [/x/impl.py]")
+
+
 def test_the_printer_says_what_a_functionality_waits_for_then_that_it_runs_again() -> None:
-    """Issue 10: after WAIT_NOTICE calls in a row without its data, once; and
+    """After WAIT_NOTICE calls in a row without its data, once; and
     when the data comes, once; a short wait is not worth a line."""
     out, err = io.StringIO(), io.StringIO()
     printer = Printer(verbose=False, source="impl.py", out=out, err=err)
@@ -154,7 +168,7 @@ def test_trace_lines_follow_the_schema(tmp_path: Path) -> None:
     }
 
 
-# Issue 9, item 1 for traces: where --trace may write.
+# For traces: where --trace may write.
 
 
 def test_an_existing_trace_is_never_overwritten_without_force(tmp_path: Path) -> None:

@@ -42,7 +42,7 @@ def test_endpoints_turn_multicast_scouting_off() -> None:
 
 
 def test_a_robot_that_only_connects_listens_nowhere(tmp_path: Path) -> None:
-    """Issue 34: a robot started with only ``--connect`` listened on every
+    """A robot started with only ``--connect`` listened on every
     interface (Zenoh's default ``tcp/[::]:0``). It reaches out; it listens only
     where it is told — by ``--listen`` or by a configuration file."""
     assert _get(ZenohOptions(connect=("tcp/10.0.0.2:7447",)), "listen/endpoints") == []
@@ -66,7 +66,7 @@ def test_a_config_file_is_the_base_and_options_go_on_top(tmp_path: Path) -> None
 
 
 def test_a_config_file_keeps_cfgplans_lease_and_retry_unless_it_sets_them(tmp_path: Path) -> None:
-    """Issue 33: a file that set only an endpoint dropped cfgplan's lease (a
+    """A file that set only an endpoint dropped cfgplan's lease (a
     frozen robot was reported lost after 10 s, Zenoh's default) and its retry."""
     path = tmp_path / "zenoh.json5"
     path.write_text('{ listen: { endpoints: ["tcp/127.0.0.1:7447"] } }')

@@ -1,6 +1,6 @@
 """A society started with ``--keys``: its goal is served over TLS with mutual
 authentication, and strangers and members beyond their rights get nothing in
-(issue 34, transport level).
+(transport level).
 
 Hermetic: loopback, free ports, scouting off, bounded waits, every process
 stopped by its pid (:mod:`tests.runtime.netutil`). The attackers are plain

@@ -1,5 +1,5 @@
 """``cfgplan keys new``: a society's CA and its members' keys, owner-only, never
-overwritten without --force, nothing secret printed (issue 34)."""
+overwritten without --force, nothing secret printed."""
 
 from __future__ import annotations
 
@@ -82,6 +82,7 @@ def test_keys_for_every_robot_of_a_state_owner_only_and_signed_by_the_ca(
         assert body[:40] not in printed
 
 
+@pytest.mark.slow
 def test_refuses_to_overwrite_without_force_and_a_folder_others_can_enter(
     tmp_path: Path,
 ) -> None:

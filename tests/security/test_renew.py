@@ -1,5 +1,5 @@
 """``cfgplan keys renew NAME -o DIR``: one member's key rotated with the society's own
-authority; where the new society.json is, the old certificate can do nothing (issue 34).
+authority; where the new society.json is, the old certificate can do nothing.
 
 The sessions are configured as robot programs configure theirs (hermetic:
 loopback, free ports, scouting off, bounded waits)."""
@@ -76,6 +76,7 @@ def test_renew_replaces_one_members_files_and_names_its_generation(tmp_path: Pat
     assert _cn(keys / "pippi.pem") == "renew-test/Pippi@3"
 
 
+@pytest.mark.slow
 def test_renew_refuses_clearly(tmp_path: Path) -> None:
     """An unknown member, a folder without ca.key (a robot's host), or no keys
     at all: exit 1, a message and no traceback; no name: usage, exit 2."""

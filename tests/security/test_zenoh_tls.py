@@ -1,5 +1,5 @@
 """How ``--keys DIR`` becomes a robot's Zenoh configuration, checked against the
-installed eclipse-zenoh's configuration schema (no network; issue 34)."""
+installed eclipse-zenoh's configuration schema (no network)."""
 
 from __future__ import annotations
 
@@ -151,7 +151,7 @@ def test_an_emitted_robot_program_takes_keys_and_their_society(keys: Path) -> No
 def test_a_society_without_keys_is_said_to_be_open_and_one_with_keys_is_not(
     keys: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Issue 34: nothing said that anyone on the network could read and steer
+    """Nothing said that anyone on the network could read and steer
     a society. Opening a robot's session without keys now warns, once, on
     stderr (``cfgplan run`` and emitted programs open it the same way)."""
     from cfgplan.runtime.main import open_transport

@@ -1,5 +1,5 @@
 """Any configuration the planner finds runs in the simulator, not only the
-cheapest (issue 15): started at another rank, the society accomplishes the
+cheapest: started at another rank, the society accomplishes the
 task — directly, or by re-planning when the world makes a measurement
 impossible (sonars cannot register W1 from afar: that measurement fails and
 the society switches, 5.5).

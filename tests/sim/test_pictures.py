@@ -1,6 +1,6 @@
 """The simulator's pictures, measured: labels that never overlap (as the
 renderer reports their extents), marks on the right rows and robots, and the
-measures the thesis's experiments are about (issue 37)."""
+measures the thesis's experiments are about."""
 
 from __future__ import annotations
 
@@ -52,6 +52,7 @@ def test_overlaps_sees_two_labels_that_meet() -> None:
     assert overlaps(fig) == [("44: cross-door", "compass(Emil) fails")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_no_label_meets_another_in_the_timeline(bundled: dict[str, Run], name: str) -> None:
     """Every text of the timeline (steps, bars, switches, failures, ticks, key):

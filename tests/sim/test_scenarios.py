@@ -1,5 +1,5 @@
 """The three experiments of chapter 6 replayed in the simulator: the numbers
-each run must show (issue 15, "Done when").
+each run must show (what the simulator was built to show).
 
 * cross-door (6.2.2 steps 1-3, Figs. 6.4-6.6): Pippi crosses with Emil's
   help (44), Emil with Pippi's (44, roles exchanged); Emil's compass is

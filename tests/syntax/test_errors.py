@@ -235,12 +235,17 @@ def test_state_fact_printed_with_space_before_paren() -> None:
 def test_a_syntax_error_anywhere_comes_before_a_wrong_form() -> None:
     """The reader builds each form as the parser closes it, but reports as if it
     had read the whole file first: a later syntax error before an earlier
-    wrong form; of two wrong forms, the first."""
+    wrong form; of two wrong forms, both, in file order (check reports every
+    problem; it used to say the first only)."""
     wrong = "(state (robot ?r))\n"
     text = wrong + '(state (robot Emil) "x")\n'
     assert_rendered(reader_error(text), text, 2, 21, "unexpected character '\"'")
     text = wrong + "(state Pippi)\n"
-    assert_rendered(reader_error(text), text, 1, 8, "a fact holds no variables")
+    with pytest.raises(CfgplanError) as info:
+        parse(text, "t.lisp")
+    first, second = info.value.diagnostics
+    assert_rendered(first, text, 1, 8, "a fact holds no variables")
+    assert_rendered(second, text, 2, 8, "expected a fact such as (robot Pippi), found Pippi")
 
 
 def test_state_fact_with_variable() -> None:

@@ -224,7 +224,7 @@ _SHAPED_TEXT = st.lists(
 ).map("\n".join)
 
 
-@pytest.mark.quick(25)
+@pytest.mark.quick(6)
 @FUZZ
 @given(_ALPHABET_TEXT)
 def test_alphabet_soup(text: str) -> None:

@@ -1,4 +1,4 @@
-"""The analysed grammar is cached between runs (issue 32: building the LALR
+"""The analysed grammar is cached between runs (building the LALR
 tables was a tenth of ``cfgplan plan``): a parser read from the cache reads
 as one built from the grammar, positions and errors alike, and a cache that
 cannot be read or written is only slower."""

@@ -7,6 +7,7 @@ const page = {
   loading: false,
   seen: 0, // the last timeline entry shown
   state: null,
+  disconnected: null, // when the page lost the run (seconds since the epoch), or null
 };
 
 function $(id) {
@@ -139,7 +140,11 @@ function robots(state) {
     const row = element("tr");
     row.append(element("td", "", name + (name === state.coordinator ? " (coordinator)" : "")));
     const cell = element("td");
-    cell.append(element("span", "state " + robot.state, robot.state));
+    // Disconnected, the page knows nothing of the robots now: their last state
+    // is not shown as if it held (a robot that ran is not "running" still).
+    const known = page.disconnected === null ? robot.state : "unknown";
+    const said = page.disconnected === null ? robot.state : "unknown (was " + robot.state + ")";
+    cell.append(element("span", "state " + known, said));
     row.append(cell);
     row.append(element("td", "number", robot.cycle === null ? "-" : robot.cycle));
     const last = robot.t === null ? null : Math.max(0, now - robot.t);
@@ -203,16 +208,25 @@ function show(state) {
   fallbacks(state);
 }
 
+// The "s ago" of the robots' table counts on between two updates, and after
+// the page lost the run (no update comes then).
+setInterval(() => {
+  if (page.state) robots(page.state);
+}, 1000);
+
 function connect() {
   const status = $("connection");
   const events = new EventSource("/events");
   events.onopen = () => {
     status.textContent = "live";
     status.className = "connection on";
+    page.disconnected = null;
   };
   events.onerror = () => {
     status.textContent = "disconnected: the run may have ended";
     status.className = "connection ended";
+    if (page.disconnected === null) page.disconnected = Date.now() / 1000;
+    if (page.state) robots(page.state);
   };
   events.onmessage = (message) => {
     const data = JSON.parse(message.data);

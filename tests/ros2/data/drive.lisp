@@ -1,4 +1,4 @@
-;;; A robot that drives on its laser scans (tests of issue 36): the laser is a
+;;; A robot that drives on its laser scans (tests of the ROS 2 bindings): the laser is a
 ;;; ROS 2 topic (/scan), the drive a ROS 2 topic (/cmd_vel); avoid is Python.
 (make-functionality :name '(laser ?r) :precond '((laser ?r)) :out '((scan ?r)))
 (make-functionality :name '(avoid ?r) :in '((scan ?r)) :out '((cmd ?r)))
