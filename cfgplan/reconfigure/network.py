@@ -138,18 +138,18 @@ class NetworkAdaptive:
                 )
 
     def _stalled(self) -> None:
-        """Whether this process stood still longer than the lease since the last
+        """Whether this process stood still for half the lease or more since the last
         pass (:mod:`cfgplan.reconfigure.stall`): then its session stood still
         too and may see robots lost that never stopped. That is said, and
         losses seen in the next two leases are held."""
         if self.heartbeat is None or self.doubts is None:
             return
         pause, lease = self.heartbeat.take(), self.doubts.lease
-        if pause > lease:
+        if pause > self.doubts.threshold:
             self.doubts.stalled(time.monotonic())
             self.deployer.member.error(
-                f"{self.deployer.me}'s process stood still longer than the lease: "
-                f"{pause:.1f} s (the lease is {lease:g} s); robots seen lost now are "
+                f"{self.deployer.me}'s process stood still for {pause:.1f} s, half the lease "
+                f"or more (the lease is {lease:g} s); robots seen lost now are "
                 "checked again before anything is withdrawn"
             )
 
