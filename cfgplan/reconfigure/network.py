@@ -44,6 +44,7 @@ from cfgplan.reconfigure.deployer import RETRY, RETRY_MOST, SWITCH_TIMEOUT, Netw
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.reconfigure.stall import Doubts, Heartbeat
 from cfgplan.reconfigure.trust import beyond_its_own
+from cfgplan.runtime.errors import printable
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
@@ -62,7 +63,9 @@ from cfgplan.runtime.protocol import (
     read_to_coordinator,
 )
 from cfgplan.runtime.society import Society
-from cfgplan.runtime.zenoh_transport import ZenohTransport
+from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, ZenohTransport
+from cfgplan.security.rates import Throttle
+from cfgplan.security.zenoh_tls import society_of
 
 __all__ = [
     "RETRY",
@@ -95,6 +98,12 @@ class NetworkAdaptive:
     heartbeat: Heartbeat | None = None  # tells this process's own stalls (coordinate())
     doubts: Doubts | None = None  # the losses held after such a stall
     reconfigures: bool = True
+    _throttle: Throttle = field(default_factory=Throttle)  # what is said of dropped messages
+    _twins: set[str] = field(default_factory=set)  # other processes of this robot, alive
+    _rivals: dict[str, tuple[Rival, float]] = field(default_factory=dict)  # said, by robot
+    coordinators: frozenset[str] = frozenset()
+    """The robots that may coordinate (coordinate(): with keys, those the
+    society's keys mark so; without, the state's robots)."""
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)
@@ -111,6 +120,9 @@ class NetworkAdaptive:
                 f"the {most} that may wait (a robot floods it)"
             )
             self._dropped = dropped
+        self._say_counts()
+        if self._rivals and self.refusal is None:
+            self._weigh_rivals()
         self._stalled()
         for detection in self.monitor.drain():
             if not self._doubt(detection):
@@ -211,7 +223,8 @@ class NetworkAdaptive:
         try:
             message = read_to_coordinator(payload)
         except ProtocolError as exc:
-            self.deployer.member.error(f"a message to the coordinator that cannot be read: {exc}")
+            said = f"a message to the coordinator that cannot be read: {exc}"
+            self._say(f"{sender} unreadable {exc.kind}", said)
             return
         if message.robot != sender:
             said = f"a message on {sender}'s key that says it is from {message.robot!r}"
@@ -226,7 +239,7 @@ class NetworkAdaptive:
             self._rival(message)
         elif isinstance(message, CallError):
             said = f"{message.robot} {message.functionality}: {message.error}"
-            self.deployer.member.error(said)
+            self._say(f"{sender} call-error", said)
         else:
             self._report(message)
 
@@ -241,7 +254,7 @@ class NetworkAdaptive:
         detection = report.detection
         if detection.robot != report.robot:
             said = f"{report.robot} reported a detection made by {detection.robot!r}: dropped"
-            self.deployer.member.error(said)
+            self._say(f"{report.robot} another's detection", said)
             return
         beyond = beyond_its_own(detection)
         if beyond is not None:
@@ -261,7 +274,10 @@ class NetworkAdaptive:
         lost (its part with it) and the other is asked whether it is ready,
         as a robot seen again is: otherwise the live name would hide that
         death until its inputs went stale."""
-        if robot == self.deployer.me or (self.members and robot not in self.members):
+        if robot == self.deployer.me:  # another process of this robot: a second coordinator
+            (self._twins.add if alive else self._twins.discard)(instance)
+            return
+        if self.members and robot not in self.members:
             return  # a stranger's tokens are not kept
         live = self._processes.setdefault(robot, set())
         (live.add if alive else live.discard)(instance)
@@ -276,6 +292,23 @@ class NetworkAdaptive:
             gone = f"its process {instance} ended; another process of {robot} runs"
             self.take(Detection("lost", me, now, other=robot, how="process", detail=gone))
             self.take(Detection("seen", me, now, other=robot, how="process"))
+
+    def _say(self, key: str, said: str) -> None:
+        """Say ``said`` (an ``error`` event), at most once a second for ``key``
+        (a kind of message and its sender); the others of the second are
+        counted and said as a count (:meth:`_say_counts`): a robot that sends
+        a flood of them costs the loop and the trace one event a second."""
+        if self._throttle.note(key, time.monotonic()):
+            self.deployer.member.error(said)
+
+    def _say_counts(self) -> None:
+        """The messages :meth:`_say` counted, once their second is over."""
+        for key, count in self._throttle.due(time.monotonic()):
+            sender, _, kind = key.partition(" ")
+            self.deployer.member.error(
+                f"{count} more message(s) from {sender} ({kind}) in the last second or more: "
+                "dropped"
+            )
 
     def _once(self, key: str, said: str) -> None:
         """Say ``said`` (dropped), the first time for ``key``, for a few keys
@@ -304,17 +337,52 @@ class NetworkAdaptive:
 
     def _rival(self, rival: Rival) -> None:
         """A robot follows another coordinator: if it is this one that is the
-        second, it stops; else the console says a second one was refused."""
+        second, it stops — once what the robot says is borne out by this
+        coordinator's own view (:meth:`_borne_out`), within a lease; else the
+        console says a second one was refused."""
         if rival.epoch == self.deployer.epoch:
-            if self.refusal is None:
-                self.refusal = (
-                    f"society {self.deployer.transport.society} has a coordinator already: "
-                    f"{rival.robot} follows {rival.leader}; this one stops"
-                )
+            if self.refusal is None and rival.robot not in self._rivals:
+                lease = getattr(self.deployer.transport, "lease", DEFAULT_LEASE)
+                self._rivals[rival.robot] = (rival, time.monotonic() + lease)
+                self._weigh_rivals()
             return
         self._once(
             f"{rival.robot} rival", f"a second coordinator of the society, refused by {rival.robot}"
         )
+
+    def _borne_out(self, rival: Rival) -> bool:
+        """Whether this coordinator's own view bears ``rival`` out: the leader
+        it names is alive and may coordinate — another process of this very
+        robot (its process token), or another robot that may (with keys, one
+        ``society.json`` marks a coordinator; without, a robot of the state)
+        and is not the robot that says it follows it. What a robot says
+        alone is not enough: with its own valid key it could otherwise stop
+        the society's coordinator by naming anyone."""
+        leader = rival.leader
+        if leader == self.deployer.me:
+            return bool(self._twins)
+        if leader == rival.robot or leader not in self.coordinators:
+            return False
+        return leader in self.deployer.transport.alive
+
+    def _weigh_rivals(self) -> None:
+        """The rivals said: borne out, this coordinator stops; not borne out
+        within a lease, it goes on, and says it did not believe them."""
+        now = time.monotonic()
+        for robot, (rival, deadline) in sorted(self._rivals.items()):
+            if self._borne_out(rival):
+                self.refusal = (
+                    f"society {self.deployer.transport.society} has a coordinator already: "
+                    f"{rival.robot} follows {rival.leader}; this one stops"
+                )
+                return
+            if now >= deadline:
+                del self._rivals[robot]
+                self._once(
+                    f"{robot} rival not believed",
+                    f"{robot} says it follows another coordinator ({printable(rival.leader)}), "
+                    "but no such coordinator runs: not believed, this one goes on",
+                )
 
     def _ready(self, robot: str) -> None:
         """``robot`` can be sent its part: take it back if it was seen, else
@@ -384,6 +452,7 @@ def coordinate(
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
     adaptive.members = frozenset(task.agents)
+    adaptive.coordinators = _coordinators(transport, adaptive.members)
     adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(transport.lease)
     adaptive.heartbeat.start()
     watch = getattr(transport, "watch_processes", None)
@@ -393,3 +462,14 @@ def coordinate(
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
+
+
+def _coordinators(transport: ZenohTransport, members: frozenset[str]) -> frozenset[str]:
+    """The robots that may coordinate ``transport``'s society: with its keys,
+    those its ``society.json`` marks so (only they may send switches); without,
+    any robot of the state."""
+    folder = getattr(transport.options, "keys", None)
+    if not folder:
+        return members
+    keys = society_of(folder)
+    return frozenset(m.name for m in keys.robots if m.coordinator)

@@ -88,6 +88,7 @@ from cfgplan.runtime.protocol import (
     encode,
     read_to_robot,
 )
+from cfgplan.security.rates import Throttle
 
 __all__ = ["Member", "Membership", "Network", "send"]
 
@@ -139,6 +140,7 @@ class Member:
         self.finished: str | None = None
         self._erring: set[str] = set()  # labels whose last call failed (already told)
         self._errors: list[CallError] = []  # to send between cycles
+        self._throttle = Throttle()  # what is said of unreadable switch messages
         network.subscribe(configure_key(network.society, robot.name), self.receive)
         declare = getattr(network, "declare", None)
         if declare is not None:  # the first answer then goes out at once
@@ -179,7 +181,8 @@ class Member:
         try:
             message = read_to_robot(payload)
         except ProtocolError as exc:
-            self.error(f"a switch message that cannot be read: {exc}")
+            if self._throttle.note(exc.kind, time.monotonic()):  # a flood: once a second
+                self.error(f"a switch message that cannot be read: {exc}")
             return
         if isinstance(message, Duplicate):
             if message.instance == self.instance and self.refused is None:
@@ -324,6 +327,8 @@ class Member:
         this robot's monitor; note a robot of another problem (:attr:`conflict`)."""
         if self.refused is None and self.conflict is not None:
             self.refused = self.conflict
+        for _, count in self._throttle.due(time.monotonic()):
+            self.error(f"{count} more switch message(s) that cannot be read in the last second")
         errors, self._errors = self._errors, []
         for error in errors:
             self._send(error)

@@ -10,6 +10,8 @@ import time
 from dataclasses import replace
 from types import SimpleNamespace
 
+import pytest
+
 from cfgplan.planner import plan
 from cfgplan.problem import load
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
@@ -479,11 +481,40 @@ def test_a_coordinator_told_it_is_a_rival_stops() -> None:
     assert adaptive.finished is None and adaptive.refusal is None
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == ["a second coordinator of the society, refused by Emil: dropped"]
+    adaptive.process("Pippi", "a1a1a1a1a1a1a1a1", True)  # the first coordinator's process
     adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Pippi")), "Emil")
     assert adaptive.finished == REFUSED
     assert adaptive.refusal == (
         "society retry-test has a coordinator already: Emil follows Pippi; this one stops"
     )
+
+
+@pytest.mark.parametrize("leader", ["Pippi", "Emil", "Rasmus", "Nobody"])
+def test_a_rival_that_the_coordinators_own_view_does_not_bear_out_is_not_believed(
+    leader: str,
+) -> None:
+    """Measured: with Pippi's valid key, a ``rival`` of this coordinator's own
+    epoch (read from the ``duplicate`` a forged ``ready`` was answered) made
+    it stop, the goal lost. A rival is believed only when the leader it names
+    runs: another process of this robot (its process token), or another
+    robot that may coordinate, alive, and not the one that says it follows
+    it. Pippi coordinates here; no second process of hers runs, Rasmus and
+    Emil are helpers (with keys, not coordinators), Nobody is not alive:
+    within a lease the coordinator goes on, and says it did not believe it."""
+    adaptive, _network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.coordinators = frozenset({"Pippi"})  # as society.json would say
+    adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, leader)), "Emil")
+    adaptive.between(1, 0.1)
+    assert adaptive.refusal is None
+    rival, _deadline = adaptive._rivals["Emil"]
+    adaptive._rivals["Emil"] = (rival, time.monotonic())  # a lease later
+    adaptive.between(2, 0.2)
+    assert adaptive.finished is None and adaptive.refusal is None
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert [e for e in errors if "not believed" in e] == [
+        f"Emil says it follows another coordinator ({leader}), but no such coordinator "
+        "runs: not believed, this one goes on: dropped"
+    ]
 
 
 def test_a_message_that_says_it_is_from_another_robot_than_its_key_is_dropped() -> None:

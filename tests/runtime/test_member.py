@@ -81,7 +81,8 @@ def _message(op: str, number: object, part: object = None, epoch: str = "A") -> 
     message: dict[str, object] = {"op": op, "id": number, "from": "Pippi", "epoch": epoch}
     if part is not None:
         message["part"] = part
-    return json.dumps(message).encode()
+    # an infinite float as a writer other than Python's would put it (JSON has no Infinity)
+    return json.dumps(message).replace("Infinity", "1e999").encode()
 
 
 def _acks(network: Network) -> list[tuple[int, str]]:
@@ -97,7 +98,9 @@ def test_a_message_whose_id_is_no_whole_number_is_an_error_not_a_crash(number: s
     member.receive(b'{"op":"prepare","id":' + number.encode() + b"}")
     assert network.sent == []
     errors = [e for e in emil.events if getattr(e, "what", "") == "error"]
-    assert len(errors) == 2 and "cannot be read" in dict(errors[0].info)["message"]
+    # not JSON at all (Infinity), the two are one kind: one said a second, the other counted
+    assert len(errors) == (1 if number == "Infinity" else 2)
+    assert "cannot be read" in dict(errors[0].info)["message"]
 
 
 @pytest.mark.parametrize(
