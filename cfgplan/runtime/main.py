@@ -38,6 +38,7 @@ from cfgplan.runtime.options import (
     RUN_OPTIONS,
     SOCIETY,
     UNTIL,
+    WITHOUT_COORDINATOR,
     Option,
     choice,
     how_long,
@@ -143,7 +144,7 @@ def robot_main(
         if args.trace is not None:
             trace = open_trace(args.trace, args.force, max_bytes=args.trace_max_bytes)
         injections = [parse_injection(text) for text in args.inject]
-        hooks = _follow(running, injections, trace)
+        hooks = _follow(running, injections, trace, args.without_coordinator)
         return execute(
             running,
             options_of(args),
@@ -173,7 +174,10 @@ def crash(trace: TraceFile | None) -> None:
 
 
 def _follow(
-    running: Society, injections: Sequence[Injection], trace: TraceFile | None
+    running: Society,
+    injections: Sequence[Injection],
+    trace: TraceFile | None,
+    without: str = WITHOUT_COORDINATOR.default,
 ) -> Hooks | None:
     """A robot of its own process on the network follows the coordinator."""
     (robot,) = running.robots
@@ -182,7 +186,7 @@ def _follow(
         return Scripted(injector) if injector.pending else None
     monitor = Monitor()
     monitor.watch(robot)
-    member = Member(robot, robot.transport, monitor)  # type: ignore[arg-type]
+    member = Member(robot, robot.transport, monitor, without=without)  # type: ignore[arg-type]
     return Membership(member, injector)
 
 

@@ -50,6 +50,7 @@ __all__ = [
     "TRACE_MAX_BYTES",
     "UNTIL",
     "VERBOSE",
+    "WITHOUT_COORDINATOR",
     "ZENOH_CONFIG",
     "Option",
     "choice",
@@ -263,6 +264,17 @@ RATE_ALLOWANCE = Option(
     number(0, above=True),
 )
 
+WITHOUT_COORDINATOR = Option(
+    "--without-coordinator",
+    "stop|run",
+    "stop",
+    "What a robot that follows a coordinator does once the coordinator is gone (its process "
+    "ended, or froze past the lease) for longer than the hold: stop (default: its part stops, "
+    "every stop hook called, so an action halts its motors, until a coordinator sends it a "
+    "part again) or run (on, with the inputs it still gets).",
+    choice(("stop", "run"), "what a robot does without its coordinator"),
+)
+
 RUN_OPTIONS: tuple[Option[Any], ...] = (
     IMPL,
     RATE,
@@ -287,6 +299,7 @@ NETWORK_OPTIONS: tuple[Option[Any], ...] = (
     LEASE,
     KEYS,
     RATE_ALLOWANCE,
+    WITHOUT_COORDINATOR,
 )
 """A robot on the network: ``cfgplan run --robot`` and a robot's module."""
 

@@ -140,3 +140,53 @@ def test_a_frozen_helper_back_next_to_its_replacement_is_told_it_is_a_duplicate(
     assert float(lost["t"]) - killed < 1.0, "the death was hidden"  # type: ignore[arg-type]
     errors = [r for r in read_trace(emil_trace) if r["event"] == "error"]
     assert any("a second process of robot Pippi" in str(r) for r in errors), errors
+
+
+@pytest.mark.slow
+def test_a_helper_stops_its_part_while_its_coordinator_is_gone(tmp_path: Path) -> None:
+    """Measured: after ``kill -9`` of the coordinator a helper's action ran on
+    at 20 Hz for 15 s, nobody watching. Now Pippi (``--without-coordinator``
+    left at its default, stop) stops her part once Emil is gone for the hold
+    (1 s): her console says so, her functionalities stop (no call after it).
+    Emil started again (the same command) takes the society back: Pippi is
+    sent her part, runs it, and his goal is served again."""
+    emil_net, pippi_net = _network(tmp_path, "orphan-test")
+    with processes() as running:
+        emil, emil_trace = _robot(
+            running, tmp_path, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120"
+        )
+        _pippi, pippi_trace = _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, pippi_net)
+        wait_for("the goal served", _after(emil_trace, 0.0, "call", **SERVED_FIELDS), LIMIT)
+        killed = time.time()
+        os.kill(emil.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        assert emil.wait(timeout=30) == -signal.SIGKILL  # type: ignore[attr-defined]
+
+        def stopped() -> Record | None:
+            found = _after(pippi_trace, killed, "error")()
+            return found if found is not None and "stops its part" in str(found) else None
+
+        said = wait_for("Pippi stops her part", stopped, LIMIT)
+        at = float(said["t"])  # type: ignore[arg-type]
+        time.sleep(2.0)
+        calls = [
+            r
+            for r in read_trace(pippi_trace)
+            if r["event"] == "call" and float(r["t"]) > at + 0.5  # type: ignore[arg-type]
+        ]
+        assert calls == [], calls[:3]
+        folder = tmp_path / "again"
+        folder.mkdir()
+        _robot(running, folder, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "60")
+        again = time.time()
+        wait_for(
+            "the goal again",
+            _after(folder / "emil.jsonl", 0.0, "call", **SERVED_FIELDS),
+            LIMIT,
+        )
+        wait_for("Pippi runs again", _after(pippi_trace, again, "call", status="ran"), LIMIT)
+        running.stop_all()
+    assert at - killed < HOLD + 2.0, f"stopped {at - killed:.1f} s after the kill"
+    assert "--without-coordinator stop" in (tmp_path / "pippi.log").read_text()
+
+
+HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
