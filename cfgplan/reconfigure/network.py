@@ -233,7 +233,7 @@ class NetworkAdaptive:
             if message.epoch == self.deployer.epoch:  # else: to the coordinator before this one
                 self.deployer.acked(message.robot, message.id, message.phase, message.reason)
         elif isinstance(message, Ready):
-            if not self._duplicate(message):
+            if not self._foreign(message.robot) and not self._duplicate(message):
                 self._ready(message.robot)
         elif isinstance(message, Rival):
             self._rival(message)
@@ -317,6 +317,23 @@ class NetworkAdaptive:
         if key not in self._noted and len(self._noted) < 64:
             self._noted.add(key)
             self.deployer.member.error(f"{said}: dropped")
+
+    def _foreign(self, robot: str) -> bool:
+        """Whether ``robot`` runs another problem: a token of another problem is
+        up under its name and none of this one's (a process started with an
+        edited state; it stops by itself, :mod:`cfgplan.security.identity`).
+        Its ``ready`` is not taken (said once): it is greeted on, and taken
+        once a process of this problem runs it."""
+        foreign = getattr(self.deployer.transport, "foreign", None)
+        theirs = foreign(robot) if foreign is not None else None
+        if theirs is None:
+            return False
+        self._once(
+            f"{robot} another problem",
+            f"robot {robot} runs another problem ({theirs}): not taken into the society "
+            "until a process of its problem runs it",
+        )
+        return True
 
     def _duplicate(self, ready: Ready) -> bool:
         """Whether ``ready`` is from a second process of a robot whose first

@@ -157,6 +157,7 @@ class ZenohTransport:
         self._met = False  # a robot of this one's problem was seen: it is of their society
         self._aliens: dict[tuple[str, str], tuple[ProblemId, float]] = {}  # another problem's
         self._said_aliens: set[tuple[str, str]] = set()
+        self._ours: set[str] = set()  # robots whose token of this one's problem is up
         if self.options.problem is not None:
             self._announce(self.options.problem)
         self.dropped = 0
@@ -280,10 +281,15 @@ class ZenohTransport:
         if sample.kind != self._z.SampleKind.PUT:
             with self._lock:
                 self._aliens.pop((robot, fingerprint), None)
+                if fingerprint == mine.fingerprint:
+                    self._ours.discard(robot)
             return
         if fingerprint == mine.fingerprint:
             if robot != self.robot:
                 self._met = True
+                with self._lock:
+                    if len(self._ours) < 4096:
+                        self._ours.add(robot)
             return
         try:
             theirs = ProblemId(fingerprint, about)
@@ -293,6 +299,15 @@ class ZenohTransport:
             if len(self._aliens) < 64:
                 self._aliens.setdefault((robot, fingerprint), (theirs, time.monotonic()))
         self._arrived.set()
+
+    def foreign(self, robot: str) -> ProblemId | None:
+        """The other problem ``robot`` runs, if a token of another problem is up
+        under its name and none of this one's: a process started with another
+        state, which the coordinator does not take into its society."""
+        with self._lock:
+            if robot in self._ours:
+                return None
+            return next((p for (r, _), (p, _) in sorted(self._aliens.items()) if r == robot), None)
 
     def _weigh(self, now: float) -> None:
         """A robot of another problem is in the society: if this robot met one

@@ -24,7 +24,7 @@ from typing import Any
 import pytest
 
 from tests.backends.support import EXAMPLE_IMPL
-from tests.reconfigure.test_network import LIMIT, _network, _robot
+from tests.reconfigure.test_network import LIMIT, STEP2, _network, _robot
 from tests.runtime.netutil import (
     Processes,
     Record,
@@ -190,3 +190,44 @@ def test_a_helper_stops_its_part_while_its_coordinator_is_gone(tmp_path: Path) -
 
 
 HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
+
+
+@pytest.mark.slow
+def test_a_helper_restarted_with_an_edited_state_is_refused_alone(tmp_path: Path) -> None:
+    """Measured (9 of 9): Pippi killed and started again with a state that
+    differs by one fact nobody uses, ``(colour Pippi red)``: both the
+    coordinator and the new process said "runs two problems ... both stop"
+    and exited 1, and the run was over. Now the new process, which meets no
+    robot of its problem, stops alone (exit 1), naming both problems; Emil
+    is not taken in by it, runs on, and takes Pippi back when she is started
+    again with the society's state."""
+    with processes() as running:
+        pippi, emil_trace, pippi_net = served_step2(running, tmp_path, "edited-test")
+        killed = time.time()
+        os.kill(pippi.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        assert pippi.wait(timeout=30) == -signal.SIGKILL  # type: ignore[attr-defined]
+        wait_for("Pippi lost", _after(emil_trace, killed, "robot-lost"), LIMIT)
+        edited = tmp_path / "state-edited.lisp"
+        original = Path(STEP2[1]).read_text()
+        edited.write_text(original.replace("(robot Pippi)", "(robot Pippi) (colour Pippi red)", 1))
+        assert edited.read_text() != original
+        folder = tmp_path / "edited"
+        folder.mkdir()
+        args = ["-m", "cfgplan", "run", STEP2[0], str(edited), "--robot", "Pippi"]
+        args += ["--impl", str(EXAMPLE_IMPL), "--rate", "20", *pippi_net]
+        other = running.start(args, folder / "pippi.log")
+        assert other.wait(timeout=LIMIT) == 1  # type: ignore[attr-defined]
+        said = (folder / "pippi.log").read_text()
+        assert "runs two problems" in said and "which met no robot of its own problem" in said
+        assert "state-edited.lisp" in said and "state-6.2.2-step2.lisp" in said
+        time.sleep(2.0)
+        again = time.time()
+        folder = tmp_path / "again"
+        folder.mkdir()
+        _robot(running, folder, "Pippi", EXAMPLE_IMPL, pippi_net)
+        wait_for("the goal again", _after(emil_trace, again, "call", **SERVED_FIELDS), LIMIT)
+        running.stop_all()
+    mine = read_trace(emil_trace)
+    assert [r for r in mine if r["event"] == "stop" and r.get("reason") == "refused"] == []
+    errors = " ".join(str(r) for r in mine if r["event"] == "error")
+    assert "announces another problem" in errors

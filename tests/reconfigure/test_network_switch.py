@@ -25,6 +25,7 @@ from cfgplan.runtime.launch import REFUSED
 from cfgplan.runtime.monitor import Detection, Monitor
 from cfgplan.runtime.part import part_to_json
 from cfgplan.runtime.protocol import CallError, Phase, Ready, Report, Rival, encode
+from cfgplan.security.identity import ProblemId
 from tests.backends.support import DOMAINS
 from tests.reconfigure.test_coordinate import Clock
 from tests.reconfigure.test_network_retry import Idle, Me, Network, _society, _wait, _what
@@ -552,3 +553,26 @@ def test_messages_dropped_past_the_backlog_are_said_once_each_time_more_are() ->
         "messages to the coordinator dropped: 1 more than the 10000 that may wait "
         "(a robot floods it)",
     ]
+
+
+def test_a_robot_whose_process_runs_another_problem_is_not_taken_in() -> None:
+    """Pippi's key to the coordinator says Rasmus is ready while a problem token
+    of another problem is up under his name and none of this one's (a process
+    started with an edited state): he is not taken into the society, and
+    the console says why once; once that token is gone, his ready is taken."""
+    adaptive, network, _clock, _events = _wall({"Pippi", "Emil"})
+    theirs = ProblemId("0123456789abcdef", "domain.lisp with edited.lisp")
+    alien: dict[str, ProblemId] = {"Rasmus": theirs}
+    network.foreign = alien.get  # type: ignore[attr-defined]
+    network.alive.add("Rasmus")
+    adaptive.receive(encode(Ready("Rasmus", "b2b2b2b2b2b2b2b2")), "Rasmus")
+    adaptive.receive(encode(Ready("Rasmus", "b2b2b2b2b2b2b2b2")), "Rasmus")
+    assert "Rasmus" not in adaptive.deployer.ready
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == [
+        f"robot Rasmus runs another problem ({theirs}): not taken into the society until a "
+        "process of its problem runs it: dropped"
+    ]
+    alien.clear()
+    adaptive.receive(encode(Ready("Rasmus", "c3c3c3c3c3c3c3c3")), "Rasmus")
+    assert "Rasmus" in adaptive.deployer.ready
