@@ -368,13 +368,19 @@ class NetworkAdaptive:
         )
 
     def _borne_out(self, rival: Rival) -> bool:
-        """Whether this coordinator's own view bears ``rival`` out: the leader
-        it names is alive and may coordinate — another process of this very
-        robot (its process token), or another robot that may (with keys, one
-        ``society.json`` marks a coordinator; without, a robot of the state)
-        and is not the robot that says it follows it. What a robot says
-        alone is not enough: with its own valid key it could otherwise stop
-        the society's coordinator by naming anyone."""
+        """Whether this coordinator's own view bears ``rival`` out. A robot that
+        never said it is ready to this coordinator follows another one: its
+        word is what the protocol goes by (a second coordinator that reaches
+        only the helpers sees no more). One that did — it follows this one,
+        its answers carry this one's epoch — contradicts itself, and is
+        believed only if the leader it names is alive and may coordinate:
+        another process of this very robot (its process token), or another
+        robot that may (with keys, one ``society.json`` marks a coordinator;
+        without, a robot of the state) and is not the robot that says it
+        follows it. With its own valid key, a robot could otherwise stop the
+        coordinator it follows by naming anyone."""
+        if rival.robot not in self.deployer.ready:
+            return True
         leader = rival.leader
         if leader == self.deployer.me:
             return bool(self._twins)

@@ -518,6 +518,16 @@ def test_a_rival_that_the_coordinators_own_view_does_not_bear_out_is_not_believe
     ]
 
 
+def test_a_rival_from_a_robot_that_never_followed_this_coordinator_is_believed() -> None:
+    """A second coordinator that reaches only the helpers sees no other
+    coordinator: the rival of a robot that never said it is ready to it is
+    what it goes by, and it stops (Rasmus never said ready here)."""
+    adaptive, _network, _clock, _events = _wall({"Pippi", "Emil"})
+    adaptive.coordinators = frozenset({"Pippi"})
+    adaptive.receive(encode(Rival("Rasmus", adaptive.deployer.epoch, "Nobody")), "Rasmus")
+    assert adaptive.finished == REFUSED
+
+
 def test_a_message_that_says_it_is_from_another_robot_than_its_key_is_dropped() -> None:
     """Each robot speaks on its own key to the coordinator (with ``--keys``,
     only it may put there): a ready, a report or an ack on Rasmus's key that
