@@ -50,6 +50,7 @@ from cfgplan.runtime.options import (
     RATE_ALLOWANCE,
     RECORD,
     RECORD_MAX_BYTES,
+    RESPAWN,
     SOCIETY,
     STALE_PERIODS,
     TRACE,
@@ -227,17 +228,7 @@ def launch(
         typer.Option("--margin", metavar="F", parser=number_of(0), help="As cfgplan run's."),
     ] = None,
     without_coordinator: Annotated[str, option(WITHOUT_COORDINATOR)] = WITHOUT_COORDINATOR.default,
-    respawn: Annotated[
-        bool,
-        typer.Option(
-            "--respawn",
-            help="Start a robot whose process died (killed, crashed) again, the coordinator "
-            "too: after 1 s, twice as long with each death in a row (at most 30 s), a "
-            "process that ran 10 s counting as the first death again. Its trace and "
-            "recording go to files of their own (run-pippi-2.jsonl), its --inject faults "
-            "are not run again.",
-        ),
-    ] = False,
+    respawn: Annotated[bool, option(RESPAWN)] = RESPAWN.default,
 ) -> None:
     """Start a whole society on this machine: every robot its own cfgplan run --robot
     process, the coordinator (the goal's robot) first, on free loopback ports with

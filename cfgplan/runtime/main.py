@@ -35,6 +35,7 @@ from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.options import (
     IMPL,
     NETWORK_OPTIONS,
+    RESPAWN,
     RUN_OPTIONS,
     SOCIETY,
     UNTIL,
@@ -259,7 +260,14 @@ def society_main(
     names = ", ".join(name for name, _ in programs)
     description = f"Run {names} in one process (cfgplan, thesis 5.3)."
     parser = parser_of(description, network=False)
+    _add(parser, RESPAWN)
     args = parser.parse_args(argv)
+    if args.respawn:  # this process supervises one that runs them, started again when it dies
+        from cfgplan.runtime.spawn import supervise
+
+        given = sys.argv[1:] if argv is None else argv
+        rest = [a for a in given if not (len(a) > 3 and "--respawn".startswith(a))]  # (abbrev.)
+        return supervise([sys.executable, sys.argv[0], *rest])
     injections = [parse_injection(text) for text in args.inject]
     for injection in injections:  # every robot is here: one aimed elsewhere is a typo
         wrong = misaimed(injection, [name for name, _ in programs])

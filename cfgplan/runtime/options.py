@@ -43,6 +43,7 @@ __all__ = [
     "RATE_ALLOWANCE",
     "RECORD",
     "RECORD_MAX_BYTES",
+    "RESPAWN",
     "RUN_OPTIONS",
     "SOCIETY",
     "STALE_PERIODS",
@@ -273,6 +274,16 @@ WITHOUT_COORDINATOR = Option(
     "every stop hook called, so an action halts its motors, until a coordinator sends it a "
     "part again) or run (on, with the inputs it still gets).",
     choice(("stop", "run"), "what a robot does without its coordinator"),
+)
+
+RESPAWN = Option(
+    "--respawn",
+    None,
+    False,
+    "Start a robot's process again when it dies (killed, crashed): after 1 s, twice as long "
+    "with each death in a row (at most 30 s), a process that ran 10 s counting as the first "
+    "death again. Its trace and recording go to files of their own (run-pippi-2.jsonl), its "
+    "--inject faults are not run again.",
 )
 
 RUN_OPTIONS: tuple[Option[Any], ...] = (

@@ -55,11 +55,14 @@ __all__ = [
     "RobotCommand",
     "SpawnOptions",
     "again_args",
+    "backoff",
     "commands",
+    "death_text",
     "died",
     "free_port",
     "in_use",
     "status_text",
+    "supervise",
 ]
 
 USER_ERRORS = (1, 2)
@@ -153,6 +156,76 @@ def commands(
             RobotCommand(robot, tuple(args), hosts[robot], ports[robot], robot == coordinator)
         )
     return out
+
+
+def backoff(options: SpawnOptions, lived: float, deaths: int) -> tuple[int, float]:
+    """A process that ran ``lived`` seconds died after ``deaths`` deaths in a
+    row: the deaths in a row now, and the seconds to wait before starting it
+    again (:attr:`SpawnOptions.respawn_delay`, doubled with each death in a
+    row, at most :attr:`SpawnOptions.respawn_most`; a process that ran
+    :attr:`SpawnOptions.respawn_reset` seconds counts as the first death)."""
+    deaths = 1 if lived >= options.respawn_reset else deaths + 1
+    return deaths, min(options.respawn_delay * 2 ** (deaths - 1), options.respawn_most)
+
+
+def death_text(code: int, lived: float, deaths: int, delay: float) -> str:
+    """What the console says of a death and the start again it waits for."""
+    row = f"death {deaths} in a row" if deaths > 1 else "its first death in a row"
+    return (
+        f"(died, exit status {status_text(code)}, after {lived:.1f} s: started again in "
+        f"{delay:g} s, {row})"
+    )
+
+
+def supervise(
+    argv: Sequence[str],
+    options: SpawnOptions | None = None,
+    say: Callable[[str], None] | None = None,
+) -> int:
+    """Run ``argv`` (a program and its arguments) and start it again each
+    time it dies (:func:`died`, as a coordinator: 0, 1, 2 and 3 end the run),
+    after :func:`backoff`'s delay, with a trace and recording of its own
+    and without scripted faults (:func:`again_args`): ``run_all.py
+    --respawn``. SIGINT or SIGTERM stops the process running (SIGTERM) and
+    ends the supervision; its exit status is returned."""
+    options = options or SpawnOptions(respawn=True)
+    tell = say or (lambda line: print(line, file=sys.stderr, flush=True))
+    program, args = argv[0], tuple(argv[1:])
+    stop = threading.Event()
+    child: list[subprocess.Popen[bytes]] = []
+    previous: dict[int, Any] = {}
+
+    def handler(signum: int, frame: object) -> None:
+        stop.set()
+        for process in child[-1:]:
+            with contextlib.suppress(ProcessLookupError):
+                process.send_signal(signal.SIGTERM)
+
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            previous[signum] = signal.signal(signum, handler)
+    try:
+        life, deaths = 1, 0
+        while True:
+            began = time.monotonic()
+            process = subprocess.Popen(
+                [program, *(args if life == 1 else again_args(args, life))],
+                preexec_fn=_death_signal(),
+            )
+            child.append(process)
+            tell(f"(started: pid {process.pid}" + (f", start {life})" if life > 1 else ")"))
+            code = process.wait()
+            if stop.is_set() or not died(code, coordinator=True):
+                return code if code >= 0 else 128 - code
+            lived = time.monotonic() - began
+            deaths, delay = backoff(options, lived, deaths)
+            tell(death_text(code, lived, deaths, delay))
+            if stop.wait(delay):
+                return code if code >= 0 else 128 - code
+            life += 1
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
 
 
 def died(code: int, coordinator: bool) -> bool:
@@ -410,16 +483,9 @@ class Launch:
         :attr:`SpawnOptions.respawn_reset` seconds or more counting as the
         first death again — as ``ros2 launch``'s ``respawn`` and systemd's
         ``Restart=on-failure`` do."""
-        options = self.options
         lived = time.monotonic() - started.began
-        deaths = 1 if lived >= options.respawn_reset else started.deaths + 1
-        delay = min(options.respawn_delay * 2 ** (deaths - 1), options.respawn_most)
-        row = f"death {deaths} in a row" if deaths > 1 else "its first death in a row"
-        self.say(
-            started.command.robot,
-            f"(died, exit status {status_text(code)}, after {lived:.1f} s: started again in "
-            f"{delay:g} s, {row})",
-        )
+        deaths, delay = backoff(self.options, lived, started.deaths)
+        self.say(started.command.robot, death_text(code, lived, deaths, delay))
         self._due.append((time.monotonic() + delay, started, deaths))
 
     def _respawn_due(self) -> None:
