@@ -350,7 +350,9 @@ def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
     after 1 s, 2 s, then 4 s (each death in a row doubles the delay), each
     start writing a trace of its own. After the third, the society serves
     the goal again with her fourth process (it runs its part, Emil crosses
-    on her data); SIGTERM then stops every robot, exit 0, no pid left.
+    on her data). Then Emil, the coordinator, is killed: started again, he
+    takes his society back and serves the goal; SIGTERM then stops every
+    robot, exit 0, no pid left.
     Before, a dead robot stayed dead: --respawn did not exist."""
     trace = tmp_path / "run.jsonl"
     launched = _launch(
@@ -398,6 +400,19 @@ def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
             return bool(crossed and helped)
 
         until("the goal served with Pippi's fourth process", served)
+        emil = _pids("".join(lines))["Emil"]
+        os.kill(emil, signal.SIGKILL)  # the coordinator too: started again, it takes it back
+        again_at = re.compile(r"^Emil +\| \(started again", re.M)
+        until("Emil started again", lambda: bool(again_at.search("".join(lines))))
+
+        def taken_back() -> bool:
+            crossed = read_trace(tmp_path / "run-emil-2.jsonl")
+            return any(
+                r["event"] == "call" and r["functionality"] == "cross-door" and r["status"] == "ran"
+                for r in crossed
+            )
+
+        until("Emil's second process serves the goal", taken_back)
         launched.send_signal(signal.SIGTERM)
         launched.wait(LIMIT)
     finally:
@@ -408,5 +423,7 @@ def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
     assert launched.returncode == 0, f"{out}\n{err}"
     delays = re.findall(r"^Pippi +\| \(died, exit status 137 .*started again in (\S+) s", out, re.M)
     assert delays == ["1", "2", "4"], out
-    assert all(_gone(pid) for pid in [*pids, _pids(out)["Emil"]])
+    emils = [int(p) for p in re.findall(r"^Emil +\| \(started(?: again)?: pid (\d+)", out, re.M)]
+    assert len(emils) == 2 and emils[0] == emil, out
+    assert all(_gone(pid) for pid in [*pids, *emils])
     assert "Traceback" not in out + err
