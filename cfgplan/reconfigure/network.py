@@ -101,6 +101,12 @@ class NetworkAdaptive:
     _throttle: Throttle = field(default_factory=Throttle)  # what is said of dropped messages
     _twins: set[str] = field(default_factory=set)  # other processes of this robot, alive
     _rivals: dict[str, tuple[Rival, float]] = field(default_factory=dict)  # said, by robot
+    _ended: dict[str, tuple[str, float]] = field(default_factory=dict)  # process gone, name up
+    _hidden: set[str] = field(default_factory=set)  # lost while a session held their name
+    process_grace: float = 0.5
+    """Seconds a robot's name may stay alive after its process ended (its two
+    tokens go one after the other) before the name is taken as held by
+    another session."""
     coordinators: frozenset[str] = frozenset()
     """The robots that may coordinate (coordinate(): with keys, those the
     society's keys mark so; without, the state's robots)."""
@@ -121,6 +127,8 @@ class NetworkAdaptive:
             )
             self._dropped = dropped
         self._say_counts()
+        if self._ended:
+            self._settle_ended()
         if self._rivals and self.refusal is None:
             self._weigh_rivals()
         self._stalled()
@@ -200,6 +208,12 @@ class NetworkAdaptive:
 
     def take(self, detection: Detection) -> None:
         robot = detection.other
+        if robot in self._hidden and detection.how != "process":
+            self._hidden.discard(robot)
+            if detection.kind == "lost":  # the name held after its process ended: taken already
+                self._held.pop(robot, None)
+                self.deployer.gone(robot)
+                return
         if detection.kind == "seen" and robot not in self._present:
             if not self.deployer.seen(robot):
                 self._held[robot] = detection  # taken once it says it is ready
@@ -292,6 +306,33 @@ class NetworkAdaptive:
             gone = f"its process {instance} ended; another process of {robot} runs"
             self.take(Detection("lost", me, now, other=robot, how="process", detail=gone))
             self.take(Detection("seen", me, now, other=robot, how="process"))
+        elif not alive and instance == current:  # its name should go with it: see _settle_ended
+            self._ended[robot] = (instance, time.monotonic() + self.process_grace)
+
+    def _settle_ended(self) -> None:
+        """A robot whose process ended while its name stays alive for longer
+        than :attr:`process_grace` — a session that declares no process of
+        it holds its ``alive`` token (its key in other hands): the robot is
+        lost, as if the token went, and greeted (a process of it started
+        again answers and is taken back). The token's going later is not a
+        second loss."""
+        now = time.monotonic()
+        for robot, (instance, deadline) in sorted(self._ended.items()):
+            if now < deadline:
+                continue
+            del self._ended[robot]
+            held = robot in self.deployer.transport.alive and not self._processes.get(robot)
+            if not held or self._instances.get(robot) != instance:
+                continue
+            me, t = self.deployer.me, time.time()
+            gone = (
+                f"its process {instance} ended, but its name is still alive: a session that "
+                f"declares no process of {robot} holds it"
+            )
+            self._once(f"{robot} name held", f"robot {robot}'s {gone}")
+            self.take(Detection("lost", me, t, other=robot, how="process", detail=gone))
+            self._hidden.add(robot)
+            self.take(Detection("seen", me, t, other=robot, how="process"))
 
     def _say(self, key: str, said: str) -> None:
         """Say ``said`` (an ``error`` event), at most once a second for ``key``
@@ -413,6 +454,7 @@ class NetworkAdaptive:
         if robot == self.deployer.me:
             return
         self.deployer.said_ready(robot)
+        self._hidden.discard(robot)  # a process of it answers: its losses are its own again
         held = self._held.pop(robot, None)
         if held is not None:
             self.take(held)

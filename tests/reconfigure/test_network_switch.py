@@ -586,3 +586,34 @@ def test_a_robot_whose_process_runs_another_problem_is_not_taken_in() -> None:
     alien.clear()
     adaptive.receive(encode(Ready("Rasmus", "c3c3c3c3c3c3c3c3")), "Rasmus")
     assert "Rasmus" in adaptive.deployer.ready
+
+
+def test_a_process_that_ended_while_its_name_stays_alive_is_lost() -> None:
+    """Measured: a session holding Rasmus's key kept his alive token up after
+    his process died (Zenoh shows two tokens of one key as one): his death
+    showed only as stale inputs, and a session that declares no process
+    token was never flagged. His process token gone and his name still
+    alive past the grace, he is lost (said once), greeted, and the later
+    going of the name is not a second loss; a process of his that says it
+    is ready is taken back."""
+    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.process_grace = 0.0
+    adaptive.process("Rasmus", "d4d4d4d4d4d4d4d4", True)
+    adaptive.receive(encode(Ready("Rasmus", "d4d4d4d4d4d4d4d4")), "Rasmus")
+    adaptive.process("Rasmus", "d4d4d4d4d4d4d4d4", False)  # his process ended; the name stays
+    adaptive.between(1, 0.1)
+    failed = [dict(e.info).get("resource") for e in events if e.what == "failure"]
+    assert failed == ["Rasmus"]
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert any("its name is still alive" in e for e in errors), errors
+    assert "Rasmus" not in adaptive.deployer.ready
+    network.alive.discard("Rasmus")  # the session holding his name leaves
+    adaptive.monitor.detect(Detection("lost", "Pippi", time.time(), other="Rasmus"))
+    adaptive.between(2, 0.2)
+    assert [dict(e.info).get("resource") for e in events if e.what == "failure"] == ["Rasmus"]
+    network.alive.add("Rasmus")  # started again: his new process says it is ready
+    adaptive.process("Rasmus", "e5e5e5e5e5e5e5e5", True)
+    adaptive.monitor.detect(Detection("seen", "Pippi", time.time(), other="Rasmus"))
+    adaptive.between(3, 0.3)
+    adaptive.receive(encode(Ready("Rasmus", "e5e5e5e5e5e5e5e5")), "Rasmus")
+    assert "Rasmus" in adaptive.deployer.ready

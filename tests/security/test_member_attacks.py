@@ -15,6 +15,8 @@ stopped by its pid (:mod:`tests.runtime.netutil`).
 from __future__ import annotations
 
 import json
+import os
+import signal
 import threading
 import time
 from pathlib import Path
@@ -214,3 +216,35 @@ def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_tr
     dropped = [r for r in errors if "dropped" in str(r["message"])]
     assert dropped, "the flood's drops were never said"
     assert society.trace.stat().st_size < 2_000_000
+
+
+@pytest.mark.slow
+def test_a_name_held_alive_by_a_session_does_not_hide_its_robots_death(tmp_path: Path) -> None:
+    """With Pippi's key, a session declares her liveliness token (Zenoh shows
+    two tokens of one key as one), then her process is killed. Emil sees
+    her lost within a second or so (her process token went, her name stayed
+    alive: he says a session holds it), not only her inputs going stale
+    later (before: no loss at all, only stale inputs)."""
+    with processes() as running:
+        society = Society(running, tmp_path)
+        with society.attacker() as holder:
+            token = holder.liveliness().declare_token(f"{P}/Pippi/alive")
+            time.sleep(2.0)  # the token reaches Emil
+            killed = time.time()
+            os.kill(society.pippi.pid, signal.SIGKILL)
+
+            def lost() -> dict[str, object] | None:
+                return next(
+                    (
+                        r
+                        for r in read_trace(society.trace)
+                        if r["event"] == "failure" and r.get("resource") == "Pippi"
+                    ),
+                    None,
+                )
+
+            found = wait_for("Pippi lost", lost, LIMIT)
+            token.undeclare()
+    assert float(found["t"]) - killed < 3.0, found  # type: ignore[arg-type]
+    said = (tmp_path / "emil.log").read_text()
+    assert "its name is still alive" in said
