@@ -427,6 +427,9 @@ class Launch:
             code = started.process.poll()
             if code is not None:
                 started.reported = True
+                if self.options.respawn and died(code, command.coordinator):
+                    self._again(started, code)  # killed or crashed while it started
+                    return
                 raise self._failed(started, code, "did not start")
             with socket.socket() as probe:
                 probe.settimeout(1.0)

@@ -158,6 +158,7 @@ class ZenohTransport:
         self._aliens: dict[tuple[str, str], tuple[ProblemId, float]] = {}  # another problem's
         self._said_aliens: set[tuple[str, str]] = set()
         self._ours: set[str] = set()  # robots whose token of this one's problem is up
+        self._up: set[tuple[str, str]] = set()  # the tokens of _aliens up now
         if self.options.problem is not None:
             self._announce(self.options.problem)
         self.dropped = 0
@@ -272,15 +273,17 @@ class ZenohTransport:
         """On a Zenoh thread: a robot of the society says which problem it runs
         (:mod:`cfgplan.security.identity`). A robot of this one's problem,
         another than this one, makes it a member of its society for good; one
-        of another problem is kept (while its token is up) for :meth:`_weigh`."""
+        of another problem is kept for :meth:`_weigh` (which goes by what was
+        seen: a robot out of place that met the other stops, even if the
+        other left first) and, while its token is up, for :meth:`foreign`."""
         mine = self.options.problem
         named = problem_of_token(str(sample.key_expr), self.society)
         if mine is None or named is None:
             return
         robot, fingerprint, about = named
         if sample.kind != self._z.SampleKind.PUT:
-            with self._lock:
-                self._aliens.pop((robot, fingerprint), None)
+            with self._lock:  # (a robot out of place decides by what it saw: _aliens stay)
+                self._up.discard((robot, fingerprint))
                 if fingerprint == mine.fingerprint:
                     self._ours.discard(robot)
             return
@@ -298,6 +301,7 @@ class ZenohTransport:
         with self._lock:
             if len(self._aliens) < 64:
                 self._aliens.setdefault((robot, fingerprint), (theirs, time.monotonic()))
+                self._up.add((robot, fingerprint))
         self._arrived.set()
 
     def foreign(self, robot: str) -> ProblemId | None:
@@ -307,7 +311,8 @@ class ZenohTransport:
         with self._lock:
             if robot in self._ours:
                 return None
-            return next((p for (r, _), (p, _) in sorted(self._aliens.items()) if r == robot), None)
+            up = sorted((k, v) for k, v in self._aliens.items() if k in self._up)
+            return next((p for (r, _), (p, _) in up if r == robot), None)
 
     def _weigh(self, now: float) -> None:
         """A robot of another problem is in the society: if this robot met one
@@ -315,9 +320,9 @@ class ZenohTransport:
         one is not of its society and is said once (:attr:`notices`), never
         acted on — else any token under any name would stop the society.
         Otherwise this robot is the one out of place (it was started with an
-        edited state, or in another team's society): once the other's token
-        has been up for a lease with no robot of its own problem seen, it
-        stops (:attr:`conflict`)."""
+        edited state, or in another team's society): a lease after it saw
+        the other's token (gone since or not), with no robot of its own
+        problem seen, it stops (:attr:`conflict`)."""
         mine = self.options.problem
         if mine is None or self.conflict is not None:
             return
