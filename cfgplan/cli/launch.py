@@ -51,15 +51,17 @@ from cfgplan.runtime.options import (
     RATE_ALLOWANCE,
     RECORD,
     RECORD_MAX_BYTES,
+    RESPAWN,
     SOCIETY,
     STALE_PERIODS,
     TRACE,
     TRACE_MAX_BYTES,
     VERBOSE,
+    WITHOUT_COORDINATOR,
     ZENOH_CONFIG,
     endpoint,
 )
-from cfgplan.runtime.spawn import Launch, commands, free_port
+from cfgplan.runtime.spawn import Launch, SpawnOptions, commands, free_port
 
 HERMETIC = (
     "{ // cfgplan launch: robots meet only through the endpoints given, and what they\n"
@@ -232,6 +234,8 @@ def launch(
         float | None,
         typer.Option("--margin", metavar="F", parser=number_of(0), help="As cfgplan run's."),
     ] = None,
+    without_coordinator: Annotated[str, option(WITHOUT_COORDINATOR)] = WITHOUT_COORDINATOR.default,
+    respawn: Annotated[bool, option(RESPAWN)] = RESPAWN.default,
 ) -> None:
     """Start a whole society on this machine: every robot its own cfgplan run --robot
     process, the coordinator (the goal's robot) first, on free loopback ports with
@@ -305,6 +309,7 @@ def launch(
         max_value_bytes=(max_value_bytes, MAX_VALUE_BYTES.default),
         trace_max_bytes=(trace_max_bytes, TRACE_MAX_BYTES.default), hold=(hold, None),
         margin=(margin, None), ros_domain_id=(ros_domain_id, None), ros2_map=(ros2_map, None),
+        without_coordinator=(without_coordinator, WITHOUT_COORDINATOR.default),
     )  # fmt: skip
     for e in connect or ():
         common += ["--connect", e]
@@ -331,7 +336,7 @@ def launch(
     if print_commands:
         _print_commands(robots, lead, common, extra, addresses, port, zenoh_config)
         return
-    _launch(robots, lead, common, extra, port, zenoh_config)
+    _launch(robots, lead, common, extra, port, zenoh_config, SpawnOptions(respawn=respawn))
 
 
 def _parse_hosts(texts: list[str] | tuple[str, ...]) -> list[tuple[str, str]]:
@@ -384,6 +389,7 @@ def _launch(
     extra: dict[str, list[str]],
     port: int | None,
     zenoh_config: Path | None,
+    options: SpawnOptions | None = None,
 ) -> None:
     host = "127.0.0.1"
     ports = {r: free_port(host) for r in robots}
@@ -396,7 +402,7 @@ def _launch(
             zenoh_config = hermetic
         common = [*common, "--zenoh-config", str(zenoh_config)]
         hosts = dict.fromkeys(robots, host)
-        launched = Launch(commands(robots, common, extra, hosts, ports, lead))
+        launched = Launch(commands(robots, common, extra, hosts, ports, lead), options=options)
         try:
             code = launched.run()
         except RunError as exc:

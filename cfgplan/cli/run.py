@@ -70,6 +70,7 @@ from cfgplan.runtime.options import (
     TRACE,
     TRACE_MAX_BYTES,
     VERBOSE,
+    WITHOUT_COORDINATOR,
     ZENOH_CONFIG,
     Option,
     how_long,
@@ -126,6 +127,7 @@ def run(
     lease: Annotated[float | None, option(LEASE)] = LEASE.default,
     keys: Annotated[Path | None, option(KEYS)] = None,
     rate_allowance: Annotated[float, option(RATE_ALLOWANCE)] = RATE_ALLOWANCE.default,
+    without_coordinator: Annotated[str, option(WITHOUT_COORDINATOR)] = WITHOUT_COORDINATOR.default,
     rate: Annotated[float, option(RATE)] = RATE.default,
     cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
     duration: Annotated[float | None, option(DURATION)] = DURATION.default,
@@ -290,7 +292,9 @@ def run(
         force=force,
         verbose=verbose,
     )
-    settings = Settings(injections(inject, problem), reconfigure, hold, margin)
+    settings = Settings(
+        injections(inject, problem), reconfigure, hold, margin, without=without_coordinator
+    )
     opened: Transport | None = None
     bound: Bindings | None = None  # --ros2-map's
     ros_node = None  # the rclpy node of --ros2 / --ros2-map (--ros2-via rclpy)

@@ -6,7 +6,11 @@ nothing a browser sends reaches the society. What a client can cost is
 bounded (:class:`LiveOptions`): a few streams at once, each a message at
 most every :attr:`~LiveOptions.state_every` seconds (a new timeline entry at
 once), a stream that cannot be written to for
-:attr:`~LiveOptions.write_timeout` seconds dropped.
+:attr:`~LiveOptions.write_timeout` seconds dropped. The streams are shared:
+when all are taken, a new client takes the place of the one that reads least
+(what waits unread in its connection), else of the oldest, whose page
+connects again a second later — so clients that hold streams without
+reading them cannot keep the operator's page out.
 
 Updates are server-sent events (``GET /events``): one JSON message
 ``{"state": ..., "entries": [...]}``, the page's state and the timeline
@@ -21,12 +25,15 @@ web site the browser visits cannot read it through a DNS name of its own
 
 from __future__ import annotations
 
+import array
 import asyncio
 import contextlib
+import fcntl
 import ipaddress
 import json
 import logging
 import socket
+import termios
 import threading
 from dataclasses import dataclass
 from functools import partial
@@ -64,7 +71,10 @@ class LiveOptions:
     """What the live page's server allows itself and its clients."""
 
     clients: int = 8
-    """Event streams open at once; more are refused (503)."""
+    """Event streams open at once. One more takes the place of the stream
+    whose client reads least (the most of what was written to it still
+    waiting to be read), else of the oldest: a few clients that never read,
+    or that only hold their streams, cannot lock the operator out."""
     poll: float = 0.05
     """Seconds between two looks at the run (a switch reaches the page within this)."""
     state_every: float = 0.25
@@ -98,6 +108,24 @@ def _hostname(header: str) -> str:
     return header.rpartition(":")[0] if ":" in header else header
 
 
+def _unread(transport: asyncio.BaseTransport) -> int:
+    """Bytes written to a stream's client that it has not read yet, as far as
+    this side knows: what waits in the connection's buffer here, and in the
+    socket's send queue (``TIOCOUTQ``, where the system has it)."""
+    if transport.is_closing():
+        return 0
+    waiting = 0
+    if isinstance(transport, asyncio.WriteTransport):
+        waiting = int(transport.get_write_buffer_size())
+    sock = transport.get_extra_info("socket")
+    if sock is not None:
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            queued = array.array("i", [0])
+            fcntl.ioctl(sock.fileno(), termios.TIOCOUTQ, queued)
+            waiting += queued[0]
+    return waiting
+
+
 def _news(hub: Hub, tick: int) -> bool:
     """Whether a stream that sent ``tick`` has something to send (or must end)."""
     return hub.closing or (hub.tick != tick and hub.state is not None)
@@ -113,7 +141,18 @@ class Hub:
         self.tick = 0
         self.closing = False
         self.clients = 0
+        self.streams: list[asyncio.BaseTransport] = []  # the streams' connections, oldest first
         self.changed = asyncio.Condition()
+
+    def make_room(self, most: int) -> None:
+        """At most ``most`` - 1 streams left open: end the one whose client
+        reads least (the most bytes written to it still unread), else the
+        oldest, for a new one to take its place."""
+        while self.streams and len(self.streams) >= most:
+            order = {id(t): k for k, t in enumerate(self.streams)}
+            victim = max(self.streams, key=lambda t: (_unread(t), -order[id(t)]))
+            self.streams.remove(victim)
+            victim.close()
 
     async def run(self) -> None:
         loop = asyncio.get_running_loop()
@@ -288,8 +327,11 @@ class LiveServer:
     async def _events(self, request: web.Request) -> web.StreamResponse:
         hub = self._hub
         assert hub is not None  # set before the site starts
-        if hub.clients >= self.options.clients:
-            raise web.HTTPServiceUnavailable(text="too many pages open on this run\n")
+        transport = request.transport
+        if transport is None:  # the client left already
+            raise web.HTTPServiceUnavailable(text="the connection is gone\n")
+        hub.make_room(self.options.clients)
+        hub.streams.append(transport)
         hub.clients += 1
         try:
             response = web.StreamResponse(headers={**HEADERS, "X-Accel-Buffering": "no"})
@@ -299,6 +341,8 @@ class LiveServer:
             return response
         finally:
             hub.clients -= 1
+            with contextlib.suppress(ValueError):
+                hub.streams.remove(transport)
 
     async def _stream(self, hub: Hub, response: web.StreamResponse) -> None:
         seen, tick = 0, -1
@@ -324,5 +368,5 @@ class LiveServer:
                 message = f"data: {payload}\n\n".encode()
             try:
                 await asyncio.wait_for(response.write(message), timeout)
-            except (TimeoutError, ConnectionError):
+            except (TimeoutError, ConnectionError, RuntimeError):  # (a stream ended to make room)
                 break

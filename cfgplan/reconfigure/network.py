@@ -44,6 +44,7 @@ from cfgplan.reconfigure.deployer import RETRY, RETRY_MOST, SWITCH_TIMEOUT, Netw
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.reconfigure.stall import Doubts, Heartbeat
 from cfgplan.reconfigure.trust import beyond_its_own
+from cfgplan.runtime.errors import printable
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector
@@ -62,7 +63,9 @@ from cfgplan.runtime.protocol import (
     read_to_coordinator,
 )
 from cfgplan.runtime.society import Society
-from cfgplan.runtime.zenoh_transport import ZenohTransport
+from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, ZenohTransport
+from cfgplan.security.rates import Throttle
+from cfgplan.security.zenoh_tls import society_of
 
 __all__ = [
     "RETRY",
@@ -95,6 +98,18 @@ class NetworkAdaptive:
     heartbeat: Heartbeat | None = None  # tells this process's own stalls (coordinate())
     doubts: Doubts | None = None  # the losses held after such a stall
     reconfigures: bool = True
+    _throttle: Throttle = field(default_factory=Throttle)  # what is said of dropped messages
+    _twins: set[str] = field(default_factory=set)  # other processes of this robot, alive
+    _rivals: dict[str, tuple[Rival, float]] = field(default_factory=dict)  # said, by robot
+    _ended: dict[str, tuple[str, float]] = field(default_factory=dict)  # process gone, name up
+    _hidden: set[str] = field(default_factory=set)  # lost while a session held their name
+    process_grace: float = 0.5
+    """Seconds a robot's name may stay alive after its process ended (its two
+    tokens go one after the other) before the name is taken as held by
+    another session."""
+    coordinators: frozenset[str] = frozenset()
+    """The robots that may coordinate (coordinate(): with keys, those the
+    society's keys mark so; without, the state's robots)."""
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)
@@ -111,6 +126,11 @@ class NetworkAdaptive:
                 f"the {most} that may wait (a robot floods it)"
             )
             self._dropped = dropped
+        self._say_counts()
+        if self._ended:
+            self._settle_ended()
+        if self._rivals and self.refusal is None:
+            self._weigh_rivals()
         self._stalled()
         for detection in self.monitor.drain():
             if not self._doubt(detection):
@@ -138,18 +158,18 @@ class NetworkAdaptive:
                 )
 
     def _stalled(self) -> None:
-        """Whether this process stood still longer than the lease since the last
+        """Whether this process stood still for half the lease or more since the last
         pass (:mod:`cfgplan.reconfigure.stall`): then its session stood still
         too and may see robots lost that never stopped. That is said, and
         losses seen in the next two leases are held."""
         if self.heartbeat is None or self.doubts is None:
             return
         pause, lease = self.heartbeat.take(), self.doubts.lease
-        if pause > lease:
+        if pause > self.doubts.threshold:
             self.doubts.stalled(time.monotonic())
             self.deployer.member.error(
-                f"{self.deployer.me}'s process stood still longer than the lease: "
-                f"{pause:.1f} s (the lease is {lease:g} s); robots seen lost now are "
+                f"{self.deployer.me}'s process stood still for {pause:.1f} s, half the lease "
+                f"or more (the lease is {lease:g} s); robots seen lost now are "
                 "checked again before anything is withdrawn"
             )
 
@@ -188,6 +208,12 @@ class NetworkAdaptive:
 
     def take(self, detection: Detection) -> None:
         robot = detection.other
+        if robot in self._hidden and detection.how != "process":
+            self._hidden.discard(robot)
+            if detection.kind == "lost":  # the name held after its process ended: taken already
+                self._held.pop(robot, None)
+                self.deployer.gone(robot)
+                return
         if detection.kind == "seen" and robot not in self._present:
             if not self.deployer.seen(robot):
                 self._held[robot] = detection  # taken once it says it is ready
@@ -211,7 +237,8 @@ class NetworkAdaptive:
         try:
             message = read_to_coordinator(payload)
         except ProtocolError as exc:
-            self.deployer.member.error(f"a message to the coordinator that cannot be read: {exc}")
+            said = f"a message to the coordinator that cannot be read: {exc}"
+            self._say(f"{sender} unreadable {exc.kind}", said)
             return
         if message.robot != sender:
             said = f"a message on {sender}'s key that says it is from {message.robot!r}"
@@ -220,13 +247,13 @@ class NetworkAdaptive:
             if message.epoch == self.deployer.epoch:  # else: to the coordinator before this one
                 self.deployer.acked(message.robot, message.id, message.phase, message.reason)
         elif isinstance(message, Ready):
-            if not self._duplicate(message):
+            if not self._foreign(message.robot) and not self._duplicate(message):
                 self._ready(message.robot)
         elif isinstance(message, Rival):
             self._rival(message)
         elif isinstance(message, CallError):
             said = f"{message.robot} {message.functionality}: {message.error}"
-            self.deployer.member.error(said)
+            self._say(f"{sender} call-error", said)
         else:
             self._report(message)
 
@@ -241,7 +268,7 @@ class NetworkAdaptive:
         detection = report.detection
         if detection.robot != report.robot:
             said = f"{report.robot} reported a detection made by {detection.robot!r}: dropped"
-            self.deployer.member.error(said)
+            self._say(f"{report.robot} another's detection", said)
             return
         beyond = beyond_its_own(detection)
         if beyond is not None:
@@ -261,7 +288,10 @@ class NetworkAdaptive:
         lost (its part with it) and the other is asked whether it is ready,
         as a robot seen again is: otherwise the live name would hide that
         death until its inputs went stale."""
-        if robot == self.deployer.me or (self.members and robot not in self.members):
+        if robot == self.deployer.me:  # another process of this robot: a second coordinator
+            (self._twins.add if alive else self._twins.discard)(instance)
+            return
+        if self.members and robot not in self.members:
             return  # a stranger's tokens are not kept
         live = self._processes.setdefault(robot, set())
         (live.add if alive else live.discard)(instance)
@@ -276,6 +306,50 @@ class NetworkAdaptive:
             gone = f"its process {instance} ended; another process of {robot} runs"
             self.take(Detection("lost", me, now, other=robot, how="process", detail=gone))
             self.take(Detection("seen", me, now, other=robot, how="process"))
+        elif not alive and instance == current:  # its name should go with it: see _settle_ended
+            self._ended[robot] = (instance, time.monotonic() + self.process_grace)
+
+    def _settle_ended(self) -> None:
+        """A robot whose process ended while its name stays alive for longer
+        than :attr:`process_grace` — a session that declares no process of
+        it holds its ``alive`` token (its key in other hands): the robot is
+        lost, as if the token went, and greeted (a process of it started
+        again answers and is taken back). The token's going later is not a
+        second loss."""
+        now = time.monotonic()
+        for robot, (instance, deadline) in sorted(self._ended.items()):
+            if now < deadline:
+                continue
+            del self._ended[robot]
+            held = robot in self.deployer.transport.alive and not self._processes.get(robot)
+            if not held or self._instances.get(robot) != instance:
+                continue
+            me, t = self.deployer.me, time.time()
+            gone = (
+                f"its process {instance} ended, but its name is still alive: a session that "
+                f"declares no process of {robot} holds it"
+            )
+            self._once(f"{robot} name held", f"robot {robot}'s {gone}")
+            self.take(Detection("lost", me, t, other=robot, how="process", detail=gone))
+            self._hidden.add(robot)
+            self.take(Detection("seen", me, t, other=robot, how="process"))
+
+    def _say(self, key: str, said: str) -> None:
+        """Say ``said`` (an ``error`` event), at most once a second for ``key``
+        (a kind of message and its sender); the others of the second are
+        counted and said as a count (:meth:`_say_counts`): a robot that sends
+        a flood of them costs the loop and the trace one event a second."""
+        if self._throttle.note(key, time.monotonic()):
+            self.deployer.member.error(said)
+
+    def _say_counts(self) -> None:
+        """The messages :meth:`_say` counted, once their second is over."""
+        for key, count in self._throttle.due(time.monotonic()):
+            sender, _, kind = key.partition(" ")
+            self.deployer.member.error(
+                f"{count} more message(s) from {sender} ({kind}) in the last second or more: "
+                "dropped"
+            )
 
     def _once(self, key: str, said: str) -> None:
         """Say ``said`` (dropped), the first time for ``key``, for a few keys
@@ -284,6 +358,23 @@ class NetworkAdaptive:
         if key not in self._noted and len(self._noted) < 64:
             self._noted.add(key)
             self.deployer.member.error(f"{said}: dropped")
+
+    def _foreign(self, robot: str) -> bool:
+        """Whether ``robot`` runs another problem: a token of another problem is
+        up under its name and none of this one's (a process started with an
+        edited state; it stops by itself, :mod:`cfgplan.security.identity`).
+        Its ``ready`` is not taken (said once): it is greeted on, and taken
+        once a process of this problem runs it."""
+        foreign = getattr(self.deployer.transport, "foreign", None)
+        theirs = foreign(robot) if foreign is not None else None
+        if theirs is None:
+            return False
+        self._once(
+            f"{robot} another problem",
+            f"robot {robot} runs another problem ({theirs}): not taken into the society "
+            "until a process of its problem runs it",
+        )
+        return True
 
     def _duplicate(self, ready: Ready) -> bool:
         """Whether ``ready`` is from a second process of a robot whose first
@@ -304,17 +395,58 @@ class NetworkAdaptive:
 
     def _rival(self, rival: Rival) -> None:
         """A robot follows another coordinator: if it is this one that is the
-        second, it stops; else the console says a second one was refused."""
+        second, it stops — once what the robot says is borne out by this
+        coordinator's own view (:meth:`_borne_out`), within a lease; else the
+        console says a second one was refused."""
         if rival.epoch == self.deployer.epoch:
-            if self.refusal is None:
-                self.refusal = (
-                    f"society {self.deployer.transport.society} has a coordinator already: "
-                    f"{rival.robot} follows {rival.leader}; this one stops"
-                )
+            if self.refusal is None and rival.robot not in self._rivals:
+                lease = getattr(self.deployer.transport, "lease", DEFAULT_LEASE)
+                self._rivals[rival.robot] = (rival, time.monotonic() + lease)
+                self._weigh_rivals()
             return
         self._once(
             f"{rival.robot} rival", f"a second coordinator of the society, refused by {rival.robot}"
         )
+
+    def _borne_out(self, rival: Rival) -> bool:
+        """Whether this coordinator's own view bears ``rival`` out. A robot that
+        never said it is ready to this coordinator follows another one: its
+        word is what the protocol goes by (a second coordinator that reaches
+        only the helpers sees no more). One that did — it follows this one,
+        its answers carry this one's epoch — contradicts itself, and is
+        believed only if the leader it names is alive and may coordinate:
+        another process of this very robot (its process token), or another
+        robot that may (with keys, one ``society.json`` marks a coordinator;
+        without, a robot of the state) and is not the robot that says it
+        follows it. With its own valid key, a robot could otherwise stop the
+        coordinator it follows by naming anyone."""
+        if rival.robot not in self.deployer.ready:
+            return True
+        leader = rival.leader
+        if leader == self.deployer.me:
+            return bool(self._twins)
+        if leader == rival.robot or leader not in self.coordinators:
+            return False
+        return leader in self.deployer.transport.alive
+
+    def _weigh_rivals(self) -> None:
+        """The rivals said: borne out, this coordinator stops; not borne out
+        within a lease, it goes on, and says it did not believe them."""
+        now = time.monotonic()
+        for robot, (rival, deadline) in sorted(self._rivals.items()):
+            if self._borne_out(rival):
+                self.refusal = (
+                    f"society {self.deployer.transport.society} has a coordinator already: "
+                    f"{rival.robot} follows {rival.leader}; this one stops"
+                )
+                return
+            if now >= deadline:
+                del self._rivals[robot]
+                self._once(
+                    f"{robot} rival not believed",
+                    f"{robot} says it follows another coordinator ({printable(rival.leader)}), "
+                    "but no such coordinator runs: not believed, this one goes on",
+                )
 
     def _ready(self, robot: str) -> None:
         """``robot`` can be sent its part: take it back if it was seen, else
@@ -322,6 +454,7 @@ class NetworkAdaptive:
         if robot == self.deployer.me:
             return
         self.deployer.said_ready(robot)
+        self._hidden.discard(robot)  # a process of it answers: its losses are its own again
         held = self._held.pop(robot, None)
         if held is not None:
             self.take(held)
@@ -384,6 +517,7 @@ def coordinate(
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
     adaptive.members = frozenset(task.agents)
+    adaptive.coordinators = _coordinators(transport, adaptive.members)
     adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(transport.lease)
     adaptive.heartbeat.start()
     watch = getattr(transport, "watch_processes", None)
@@ -393,3 +527,14 @@ def coordinate(
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
+
+
+def _coordinators(transport: ZenohTransport, members: frozenset[str]) -> frozenset[str]:
+    """The robots that may coordinate ``transport``'s society: with its keys,
+    those its ``society.json`` marks so (only they may send switches); without,
+    any robot of the state."""
+    folder = getattr(transport.options, "keys", None)
+    if not folder:
+        return members
+    keys = society_of(folder)
+    return frozenset(m.name for m in keys.robots if m.coordinator)

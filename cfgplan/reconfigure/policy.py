@@ -337,6 +337,11 @@ class Reconfigurator:
             limit *= 4
 
     def _stay(self, cause: str, withdrawn: tuple[Ground, ...] = ()) -> Decision:
+        """Run on as before. The situation may have changed though (a failure
+        of what is not used, a recovery not worth a switch), and fallbacks
+        are kept by situation: those of the new one are queued, so that the
+        next failure is still answered by one (those known are skipped)."""
+        self._queue_fallbacks()
         return Decision(
             "stay", self.id, self.running, self.running, withdrawn=withdrawn, cause=cause
         )

@@ -46,6 +46,8 @@ class Settings:
     reconfigure: bool = True
     hold: float = HOLD
     margin: float = 0.1
+    without: str = "stop"
+    """What a helper does once its coordinator is gone for the hold (``--without-coordinator``)."""
 
 
 def hooks(
@@ -105,5 +107,5 @@ def hooks(
         )
     monitor = Monitor(hold=settings.hold)
     monitor.watch(robot)
-    member = Member(robot, transport, monitor)
+    member = Member(robot, transport, monitor, without=settings.without, hold=settings.hold)
     return Membership(member, Injector(settings.injections, running, facts=False, kill=kill))

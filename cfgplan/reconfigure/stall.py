@@ -12,7 +12,9 @@ later, with a failure on record that never was.
   stood still too) from a loop pass that is only slow (a long search, a slow
   functionality: the thread and the session ran on, so a loss seen then is
   real).
-* :class:`Doubts` — after such a stall, each loss seen within two leases is
+* :class:`Doubts` — after such a stall (half the lease or more: a session
+  woken from a stall of about the lease may drop a link whose keep-alives
+  wait unread), each loss seen within two leases is
   held until its own deadline (two leases after it was held): let go if the
   robot is seen again by the same process, taken if the robot is still gone,
   or came back as another process, at the deadline.
@@ -41,6 +43,7 @@ class Heartbeat:
     def __init__(self, beat: float = BEAT) -> None:
         self.beat = beat
         self._worst = 0.0
+        self._last = time.monotonic()  # the last beat
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -51,21 +54,29 @@ class Heartbeat:
         self._thread.start()
 
     def _run(self) -> None:
-        last = time.monotonic()
+        with self._lock:
+            self._last = time.monotonic()
         while not self._stop.wait(self.beat):
             now = time.monotonic()
-            self.note(now - last - self.beat)
-            last = now
+            with self._lock:
+                pause, self._last = now - self._last - self.beat, now
+            self.note(pause)
 
     def note(self, pause: float) -> None:
         """A pause of ``pause`` seconds beyond a beat (the thread calls it; tests too)."""
         with self._lock:
             self._worst = max(self._worst, pause)
 
-    def take(self) -> float:
-        """The longest pause since the last call, and start over."""
+    def take(self, now: float | None = None) -> float:
+        """The longest pause since the last call, and start over. A pause
+        still going on counts too: woken from a stall, the loop may ask before
+        this thread has beaten again (and it sees the losses the stall made
+        first), so the time since the last beat is part of the answer."""
+        now = time.monotonic() if now is None else now
         with self._lock:
             worst, self._worst = self._worst, 0.0
+            if self._thread is not None:
+                worst = max(worst, now - self._last - self.beat)
         return worst
 
     def stop(self) -> None:
@@ -80,14 +91,25 @@ class Doubts:
 
     lease: float
     """Seconds of silence after which a robot is lost (the session's lease)."""
+    share: float = 0.5
+    """The part of the lease a stall of the process must last to put the
+    losses seen after it in doubt: a session that stood still for less than
+    the lease but more than this may still drop a link when it runs again
+    (the keep-alives that arrived meanwhile wait unread behind its lease
+    check), so a stall of *about* the lease is one too."""
     until: float = 0.0
     """Monotonic time before which a loss seen is held."""
     held: dict[str, tuple[Detection, float]] = field(default_factory=dict)
     """By robot: the loss held and its deadline (monotonic)."""
 
+    @property
+    def threshold(self) -> float:
+        """Seconds a stall must last to count (:attr:`share` of the lease)."""
+        return self.share * self.lease
+
     def stalled(self, now: float) -> None:
-        """The process stood still longer than the lease: losses seen in the
-        next two leases are held."""
+        """The process stood still longer than :attr:`threshold`: losses seen
+        in the next two leases are held."""
         self.until = now + 2 * self.lease
 
     def hold(self, detection: Detection, now: float) -> bool:

@@ -35,9 +35,11 @@ from cfgplan.runtime.monitor import Monitor
 from cfgplan.runtime.options import (
     IMPL,
     NETWORK_OPTIONS,
+    RESPAWN,
     RUN_OPTIONS,
     SOCIETY,
     UNTIL,
+    WITHOUT_COORDINATOR,
     Option,
     choice,
     how_long,
@@ -143,7 +145,7 @@ def robot_main(
         if args.trace is not None:
             trace = open_trace(args.trace, args.force, max_bytes=args.trace_max_bytes)
         injections = [parse_injection(text) for text in args.inject]
-        hooks = _follow(running, injections, trace)
+        hooks = _follow(running, injections, trace, args.without_coordinator)
         return execute(
             running,
             options_of(args),
@@ -173,7 +175,10 @@ def crash(trace: TraceFile | None) -> None:
 
 
 def _follow(
-    running: Society, injections: Sequence[Injection], trace: TraceFile | None
+    running: Society,
+    injections: Sequence[Injection],
+    trace: TraceFile | None,
+    without: str = WITHOUT_COORDINATOR.default,
 ) -> Hooks | None:
     """A robot of its own process on the network follows the coordinator."""
     (robot,) = running.robots
@@ -182,7 +187,7 @@ def _follow(
         return Scripted(injector) if injector.pending else None
     monitor = Monitor()
     monitor.watch(robot)
-    member = Member(robot, robot.transport, monitor)  # type: ignore[arg-type]
+    member = Member(robot, robot.transport, monitor, without=without)  # type: ignore[arg-type]
     return Membership(member, injector)
 
 
@@ -255,7 +260,14 @@ def society_main(
     names = ", ".join(name for name, _ in programs)
     description = f"Run {names} in one process (cfgplan, thesis 5.3)."
     parser = parser_of(description, network=False)
+    _add(parser, RESPAWN)
     args = parser.parse_args(argv)
+    if args.respawn:  # this process supervises one that runs them, started again when it dies
+        from cfgplan.runtime.spawn import supervise
+
+        given = sys.argv[1:] if argv is None else argv
+        rest = [a for a in given if not (len(a) > 3 and "--respawn".startswith(a))]  # (abbrev.)
+        return supervise([sys.executable, sys.argv[0], *rest])
     injections = [parse_injection(text) for text in args.inject]
     for injection in injections:  # every robot is here: one aimed elsewhere is a typo
         wrong = misaimed(injection, [name for name, _ in programs])

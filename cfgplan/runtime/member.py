@@ -67,7 +67,7 @@ from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.install import install, runnable
 from cfgplan.runtime.keys import configure_key, coordinator_key
 from cfgplan.runtime.launch import REFUSED
-from cfgplan.runtime.monitor import Monitor
+from cfgplan.runtime.monitor import HOLD, Monitor
 from cfgplan.runtime.part import Part, part_from_json
 from cfgplan.runtime.protocol import (
     Abort,
@@ -88,6 +88,7 @@ from cfgplan.runtime.protocol import (
     encode,
     read_to_robot,
 )
+from cfgplan.security.rates import Throttle
 
 __all__ = ["Member", "Membership", "Network", "send"]
 
@@ -121,8 +122,17 @@ class Member:
         monitor: Monitor | None = None,
         *,
         forward: bool = True,
+        without: str = "stop",
+        hold: float = HOLD,
     ) -> None:
         self.robot = robot
+        self.without = without
+        """What this robot does once its coordinator is gone for ``hold``
+        seconds (``--without-coordinator``): ``stop`` its part, or ``run`` on."""
+        self.hold = hold
+        self._gone: float | None = None  # when the coordinator followed went (monotonic)
+        self.orphaned = False
+        """True while its part is stopped because its coordinator is gone."""
         self.network = network
         self.monitor = monitor
         self.forward = forward
@@ -139,6 +149,7 @@ class Member:
         self.finished: str | None = None
         self._erring: set[str] = set()  # labels whose last call failed (already told)
         self._errors: list[CallError] = []  # to send between cycles
+        self._throttle = Throttle()  # what is said of unreadable switch messages
         network.subscribe(configure_key(network.society, robot.name), self.receive)
         declare = getattr(network, "declare", None)
         if declare is not None:  # the first answer then goes out at once
@@ -157,9 +168,44 @@ class Member:
 
     def _presence(self, other: str, alive: bool) -> None:
         """The coordinator followed went away (a message of its run, after it
-        is seen again, says it is the same run: :meth:`receive`)."""
-        if other == self.leader and not alive:
+        is seen again, says it is the same run: :meth:`receive`), or came
+        back: a robot that stopped its part without it says it is ready
+        again, so that it is sent its part (a coordinator whose own stall
+        hid the loss would not send it)."""
+        if other != self.leader:
+            return
+        if not alive:
             self._leader_gone = True
+            self._gone = time.monotonic()
+            return
+        self._gone = None
+        if self.orphaned:
+            self._send(Ready(self.robot.name, self.instance))
+
+    def _alone(self) -> None:
+        """The coordinator followed is gone for longer than the hold: with
+        ``without`` = ``stop``, this robot stops its part (every stop hook is
+        called: an action halts its motors) and runs empty, watching, until a
+        coordinator sends it a part again — as Nav2's bond stops a robot whose
+        supervisor went silent; with ``run``, it runs on. Said either way."""
+        if self._gone is None or self.finished is not None or self.orphaned:
+            return
+        gone = time.monotonic() - self._gone
+        if gone < self.hold:
+            return
+        self._gone = None
+        if self.without != "stop":
+            self.error(
+                f"{self.leader}, the coordinator, is gone for {gone:.1f} s: {self.robot.name} "
+                "runs on (--without-coordinator run)"
+            )
+            return
+        self.install(self.current, Part(self.robot.name, (), ()))
+        self.orphaned = True
+        self.error(
+            f"{self.leader}, the coordinator, is gone for {gone:.1f} s: {self.robot.name} "
+            "stops its part (--without-coordinator stop) until a coordinator sends it one"
+        )
 
     def _event(self, event: Event) -> None:
         """Note the first failed call of each run of them (:meth:`report` sends it)."""
@@ -179,7 +225,8 @@ class Member:
         try:
             message = read_to_robot(payload)
         except ProtocolError as exc:
-            self.error(f"a switch message that cannot be read: {exc}")
+            if self._throttle.note(exc.kind, time.monotonic()):  # a flood: once a second
+                self.error(f"a switch message that cannot be read: {exc}")
             return
         if isinstance(message, Duplicate):
             if message.instance == self.instance and self.refused is None:
@@ -291,6 +338,7 @@ class Member:
 
     def install(self, number: int, part: Part) -> None:
         """Run ``part`` as configuration ``number`` from the next cycle on."""
+        self.orphaned = False
         installed = install(self.robot, part)
         same = number == self.current and not installed.changed  # a re-synchronisation
         self.current = number
@@ -324,9 +372,13 @@ class Member:
         this robot's monitor; note a robot of another problem (:attr:`conflict`)."""
         if self.refused is None and self.conflict is not None:
             self.refused = self.conflict
+        for _, count in self._throttle.due(time.monotonic()):
+            self.error(f"{count} more switch message(s) that cannot be read in the last second")
         errors, self._errors = self._errors, []
         for error in errors:
             self._send(error)
+        if self.forward:
+            self._alone()
         if self.monitor is None or not self.forward:
             return
         for detection in self.monitor.drain():

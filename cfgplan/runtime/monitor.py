@@ -47,7 +47,7 @@ from cfgplan.notation import atom_text
 from cfgplan.runtime.events import Adaptation, Call, Event, Presence, Staleness
 from cfgplan.runtime.executor import Robot
 from cfgplan.runtime.faults import term_text
-from cfgplan.runtime.wire import is_number, names, whole
+from cfgplan.runtime.wire import is_number, loads, names, whole
 from cfgplan.runtime.wrapper import Wrapper
 
 __all__ = ["HOLD", "HOLD_MAX", "PROBE", "Detection", "Monitor", "Prober", "doubled_hold"]
@@ -102,7 +102,7 @@ class Detection:
         It comes from another process: every field is checked for the type
         :meth:`message` writes, so that one read cannot fail later, when the
         coordinator acts on it (after a switch, say)."""
-        data = json.loads(payload)
+        data = loads(payload)
         if not isinstance(data, dict):
             raise ValueError("not a detection")
         if data.get("kind") not in get_args(Kind):

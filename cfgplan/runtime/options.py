@@ -45,6 +45,7 @@ __all__ = [
     "RATE_ALLOWANCE",
     "RECORD",
     "RECORD_MAX_BYTES",
+    "RESPAWN",
     "RUN_OPTIONS",
     "SOCIETY",
     "STALE_PERIODS",
@@ -52,6 +53,7 @@ __all__ = [
     "TRACE_MAX_BYTES",
     "UNTIL",
     "VERBOSE",
+    "WITHOUT_COORDINATOR",
     "ZENOH_CONFIG",
     "Option",
     "choice",
@@ -266,6 +268,27 @@ RATE_ALLOWANCE = Option(
     number(0, above=True),
 )
 
+WITHOUT_COORDINATOR = Option(
+    "--without-coordinator",
+    "stop|run",
+    "stop",
+    "What a robot that follows a coordinator does once the coordinator is gone (its process "
+    "ended, or froze past the lease) for longer than the hold: stop (default: its part stops, "
+    "every stop hook called, so an action halts its motors, until a coordinator sends it a "
+    "part again) or run (on, with the inputs it still gets).",
+    choice(("stop", "run"), "what a robot does without its coordinator"),
+)
+
+RESPAWN = Option(
+    "--respawn",
+    None,
+    False,
+    "Start a robot's process again when it dies (killed, crashed): after 1 s, twice as long "
+    "with each death in a row (at most 30 s), a process that ran 10 s counting as the first "
+    "death again. Its trace and recording go to files of their own (run-pippi-2.jsonl), its "
+    "--inject faults are not run again.",
+)
+
 RUN_OPTIONS: tuple[Option[Any], ...] = (
     IMPL,
     RATE,
@@ -290,6 +313,7 @@ NETWORK_OPTIONS: tuple[Option[Any], ...] = (
     LEASE,
     KEYS,
     RATE_ALLOWANCE,
+    WITHOUT_COORDINATOR,
 )
 """A robot on the network: ``cfgplan run --robot`` and a robot's module."""
 

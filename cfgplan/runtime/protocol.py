@@ -36,7 +36,7 @@ from enum import StrEnum
 from typing import Any, ClassVar
 
 from cfgplan.runtime.monitor import Detection
-from cfgplan.runtime.wire import is_whole
+from cfgplan.runtime.wire import is_whole, loads
 
 __all__ = [
     "MAX_BYTES",
@@ -78,6 +78,10 @@ MAX_TEXT = 4000
 
 class ProtocolError(ValueError):
     """A message that is not one of this protocol: recorded and dropped by the receiver."""
+
+    kind: str = "not a message"
+    """What it claimed to be (its ``op`` or ``type``, when one of the
+    protocol's), so that a receiver can say one of each kind at a time."""
 
 
 class Phase(StrEnum):
@@ -299,7 +303,7 @@ def _object(payload: bytes) -> dict[str, object]:
     if len(payload) > MAX_BYTES:
         raise ProtocolError(f"a message of {len(payload)} bytes (at most {MAX_BYTES} are read)")
     try:
-        data = json.loads(payload)
+        data = loads(payload)
     except (ValueError, RecursionError) as exc:  # UnicodeDecodeError is a ValueError
         raise ProtocolError(f"not JSON: {exc}") from None
     if not isinstance(data, dict):
@@ -367,7 +371,11 @@ def _read(payload: bytes, key: str, kinds: dict[str, type[Any]]) -> object:
     message = kinds.get(tag) if isinstance(tag, str) else None
     if message is None:
         raise ProtocolError(f"{key} is {tag!r}, not one of {', '.join(kinds)}")
-    return _fields(message, data)
+    try:
+        return _fields(message, data)
+    except ProtocolError as exc:
+        exc.kind = str(tag)
+        raise
 
 
 def read_to_robot(payload: bytes) -> ToRobot:

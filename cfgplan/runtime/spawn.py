@@ -20,6 +20,14 @@ functionality, 3 no configuration left). A robot that exits with 1 or 2 (it
 could not start or run its part) stops the launch: exit status 1, with the
 robot's last lines. Any other end of a robot (a scripted ``kill``, a crash) is
 the society's business: the coordinator sees it lost and reconfigures.
+
+With :attr:`SpawnOptions.respawn` (``--respawn``) a robot whose process died —
+killed, crashed: any end but those above (:func:`died`) — is started again,
+the coordinator too, after 1 s, twice as long with each death in a row (at
+most 30 s), a process that ran 10 s counting as the first death again; the
+output says each death and each start again. The society takes the new
+process back as it takes any robot back (the coordinator started again takes
+its society back).
 """
 
 from __future__ import annotations
@@ -36,6 +44,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import IO, Any, TextIO
 
 from cfgplan.runtime.errors import RunError
@@ -46,10 +55,15 @@ __all__ = [
     "Launch",
     "RobotCommand",
     "SpawnOptions",
+    "again_args",
+    "backoff",
     "commands",
+    "death_text",
+    "died",
     "free_port",
     "in_use",
     "status_text",
+    "supervise",
 ]
 
 USER_ERRORS = (1, 2)
@@ -73,6 +87,14 @@ class SpawnOptions:
     """Lines of a robot's output kept to say why it failed."""
     colour: bool | None = None
     """Colour the prefixes; ``None``: when the output is a terminal and NO_COLOR is unset."""
+    respawn: bool = False
+    """Start a robot whose process died again (``--respawn``; see :class:`Launch`)."""
+    respawn_delay: float = 1.0
+    """Seconds before the first start again; doubled with each death in a row."""
+    respawn_most: float = 30.0
+    """The longest wait before a start again."""
+    respawn_reset: float = 10.0
+    """Seconds a process must have run for its death not to count as one more in a row."""
 
 
 @dataclass(frozen=True)
@@ -137,6 +159,107 @@ def commands(
     return out
 
 
+def backoff(options: SpawnOptions, lived: float, deaths: int) -> tuple[int, float]:
+    """A process that ran ``lived`` seconds died after ``deaths`` deaths in a
+    row: the deaths in a row now, and the seconds to wait before starting it
+    again (:attr:`SpawnOptions.respawn_delay`, doubled with each death in a
+    row, at most :attr:`SpawnOptions.respawn_most`; a process that ran
+    :attr:`SpawnOptions.respawn_reset` seconds counts as the first death)."""
+    deaths = 1 if lived >= options.respawn_reset else deaths + 1
+    return deaths, min(options.respawn_delay * 2 ** (deaths - 1), options.respawn_most)
+
+
+def death_text(code: int, lived: float, deaths: int, delay: float) -> str:
+    """What the console says of a death and the start again it waits for."""
+    row = f"death {deaths} in a row" if deaths > 1 else "its first death in a row"
+    return (
+        f"(died, exit status {status_text(code)}, after {lived:.1f} s: started again in "
+        f"{delay:g} s, {row})"
+    )
+
+
+def supervise(
+    argv: Sequence[str],
+    options: SpawnOptions | None = None,
+    say: Callable[[str], None] | None = None,
+) -> int:
+    """Run ``argv`` (a program and its arguments) and start it again each
+    time it dies (:func:`died`, as a coordinator: 0, 1, 2 and 3 end the run),
+    after :func:`backoff`'s delay, with a trace and recording of its own
+    and without scripted faults (:func:`again_args`): ``run_all.py
+    --respawn``. SIGINT or SIGTERM stops the process running (SIGTERM) and
+    ends the supervision; its exit status is returned."""
+    options = options or SpawnOptions(respawn=True)
+    tell = say or (lambda line: print(line, file=sys.stderr, flush=True))
+    program, args = argv[0], tuple(argv[1:])
+    stop = threading.Event()
+    child: list[subprocess.Popen[bytes]] = []
+    previous: dict[int, Any] = {}
+
+    def handler(signum: int, frame: object) -> None:
+        stop.set()
+        for process in child[-1:]:
+            with contextlib.suppress(ProcessLookupError):
+                process.send_signal(signal.SIGTERM)
+
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            previous[signum] = signal.signal(signum, handler)
+    try:
+        life, deaths = 1, 0
+        while True:
+            began = time.monotonic()
+            process = subprocess.Popen(
+                [program, *(args if life == 1 else again_args(args, life))],
+                preexec_fn=_death_signal(),
+            )
+            child.append(process)
+            tell(f"(started: pid {process.pid}" + (f", start {life})" if life > 1 else ")"))
+            code = process.wait()
+            if stop.is_set() or not died(code, coordinator=True):
+                return code if code >= 0 else 128 - code
+            lived = time.monotonic() - began
+            deaths, delay = backoff(options, lived, deaths)
+            tell(death_text(code, lived, deaths, delay))
+            if stop.wait(delay):
+                return code if code >= 0 else 128 - code
+            life += 1
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def died(code: int, coordinator: bool) -> bool:
+    """Whether a robot's process that ended with ``code`` died (killed, a
+    crash), as opposed to ending: 0 (its run or its task done), 1 or 2 (it
+    could not start or run its part, or was refused: starting it again would
+    end the same way) and, for the coordinator, 3 (no configuration left)."""
+    return code not in (0, *USER_ERRORS, *((3,) if coordinator else ()))
+
+
+def again_args(args: Sequence[str], life: int) -> tuple[str, ...]:
+    """A robot's command for its ``life``-th start: a ``--trace`` or
+    ``--record`` file of its own (``run-pippi.jsonl`` -> ``run-pippi-2.jsonl``:
+    the dead process's is kept), and without its ``--inject`` faults (a
+    script of one run's faults, by cycle and second: the new process would
+    count from 0 and meet them again)."""
+    out: list[str] = []
+    k = 0
+    while k < len(args):
+        arg = args[k]
+        if arg == "--inject" and k + 1 < len(args):
+            k += 2
+            continue
+        out.append(arg)
+        if arg in ("--trace", "--record") and k + 1 < len(args):
+            path = Path(args[k + 1])
+            out.append(str(path.with_name(f"{path.stem}-{life}{path.suffix}")))
+            k += 2
+            continue
+        k += 1
+    return tuple(out)
+
+
 def status_text(code: int) -> str:
     """A process's exit status as a shell says it: a signal ``N`` is ``128+N``."""
     if code < 0:
@@ -177,6 +300,12 @@ class Started:
     pump: threading.Thread
     tail: deque[str] = field(default_factory=deque)
     reported: bool = False
+    began: float = field(default_factory=time.monotonic)
+    """When this process was started (monotonic)."""
+    life: int = 1
+    """Which start of its robot this is (2: the first start again)."""
+    deaths: int = 0
+    """Deaths of its robot in a row before this start (a process that lasted resets it)."""
 
 
 class Launch:
@@ -199,6 +328,7 @@ class Launch:
         self._lock = threading.Lock()
         self._closed = False
         self._width = max((len(r.robot) for r in self.robots), default=0)
+        self._due: list[tuple[float, Started, int]] = []  # robots to start again: when
         self._print = self._printer()
 
     # -- output ------------------------------------------------------------------
@@ -263,28 +393,32 @@ class Launch:
                     "listen on it",
                     hint="give another --port, or none (a free port)",
                 )
-            process = subprocess.Popen(
-                [*self.program, *command.args],
-                stdin=subprocess.DEVNULL,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.STDOUT,
-                env={**os.environ, "PYTHONUNBUFFERED": "1", LAUNCHED: "1"},
-                start_new_session=True,  # Ctrl-C reaches the launch, which stops them in order
-                preexec_fn=self._death,
-            )
-            self.say(command.robot, f"(started: pid {process.pid})")
-            tail: deque[str] = deque()
-            assert process.stdout is not None
-            pump = threading.Thread(
-                target=self._pump,
-                args=(command.robot, process.stdout, tail),
-                name=f"launch-{command.robot}",
-                daemon=True,
-            )
-            pump.start()
-            started = Started(command, process, pump, tail)
+            started = self._spawn(command, command.args)
+            self.say(command.robot, f"(started: pid {started.process.pid})")
             self.started.append(started)
             self._listening(started)
+
+    def _spawn(self, command: RobotCommand, args: Sequence[str]) -> Started:
+        """Start ``command``'s process with ``args``, its output pumped."""
+        process = subprocess.Popen(
+            [*self.program, *args],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", LAUNCHED: "1"},
+            start_new_session=True,  # Ctrl-C reaches the launch, which stops them in order
+            preexec_fn=self._death,
+        )
+        tail: deque[str] = deque()
+        assert process.stdout is not None
+        pump = threading.Thread(
+            target=self._pump,
+            args=(command.robot, process.stdout, tail),
+            name=f"launch-{command.robot}",
+            daemon=True,
+        )
+        pump.start()
+        return Started(command, process, pump, tail)
 
     def _listening(self, started: Started) -> None:
         """Wait until ``started`` accepts connections on its port (bounded)."""
@@ -294,6 +428,9 @@ class Launch:
             code = started.process.poll()
             if code is not None:
                 started.reported = True
+                if self.options.respawn and died(code, command.coordinator):
+                    self._again(started, code)  # killed or crashed while it started
+                    return
                 raise self._failed(started, code, "did not start")
             with socket.socket() as probe:
                 probe.settimeout(1.0)
@@ -323,21 +460,54 @@ class Launch:
         :class:`RunError`) or :attr:`stop` is set (the coordinator's status
         once stopped)."""
         while not self.stop.is_set():
-            for started in self.started:
+            for started in list(self.started):
                 code = started.process.poll()
                 if code is None or started.reported:
                     continue
                 started.reported = True
+                if self.options.respawn and died(code, started.command.coordinator):
+                    self._again(started, code)
+                    continue
                 if started.command.coordinator:
                     started.pump.join(timeout=2.0)
                     return code if code >= 0 else 128 - code
                 if code in USER_ERRORS:
                     raise self._failed(started, code, "stopped")
                 self.say(started.command.robot, f"(ended, exit status {status_text(code)})")
-            if all(s.reported for s in self.started):  # no coordinator here, all ended
+            self._respawn_due()
+            if not self._due and all(s.reported for s in self.started):  # all ended
                 return 0
             time.sleep(self.options.poll)
         return -1
+
+    def _again(self, started: Started, code: int) -> None:
+        """``started`` died: its robot is started again after a delay that
+        doubles with each death in a row (from :attr:`SpawnOptions.respawn_delay`
+        to :attr:`SpawnOptions.respawn_most`), a process that ran
+        :attr:`SpawnOptions.respawn_reset` seconds or more counting as the
+        first death again — as ``ros2 launch``'s ``respawn`` and systemd's
+        ``Restart=on-failure`` do."""
+        lived = time.monotonic() - started.began
+        deaths, delay = backoff(self.options, lived, started.deaths)
+        self.say(started.command.robot, death_text(code, lived, deaths, delay))
+        self._due.append((time.monotonic() + delay, started, deaths))
+
+    def _respawn_due(self) -> None:
+        """Start again the robots whose delay is over (same command: same name,
+        port and endpoints; a trace or recording of a file of its own, and no
+        scripted faults, which were the first start's: :func:`again_args`)."""
+        now = time.monotonic()
+        due = [d for d in self._due if d[0] <= now]
+        self._due = [d for d in self._due if d[0] > now]
+        for _, dead, deaths in due:
+            life = dead.life + 1
+            dead.pump.join(timeout=2.0)
+            started = self._spawn(dead.command, again_args(dead.command.args, life))
+            started.life, started.deaths = life, deaths
+            self.started[self.started.index(dead)] = started
+            self.say(
+                dead.command.robot, f"(started again: pid {started.process.pid}, start {life})"
+            )
 
     def stop_all(self) -> int | None:
         """Stop every robot still running by its pid, the coordinator first:

@@ -8,7 +8,12 @@ or a FIFO is refused; a file that cannot be written is a clear error. Lines
 are written as events happen and flushed once per cycle, so a trace can be
 followed while the robot runs (``tail -f``) and survives the process being
 killed. When writing fails later (a full disk), tracing stops, the robot
-goes on, and the failure is reported.
+goes on, and the failure is reported. A trace holds every value of the run:
+it is created (or truncated) readable by its owner only, mode 0600. Every
+line is JSON: a float that is not finite (a NaN an implementation computed,
+in one process) is written as a string, ``"NaN"``, ``"Infinity"`` or
+``"-Infinity"`` (:func:`~cfgplan.runtime.wire.finite`); across processes
+such a value does not travel at all (:func:`~cfgplan.runtime.values.encode`).
 
 Bounded: a value whose JSON is longer than ``elide`` characters
 (:data:`ELIDE`, 4096) is recorded by its size and digest
@@ -36,6 +41,7 @@ from typing import TextIO
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.events import Call, Data, Event, Transfer
 from cfgplan.runtime.values import elide
+from cfgplan.runtime.wire import finite
 
 __all__ = [
     "ELIDE",
@@ -149,7 +155,9 @@ def create(p: Path, force: bool) -> int:
             flags |= getattr(os, "O_NOFOLLOW", 0)
     else:
         flags |= os.O_EXCL  # also refuses any symbolic link, dangling or not
-    return os.open(p, flags, 0o644)
+    fd = os.open(p, flags, 0o600)
+    os.fchmod(fd, 0o600)  # a file truncated keeps its mode: a trace is the run's own
+    return fd
 
 
 def _text(fd: int) -> TextIO:
@@ -176,8 +184,12 @@ class TraceFile:
     def write(self, event: Event) -> None:
         if self._stream is None:
             return
+        record = elided(event, self.elide).record()
         try:
-            line = json.dumps(elided(event, self.elide).record(), separators=(",", ":")) + "\n"
+            try:
+                line = json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n"
+            except ValueError:  # a NaN or an infinity (a value, a time): JSON has neither
+                line = json.dumps(finite(record), separators=(",", ":"), allow_nan=False) + "\n"
         except (TypeError, ValueError) as exc:  # pragma: no cover - records are JSON-ready
             line = json.dumps({"event": "error", "robot": event.robot, "message": str(exc)}) + "\n"
         size = len(line)  # ASCII: json.dumps escapes the rest

@@ -34,7 +34,7 @@ import math
 from typing import NamedTuple
 
 from cfgplan.runtime.errors import RunError, printable
-from cfgplan.runtime.wire import is_number, is_whole
+from cfgplan.runtime.wire import is_number, is_whole, loads
 
 __all__ = [
     "ENVELOPE_ROOM",
@@ -129,7 +129,12 @@ def _conversion(item: object) -> str:
 def encode(value: object) -> str:
     """The JSON text of ``value``; :class:`ValueRuleError` when it cannot travel."""
     check(value)
-    return json.dumps(value, separators=(",", ":"))
+    try:
+        return json.dumps(value, separators=(",", ":"), allow_nan=False)
+    except ValueError:  # NaN or an infinity somewhere: JSON has neither
+        raise ValueRuleError(
+            "a float that is not finite (NaN or an infinity) cannot travel as JSON", "float"
+        ) from None
 
 
 def size_problem(size: int, limit: int) -> str | None:
@@ -169,7 +174,7 @@ class Envelope(NamedTuple):
 def open_envelope(payload: bytes) -> Envelope:
     """Read a message; :class:`RunError` when it is not a cfgplan envelope."""
     try:
-        data = json.loads(payload)
+        data = loads(payload)
     except (ValueError, RecursionError) as exc:
         raise RunError(f"a message that is not JSON ({exc})") from None
     if not isinstance(data, dict) or "value" not in data:

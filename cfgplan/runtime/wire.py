@@ -2,13 +2,43 @@
 checked before anything acts on them (a switch message, a robot's part, a
 detection, a channel's envelope). JSON's ``true`` reads as a Python bool,
 which is also an int, and ``1e999`` as an infinite float: neither is an id,
-an index or a time."""
+an index or a time. JSON has no ``NaN`` nor ``Infinity``: Python's reader
+takes them, :func:`loads` does not."""
 
 from __future__ import annotations
 
+import json
+import math
 from typing import TypeGuard
 
-__all__ = ["is_number", "is_whole", "name", "names", "whole"]
+__all__ = ["finite", "is_number", "is_whole", "loads", "name", "names", "whole"]
+
+
+def _not_json(constant: str) -> object:
+    raise ValueError(f"{constant} is not JSON")
+
+
+def loads(payload: bytes | str) -> object:
+    """``payload`` read as JSON, strictly: ``NaN``, ``Infinity`` and
+    ``-Infinity`` (which Python's :func:`json.loads` takes) are a
+    ``ValueError``, as is anything else that is not JSON."""
+    return json.loads(payload, parse_constant=_not_json)
+
+
+def finite(value: object) -> object:
+    """``value`` with every float that is not finite written as a string
+    (``"NaN"``, ``"Infinity"``, ``"-Infinity"``, as JavaScript prints them),
+    so that :func:`json.dumps` writes JSON; lists, tuples and dicts are copied
+    only where they hold one."""
+    if isinstance(value, float):
+        if math.isfinite(value):
+            return value
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [finite(v) for v in value]
+    return value
 
 
 def is_whole(value: object) -> TypeGuard[int]:

@@ -77,7 +77,7 @@ from cfgplan.runtime.zenoh_config import (
     reason,
     zenoh_config,
 )
-from cfgplan.security.identity import ProblemId, conflict_message
+from cfgplan.security.identity import ProblemId, conflict_message, stranger_message
 from cfgplan.security.rates import Buckets
 
 if TYPE_CHECKING:
@@ -141,7 +141,8 @@ class ZenohTransport:
         )
         self.sent = 0
         self._buckets = Buckets(self.options.rates, lease=self.lease)
-        self.notices: list[Callable[[str, str], None]] = []
+        self._control = Buckets(self.options.rates.for_control)  # the protocol's keys
+        self.notices: list[Callable[[str, str | None], None]] = []
         """Told ``(message, channel)`` of the messages a flood cost, once per
         interval (:attr:`~cfgplan.security.rates.RateLimits.report_every`): the
         robot's :class:`~cfgplan.runtime.member.Member` records them."""
@@ -153,6 +154,11 @@ class ZenohTransport:
         else :meth:`poll` raises it."""
         self._problem_token: Any = None
         self._problems: Any = None
+        self._met = False  # a robot of this one's problem was seen: it is of their society
+        self._aliens: dict[tuple[str, str], tuple[ProblemId, float]] = {}  # another problem's
+        self._said_aliens: set[tuple[str, str]] = set()
+        self._ours: set[str] = set()  # robots whose token of this one's problem is up
+        self._up: set[tuple[str, str]] = set()  # the tokens of _aliens up now
         if self.options.problem is not None:
             self._announce(self.options.problem)
         self.dropped = 0
@@ -198,10 +204,20 @@ class ZenohTransport:
                 self._buckets.pace(where, period)
 
     def subscribe(self, key: str, handler: Callable[[bytes], None]) -> None:
-        """Every message on ``key`` (in order, none dropped) to ``handler``, at
-        :meth:`poll`: the reconfiguration protocol's messages."""
+        """Every message on ``key`` (in order) to ``handler``, at :meth:`poll`:
+        the reconfiguration protocol's messages. ``key`` is one sender's (a
+        robot's key to the coordinator, a robot's ``configure``): at most
+        :attr:`~cfgplan.security.rates.RateLimits.control` of them a second
+        are taken, after a burst (:mod:`cfgplan.security.rates`), the rest
+        dropped unread and said once per interval (:attr:`notices`)."""
+
+        with self._lock:
+            self._control.open(key, time.monotonic())
 
         def queue_it(sample: Any) -> None:
+            with self._lock:  # each such key is one sender's: bounded like a channel
+                if not self._control.admit(key, time.monotonic()):
+                    return
             if self._messages.qsize() >= self.options.backlog:
                 self.dropped += 1
                 return
@@ -254,20 +270,75 @@ class ZenohTransport:
             raise RunError(f"cannot announce {self.robot}'s problem: {reason(exc)}") from None
 
     def _on_problem(self, sample: Any) -> None:
-        """On a Zenoh thread: a robot of the society says which problem it runs."""
+        """On a Zenoh thread: a robot of the society says which problem it runs
+        (:mod:`cfgplan.security.identity`). A robot of this one's problem,
+        another than this one, makes it a member of its society for good; one
+        of another problem is kept for :meth:`_weigh` (which goes by what was
+        seen: a robot out of place that met the other stops, even if the
+        other left first) and, while its token is up, for :meth:`foreign`."""
         mine = self.options.problem
         named = problem_of_token(str(sample.key_expr), self.society)
-        if mine is None or named is None or sample.kind != self._z.SampleKind.PUT:
+        if mine is None or named is None:
             return
         robot, fingerprint, about = named
-        if fingerprint == mine.fingerprint or self.conflict is not None:
+        if sample.kind != self._z.SampleKind.PUT:
+            with self._lock:  # (a robot out of place decides by what it saw: _aliens stay)
+                self._up.discard((robot, fingerprint))
+                if fingerprint == mine.fingerprint:
+                    self._ours.discard(robot)
+            return
+        if fingerprint == mine.fingerprint:
+            if robot != self.robot:
+                self._met = True
+                with self._lock:
+                    if len(self._ours) < 4096:
+                        self._ours.add(robot)
             return
         try:
             theirs = ProblemId(fingerprint, about)
         except ValueError:  # not a fingerprint: not written by cfgplan
             return
-        self.conflict = conflict_message(self.society, mine, printable(robot[:64]), theirs)
+        with self._lock:
+            if len(self._aliens) < 64:
+                self._aliens.setdefault((robot, fingerprint), (theirs, time.monotonic()))
+                self._up.add((robot, fingerprint))
         self._arrived.set()
+
+    def foreign(self, robot: str) -> ProblemId | None:
+        """The other problem ``robot`` runs, if a token of another problem is up
+        under its name and none of this one's: a process started with another
+        state, which the coordinator does not take into its society."""
+        with self._lock:
+            if robot in self._ours:
+                return None
+            up = sorted((k, v) for k, v in self._aliens.items() if k in self._up)
+            return next((p for (r, _), (p, _) in up if r == robot), None)
+
+    def _weigh(self, now: float) -> None:
+        """A robot of another problem is in the society: if this robot met one
+        of its own problem (it is a member of a society running it), that
+        one is not of its society and is said once (:attr:`notices`), never
+        acted on — else any token under any name would stop the society.
+        Otherwise this robot is the one out of place (it was started with an
+        edited state, or in another team's society): a lease after it saw
+        the other's token (gone since or not), with no robot of its own
+        problem seen, it stops (:attr:`conflict`)."""
+        mine = self.options.problem
+        if mine is None or self.conflict is not None:
+            return
+        with self._lock:
+            aliens = sorted(self._aliens.items())
+        for (robot, fingerprint), (theirs, since) in aliens:
+            name = printable(robot[:64])
+            if self._met:
+                if (robot, fingerprint) not in self._said_aliens and len(self._said_aliens) < 64:
+                    self._said_aliens.add((robot, fingerprint))
+                    said = stranger_message(self.society, mine, name, theirs)
+                    for notice in self.notices:
+                        notice(said, None)
+            elif now - since >= self.lease:
+                self.conflict = conflict_message(self.society, mine, name, theirs)
+                return
 
     def send(self, key: ChannelKey, robot: str, payload: bytes) -> None:
         where = channel_key(self.society, robot, key, self.robot)
@@ -296,7 +367,7 @@ class ZenohTransport:
 
     def watch_processes(self, report: Callable[[str, str, bool], None]) -> None:
         """Report ``(robot, instance, alive)`` for every process of the
-        society's other robots appearing or going (:func:`process_key`), on
+        society's robots but this one appearing or going (:func:`process_key`), on
         the loop's thread, as :meth:`poll` hands over (the coordinator: a
         robot's ``alive`` token shows two processes as one)."""
         if not self._process_watchers:
@@ -310,8 +381,8 @@ class ZenohTransport:
     def _on_process(self, sample: Any) -> None:
         """On a Zenoh thread: queue a process token's change for :meth:`poll`."""
         named = process_of_token(str(sample.key_expr), self.society)
-        if named is None or named[0] == self.robot:
-            return
+        if named is None or named == (self.robot, self.instance):
+            return  # (another process of this robot is reported: a second coordinator)
         self._processes.put((*named, sample.kind == self._z.SampleKind.PUT))
         self._arrived.set()
 
@@ -334,13 +405,17 @@ class ZenohTransport:
     def poll(self) -> None:
         """Hand over what arrived; :class:`RunError` when a robot of the
         society runs another problem (:attr:`conflict`) and nothing else ends the run."""
+        if self._aliens:
+            self._weigh(time.monotonic())
         if self.conflict is not None and not self.conflict_handled:
             raise RunError(self.conflict, hint="robots of one problem share a society name")
         with self._lock:
             newest, self._newest = self._newest, {}
             self._arrived.clear()
-            drops = self._buckets.due(time.monotonic())
+            now = time.monotonic()
+            drops, control = self._buckets.due(now), self._control.due(now)
         self._say_drops(drops)
+        self._say_control_drops(control)
         for where, payload in newest.items():
             receiver = self._receivers.get(where)
             if receiver is not None:
@@ -385,6 +460,24 @@ class ZenohTransport:
             )
             for notice in self.notices:
                 notice(said, channel)
+
+    def _say_control_drops(self, drops: list[tuple[str, int, float]]) -> None:
+        """Tell :attr:`notices` of the protocol's messages a flood cost, per key."""
+        every = self.options.rates.report_every
+        for where, count, rate in drops:
+            said = (
+                f"{count} message(s) of the switch protocol on {where} over the rate limit "
+                f"({rate:g} per second) dropped in the last {every:g} s or more (its sender "
+                "floods it)"
+            )
+            for notice in self.notices:
+                notice(said, None)
+
+    @property
+    def control_dropped(self) -> int:
+        """Messages of the switch protocol the rate limits dropped."""
+        with self._lock:
+            return self._control.dropped
 
     @property
     def rate_dropped(self) -> int:

@@ -7,10 +7,17 @@ that both leave it out would exchange values, switches and losses. So a
 robot that knows its problem announces it, beside its liveliness token, as a
 second token ``cfgplan/<society>/<robot>/problem/<fingerprint>/<about>``
 (:func:`cfgplan.runtime.keys.problem_key`), and watches the others'. A robot
-of the same society that announces another fingerprint runs another problem:
-each of the two says so, naming both problems, and stops with exit status 1
-(:attr:`cfgplan.runtime.zenoh_transport.ZenohTransport.conflict`). Robots of
-one problem announce one fingerprint and join as before.
+of the same society that announces another fingerprint runs another problem.
+The one out of place stops, alone: a robot that has met no robot of its own
+problem (another robot announcing its fingerprint) once the other's token has
+been up for a lease says so, naming both problems, and stops with exit
+status 1 (:attr:`cfgplan.runtime.zenoh_transport.ZenohTransport.conflict`): a
+robot restarted with an edited state, a second team's robot under the same
+society name. A robot that has met one of its own is a member of a society
+that runs its problem: it says once that the other is not of its society and
+goes on — a token alone (anyone's, without keys; a member's own, with them)
+never stops a society. Robots of one problem announce one fingerprint and
+join as before.
 
 The **fingerprint** is the first 16 hex digits of the SHA-256 of the
 problem's canonical text: the domain and the state as the printer writes
@@ -48,7 +55,7 @@ from cfgplan.notation import call_text
 if TYPE_CHECKING:
     from cfgplan.problem import Problem
 
-__all__ = ["MAX_ABOUT", "ProblemId", "conflict_message", "problem_id"]
+__all__ = ["MAX_ABOUT", "ProblemId", "conflict_message", "problem_id", "stranger_message"]
 
 MAX_ABOUT = 160
 """The most characters of a problem's description that are announced and read."""
@@ -100,8 +107,21 @@ def problem_id(problem: Problem, domain: Path | str, state: Path | str) -> Probl
 
 
 def conflict_message(society: str, mine: ProblemId, robot: str, theirs: ProblemId) -> str:
-    """What a robot says when ``robot`` of its society runs another problem."""
+    """What a robot says when ``robot`` of its society runs another problem and
+    it met no robot of its own: it is the one out of place, and stops."""
     return (
         f"society {society} runs two problems: this robot runs {mine}, robot {robot} "
-        f"runs {theirs}; both stop. Give each problem its own society: --society NAME"
+        f"runs {theirs}; this one, which met no robot of its own problem, stops. Start it "
+        "with the society's domain, state and goals, or give each problem its own "
+        "society: --society NAME"
+    )
+
+
+def stranger_message(society: str, mine: ProblemId, robot: str, theirs: ProblemId) -> str:
+    """What a robot of a society says when ``robot`` announces another problem:
+    it is not of this society, and is not acted on."""
+    return (
+        f"robot {robot} announces another problem than society {society}'s: it runs "
+        f"{theirs}, this society {mine}; not of this society, ignored (a robot started "
+        "with another problem stops by itself)"
     )

@@ -29,7 +29,18 @@ anything is read, stored or woken (:class:`Buckets`):
   once per message.
 
 Values that pass are handled exactly as before, so a flood changes what the
-receiver computes by the values dropped and no more. Settable through
+receiver computes by the values dropped and no more.
+
+The switch protocol's messages (:mod:`cfgplan.runtime.protocol`) are bounded
+the same way, per key — and each of them names one sender: the coordinator
+hears each robot on a key of its own, a robot hears its switches on its
+``configure`` key — by a bucket of ``control_burst`` messages refilled at
+``control`` a second (200 and 200: a switch among many robots, a robot's
+reports of a bad cycle, never come near it). What a flood of them costs is
+recorded once per ``report_every`` seconds per sender; what passes and cannot
+be read, or is not its sender's to say, is recorded once per kind, sender and
+interval with a count of the others (:class:`Throttle`), so neither the
+loop nor the trace grows with the flood. Settable through
 :class:`RateLimits` (``ZenohOptions.rates``); pure Python, no clock of its own
 (the caller passes the time), so it is tested without a network.
 """
@@ -41,7 +52,7 @@ from dataclasses import dataclass, field
 
 from cfgplan.run_errors import RunError
 
-__all__ = ["Bucket", "Buckets", "RateLimits"]
+__all__ = ["Bucket", "Buckets", "RateLimits", "Throttle"]
 
 
 @dataclass(frozen=True)
@@ -58,14 +69,29 @@ class RateLimits:
     """Seconds between two records of the messages dropped on one channel."""
     enabled: bool = True
     """False: every message is taken (measurements only)."""
+    control: float = 200.0
+    """The most switch-protocol messages per second taken from one sender."""
+    control_burst: float = 200.0
+    """Switch-protocol messages of one sender that may come at once."""
 
     def __post_init__(self) -> None:
-        for name in ("allowance", "burst", "ceiling", "report_every"):
+        for name in ("allowance", "burst", "ceiling", "report_every", "control", "control_burst"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise RunError(f"rate limit {name} is {value!r}: a positive finite number")
-        if self.burst < 1:
-            raise RunError(f"rate limit burst is {self.burst!r}: at least one message")
+        if self.burst < 1 or self.control_burst < 1:
+            raise RunError("a rate limit's burst is at least one message")
+
+    @property
+    def for_control(self) -> RateLimits:
+        """The limits of the switch protocol's keys: ``control`` a second,
+        ``control_burst`` at once, whatever a message says."""
+        return RateLimits(
+            ceiling=self.control,
+            burst=self.control_burst,
+            report_every=self.report_every,
+            enabled=self.enabled,
+        )
 
     def rate(self, period: float | None) -> float:
         """Messages per second taken from a sender of ``period`` seconds (``None``: unknown)."""
@@ -163,3 +189,39 @@ class Buckets:
     def dropped(self) -> int:
         """Messages dropped in all, on the channels attached now."""
         return sum(b.total for b in self._buckets.values())
+
+
+@dataclass
+class Throttle:
+    """What is said about dropped messages, at most once per ``every`` seconds
+    for each key (a kind of message and its sender): the first of an interval
+    is said, the others counted and said as a count when the interval is over
+    (:meth:`due`). No clock of its own (the caller passes the time)."""
+
+    every: float = 1.0
+    _said: dict[str, float] = field(default_factory=dict)  # when each key was last said
+    _counted: dict[str, int] = field(default_factory=dict)  # not said since
+    most: int = 256
+    """Keys kept at most (each a kind and a sender of the state: a few)."""
+
+    def note(self, key: str, now: float) -> bool:
+        """Whether to say this one now (else it is counted)."""
+        last = self._said.get(key)
+        if last is not None and now - last < self.every:
+            self._counted[key] = self._counted.get(key, 0) + 1
+            return False
+        if last is None and len(self._said) >= self.most:
+            return False
+        self._said[key] = now
+        return True
+
+    def due(self, now: float) -> list[tuple[str, int]]:
+        """Per key, the messages counted and not said, once its interval is over
+        (then said: their count starts again)."""
+        out = []
+        for key, count in sorted(self._counted.items()):
+            if now - self._said[key] >= self.every:
+                out.append((key, count))
+                self._said[key] = now
+                del self._counted[key]
+        return out

@@ -19,11 +19,12 @@ import sys
 import textwrap
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from cfgplan.runtime.spawn import RobotCommand, commands, status_text
+from cfgplan.runtime.spawn import RobotCommand, again_args, commands, died, status_text
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
 from tests.runtime.netutil import read_trace
 
@@ -297,4 +298,133 @@ def test_a_robot_that_cannot_start_stops_the_launch(tmp_path: Path) -> None:
     assert "Pippi did not start (exit status 1)" in err and "measure-door" in err, err
     assert list(pids) == ["Emil", "Pippi"]
     assert all(_gone(pid) for pid in pids.values())
+    assert "Traceback" not in out + err
+
+
+def test_a_robot_started_again_keeps_its_command_but_its_files_and_faults() -> None:
+    """A start again runs the same command (name, port, endpoints) with a trace
+    and a recording of its own (the dead process's are kept) and without the
+    scripted faults (the new process would count its cycles from 0 and meet
+    them again)."""
+    args = ("run", "d.lisp", "s.lisp", "--trace", "/tmp/run-pippi.jsonl", "--inject",
+            "kill Pippi at cycle 5", "--record", "out/pippi", "--robot", "Pippi",
+            "--listen", "tcp/127.0.0.1:7447")  # fmt: skip
+    assert again_args(args, 3) == (
+        "run", "d.lisp", "s.lisp", "--trace", "/tmp/run-pippi-3.jsonl", "--record",
+        "out/pippi-3", "--robot", "Pippi", "--listen", "tcp/127.0.0.1:7447",
+    )  # fmt: skip
+
+
+def test_what_counts_as_a_death() -> None:
+    """Killed or crashed: started again; a run or task done (0), a robot that
+    could not start or was refused (1, 2), the coordinator out of
+    configurations (3): not (it would end the same way)."""
+    assert [died(c, False) for c in (-9, 137, 0, 1, 2, 3)] == [
+        True,
+        True,
+        False,
+        False,
+        False,
+        True,
+    ]
+    assert [died(c, True) for c in (-9, 137, 0, 1, 2, 3)] == [
+        True,
+        True,
+        False,
+        False,
+        False,
+        False,
+    ]
+
+
+def _newest_pid(output: str, robot: str) -> int | None:
+    found = re.findall(rf"^{robot} +\| \(started(?: again)?: pid (\d+)", output, re.M)
+    return int(found[-1]) if found else None
+
+
+@pytest.mark.slow
+def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
+    tmp_path: Path,
+) -> None:
+    """--respawn: Pippi's process is killed (SIGKILL) three times, each new one
+    soon after it started: the launch says each death and starts her again
+    after 1 s, 2 s, then 4 s (each death in a row doubles the delay), each
+    start writing a trace of its own. After the third, the society serves
+    the goal again with her fourth process (it runs its part, Emil crosses
+    on her data). Then Emil, the coordinator, is killed: started again, he
+    takes his society back and serves the goal; SIGTERM then stops every
+    robot, exit 0, no pid left.
+    Before, a dead robot stayed dead: --respawn did not exist."""
+    trace = tmp_path / "run.jsonl"
+    launched = _launch(
+        "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--respawn", "--trace", str(trace)
+    )  # fmt: skip
+    assert launched.stdout is not None
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(launched.stdout), daemon=True)  # type: ignore[arg-type]
+    reader.start()
+
+    def until(what: str, found: Callable[[], bool]) -> None:
+        deadline = time.monotonic() + LIMIT
+        while not found():
+            if time.monotonic() > deadline or launched.poll() is not None:
+                launched.kill()
+                raise AssertionError(f"not seen: {what}\n{''.join(lines)}")
+            time.sleep(0.05)
+
+    try:
+        until("Emil sees Pippi", lambda: "Emil: robot Pippi seen" in "".join(lines))
+        pids = [_pids("".join(lines))["Pippi"]]
+        for life in (2, 3, 4):
+            os.kill(pids[-1], signal.SIGKILL)
+            until(f"start {life}", lambda life=life: f"start {life})" in "".join(lines))  # type: ignore[misc]
+            pid = _newest_pid("".join(lines), "Pippi")
+            assert pid is not None and pid != pids[-1]
+            pids.append(pid)
+            mine = tmp_path / f"run-pippi-{life}.jsonl"
+            until(f"life {life} runs", lambda mine=mine: bool(read_trace(mine)))  # type: ignore[misc]
+        again = time.time()
+        fourth = tmp_path / "run-pippi-4.jsonl"
+
+        def served() -> bool:
+            crossed = [
+                r
+                for r in read_trace(tmp_path / "run-emil.jsonl")
+                if r["event"] == "call"
+                and r["functionality"] == "cross-door"
+                and r["status"] == "ran"
+                and float(r["t"]) > again  # type: ignore[arg-type]
+            ]
+            helped = [
+                r for r in read_trace(fourth) if r["event"] == "call" and r["status"] == "ran"
+            ]
+            return bool(crossed and helped)
+
+        until("the goal served with Pippi's fourth process", served)
+        emil = _pids("".join(lines))["Emil"]
+        os.kill(emil, signal.SIGKILL)  # the coordinator too: started again, it takes it back
+        again_at = re.compile(r"^Emil +\| \(started again", re.M)
+        until("Emil started again", lambda: bool(again_at.search("".join(lines))))
+
+        def taken_back() -> bool:
+            crossed = read_trace(tmp_path / "run-emil-2.jsonl")
+            return any(
+                r["event"] == "call" and r["functionality"] == "cross-door" and r["status"] == "ran"
+                for r in crossed
+            )
+
+        until("Emil's second process serves the goal", taken_back)
+        launched.send_signal(signal.SIGTERM)
+        launched.wait(LIMIT)
+    finally:
+        if launched.poll() is None:
+            launched.kill()
+    reader.join(10.0)
+    out, err = "".join(lines), launched.stderr.read() if launched.stderr else ""
+    assert launched.returncode == 0, f"{out}\n{err}"
+    delays = re.findall(r"^Pippi +\| \(died, exit status 137 .*started again in (\S+) s", out, re.M)
+    assert delays == ["1", "2", "4"], out
+    emils = [int(p) for p in re.findall(r"^Emil +\| \(started(?: again)?: pid (\d+)", out, re.M)]
+    assert len(emils) == 2 and emils[0] == emil, out
+    assert all(_gone(pid) for pid in [*pids, *emils])
     assert "Traceback" not in out + err

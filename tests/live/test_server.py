@@ -130,22 +130,49 @@ def test_a_switch_is_pushed_to_the_page_at_once(served: tuple[Watch, LiveServer]
         connection.close()
 
 
-def test_a_bounded_number_of_pages_may_follow_the_run(
+def test_clients_holding_every_stream_cannot_lock_the_operator_out(
     served: tuple[Watch, LiveServer],
 ) -> None:
-    """LiveOptions.clients streams at once; the next is refused with 503."""
+    """Measured: any few local processes could hold the page's streams
+    (LiveOptions.clients) without reading them, and the operator's page was
+    refused (503). Now a new stream takes the place of the one that reads
+    least, else of the oldest: with both streams held by clients that never
+    read, the operator's page gets its state, and one holder's stream ends
+    (the other holder's is not ended for it); the streams never exceed the
+    bound."""
     _, server = served
-    open_ones = []
+    holders = []
     try:
         for _ in range(2):
             connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
             connection.request("GET", "/events")
-            assert connection.getresponse().status == 200
-            open_ones.append(connection)
-        assert _get(server, "/events")[0] == 503
+            holders.append(connection.getresponse())  # and never read
+            assert holders[-1].status == 200
+        time.sleep(0.5)
+        operator = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+        try:
+            operator.request("GET", "/events")
+            stream = operator.getresponse()
+            assert stream.status == 200
+            while not (line := stream.readline()).startswith(b"data: "):
+                assert line, "the operator's stream ended"
+            assert json.loads(line[6:])["state"]["title"] == "cross-door"
+        finally:
+            operator.close()
+        ended = []
+        for holder in holders:
+            holder.fp.raw._sock.settimeout(1.0)  # type: ignore[union-attr]
+            deadline, over = time.monotonic() + 3.0, False
+            try:
+                while not over and time.monotonic() < deadline:
+                    over = holder.readline() == b""
+            except TimeoutError:
+                pass
+            ended.append(over)
+        assert ended == [True, False]  # the oldest gave its place
     finally:
-        for connection in open_ones:
-            connection.close()
+        for holder in holders:
+            holder.close()
 
 
 def test_an_address_in_use_is_a_clear_error() -> None:

@@ -54,13 +54,18 @@ def test_a_helper_frozen_and_let_go_serves_the_goal_again(tmp_path: Path, frozen
 
 
 @pytest.mark.slow
-def test_a_coordinator_frozen_and_let_go_does_not_blame_its_helper(tmp_path: Path) -> None:
+@pytest.mark.parametrize("frozen", [1.0, 4.0])
+def test_a_coordinator_frozen_and_let_go_does_not_blame_its_helper(
+    tmp_path: Path, frozen: float
+) -> None:
     """Found by a review: Emil, the coordinator, frozen 4 s (his Zenoh session
     too) came back seeing Pippi lost (her lease ran out in his stopped session,
     not because she stopped), recorded her failure, withdrew her, found nothing
-    admissible, and took her back a cycle later. Now he says his own loop stood
-    still, checks the loss again, records no failure of Pippi, and the goal is
-    served again."""
+    admissible, and took her back a cycle later. Measured later: frozen for
+    about the lease (1 s here), the same, every time (the detector fired only
+    above the lease, and only once its thread had beaten again). Now he says
+    his own loop stood still, checks the loss again, records no failure of
+    Pippi, and the goal is served again."""
     emil_net, pippi_net = _network(tmp_path, "coordinator-freeze")
     with processes() as running:
         emil, emil_trace = _robot(
@@ -71,7 +76,7 @@ def test_a_coordinator_frozen_and_let_go_does_not_blame_its_helper(tmp_path: Pat
         time.sleep(1.0)  # past the first switches' hold
         stopped = time.time()
         os.kill(emil.pid, signal.SIGSTOP)  # type: ignore[attr-defined]
-        time.sleep(4.0)
+        time.sleep(frozen)
         os.kill(emil.pid, signal.SIGCONT)  # type: ignore[attr-defined]
         let_go = time.time()
         wait_for("the stall said", _after(emil_trace, stopped, "error"), LIMIT)
@@ -82,7 +87,7 @@ def test_a_coordinator_frozen_and_let_go_does_not_blame_its_helper(tmp_path: Pat
         running.stop_all()
     mine = read_trace(emil_trace)
     said = [str(r) for r in mine if r["event"] == "error"]
-    assert any("process stood still longer than the lease" in s for s in said), said
+    assert any("process stood still for" in s for s in said), said
     failed = [r["resource"] for r in mine if r["event"] == "failure"]
     assert failed == [], failed
     assert [r for r in mine if r["event"] == "no-configuration"] == []

@@ -24,7 +24,7 @@ from typing import Any
 import pytest
 
 from tests.backends.support import EXAMPLE_IMPL
-from tests.reconfigure.test_network import LIMIT, _network, _robot
+from tests.reconfigure.test_network import LIMIT, STEP2, _network, _robot
 from tests.runtime.netutil import (
     Processes,
     Record,
@@ -140,3 +140,94 @@ def test_a_frozen_helper_back_next_to_its_replacement_is_told_it_is_a_duplicate(
     assert float(lost["t"]) - killed < 1.0, "the death was hidden"  # type: ignore[arg-type]
     errors = [r for r in read_trace(emil_trace) if r["event"] == "error"]
     assert any("a second process of robot Pippi" in str(r) for r in errors), errors
+
+
+@pytest.mark.slow
+def test_a_helper_stops_its_part_while_its_coordinator_is_gone(tmp_path: Path) -> None:
+    """Measured: after ``kill -9`` of the coordinator a helper's action ran on
+    at 20 Hz for 15 s, nobody watching. Now Pippi (``--without-coordinator``
+    left at its default, stop) stops her part once Emil is gone for the hold
+    (1 s): her console says so, her functionalities stop (no call after it).
+    Emil started again (the same command) takes the society back: Pippi is
+    sent her part, runs it, and his goal is served again."""
+    emil_net, pippi_net = _network(tmp_path, "orphan-test")
+    with processes() as running:
+        emil, emil_trace = _robot(
+            running, tmp_path, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "120"
+        )
+        _pippi, pippi_trace = _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, pippi_net)
+        wait_for("the goal served", _after(emil_trace, 0.0, "call", **SERVED_FIELDS), LIMIT)
+        killed = time.time()
+        os.kill(emil.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        assert emil.wait(timeout=30) == -signal.SIGKILL  # type: ignore[attr-defined]
+
+        def stopped() -> Record | None:
+            found = _after(pippi_trace, killed, "error")()
+            return found if found is not None and "stops its part" in str(found) else None
+
+        said = wait_for("Pippi stops her part", stopped, LIMIT)
+        at = float(said["t"])  # type: ignore[arg-type]
+        time.sleep(2.0)
+        calls = [
+            r
+            for r in read_trace(pippi_trace)
+            if r["event"] == "call" and float(r["t"]) > at + 0.5  # type: ignore[arg-type]
+        ]
+        assert calls == [], calls[:3]
+        folder = tmp_path / "again"
+        folder.mkdir()
+        _robot(running, folder, "Emil", EXAMPLE_IMPL, emil_net, "--duration", "60")
+        again = time.time()
+        wait_for(
+            "the goal again",
+            _after(folder / "emil.jsonl", 0.0, "call", **SERVED_FIELDS),
+            LIMIT,
+        )
+        wait_for("Pippi runs again", _after(pippi_trace, again, "call", status="ran"), LIMIT)
+        running.stop_all()
+    assert at - killed < HOLD + 2.0, f"stopped {at - killed:.1f} s after the kill"
+    assert "--without-coordinator stop" in (tmp_path / "pippi.log").read_text()
+
+
+HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
+
+
+@pytest.mark.slow
+def test_a_helper_restarted_with_an_edited_state_is_refused_alone(tmp_path: Path) -> None:
+    """Measured (9 of 9): Pippi killed and started again with a state that
+    differs by one fact nobody uses, ``(colour Pippi red)``: both the
+    coordinator and the new process said "runs two problems ... both stop"
+    and exited 1, and the run was over. Now the new process, which meets no
+    robot of its problem, stops alone (exit 1), naming both problems; Emil
+    is not taken in by it, runs on, and takes Pippi back when she is started
+    again with the society's state."""
+    with processes() as running:
+        pippi, emil_trace, pippi_net = served_step2(running, tmp_path, "edited-test")
+        killed = time.time()
+        os.kill(pippi.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        assert pippi.wait(timeout=30) == -signal.SIGKILL  # type: ignore[attr-defined]
+        wait_for("Pippi lost", _after(emil_trace, killed, "robot-lost"), LIMIT)
+        edited = tmp_path / "state-edited.lisp"
+        original = Path(STEP2[1]).read_text()
+        edited.write_text(original.replace("(robot Pippi)", "(robot Pippi) (colour Pippi red)", 1))
+        assert edited.read_text() != original
+        folder = tmp_path / "edited"
+        folder.mkdir()
+        args = ["-m", "cfgplan", "run", STEP2[0], str(edited), "--robot", "Pippi"]
+        args += ["--impl", str(EXAMPLE_IMPL), "--rate", "20", *pippi_net]
+        other = running.start(args, folder / "pippi.log")
+        assert other.wait(timeout=LIMIT) == 1  # type: ignore[attr-defined]
+        said = (folder / "pippi.log").read_text()
+        assert "runs two problems" in said and "which met no robot of its own problem" in said
+        assert "state-edited.lisp" in said and "state-6.2.2-step2.lisp" in said
+        time.sleep(2.0)
+        again = time.time()
+        folder = tmp_path / "again"
+        folder.mkdir()
+        _robot(running, folder, "Pippi", EXAMPLE_IMPL, pippi_net)
+        wait_for("the goal again", _after(emil_trace, again, "call", **SERVED_FIELDS), LIMIT)
+        running.stop_all()
+    mine = read_trace(emil_trace)
+    assert [r for r in mine if r["event"] == "stop" and r.get("reason") == "refused"] == []
+    errors = " ".join(str(r) for r in mine if r["event"] == "error")
+    assert "announces another problem" in errors

@@ -10,6 +10,8 @@ import time
 from dataclasses import replace
 from types import SimpleNamespace
 
+import pytest
+
 from cfgplan.planner import plan
 from cfgplan.problem import load
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
@@ -23,6 +25,7 @@ from cfgplan.runtime.launch import REFUSED
 from cfgplan.runtime.monitor import Detection, Monitor
 from cfgplan.runtime.part import part_to_json
 from cfgplan.runtime.protocol import CallError, Phase, Ready, Report, Rival, encode
+from cfgplan.security.identity import ProblemId
 from tests.backends.support import DOMAINS
 from tests.reconfigure.test_coordinate import Clock
 from tests.reconfigure.test_network_retry import Idle, Me, Network, _society, _wait, _what
@@ -368,7 +371,7 @@ def test_losses_after_the_coordinators_own_stall_are_checked_again() -> None:
     adaptive.between(1, 0.1)
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == [
-        "Pippi's process stood still longer than the lease: 4.5 s (the lease is 1 s); "
+        "Pippi's process stood still for 4.5 s, half the lease or more (the lease is 1 s); "
         "robots seen lost now are checked again before anything is withdrawn"
     ]
     adaptive.monitor.detect(Detection("seen", me, time.time(), other="Rasmus"))
@@ -382,6 +385,40 @@ def test_losses_after_the_coordinators_own_stall_are_checked_again() -> None:
     failed = [dict(e.info).get("resource") for e in events if e.what == "failure"]
     assert failed == ["Emil"], failed  # the one still gone; Rasmus never left
     assert "Rasmus" in adaptive.deployer.ready
+
+
+def test_a_stall_of_about_the_lease_holds_the_losses_it_made() -> None:
+    """Measured: the coordinator frozen for about its lease (2 s) came back
+    seeing a healthy helper lost (its session dropped the link whose
+    keep-alives waited unread), recorded her failure and stopped every
+    functionality; the detector fired only above the lease. A stall of half
+    the lease or more is one: a loss seen after 1.8 s of a 2 s lease is
+    held, and let go when the robot is seen again by the same process."""
+    adaptive, _network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(lease=2.0)
+    me = adaptive.deployer.me
+    adaptive.heartbeat.note(1.8)
+    adaptive.monitor.detect(Detection("lost", me, time.time(), other="Rasmus"))
+    adaptive.between(1, 0.1)
+    assert "Rasmus" in adaptive.doubts.held
+    adaptive.monitor.detect(Detection("seen", me, time.time(), other="Rasmus"))
+    adaptive.between(2, 0.2)
+    assert [e for e in events if e.what in ("failure", "switch", "no-configuration")] == []
+    assert adaptive.doubts.held == {}
+
+
+def test_a_stall_still_going_on_counts_before_the_heartbeat_beats_again() -> None:
+    """Woken from a stall, the loop may ask the heartbeat before its thread has
+    beaten again; the pause since the last beat is part of the answer (before,
+    it was 0 then, and the losses the stall made were taken as real)."""
+    heart = Heartbeat(beat=0.05)
+    heart.start()
+    try:
+        time.sleep(0.2)
+        assert heart.take() < 0.5
+        assert heart.take(time.monotonic() + 3.0) > 2.5  # asked 3 s after the last beat
+    finally:
+        heart.stop()
 
 
 def test_a_loop_only_slow_holds_no_loss() -> None:
@@ -445,11 +482,50 @@ def test_a_coordinator_told_it_is_a_rival_stops() -> None:
     assert adaptive.finished is None and adaptive.refusal is None
     errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
     assert errors == ["a second coordinator of the society, refused by Emil: dropped"]
+    adaptive.process("Pippi", "a1a1a1a1a1a1a1a1", True)  # the first coordinator's process
     adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Pippi")), "Emil")
     assert adaptive.finished == REFUSED
     assert adaptive.refusal == (
         "society retry-test has a coordinator already: Emil follows Pippi; this one stops"
     )
+
+
+@pytest.mark.parametrize("leader", ["Pippi", "Emil", "Rasmus", "Nobody"])
+def test_a_rival_that_the_coordinators_own_view_does_not_bear_out_is_not_believed(
+    leader: str,
+) -> None:
+    """Measured: with Pippi's valid key, a ``rival`` of this coordinator's own
+    epoch (read from the ``duplicate`` a forged ``ready`` was answered) made
+    it stop, the goal lost. A rival is believed only when the leader it names
+    runs: another process of this robot (its process token), or another
+    robot that may coordinate, alive, and not the one that says it follows
+    it. Pippi coordinates here; no second process of hers runs, Rasmus and
+    Emil are helpers (with keys, not coordinators), Nobody is not alive:
+    within a lease the coordinator goes on, and says it did not believe it."""
+    adaptive, _network, _clock, _events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.coordinators = frozenset({"Pippi"})  # as society.json would say
+    adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, leader)), "Emil")
+    adaptive.between(1, 0.1)
+    assert adaptive.refusal is None
+    rival, _deadline = adaptive._rivals["Emil"]
+    adaptive._rivals["Emil"] = (rival, time.monotonic())  # a lease later
+    adaptive.between(2, 0.2)
+    assert adaptive.finished is None and adaptive.refusal is None
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert [e for e in errors if "not believed" in e] == [
+        f"Emil says it follows another coordinator ({leader}), but no such coordinator "
+        "runs: not believed, this one goes on: dropped"
+    ]
+
+
+def test_a_rival_from_a_robot_that_never_followed_this_coordinator_is_believed() -> None:
+    """A second coordinator that reaches only the helpers sees no other
+    coordinator: the rival of a robot that never said it is ready to it is
+    what it goes by, and it stops (Rasmus never said ready here)."""
+    adaptive, _network, _clock, _events = _wall({"Pippi", "Emil"})
+    adaptive.coordinators = frozenset({"Pippi"})
+    adaptive.receive(encode(Rival("Rasmus", adaptive.deployer.epoch, "Nobody")), "Rasmus")
+    assert adaptive.finished == REFUSED
 
 
 def test_a_message_that_says_it_is_from_another_robot_than_its_key_is_dropped() -> None:
@@ -487,3 +563,57 @@ def test_messages_dropped_past_the_backlog_are_said_once_each_time_more_are() ->
         "messages to the coordinator dropped: 1 more than the 10000 that may wait "
         "(a robot floods it)",
     ]
+
+
+def test_a_robot_whose_process_runs_another_problem_is_not_taken_in() -> None:
+    """Pippi's key to the coordinator says Rasmus is ready while a problem token
+    of another problem is up under his name and none of this one's (a process
+    started with an edited state): he is not taken into the society, and
+    the console says why once; once that token is gone, his ready is taken."""
+    adaptive, network, _clock, _events = _wall({"Pippi", "Emil"})
+    theirs = ProblemId("0123456789abcdef", "domain.lisp with edited.lisp")
+    alien: dict[str, ProblemId] = {"Rasmus": theirs}
+    network.foreign = alien.get  # type: ignore[attr-defined]
+    network.alive.add("Rasmus")
+    adaptive.receive(encode(Ready("Rasmus", "b2b2b2b2b2b2b2b2")), "Rasmus")
+    adaptive.receive(encode(Ready("Rasmus", "b2b2b2b2b2b2b2b2")), "Rasmus")
+    assert "Rasmus" not in adaptive.deployer.ready
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert errors == [
+        f"robot Rasmus runs another problem ({theirs}): not taken into the society until a "
+        "process of its problem runs it: dropped"
+    ]
+    alien.clear()
+    adaptive.receive(encode(Ready("Rasmus", "c3c3c3c3c3c3c3c3")), "Rasmus")
+    assert "Rasmus" in adaptive.deployer.ready
+
+
+def test_a_process_that_ended_while_its_name_stays_alive_is_lost() -> None:
+    """Measured: a session holding Rasmus's key kept his alive token up after
+    his process died (Zenoh shows two tokens of one key as one): his death
+    showed only as stale inputs, and a session that declares no process
+    token was never flagged. His process token gone and his name still
+    alive past the grace, he is lost (said once), greeted, and the later
+    going of the name is not a second loss; a process of his that says it
+    is ready is taken back."""
+    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.process_grace = 0.0
+    adaptive.process("Rasmus", "d4d4d4d4d4d4d4d4", True)
+    adaptive.receive(encode(Ready("Rasmus", "d4d4d4d4d4d4d4d4")), "Rasmus")
+    adaptive.process("Rasmus", "d4d4d4d4d4d4d4d4", False)  # his process ended; the name stays
+    adaptive.between(1, 0.1)
+    failed = [dict(e.info).get("resource") for e in events if e.what == "failure"]
+    assert failed == ["Rasmus"]
+    errors = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert any("its name is still alive" in e for e in errors), errors
+    assert "Rasmus" not in adaptive.deployer.ready
+    network.alive.discard("Rasmus")  # the session holding his name leaves
+    adaptive.monitor.detect(Detection("lost", "Pippi", time.time(), other="Rasmus"))
+    adaptive.between(2, 0.2)
+    assert [dict(e.info).get("resource") for e in events if e.what == "failure"] == ["Rasmus"]
+    network.alive.add("Rasmus")  # started again: his new process says it is ready
+    adaptive.process("Rasmus", "e5e5e5e5e5e5e5e5", True)
+    adaptive.monitor.detect(Detection("seen", "Pippi", time.time(), other="Rasmus"))
+    adaptive.between(3, 0.3)
+    adaptive.receive(encode(Ready("Rasmus", "e5e5e5e5e5e5e5e5")), "Rasmus")
+    assert "Rasmus" in adaptive.deployer.ready

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -261,3 +262,41 @@ def test_a_robot_alone_says_what_it_waits_for(emitted: Path) -> None:
         f"orient(Emil, Pippi) ({WAIT_NOTICE} calls in a row so far)",
     ]
     assert "waits for" not in "\n".join(lines[3:]).split("ran in")[0]  # said once each
+
+
+@pytest.mark.slow
+def test_run_all_with_respawn_starts_its_society_again_when_its_process_dies(
+    emitted: Path, tmp_path: Path
+) -> None:
+    """``run_all.py --respawn`` runs the society in a process it watches: that
+    process killed (SIGKILL) twice, it is started again after 1 s, then 2 s
+    (a death in a row doubles the delay), each start tracing to a file of
+    its own, and the society runs again (its goal's action ran in the third
+    start); SIGTERM then stops it, exit 0. Before, --respawn did not exist
+    and a killed run_all.py stayed dead."""
+    trace = tmp_path / "run.jsonl"
+    log = tmp_path / "run.log"
+    with processes() as running:
+        supervisor = running.start(
+            [str(emitted / "run_all.py"), "--impl", str(EXAMPLE_IMPL), "--rate", "50",
+             "--trace", str(trace), "--respawn"],
+            log,
+        )  # fmt: skip
+        for life, file in ((1, trace), (2, tmp_path / "run-2.jsonl")):
+            wait_for(f"start {life} runs", first(file, lambda r: int(r["cycle"]) >= 5), 60.0)
+            pids = [int(p) for p in re.findall(r"\(started: pid (\d+)", log.read_text())]
+            assert len(pids) == life, log.read_text()
+            os.kill(pids[-1], signal.SIGKILL)
+        third = tmp_path / "run-3.jsonl"
+        wait_for(
+            "the third start serves the goal",
+            first(third, lambda r: r["event"] == "call" and r["functionality"] == "cross-door"),
+            60.0,
+        )
+        os.kill(supervisor.pid, signal.SIGTERM)
+        assert supervisor.wait(timeout=30) == 0
+        text = log.read_text()
+    assert re.findall(r"started again in (\S+) s", text) == ["1", "2"], text
+    assert "start 3)" in text and "Traceback" not in text
+    stops = [r for r in read_trace(third) if r["event"] == "stop"]
+    assert {r["reason"] for r in stops} == {"terminated"}

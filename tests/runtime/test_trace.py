@@ -130,6 +130,34 @@ def test_describe_says_why_a_functionality_did_not_run() -> None:
     assert describe(_call(status="busy")).endswith("does not run: its last call is still running")
 
 
+def _strict(line: str) -> object:
+    def refuse(constant: str) -> object:
+        raise ValueError(f"{constant} is not JSON")
+
+    return json.loads(line, parse_constant=refuse)
+
+
+@pytest.mark.parametrize("force", [False, True])
+def test_a_trace_is_its_owners_only_and_every_line_json(tmp_path: Path, force: bool) -> None:
+    """Measured: traces were written 0644 (every value of the run, readable
+    by anyone on the robot), and a NaN a functionality computed was written
+    as a bare NaN, which is not JSON. A trace is made 0600, also one that
+    --force truncates; a float that is not finite is written as a string."""
+    path = tmp_path / "t.jsonl"
+    if force:
+        path.write_text("an earlier run\n")
+        path.chmod(0o644)
+    trace = open_trace(path, force=force)
+    nan, inf = float("nan"), float("inf")
+    trace(_call(status="ran", inputs=((("pos", "Pippi", "Door1"), [nan, inf, -inf, 0.5]),)))
+    trace.close()
+    assert path.stat().st_mode & 0o777 == 0o600
+    (line,) = path.read_text().splitlines()
+    record = _strict(line)
+    assert isinstance(record, dict)
+    assert record["inputs"][0]["value"] == ["NaN", "Infinity", "-Infinity", 0.5]
+
+
 def test_trace_lines_follow_the_schema(tmp_path: Path) -> None:
     trace = open_trace(tmp_path / "t.jsonl")
     trace(_call(status="ran", action=True, inputs=((("pos", "Pippi", "Door1"), (0.5, Bad())),)))

@@ -20,6 +20,7 @@ from cfgplan.runtime.values import (
     open_envelope,
     safe_repr,
 )
+from cfgplan.runtime.wire import loads
 
 
 class Level(IntEnum):
@@ -39,8 +40,20 @@ def test_what_travels_and_how_it_arrives() -> None:
         "level": 2,  # a subclass as its base type
     }
     assert encode(OrderedDict(a=1)) == '{"a":1}'
-    nan = json.loads(encode([math.nan, math.inf]))
-    assert math.isnan(nan[0]) and nan[1] == math.inf
+    for number in (math.nan, math.inf, -math.inf):  # JSON has none of them: refused at the door
+        with pytest.raises(ValueRuleError, match="not finite"):
+            encode({"pos": [1.0, number]})
+
+
+@pytest.mark.parametrize("constant", [b"NaN", b"Infinity", b"-Infinity"])
+def test_a_message_with_a_nan_is_not_json_and_not_taken(constant: bytes) -> None:
+    """Python's JSON reader takes NaN and Infinity, which are not JSON: a
+    channel value holding one was taken and written to the trace as a bare
+    NaN (a line no other JSON reader reads). It is refused as not JSON."""
+    payload = b'{"from":"Pippi","seq":1,"t":1.0,"period":0.1,"value":[' + constant + b"]}"
+    with pytest.raises(RunError, match="not JSON"):
+        open_envelope(payload)
+    assert loads(b"[1e999]") == [math.inf]  # a number too big is a number (checked where read)
 
 
 @pytest.mark.parametrize(
