@@ -161,7 +161,7 @@ class Bound:
         an end) that no pending method item can derive, as only its
         ancestors call them (:meth:`Summaries.beyond`): each is a part of its
         own, which shares with nothing else pending. On a recursive path (a
-        conversion graph, issue 35) the path's own functionalities wait on
+        conversion graph) the path's own functionalities wait on
         the stack below the method deriving their inputs; named by their
         names, they would all count as one with it."""
         if not self.task.recursive:
@@ -221,8 +221,8 @@ class Bound:
     def _guarded(self, node: Partial, methods: dict[int, Ground]) -> dict[int, float]:
         """Per pending method item, the cost of the functionalities in C that
         its expansion cannot reuse, as only its ancestors call them
-        (:meth:`Summaries.beyond`): on a recursive path (a conversion graph,
-        issue 35) C holds the path's own functionalities, which would
+        (:meth:`Summaries.beyond`): on a recursive path (a conversion
+        graph) C holds the path's own functionalities, which would
         otherwise each lower the item's least cost."""
         if not self.task.recursive:
             return {}
@@ -350,7 +350,7 @@ def _repeats(node: Partial, methods: dict[int, Ground]) -> set[int]:
     lower bound: parts that cannot share still add up, and what the left-out
     items add is at least nothing. Counted, the repeat could share with every
     part of the other occurrence's body and join them into one, priced as the
-    largest (the shared sub-derivations of issue 35). Ancestors are part of
+    largest (shared sub-derivations). Ancestors are part of
     the canonical form (:mod:`cfgplan.planner.canonical`), so two nodes of
     one form leave out the same items."""
     if not methods:

@@ -1,4 +1,4 @@
-"""Configurations of independent parts, listed cheapest first (issue 11).
+"""Configurations of independent parts, listed cheapest first.
 
 When the choices of a goal fall into independent parts
 (:mod:`cfgplan.planner.components`), each part is searched on its own, best

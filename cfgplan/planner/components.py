@@ -1,4 +1,4 @@
-"""The independent parts of a goal: choices that share nothing (issue 11).
+"""The independent parts of a goal: choices that share nothing.
 
 The planner of 4.5 expands the pending items top first, so the choices of a
 derivation come in the depth-first order of the goal's tree. Where many

@@ -1,5 +1,5 @@
 """Every tuning constant and strategy switch of the planner, in one frozen
-object (issue 35): a search is given a :class:`SearchOptions`, and tests pass
+object: a search is given a :class:`SearchOptions`, and tests pass
 one instead of patching module constants. None of them changes what is found
 or its order, only how much work finding it takes (the property tests of
 ``tests/planner`` check that with the extreme settings).

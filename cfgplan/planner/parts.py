@@ -31,7 +31,7 @@ met with each group (:func:`_grouped`: a few set intersections, done in C);
 past it, as on a deep recursive path with hundreds of parts of their own,
 the groups are found again by filing every name (:func:`_many`). On the
 dag family, whose parts mostly join one group, meeting the groups takes a
-third of the time filing the names does (issue 35: dag D=30's estimates);
+third of the time filing the names does (dag D=30's estimates);
 on fusion, whose groups stay apart, filing is the cheaper."""
 
 

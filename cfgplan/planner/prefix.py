@@ -1,4 +1,4 @@
-"""The first ``-k N`` results of a search, and whether one more exists (issue 35).
+"""The first ``-k N`` results of a search, and whether one more exists.
 
 ``cfgplan plan -k N`` says whether more configurations (or sequences) exist
 than it lists. Searching for the (N+1)-th without a bound would, where

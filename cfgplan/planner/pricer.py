@@ -1,5 +1,5 @@
 """Pricing the nodes of one search: its bounds, and the rule for giving the
-stronger one up (issue 35: the strategies order nodes, the pricer prices them).
+stronger one up (the strategies order nodes, the pricer prices them).
 
 4.5 ranks configurations by cost; searched best-first, a node's priority is
 the cost of its settled part plus a lower bound on what it must still add.

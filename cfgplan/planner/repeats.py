@@ -1,4 +1,4 @@
-"""Which method instances may occur again in one derivation (issue 35): the
+"""Which method instances may occur again in one derivation: the
 ones a search remembers for replays (:mod:`cfgplan.planner.replay`). Passes
 over the grounder's graph of ground instances (:mod:`cfgplan.planner.graph`),
 made once per task and goal (:meth:`cfgplan.planner.grow.Grower`), with the

@@ -1,4 +1,4 @@
-"""A sub-derivation done again in one step (issue 35: shared sub-derivations).
+"""A sub-derivation done again in one step (shared sub-derivations).
 
 4.5 expands every occurrence of a method instance on its own: where one ground
 instance occurs many times in a derivation (a level of the ``dag`` family

@@ -26,7 +26,7 @@ the twin (:meth:`BestFirst._supersede`). It is expanded too, and what the
 twin's expansion left open is dropped as it is taken. Nothing the twin
 derived was listed yet: the earlier node's priority bounds what both
 complete at, and at that cost its path comes first. So the search never
-starts over to repair its order (issue 35; ``tests/data/repros/
+starts over to repair its order (``tests/data/repros/
 k-not-prefix-of-all``, where ``-k 5`` was once not a prefix of ``--all``).
 """
 

@@ -82,7 +82,7 @@ def waiting_parts(
     ends inside its expansion): they are a part of their own. So is a
     channel into a functionality whose name no pending method item can
     reach (``unreached``): a channel an item makes ends at a body item
-    of its expansion, which has a name it reaches (issue 35: on the
+    of its expansion, which has a name it reaches (on the
     ``dag`` family the channels into the fusers waiting on the stack
     were joined with every level below, by their data)."""
     names: set[str] = set()  # the data predicates of the channels not apart

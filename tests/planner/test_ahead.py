@@ -1,4 +1,4 @@
-"""``-k N`` looks ahead for one more configuration within bounded work (issue 35).
+"""``-k N`` looks ahead for one more configuration within bounded work.
 
 ``cfgplan plan -k 1`` used to plan two configurations to say whether more
 exist, so where only one exists it searched to the end to prove it (112 s on
@@ -96,7 +96,7 @@ def test_the_note_says_may_when_it_is_not_known() -> None:
 
 def test_sequences_look_ahead_by_the_same_rule() -> None:
     """``cfgplan plan -k N`` of a sequence planned N + 1 sequences to fill
-    ``more`` (issue 35); now it looks for one more as one goal does
+    ``more``; now it looks for one more as one goal does
     (:mod:`cfgplan.planner.prefix`). 6.2.2 as a sequence (Pippi, then Emil,
     crosses): more exist; the one listed is the first of a search without a
     limit; a sequence of one goal with one configuration has no second."""

@@ -87,7 +87,7 @@ ONE_SOURCE_TWO_USERS = """\
 
 
 def test_channels_with_one_end_open_are_told_apart_by_the_other() -> None:
-    """Issue 11 (media-tight: a member's pose goes to both its follower and
+    """Media-tight ( a member's pose goes to both its follower and
     its avoider): two channels of one data from a method not yet expanded
     to two different receivers can never merge, so the partitioned bound
     charges both in full. Before, it shared one weight among them."""
@@ -187,7 +187,7 @@ def test_a_stack_summed_from_its_suffix_is_the_plain_sum_and_orders_are_topologi
 
 
 def test_a_repeated_method_instance_does_not_join_the_parts_of_its_twin() -> None:
-    """Issue 35, shared sub-derivations (benchmarks/families/shared.py ``dag``):
+    """Shared sub-derivations (benchmarks/families/shared.py ``dag``):
     level 3 is expanded (by its refining version, ``step3``) while another
     occurrence of it waits. Counted, the waiting one may share with every
     part of the first one's body and joined ``level2`` and ``step3`` into one
@@ -216,7 +216,7 @@ def test_a_repeated_method_instance_does_not_join_the_parts_of_its_twin() -> Non
 
 
 def test_a_recursive_path_is_priced_at_its_cheapest_completion() -> None:
-    """Issue 35, recursion over a conversion graph (benchmarks/families/shared.py
+    """Recursion over a conversion graph (benchmarks/families/shared.py
     ``conversion``): ``(get T6)`` derives type 6 from any type it converts
     from, with the recursion guard of 4.5. The bound was 13 at the root
     against an optimum of 27 on the issue's instance: a recursive call was
@@ -246,7 +246,7 @@ def test_a_recursive_path_is_priced_at_its_cheapest_completion() -> None:
 
 
 def test_a_chain_is_priced_at_its_cheapest_completion() -> None:
-    """Issue 35, deep chain (benchmarks/families/chain.py): each level has a
+    """A deep chain (benchmarks/families/chain.py): each level has a
     version with one functionality of cost 3 and one channel, and one with
     two of cost 1 and two channels, both 4 in all. Its least functionalities
     (2) and least channels (1) come from different versions, so their sum

@@ -45,7 +45,7 @@ def _reached(domain: str, state: str, most: int) -> tuple[Grounder, list[Partial
 
 @pytest.mark.parametrize("family", ["cross-door", "conversion"])
 def test_items_are_numbered_when_made_and_canonical_only_reads_nodes(family: str) -> None:
-    """Nodes are never written after they are made (issue 35): canonical() and
+    """Nodes are never written after they are made: canonical() and
     fingerprint() leave every node as it was, and each item's and channel's
     number, given when it was made, is what the canonical form defines: an
     item's call with its ancestors whose method can recur (those with some

@@ -1,6 +1,6 @@
 """Independent parts searched apart (cfgplan/planner/components.py, combine.py)
 list exactly what the plain best-first search lists: the same configurations,
-costs, labels and derivation numbers, in the same order (issue 11)."""
+costs, labels and derivation numbers, in the same order."""
 
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ def test_the_partition_bound_is_given_up_where_it_never_pays_and_kept_where_it_d
     ``rely`` to drop the first (priced from its last evaluation, it is the
     cheaper there). On fusion M=8 it raises nearly every one: kept. All
     tried from the first node. (On wall K=3 N=4 L=3 it pays since it prices
-    channels with one end open by that end: issue 11.)"""
+    channels with one end open by that end.)"""
     _, on_wall = _run(wall(6, 20, 8), 1, warm=0)
     _, on_chain = _run(chain(8), 1, warm=0)
     _, on_fusion = _run(fusion(8, 3, 6, 6), 1, warm=0)

@@ -52,7 +52,7 @@ from tests.planner.problems import FIRST_NODE, PROPERTY, Generated, load_generat
 @given(generated())
 def test_limit_k_is_a_prefix_of_all(example: Generated) -> None:
     """``-k N`` lists the first N of ``--all``, labels and derivation numbers
-    included (issue 35), each search from the task read afresh, as the CLI's
+    included, each search from the task read afresh, as the CLI's
     (a search leaves caches on its task)."""
     for distinct in (True, False):
         everything = run(solve(example), distinct=distinct)

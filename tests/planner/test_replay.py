@@ -1,4 +1,4 @@
-"""Replays of closed sub-derivations (cfgplan/planner/replay.py, issue 35).
+"""Replays of closed sub-derivations (cfgplan/planner/replay.py).
 
 The claims, each tested where it can fail:
 
@@ -165,7 +165,7 @@ def test_replays_list_what_the_walk_lists(depth: int) -> None:
 
 def test_the_cheapest_on_dag_takes_nodes_linear_in_its_depth() -> None:
     """Without replays the walk of the optimum has a Fibonacci number of
-    steps (issue 35's exponential row); with them each level costs a few
+    steps (exponential in D); with them each level costs a few
     nodes: one expansion of its first occurrence, one replay of its second."""
     nodes = {}
     for depth in (12, 16, 20):

@@ -69,7 +69,7 @@ def test_depth_first_ignores_versions_whose_name_does_not_match() -> None:
     assert functionalities == {("act", "R1"), ("sens", "R1")}
 
 
-# -- issue 8: a channel from a label to itself --------------------------------------
+# -- a channel from a label to itself ----------------------------------------------
 
 SELF_LOOP = """\
 (make-functionality :name '(s ?r) :out '((d ?r)))
@@ -97,7 +97,7 @@ def test_channel_from_a_method_to_itself_is_rewired_at_both_ends() -> None:
     assert depth_first(problem, Weights()) == []
 
 
-# -- issue 8: outputs bound by a functionality's own preconditions -----------------
+# -- outputs bound by a functionality's own preconditions ------------------------
 
 LOCALIZER = """\
 (make-functionality :name '(loc ?r) :precond '((in ?r ?room)) :out '((pos ?r ?room)))
@@ -120,7 +120,7 @@ def test_outputs_follow_the_binding_of_the_preconditions(facts: str) -> None:
     assert [(c.cost, c.identity()) for c in configs] == depth_first(problem, Weights())
 
 
-# -- issue 8: the state is a set of facts; evals wait for their variables ------------
+# -- the state is a set of facts; evals wait for their variables -------------------
 
 CAMERA = """\
 (make-functionality :name '(cam ?r) :precond '((camera ?r)) :out '((img ?r)))
@@ -153,7 +153,7 @@ K_NOT_PREFIX = ROOT / "tests" / "data" / "repros" / "k-not-prefix-of-all"
 
 
 def test_k_best_is_a_prefix_of_all_when_the_partition_bound_was_given_up() -> None:
-    """Issue 35 (../shared/repros/k-not-prefix-of-all): ``-k 5`` listed as
+    """The repro ../shared/repros/k-not-prefix-of-all: ``-k 5`` listed as
     rank 5 the labels of derivation 7 while ``--all`` listed derivation 5's.
     Two partial configurations of one canonical form had been taken out of
     the thesis's depth-first order, and the search started over (without the

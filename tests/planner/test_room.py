@@ -1,6 +1,6 @@
 """What the media still have room for (cfgplan.planner.room), and the
 partitioned bound that leaves out expansions the media cannot carry
-(issue 11: media-tight, where a member cannot take both a raw image stream,
+(media-tight, where a member cannot take both a raw image stream,
 40, and its pose, 5, from one camera host over a medium of 40)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Search at scale (issue 11): the optimum on instances too big for the
+"""Search at scale: the optimum on instances too big for the
 depth-first oracle, checked by a second, independent method; listing
 everything in bounded memory; duplicate facts; time limits.
 
@@ -172,7 +172,7 @@ CYCLES = (
 """,
     "(state (robot r1) (robot r2) (robot r1)) (goal (do r1))",
 )
-"""Issue 8's self-loop beside a version without it: derivations rejected (a cycle)."""
+"""A self-loop beside a version without it: derivations rejected (a cycle)."""
 
 
 @pytest.mark.parametrize("one_pass", [0, 3, 7, 200])
@@ -207,7 +207,7 @@ def test_giving_up_the_first_walk_lists_the_same(texts: tuple[str, str], one_pas
 
 
 def test_a_fact_repeated_forty_times_costs_nothing() -> None:
-    """Issue 11: cross-door with the compass facts repeated 40 times took
+    """Cross-door with the compass facts repeated 40 times took
     over 300 s and 2.7 GiB; a fact written twice is one fact (4.4)."""
     domain = ROOT / "domains/cross-door/domain.lisp"
     text = (ROOT / "domains/cross-door/state-6.2.2-step1.lisp").read_text()
@@ -236,7 +236,7 @@ JOIN = """\
 
 @pytest.mark.slow
 def test_the_time_limit_holds_inside_one_expansion(tmp_path: Path) -> None:
-    """Issue 11: one method whose preconditions join four robots out of 60
+    """One method whose preconditions join four robots out of 60
     (13 million bindings, none valid) kept a run going long after its time
     limit. Now the expansion stops at the limit (the README reports how close)."""
     (tmp_path / "d.lisp").write_text(JOIN)

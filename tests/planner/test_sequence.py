@@ -1,4 +1,4 @@
-"""Sequences of configurations (issue 14; thesis 7.2, 6.2.2 as one plan)."""
+"""Sequences of configurations (thesis 7.2, 6.2.2 as one plan)."""
 
 from __future__ import annotations
 

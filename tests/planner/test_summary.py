@@ -51,7 +51,7 @@ def test_a_summary_holds_what_every_expansion_holds() -> None:
 
 
 def test_a_hierarchy_deeper_than_the_recursion_limit() -> None:
-    """Issue 9, item 4: a chain of methods deeper than Python's recursion limit
+    """A chain of methods deeper than Python's recursion limit
     is summarised and planned without recursion (before: RecursionError in
     the bound at about 330 levels)."""
     depth = sys.getrecursionlimit() + 200
@@ -83,7 +83,7 @@ def test_the_grounding_memo_s_graph_gives_the_same_summaries() -> None:
 
 
 def test_a_recursive_instance_costs_its_lightest_derivation() -> None:
-    """Issue 35: in a conversion graph (benchmarks/families/shared.py) every
+    """In a conversion graph (benchmarks/families/shared.py) every
     ``(get ?t)`` can reach itself. Met again inside its own summary, a call
     was summarised as UNKNOWN, costing nothing, and the instances of its
     cycle came out almost free (type 12: 2 and 1, for the converter on top).
