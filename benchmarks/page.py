@@ -81,6 +81,12 @@ The instances (`benchmarks/instances.py`; families in `benchmarks/families/`):
   D=28 0.8 s, D=40 1.3 s);
 - **deliveries S R**: a sequence of S configurations for R robots.
 
+The shapes that fell off cliffs between the sizes of this table are swept over
+every size of a grid on the [sweeps page](benchmark-sweeps.md)
+(`python -m benchmarks.sweeps`): sequences of independent goals against their
+steps planned alone, delegation to any robot, and randomised structured
+domains.
+
 `--against REV` prints instead one table that puts cfgplan at git revision REV
 beside this one, each instance planned by both in turn. Where planning takes
 milliseconds, times are mostly noise: the [instruction counts](instructions.md)
