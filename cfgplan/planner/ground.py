@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 from cfgplan.notation import atom_text, call_text
-from cfgplan.planner.match import Failure, bindings
+from cfgplan.planner.match import Failure, bindings, exists
 from cfgplan.planner.numbering import Numbering
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.senders import Placement
@@ -254,9 +254,18 @@ class Grounder:
             for method in task.versions(call):
                 yield from self._instantiated(method, call)
 
+        known: dict[Ground, bool] = {}
+
         def placeable(call: Ground) -> bool:
-            schema = task.functionality(call)
-            return schema is not None and bool(self.instances(schema, call))
+            """Some binding of its preconditions exists (found, not all listed)."""
+            found = known.get(call)
+            if found is None:
+                schema = task.functionality(call)
+                env = None if schema is None else bind_name(schema.params, call[1:])
+                found = known[call] = (
+                    schema is not None and env is not None and exists(task, schema.tests, env)
+                )
+            return found
 
         return Placement(task, every, placeable)
 

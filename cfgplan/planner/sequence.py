@@ -391,13 +391,9 @@ class SequenceSearch:
             if (i, here) in done:
                 frames.pop()
                 continue
-            config = None if i == len(self.goals) else self.ranked(i, here).get(j)
-            if (
-                i == len(self.goals)
-                or config is None
-                or config.cost >= best
-                or (j > 0 and self._one_state(i, here))
-            ):
+            last = i == len(self.goals) or (j > 0 and self._one_state(i, here))
+            config = None if last else self.ranked(i, here).get(j)
+            if config is None or config.cost >= best:
                 done[(i, here)] = 0.0 if i == len(self.goals) else best
                 frames.pop()
                 continue
