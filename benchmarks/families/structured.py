@@ -5,14 +5,15 @@ the search fall off cliffs, for sweeps over their parameters
 One goal robot G fuses ``pieces`` pieces of information. Piece i has
 ``versions`` method versions; each needs one or two of ``kinds`` sensor
 kinds, read through a *filter* of that kind on the robot that carries the
-sensor: on G itself, or on a helper that sends the processed piece over a
-global channel (with a bandwidth, where the state declares media). The
+sensor: on G itself, or on a helper, the processed piece going to a receiver
+on G over a channel declared global (with a bandwidth, where the state
+declares media; one from G to G costs as global but needs no medium). The
 filters are methods shared by every piece and version that reads that kind
 on that robot (siblings share children and reuse filters); a filter is a
 chain of ``depth`` refinement levels, each in two versions (on the robot,
 or a cheaper one that needs a second sensor kind), so that hierarchies are
-deep and shared. There are ``robots`` robots besides G, each carrying each
-kind with probability ``density``; ``:cost`` of processing and of some
+deep and shared. There are ``robots`` robots besides G; G and each of them
+carry each kind with probability ``density``; ``:cost`` of processing and of some
 sensors is 1 to 5. With ``media``, every helper has a medium to G whose
 capacity carries about two pieces: the cheapest cover may not fit.
 
@@ -55,7 +56,7 @@ def structured(
         )
         # The filter chain of kind k: level 0 reads the sensor; level l refines
         # level l-1 on the robot, or more cheaply with a second kind's sensor.
-        other = (k + 1 + rng.randrange(max(kinds - 1, 1))) % kinds if kinds > 1 else k
+        other = (k + 1 + rng.randrange(kinds - 1)) % kinds if kinds > 1 else k
         for level in range(depth):
             below = f"(raw{k} ?h)" if level == 0 else f"(f{k}-{level - 1} ?h)"
             call = f"(sensor{k} ?h)" if level == 0 else f"(filter{k}-{level - 1} ?h)"

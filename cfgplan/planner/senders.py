@@ -43,8 +43,10 @@ the cause (:meth:`Placement.misplaced`).
 
 Only sending ends are followed: the receiving end of a channel into a method
 is re-wired to every item its ``:in`` names, a condition on all of them,
-left to the search. ``any`` channels (decided when placed) and robots the
-expansion leaves unbound are not checked.
+left to the search. A channel declared ``any`` is checked as the local or
+global channel its robots made it when the expansion was instantiated
+(:func:`cfgplan.planner.ground.channel_kind`); an expansion's robots are
+ground (an unbound one is a dead end of its own, :func:`~cfgplan.planner.ground.instantiate`).
 """
 
 from __future__ import annotations
@@ -53,7 +55,6 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol
 
-from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
 from cfgplan.planner.report import Condition, DeadEnd
@@ -203,10 +204,9 @@ class Placement:
     @staticmethod
     def _checked(body: Body) -> Iterator[Spec]:
         """The channels whose sending robot is checked: local and global ones
-        whose robot the expansion binds."""
+        (an ``any`` channel is one of them once instantiated)."""
         for spec in body.channels:
-            kind, robots = spec[0], spec[1]
-            if kind in ("local", "global") and robots and not is_variable(robots[0]):
+            if spec[0] in ("local", "global") and spec[1]:
                 yield spec
 
 
