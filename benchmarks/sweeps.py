@@ -193,6 +193,16 @@ def main() -> None:
         print(line, flush=True)
         lines.append(line)
 
+    def section(title: str, head: list[str], rows: Iterator[list[str]]) -> None:
+        """One sweep's table, each row printed as it is measured."""
+        emit(f"### {title}")
+        emit("")
+        emit("| " + " | ".join(head) + " |")
+        emit("|" + "---|" * len(head))
+        for row in rows:
+            emit("| " + " | ".join(row) + " |")
+        emit("")
+
     with tempfile.TemporaryDirectory() as scratch:
         tmp = Path(scratch)
         against = checkout(rev, tmp / "against") if rev else None
@@ -205,39 +215,21 @@ def main() -> None:
             head = ["goals G", "helpers H", "sequence s", "steps alone s", "ratio", "≤ 2x", "MiB"]
             if rev:
                 head += [f"sequence s {rev}", f"MiB {rev}"]
-            emit(f"### {title}")
-            emit("")
-            emit("| " + " | ".join(head) + " |")
-            emit("|" + "---|" * len(head))
-            for row in mission_rows(run, name, tmp / "inputs", rev):
-                emit("| " + " | ".join(row) + " |")
-            emit("")
+            section(title, head, mission_rows(run, name, tmp / "inputs", rev))
         if "structured" in only:
             head = ["pieces", "media"]
             for seed in SEEDS:
                 head += [f"seed {seed} s", "≤ 1 s", "MiB"]
                 if rev:
                     head += [f"seed {seed} s {rev}"]
-            emit("### structured")
-            emit("")
-            emit("| " + " | ".join(head) + " |")
-            emit("|" + "---|" * len(head))
-            for row in structured_rows(run, tmp / "inputs", rev):
-                emit("| " + " | ".join(row) + " |")
-            emit("")
+            section("structured", head, structured_rows(run, tmp / "inputs", rev))
         if "delegation" in only:
             head = ["robots N"]
             for mode, _, target in MODES:
                 head += [f"{mode} s", f"≤ {target:g} s", f"{mode} MiB"]
                 if rev:
                     head += [f"{mode} s {rev}"]
-            emit("### any-delegation")
-            emit("")
-            emit("| " + " | ".join(head) + " |")
-            emit("|" + "---|" * len(head))
-            for row in delegation_rows(run, tmp / "inputs", rev):
-                emit("| " + " | ".join(row) + " |")
-            emit("")
+            section("any-delegation", head, delegation_rows(run, tmp / "inputs", rev))
     if args.markdown:
         args.markdown.write_text(page(lines, sys.argv[1:]))
         print(f"wrote {args.markdown}")
