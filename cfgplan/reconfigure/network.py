@@ -131,8 +131,9 @@ class NetworkAdaptive:
             self._settle_ended()
         if self._rivals and self.refusal is None:
             self._weigh_rivals()
-        self._stalled()
-        for detection in self.monitor.drain():
+        detections = self.monitor.drain()
+        self._stalled()  # after the drain: a stall before any loss drained is seen
+        for detection in detections:
             if not self._doubt(detection):
                 self.take(detection)
         self._settle_doubts()
@@ -160,13 +161,16 @@ class NetworkAdaptive:
     def _stalled(self) -> None:
         """Whether this process stood still for half the lease or more since the last
         pass (:mod:`cfgplan.reconfigure.stall`): then its session stood still
-        too and may see robots lost that never stopped. That is said, and
-        losses seen in the next two leases are held."""
+        too and may see robots lost that never stopped. That is said,
+        losses seen in the next two leases are held, and what went stale with
+        this robot is not blamed in them (its outputs and its inputs stopped
+        because it stood still; :meth:`Coordinator.excuse`)."""
         if self.heartbeat is None or self.doubts is None:
             return
         pause, lease = self.heartbeat.take(), self.doubts.lease
         if pause > self.doubts.threshold:
             self.doubts.stalled(time.monotonic())
+            self.coordinator.excuse(self.deployer.me, 2 * lease)
             self.deployer.member.error(
                 f"{self.deployer.me}'s process stood still for {pause:.1f} s, half the lease "
                 f"or more (the lease is {lease:g} s); robots seen lost now are "
@@ -175,36 +179,55 @@ class NetworkAdaptive:
 
     def _doubt(self, detection: Detection) -> bool:
         """Whether ``detection`` is held: a loss while losses are in doubt, or
-        a robot seen again by the same process whose loss is held (both are
-        let go). Seen again as another process (it was restarted meanwhile),
-        its loss is taken first, then the sighting."""
+        a robot seen again whose loss is held. Seen again by the same process,
+        both are let go; seen before any process of it is (its two tokens come
+        back one after the other), the loss stays held to its deadline
+        (:meth:`_settle_doubts` decides). Seen again as another process (it
+        was restarted meanwhile), its loss is taken first, then the sighting."""
         if self.doubts is None:
             return False
         if self.doubts.hold(detection, time.monotonic()):
             return True
-        if detection.kind == "seen":
-            lost = self.doubts.seen(detection.other)
+        robot = detection.other
+        if detection.kind == "seen" and robot in self.doubts.held:
+            same = self._same_process(robot)
+            if same is None:
+                return True  # its process token is not back yet: decided at the deadline
+            lost = self.doubts.seen(robot)
+            if same:
+                return True  # it never left: its loss was this robot's stall
             if lost is not None:
-                if self._same_process(detection.other):
-                    return True  # it never left: its loss was this robot's stall
                 self.take(lost)
         return False
 
-    def _same_process(self, robot: str) -> bool:
-        """Whether ``robot``'s accepted process still runs (its process token is
-        seen; without process tokens, whether the robot is alive)."""
+    def _same_process(self, robot: str) -> bool | None:
+        """Whether ``robot``'s accepted process still runs: its process token
+        is seen (True), another one's is and not it (False), or its name is
+        alive with no process token seen (None: not known yet). Without
+        process tokens, whether the robot is alive."""
         current, live = self._instances.get(robot), self._processes.get(robot)
+        alive = robot in self.deployer.transport.alive
         if current is None or live is None:
-            return robot in self.deployer.transport.alive
-        return current in live
+            return alive
+        if current in live:
+            return True
+        return None if alive and not live else False
 
     def _settle_doubts(self) -> None:
-        """Take the held losses whose deadline passed, of robots still gone."""
+        """At their deadline, take the held losses of robots not seen again
+        by the same process; one that runs as another process is seen again
+        too (its new process is greeted, as after :meth:`process`)."""
         if self.doubts is None:
             return
         for lost in self.doubts.due(time.monotonic()):
-            if not self._same_process(lost.other):
-                self.take(lost)
+            robot = lost.other
+            same = self._same_process(robot)
+            if same:
+                continue
+            self.take(lost)
+            if same is False and robot in self.deployer.transport.alive:
+                me = self.deployer.me
+                self.take(Detection("seen", me, time.time(), other=robot, how="process"))
 
     def take(self, detection: Detection) -> None:
         robot = detection.other

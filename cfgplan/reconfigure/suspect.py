@@ -23,6 +23,16 @@ back by then. When another channel from the same robot still flows, the
 suspect's own outputs stopped: it is acted on at its staleness limit, or,
 when another robot saw it, after :attr:`Suspicions.reported` at least (its
 reports cross the same lossy network).
+
+**A robot that stood still** (:mod:`cfgplan.reconfigure.stall`): when the
+coordinator's own process stopped a while, the inputs it reads and the
+outputs it sends went stale *because of that*: the other robots' reports of
+its silent outputs, and its own stale inputs, arrive as it runs again, and
+the fresh data after them may take the network a while. :meth:`Suspicions.excuse`
+holds every suspicion that robot is part of (as the robot whose data stopped
+or as the one that saw it) unripe until a deadline, as a starved one is:
+its clock starts again then, so a functionality that really stopped is
+still blamed, one staleness limit later.
 """
 
 from __future__ import annotations
@@ -82,6 +92,7 @@ class Suspicions:
     and its fresh cross the network, and a lost packet delays the one after
     the other by 200 ms or more (0: no wait)."""
     _open: dict[tuple[str, str, str], _Suspicion] = field(default_factory=dict)
+    _excused: dict[str, float] = field(default_factory=dict)  # robot -> until (clock)
 
     def note(self, detection: Detection) -> None:
         """A ``stale`` detection opens (or renews) a suspicion; ``fresh`` withdraws it."""
@@ -94,6 +105,21 @@ class Suspicions:
     def clear(self) -> None:
         """Forget them all (a switch is being deployed)."""
         self._open.clear()
+
+    def excuse(self, robot: str, until: float) -> None:
+        """``robot`` stood still (module docstring): no suspicion it is part
+        of ripens before ``until`` (this clock's time); each one's clock
+        starts again then."""
+        self._excused[robot] = max(until, self._excused.get(robot, until))
+        now = self.clock()
+        for gone in [r for r, deadline in self._excused.items() if deadline <= now]:
+            del self._excused[gone]
+
+    def _excuses(self, detection: Detection, now: float) -> float:
+        """When the excuses of the robots ``detection`` involves run out
+        (``now`` or earlier when none is excused)."""
+        involved = (detection.robot, detection.other)
+        return max([now, *(self._excused.get(r, now) for r in involved if r)])
 
     def settled(self, running: Configuration | None) -> Detection | None:
         """The ``failure`` to act on: the most upstream suspect of ``running``
@@ -110,6 +136,9 @@ class Suspicions:
         for suspicion in self._open.values():
             if upstream(running, suspicion.detection.label) & suspected:
                 suspicion.since = now  # starved, not failed: its clock runs once fed again
+            excused = self._excuses(suspicion.detection, now)
+            if excused > now:  # stale because a robot stood still: its clock runs from then
+                suspicion.since = max(suspicion.since, excused)
         silent = self._silent_links(running)
         ripe = {
             s.detection.label: s

@@ -164,3 +164,42 @@ def test_what_another_robot_reported_stale_is_waited_for_as_its_reports_travel()
     clock.now += 0.7
     blamed = elsewhere.settled(LINK)
     assert blamed is not None and blamed.detail == "input F1->F3 stale for over 1 s"
+
+
+def test_what_went_stale_because_a_robot_stood_still_is_excused_until_its_deadline() -> None:
+    """Found in CI: the coordinator X frozen 4 s came back, Y's report that
+    X's outputs stopped arrived before the fresh data (the machine was
+    loaded), and X's own computation was recorded as failed. Excused, a
+    suspicion X is part of does not ripen before the deadline; its clock
+    starts again then, so what really stopped is still blamed, one limit
+    later. A suspicion between two other robots is not excused."""
+    clock = Clock()
+    suspicions = Suspicions(clock)
+    suspicions.note(_stale("F1"))  # X's a(X), seen stale by Y
+    suspicions.excuse("X", until=clock.now + 2.0)
+    clock.now += 1.99
+    assert suspicions.settled(LINK) is None
+    clock.now += 0.02  # the excuse is over: the limit is counted from here
+    assert suspicions.settled(LINK) is None
+    clock.now += 0.29
+    assert suspicions.settled(LINK) is None
+    clock.now += 0.02
+    blamed = suspicions.settled(LINK)
+    assert blamed is not None and blamed.label == "F1"
+    suspicions.note(_stale("F2"))
+    suspicions.excuse("Z", until=clock.now + 2.0)  # another robot stood still
+    clock.now += 0.31
+    blamed = suspicions.settled(LINK)
+    assert blamed is not None and blamed.label == "F2"
+
+
+def test_an_excused_suspicion_withdrawn_by_fresh_data_is_never_blamed() -> None:
+    clock = Clock()
+    suspicions = Suspicions(clock)
+    suspicions.note(_stale("F1"))
+    suspicions.excuse("Y", until=clock.now + 2.0)  # the robot that saw it stood still
+    clock.now += 1.5
+    assert suspicions.settled(LINK) is None
+    suspicions.note(_stale("F1", "fresh"))
+    clock.now += 5.0
+    assert suspicions.settled(LINK) is None
