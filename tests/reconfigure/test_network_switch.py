@@ -460,35 +460,10 @@ def test_a_helper_restarted_during_the_coordinators_stall_is_taken_as_a_restart(
     assert network.to("Emil", "duplicate") == [] and "Emil" in adaptive.deployer.ready
 
 
-def test_a_robot_seen_again_before_its_process_token_is_not_taken_as_lost() -> None:
-    """Found in CI (a 1 s and a 4 s freeze of the coordinator, the machine
-    loaded): after the stall, Emil's name was seen again a moment before his
-    process token, his held loss was taken as a restart, and his failure
-    recorded though he never stopped. Seen with no process of his seen yet,
-    the loss stays held; his token back by the deadline, it is let go."""
-    adaptive, _network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
-    adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(lease=1.0)
-    me = adaptive.deployer.me
-    adaptive.receive(encode(Ready("Emil", "one")), "Emil")
-    adaptive.process("Emil", "one", True)
-    adaptive.heartbeat.note(4.0)
-    adaptive.process("Emil", "one", False)  # both his tokens ran out in this session
-    adaptive.monitor.detect(Detection("lost", me, time.time(), other="Emil"))
-    adaptive.between(1, 0.1)
-    adaptive.monitor.detect(Detection("seen", me, time.time(), other="Emil"))  # name first
-    adaptive.between(2, 0.2)
-    assert "Emil" in adaptive.doubts.held  # not decided yet
-    adaptive.process("Emil", "one", True)  # then his process token
-    (held,) = adaptive.doubts.held.values()
-    adaptive.doubts.held["Emil"] = (held[0], time.monotonic())  # two leases later
-    adaptive.between(3, 0.3)
-    assert [e for e in events if e.what in ("failure", "switch", "no-configuration")] == []
-    assert adaptive.doubts.held == {} and "Emil" in adaptive.deployer.ready
-
-
-def test_a_robot_whose_process_token_never_comes_back_is_lost_at_the_deadline() -> None:
-    """The other side of the same rule: seen by name only, and still no
-    process of it at the deadline, its loss is taken."""
+def _seen_by_name_after_a_stall() -> tuple[NetworkAdaptive, list[Event]]:
+    """Pippi coordinates; she stood still 4 s, long enough for both of Emil's
+    tokens (his name and his process ``one``) to run out in her session; his
+    loss is held, then his name is seen again, and not (yet) his process."""
     adaptive, _network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
     adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(lease=1.0)
     me = adaptive.deployer.me
@@ -498,11 +473,38 @@ def test_a_robot_whose_process_token_never_comes_back_is_lost_at_the_deadline() 
     adaptive.process("Emil", "one", False)
     adaptive.monitor.detect(Detection("lost", me, time.time(), other="Emil"))
     adaptive.between(1, 0.1)
-    adaptive.monitor.detect(Detection("seen", me, time.time(), other="Emil"))
+    adaptive.monitor.detect(Detection("seen", me, time.time(), other="Emil"))  # name first
     adaptive.between(2, 0.2)
+    return adaptive, events
+
+
+def _at_the_deadline(adaptive: NetworkAdaptive) -> None:
+    """The next pass, two leases after Emil's loss was held."""
+    assert adaptive.doubts is not None
     (held,) = adaptive.doubts.held.values()
     adaptive.doubts.held["Emil"] = (held[0], time.monotonic())
     adaptive.between(3, 0.3)
+
+
+def test_a_robot_seen_again_before_its_process_token_is_not_taken_as_lost() -> None:
+    """Found in CI (a 1 s and a 4 s freeze of the coordinator, the machine
+    loaded): after the stall, Emil's name was seen again a moment before his
+    process token, his held loss was taken as a restart, and his failure
+    recorded though he never stopped. Seen with no process of his seen yet,
+    the loss stays held; his token back by the deadline, it is let go."""
+    adaptive, events = _seen_by_name_after_a_stall()
+    assert adaptive.doubts is not None and "Emil" in adaptive.doubts.held  # not decided yet
+    adaptive.process("Emil", "one", True)  # then his process token
+    _at_the_deadline(adaptive)
+    assert [e for e in events if e.what in ("failure", "switch", "no-configuration")] == []
+    assert adaptive.doubts.held == {} and "Emil" in adaptive.deployer.ready
+
+
+def test_a_robot_whose_process_token_never_comes_back_is_lost_at_the_deadline() -> None:
+    """The other side of the same rule: seen by name only, and still no
+    process of it at the deadline, its loss is taken."""
+    adaptive, events = _seen_by_name_after_a_stall()
+    _at_the_deadline(adaptive)
     failed = [dict(e.info).get("resource") for e in events if e.what == "failure"]
     assert failed == ["Emil"], failed
 
