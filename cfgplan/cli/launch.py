@@ -2,9 +2,12 @@
 
 Every robot and device of the state (with ``--no-reconfigure``: of the
 configuration) runs its own ``cfgplan run --robot NAME`` process on this
-machine, the coordinator (the goal's robot, 5.5) first, on free loopback
-ports, scouting off; their output is one stream, each line prefixed with its
-robot. The logic is :mod:`cfgplan.runtime.spawn`; this module reads the
+machine, scouting off: by default each a client of one Zenoh router that
+launch starts first (``--topology router``; ``--router`` names one that runs
+already), or, in a mesh (``--topology mesh``, the default with ``--keys`` or
+``--connect``), each linked to every other, the coordinator (the goal's
+robot, 5.5) first, on free loopback ports. Their output is one stream, each
+line prefixed with its robot. The logic is :mod:`cfgplan.runtime.spawn`; this module reads the
 command line and writes each robot's command. ``--print-commands`` writes,
 instead, the command each host runs (``--host NAME=ADDRESS``).
 """
@@ -13,6 +16,7 @@ from __future__ import annotations
 
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -25,13 +29,14 @@ from cfgplan.cli.options import (
     GoalsOpt,
     RankOpt,
     StateArg,
+    choice_of,
     choose,
     injections,
     load_problem,
     number_of,
+    option,
     parsed,
 )
-from cfgplan.cli.run import option
 from cfgplan.cli.sequence import first_step
 from cfgplan.configuration.cost import parse_weights
 from cfgplan.diagnostics import did_you_mean, run_error
@@ -61,7 +66,15 @@ from cfgplan.runtime.options import (
     ZENOH_CONFIG,
     endpoint,
 )
-from cfgplan.runtime.spawn import Launch, SpawnOptions, commands, free_port
+from cfgplan.runtime.spawn import (
+    Launch,
+    RobotCommand,
+    SpawnOptions,
+    commands,
+    free_port,
+    router_command,
+)
+from cfgplan.runtime.spawn import endpoint as endpoint_of
 
 HERMETIC = (
     "{ // cfgplan launch: robots meet only through the endpoints given, and what they\n"
@@ -73,6 +86,8 @@ HERMETIC = (
 no multicast scouting (nothing off this host is found), gossip as Zenoh's default
 (it spreads only the locators of sessions already connected: the robots' own
 loopback endpoints, and what a --connect router knows)."""
+TOPOLOGIES = ("router", "mesh")
+"""How the launched robots reach each other: through one router, or each to every other."""
 DEFAULT_PORT = 7447
 """Zenoh's port: each robot's with --print-commands, the next for a second robot on a host."""
 
@@ -133,8 +148,9 @@ def launch(
             metavar="N",
             min=1,
             max=65535,
-            help="The coordinator's port (default: a free one; with --print-commands "
-            f"{DEFAULT_PORT}, and the next ones for more robots on a host).",
+            help="The router's port, in a mesh the coordinator's (default: a free one; with "
+            f"--print-commands {DEFAULT_PORT}, and in a mesh the next ones for more robots on a "
+            "host).",
             show_default=False,
         ),
     ] = None,
@@ -155,6 +171,30 @@ def launch(
         ),
     ] = None,
     society_name: Annotated[str, option(SOCIETY)] = SOCIETY.default,
+    topology: Annotated[
+        str | None,
+        typer.Option(
+            "--topology",
+            metavar="router|mesh",
+            parser=choice_of(TOPOLOGIES, "a topology"),
+            help="router: every robot a client of one Zenoh router (one connection each; "
+            "started here, or the one --router names); mesh: every robot a peer linked to "
+            "every other (N·(N−1)/2 connections). Default: router, but mesh with --keys or "
+            "--connect (a router is not one of the society's keys).",
+            show_default=False,
+        ),
+    ] = None,
+    router: Annotated[
+        str | None,
+        typer.Option(
+            "--router",
+            metavar="ENDPOINT",
+            parser=parsed(endpoint),
+            help="The robots are clients of the Zenoh router at ENDPOINT (cfgplan router, "
+            "zenohd, rmw_zenohd), which launch does not start.",
+            show_default=False,
+        ),
+    ] = None,
     connect: Annotated[
         list[str] | None,
         typer.Option(
@@ -238,8 +278,9 @@ def launch(
     respawn: Annotated[bool, option(RESPAWN)] = RESPAWN.default,
 ) -> None:
     """Start a whole society on this machine: every robot its own cfgplan run --robot
-    process, the coordinator (the goal's robot) first, on free loopback ports with
-    scouting off; each line of output prefixed with its robot.
+    process, each a client of one Zenoh router started first (or, with --topology mesh,
+    each linked to every other, the coordinator first), on loopback with scouting off;
+    each line of output prefixed with its robot.
 
     Ctrl-C or SIGTERM stops every robot (SIGTERM, at most 10 s, then SIGKILL). When the
     coordinator ends (--cycles, --duration, the task done), the others are stopped.
@@ -261,6 +302,7 @@ def launch(
         usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
     if hosts and not print_commands:
         usage_error("names the hosts of --print-commands: give --print-commands", "--host")
+    mesh = _mesh(topology, router, keys, connect)
     addresses = dict(_parse_hosts(hosts or ()))
     problem = load_problem(
         domain,
@@ -333,10 +375,52 @@ def launch(
         if path is not None:
             for r in robots:
                 extra[r] += [flag, trace_of(str(path), r)]
+    via = None if mesh else Via(router, lease)
     if print_commands:
-        _print_commands(robots, lead, common, extra, addresses, port, zenoh_config)
+        _print_commands(robots, lead, common, extra, addresses, port, zenoh_config, via)
         return
-    _launch(robots, lead, common, extra, port, zenoh_config, SpawnOptions(respawn=respawn))
+    _launch(robots, lead, common, extra, port, zenoh_config, SpawnOptions(respawn=respawn), via)
+
+
+@dataclass(frozen=True)
+class Via:
+    """The robots are clients of a router: ``given``, one that runs already
+    (``--router``), or one launch starts (``None``), with the robots' lease."""
+
+    given: str | None
+    lease: float | None
+
+    def started(self, host: str, port: int, listen: str) -> RobotCommand | None:
+        """The router's command, when launch starts it (listening on ``listen``,
+        reached at ``host``:``port``)."""
+        return None if self.given is not None else router_command(host, port, listen, self.lease)
+
+    def endpoint(self, host: str, port: int) -> str:
+        """What the robots connect to."""
+        return self.given if self.given is not None else endpoint_of(host, port)
+
+
+def _mesh(
+    topology: str | None, router: str | None, keys: Path | None, connect: list[str] | None
+) -> bool:
+    """Whether the robots are a mesh of peers (``--topology``, and its default)."""
+    if router is not None and topology == "mesh":
+        usage_error("names a router: not with --topology mesh", "--router")
+    if topology == "router" or router is not None:
+        if keys is not None:
+            usage_error(
+                "cannot be combined with --keys: the society's keys name its robots, not a "
+                "router (use --topology mesh)",
+                "--router" if router is not None else "--topology",
+            )
+        if connect:
+            usage_error(
+                "cannot be combined with --connect: a client of a router reaches the others "
+                "only through it",
+                "--router" if router is not None else "--topology",
+            )
+        return False
+    return topology == "mesh" or keys is not None or bool(connect)
 
 
 def _parse_hosts(texts: list[str] | tuple[str, ...]) -> list[tuple[str, str]]:
@@ -366,6 +450,7 @@ def _print_commands(
     addresses: dict[str, str],
     port: int | None,
     zenoh_config: Path | None,
+    via: Via | None,
 ) -> None:
     missing = [r for r in robots if r not in addresses]
     if missing:
@@ -376,8 +461,24 @@ def _print_commands(
         ports[r] = base + sum(1 for o in ports if addresses[o] == addresses[r])
     if zenoh_config is not None:
         common = [*common, "--zenoh-config", str(zenoh_config)]
-    for command in commands(robots, common, extra, addresses, ports, lead):
+    reach = None
+    if via is not None:  # the router on the coordinator's host, unless one is named
+        if via.given is None and lead not in addresses:
+            usage_error(
+                f"give --router ENDPOINT (the society's router), or the host of {lead}, the "
+                "coordinator, whose host runs the router (NAME=ADDRESS)",
+                "--host",
+            )
+        host, at = addresses.get(lead, ""), port or DEFAULT_PORT
+        router = via.started(host, at, endpoint_of("0.0.0.0", at))
+        if router is not None:
+            typer.echo(f"# the router on {host} (start it first)")
+            typer.echo(router.shell())
+        reach = via.endpoint(host, at)
+    for command in commands(robots, common, extra, addresses, ports, lead, reach):
         role = " (coordinator: start it first)" if command.robot == lead else ""
+        if via is not None:
+            role = " (coordinator)" if command.robot == lead else ""
         typer.echo(f"# {command.robot} on {command.host}{role}")
         typer.echo(command.shell())
 
@@ -390,11 +491,19 @@ def _launch(
     port: int | None,
     zenoh_config: Path | None,
     options: SpawnOptions | None = None,
+    via: Via | None = None,
 ) -> None:
     host = "127.0.0.1"
-    ports = {r: free_port(host) for r in robots}
+    ports = {r: free_port(host) for r in robots} if via is None else {}
     if port is not None:
         ports[lead] = port
+    started: list[RobotCommand] = []
+    reach = None
+    if via is not None:  # one port: the router's (--port), a free one else
+        at = port if port is not None else free_port(host)
+        router = via.started(host, at, endpoint_of(host, at))
+        started += [router] if router is not None else []
+        reach = via.endpoint(host, at)
     with tempfile.TemporaryDirectory(prefix="cfgplan-launch-") as folder:
         if zenoh_config is None:
             hermetic = Path(folder) / "zenoh-hermetic.json5"
@@ -402,7 +511,8 @@ def _launch(
             zenoh_config = hermetic
         common = [*common, "--zenoh-config", str(zenoh_config)]
         hosts = dict.fromkeys(robots, host)
-        launched = Launch(commands(robots, common, extra, hosts, ports, lead), options=options)
+        started += commands(robots, common, extra, hosts, ports, lead, reach)
+        launched = Launch(started, options=options)
         try:
             code = launched.run()
         except RunError as exc:

@@ -28,6 +28,7 @@ from cfgplan.notation import call_text
 from cfgplan.option_values import choice, number, whole
 from cfgplan.planner import plan
 from cfgplan.problem import GOAL_SOURCE, Problem, load
+from cfgplan.runtime.options import Option
 from cfgplan.syntax.reader import collection_paused
 
 if TYPE_CHECKING:
@@ -79,6 +80,15 @@ def parsed(parse: Callable[[str], Any]) -> Callable[[str], Any]:
             raise typer.BadParameter(str(exc)) from None
 
     return convert
+
+
+def option(spec: Option[Any]) -> Any:
+    """The typer option of one of the run options of :mod:`cfgplan.runtime.options`
+    (the emitted programs build theirs from the same)."""
+    parse = None if spec.parse is None else parsed(spec.parse)
+    return typer.Option(
+        spec.flag, metavar=spec.metavar, help=spec.help, parser=parse, show_default=False
+    )
 
 
 def count_of(low: int) -> Callable[[str], int]:

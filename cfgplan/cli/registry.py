@@ -30,6 +30,7 @@ COMMANDS: dict[str, str] = {
     "record": "cfgplan.cli.record:record",
     "render": "cfgplan.cli.render:render",
     "report": "cfgplan.cli.report:report",
+    "router": "cfgplan.cli.router:router",
     "run": "cfgplan.cli.run:run",
     "simulate": "cfgplan.cli.simulate:simulate",
 }

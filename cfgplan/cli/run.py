@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -39,6 +39,7 @@ from cfgplan.cli.options import (
     injections,
     load_problem,
     number_of,
+    option,
     parsed,
 )
 from cfgplan.cli.registry import command
@@ -65,6 +66,7 @@ from cfgplan.runtime.options import (
     RATE_ALLOWANCE,
     RECORD,
     RECORD_MAX_BYTES,
+    ROUTER,
     SOCIETY,
     STALE_PERIODS,
     TRACE,
@@ -72,7 +74,6 @@ from cfgplan.runtime.options import (
     VERBOSE,
     WITHOUT_COORDINATOR,
     ZENOH_CONFIG,
-    Option,
     how_long,
 )
 from cfgplan.runtime.part import Part
@@ -84,15 +85,6 @@ if TYPE_CHECKING:
     from cfgplan.ros2.bindings import Bindings
 
 TRANSPORTS = ("zenoh", "inprocess")
-
-
-def option(spec: Option[Any]) -> Any:
-    """The typer option of one of the run options of :mod:`cfgplan.runtime.options`
-    (the emitted programs build theirs from the same)."""
-    parse = None if spec.parse is None else parsed(spec.parse)
-    return typer.Option(
-        spec.flag, metavar=spec.metavar, help=spec.help, parser=parse, show_default=False
-    )
 
 
 @command(short_help="Run a configuration: all robots here, or one on the network (5.2).")
@@ -123,6 +115,7 @@ def run(
     society_name: Annotated[str, option(SOCIETY)] = SOCIETY.default,
     listen: Annotated[list[str] | None, option(LISTEN)] = None,
     connect: Annotated[list[str] | None, option(CONNECT)] = None,
+    router: Annotated[list[str] | None, option(ROUTER)] = None,
     zenoh_config: Annotated[Path | None, option(ZENOH_CONFIG)] = None,
     lease: Annotated[float | None, option(LEASE)] = LEASE.default,
     keys: Annotated[Path | None, option(KEYS)] = None,
@@ -332,6 +325,7 @@ def run(
                 None if keys is None else str(keys),
                 problem=problem_id(problem, domain, state),
                 allowance=rate_allowance,
+                router=router or (),
             )
             via = None
             if ros2 or topics is not None:  # rclpy is imported only if so chosen

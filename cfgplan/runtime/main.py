@@ -202,6 +202,7 @@ def zenoh_options(args: argparse.Namespace, problem: ProblemId | None = None) ->
         args.keys,
         problem=problem,
         allowance=args.rate_allowance,
+        router=args.router,
     )
 
 
@@ -215,11 +216,13 @@ def network_options(
     *,
     problem: ProblemId | None = None,
     allowance: float | None = None,
+    router: Sequence[str] = (),
 ) -> ZenohOptions:
     """The Zenoh options of a robot, as ``cfgplan run`` and emitted programs
     take them: with keys and no ``--society``, the keys' society; ``problem``:
     the one it runs, announced to the society (:mod:`cfgplan.security.identity`);
-    ``allowance``: ``--rate-allowance`` (:mod:`cfgplan.security.rates`)."""
+    ``allowance``: ``--rate-allowance`` (:mod:`cfgplan.security.rates`);
+    ``router``: ``--router``, the routers it is a client of."""
     if keys is not None:  # the keys name the society, unless --society does
         from cfgplan.security.zenoh_tls import society_for
 
@@ -228,6 +231,7 @@ def network_options(
         society=society,
         listen=tuple(listen),
         connect=tuple(connect),
+        router=tuple(router),
         config_file=config_file,
         lease=lease,
         keys=keys,

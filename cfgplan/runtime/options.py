@@ -46,6 +46,7 @@ __all__ = [
     "RECORD",
     "RECORD_MAX_BYTES",
     "RESPAWN",
+    "ROUTER",
     "RUN_OPTIONS",
     "SOCIETY",
     "STALE_PERIODS",
@@ -234,6 +235,17 @@ CONNECT: Option[list[str]] = Option(
     endpoint,
     repeat=True,
 )
+ROUTER: Option[list[str]] = Option(
+    "--router",
+    "ENDPOINT",
+    [],
+    "Be a client of the Zenoh router at ENDPOINT (cfgplan router, zenohd or rmw_zenohd; "
+    "repeatable: one of them), e.g. tcp/192.168.1.2:7447: the robot connects only there and "
+    "listens nowhere, so the society's connections grow with its robots, not their square. "
+    "Not with --listen, --connect or --keys.",
+    endpoint,
+    repeat=True,
+)
 ZENOH_CONFIG: Option[str | None] = Option(
     "--zenoh-config",
     "FILE",
@@ -309,6 +321,7 @@ NETWORK_OPTIONS: tuple[Option[Any], ...] = (
     SOCIETY,
     LISTEN,
     CONNECT,
+    ROUTER,
     ZENOH_CONFIG,
     LEASE,
     KEYS,

@@ -5,21 +5,28 @@ process, as each ran on its own body in the thesis (5.2.2), here side by side
 for development and demos (like ``ros2 launch`` or ``docker compose up``):
 
 * :func:`commands` writes the command of each robot, the coordinator (the
-  goal's robot, 5.5) first: robot *k* listens on its own endpoint and connects
-  to the endpoints of robots 1 to *k*-1, so every two robots share a link
-  without scouting (a full mesh; Zenoh peers do not route for each other);
-* :class:`Launch` starts them in that order, each once the previous one
-  listens (its port accepts a connection), prefixes every line of their
+  goal's robot, 5.5) first. Behind a router (:func:`router_command`,
+  :mod:`cfgplan.runtime.router`) each robot is its client (``--router``):
+  one connection each. In a mesh, robot *k* listens on its own endpoint and
+  connects to the endpoints of robots 1 to *k*-1, so every two robots share
+  a link without scouting (N·(N−1)/2 links; Zenoh peers do not route for
+  each other);
+* :class:`Launch` starts them in that order — the router first, then every
+  robot at once; in a mesh each robot once the previous one listens (its
+  port accepts a connection) — prefixes every line of their
   output with the robot's name (in colour on a terminal), and stops them all
   by pid: SIGTERM, a bounded wait (:attr:`SpawnOptions.stop_wait`), then
   SIGKILL.
 
-When the coordinator ends, the run is over: the others are stopped, and the
+When the coordinator ends, the run is over: the others are stopped (the
+router last), and the
 launch's exit status is the coordinator's (0 ran, 1 a user error or a failing
 functionality, 3 no configuration left). A robot that exits with 1 or 2 (it
 could not start or run its part) stops the launch: exit status 1, with the
 robot's last lines. Any other end of a robot (a scripted ``kill``, a crash) is
-the society's business: the coordinator sees it lost and reconfigures.
+the society's business: the coordinator sees it lost and reconfigures. The
+router that ends cuts the robots off from each other: without ``--respawn``
+the launch stops (exit status 1).
 
 With :attr:`SpawnOptions.respawn` (``--respawn``) a robot whose process died —
 killed, crashed: any end but those above (:func:`died`) — is started again,
@@ -62,6 +69,7 @@ __all__ = [
     "died",
     "free_port",
     "in_use",
+    "router_command",
     "status_text",
     "supervise",
 ]
@@ -106,7 +114,14 @@ class RobotCommand:
     """The command line after the program (``run DOMAIN STATE ...``)."""
     host: str
     port: int
+    """Where it listens (0: nowhere, a client of the router)."""
     coordinator: bool = False
+    router: bool = False
+    """The society's router (``cfgplan router``), not a robot."""
+
+    @property
+    def listens(self) -> bool:
+        return self.port > 0
 
     def shell(self, program: Sequence[str] = ("cfgplan",)) -> str:
         """The command as a shell line."""
@@ -142,21 +157,34 @@ def commands(
     hosts: Mapping[str, str],
     ports: Mapping[str, int],
     coordinator: str | None = None,
+    router: str | None = None,
 ) -> list[RobotCommand]:
     """The command of each of ``robots`` (the ``coordinator`` first, if it is
     one of them): ``common`` (``run DOMAIN STATE --impl ...``), then its
-    ``extra`` options, ``--robot``, ``--listen`` on its host and port, and
-    ``--connect`` to every robot before it."""
+    ``extra`` options, ``--robot``, and with a ``router`` endpoint
+    ``--router`` it (``ports`` are not used); else ``--listen`` on its host and
+    port and ``--connect`` to every robot before it (a mesh)."""
     out: list[RobotCommand] = []
     for k, robot in enumerate(robots):
         args = [*common, *extra.get(robot, ()), "--robot", robot]
-        args += ["--listen", endpoint(hosts[robot], ports[robot])]
-        for earlier in robots[:k]:
-            args += ["--connect", endpoint(hosts[earlier], ports[earlier])]
-        out.append(
-            RobotCommand(robot, tuple(args), hosts[robot], ports[robot], robot == coordinator)
-        )
+        if router is not None:
+            args += ["--router", router]
+        else:
+            args += ["--listen", endpoint(hosts[robot], ports[robot])]
+            for earlier in robots[:k]:
+                args += ["--connect", endpoint(hosts[earlier], ports[earlier])]
+        port = 0 if router is not None else ports[robot]
+        out.append(RobotCommand(robot, tuple(args), hosts[robot], port, robot == coordinator))
     return out
+
+
+def router_command(host: str, port: int, listen: str, lease: float | None) -> RobotCommand:
+    """The society's router (``cfgplan router``), listening on ``listen``
+    (reached at ``host``:``port``), with the robots' ``lease`` if one is given."""
+    args = ["router", "--listen", listen]
+    if lease is not None:
+        args += ["--lease", f"{lease:g}"]
+    return RobotCommand("router", tuple(args), host, port, router=True)
 
 
 def backoff(options: SpawnOptions, lived: float, deaths: int) -> tuple[int, float]:
@@ -381,12 +409,18 @@ class Launch:
     # -- start -------------------------------------------------------------------
 
     def start(self) -> None:
-        """Start every robot in order, each once the previous one listens;
-        a robot that ends first, or does not listen in time, is a
-        :class:`RunError` (the caller stops the rest)."""
+        """Start every process in order, each that listens (the router, a
+        robot of a mesh) waited for until it does; one that ends first, or
+        does not listen in time, is a :class:`RunError` (the caller stops
+        the rest). A client of the router is not waited for."""
         for command in self.robots:
             if self.stop.is_set():
                 return
+            if not command.listens:
+                started = self._spawn(command, command.args)
+                self.say(command.robot, f"(started: pid {started.process.pid})")
+                self.started.append(started)
+                continue
             if in_use(command.port, command.host):
                 raise RunError(
                     f"port {command.port} on {command.host} is in use: {command.robot} cannot "
@@ -471,6 +505,8 @@ class Launch:
                 if started.command.coordinator:
                     started.pump.join(timeout=2.0)
                     return code if code >= 0 else 128 - code
+                if started.command.router:  # every robot is cut off from every other
+                    raise self._failed(started, code, "ended: the robots cannot reach each other")
                 if code in USER_ERRORS:
                     raise self._failed(started, code, "stopped")
                 self.say(started.command.robot, f"(ended, exit status {status_text(code)})")
@@ -510,12 +546,13 @@ class Launch:
             )
 
     def stop_all(self) -> int | None:
-        """Stop every robot still running by its pid, the coordinator first:
-        SIGTERM, at most :attr:`SpawnOptions.stop_wait` seconds, then SIGKILL.
-        The coordinator's exit status, if it ran."""
+        """Stop every process still running by its pid, the coordinator first,
+        the router last: SIGTERM, at most :attr:`SpawnOptions.stop_wait`
+        seconds, then SIGKILL. The coordinator's exit status, if it ran."""
         first = [s for s in self.started if s.command.coordinator]
-        rest = [s for s in self.started if not s.command.coordinator]
-        for group in (first, rest):
+        rest = [s for s in self.started if not (s.command.coordinator or s.command.router)]
+        last = [s for s in self.started if s.command.router]
+        for group in (first, rest, last):
             self._signal(group, signal.SIGTERM)
             deadline = time.monotonic() + self.options.stop_wait
             for started in group:

@@ -81,6 +81,11 @@ class ZenohOptions:
     society: str = DEFAULT_SOCIETY
     listen: tuple[str, ...] = ()
     connect: tuple[str, ...] = ()
+    router: tuple[str, ...] = ()
+    """Routers the robot is a Zenoh *client* of (``--router``): it connects to
+    one of them and listens nowhere, and everything it says and hears goes
+    through that router (connections that grow with the society, not with its
+    square). Empty: a peer, linked to every robot it reaches."""
     config_file: str | None = None
     lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
     keys: str | None = None  # a folder of society keys: TLS, mTLS, access control
@@ -102,6 +107,23 @@ class ZenohOptions:
                 problem = endpoint_problem(endpoint)
                 if problem:
                     raise RunError(f"{option} {problem}", hint=ENDPOINT_HINT)
+        for endpoint in self.router:
+            problem = endpoint_problem(endpoint)
+            if problem:
+                raise RunError(f"--router {problem}", hint=ENDPOINT_HINT)
+        if self.router and (self.listen or self.connect):
+            given = "--listen" if self.listen else "--connect"
+            raise RunError(
+                f"--router and {given}: a client of a router reaches the others only through it",
+                hint="give the router alone, or --listen/--connect without it (a mesh of peers)",
+            )
+        if self.router and self.keys is not None:
+            raise RunError(
+                "--router with --keys: a society's keys name its robots, not a router (the "
+                "access control is per robot, and a router in between would hide who sent "
+                "what)",
+                hint="with --keys, connect the robots as peers (--listen/--connect)",
+            )
         if self.lease is not None and not self.lease > 0:
             raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")
 
@@ -162,7 +184,12 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
         config = z.Config()
         for key, value, what in DEFAULTS:
             _set(config, key, value, what)
-    if options.listen:
+    if options.router:
+        _set(config, "mode", '"client"', "--router")
+        _set(config, "connect/endpoints", json.dumps(list(options.router)), "--router")
+        _set(config, "listen/endpoints", "[]", "--router (a client listens nowhere)")
+        _set(config, "scouting/multicast/enabled", "false", "scouting")
+    elif options.listen:
         _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
     elif options.connect and config.get_json("listen/endpoints") == z.Config().get_json(
         "listen/endpoints"

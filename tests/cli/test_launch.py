@@ -10,6 +10,7 @@ configuration), every wait bounded.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import signal
@@ -105,7 +106,7 @@ def test_each_robot_listens_and_connects_to_every_robot_before_it() -> None:
 def test_print_commands_writes_each_hosts_command(cfgplan) -> None:  # type: ignore[no-untyped-def]
     """Nothing starts; each robot's line has its endpoints, its faults and its trace."""
     done = cfgplan(
-        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands",
+        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands", "--topology", "mesh",
         "--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2", "--duration", "5",
         "--inject", "fail compass(Pippi) at cycle 9", "--trace", "run.jsonl",
     )  # fmt: skip
@@ -131,7 +132,8 @@ def test_the_coordinator_serves_the_live_page_and_every_robot_records(cfgplan) -
         "--foxglove", "127.0.0.1:8765", "--record", "run.mcap", "--rate-allowance", "3",
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
-    emil, pippi = done.stdout.splitlines()[1], done.stdout.splitlines()[3]
+    (emil,) = [line for line in done.stdout.splitlines() if "--robot Emil" in line]
+    (pippi,) = [line for line in done.stdout.splitlines() if "--robot Pippi" in line]
     assert "--live 0" in emil and "--foxglove 127.0.0.1:8765" in emil
     assert "--live" not in pippi and "--foxglove" not in pippi
     assert "--record run-emil.mcap" in emil and "--record run-pippi.mcap" in pippi
@@ -148,9 +150,13 @@ def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignor
     a KeyError traceback). Floats go on exactly as given."""
     base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--robot", "Pippi"]
     shown = ["--print-commands", "--host", "Pippi=10.0.0.2"]
+    unreached = cfgplan(*base, *shown)  # behind a router: which one?
+    assert unreached.returncode == 2 and "give --router ENDPOINT" in unreached.stderr
+    shown += ["--router", "tcp/10.0.0.1:7447"]
     done = cfgplan(*base, *shown, "--hold", "0.0000123456789", "--rate", "20.25")
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines()[0] == "# Pippi on 10.0.0.2"
+    assert done.stdout.splitlines()[1].endswith("--robot Pippi --router tcp/10.0.0.1:7447")
     assert "--hold 1.23456789e-05" in done.stdout and "--rate 20.25" in done.stdout
     late = cfgplan(*base, *shown, "--duration", "86400.25")
     assert late.returncode == 2 and "the coordinator, Emil" in late.stderr
@@ -160,6 +166,34 @@ def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignor
     typo = cfgplan(*base, *shown, "--inject", "kill Emli at cycle 9")
     assert typo.returncode == 2 and "no robot Emli in this society" in typo.stderr
     assert "did you mean Emil?" in typo.stderr and not typo.stdout
+
+
+def test_print_commands_behind_a_router_start_it_on_the_coordinators_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """The default topology without --keys: the router first, on the
+    coordinator's host (every interface, Zenoh's port, the robots' lease),
+    then each robot a client of it, listening nowhere; --router names one
+    that runs already (none is printed); with --keys the robots are a mesh."""
+    base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands"]
+    hosts = ["--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2"]
+    done = cfgplan(*base, *hosts, "--lease", "3")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[:2] == [
+        "# the router on 10.0.0.1 (start it first)",
+        "cfgplan router --listen tcp/0.0.0.0:7447 --lease 3",
+    ]
+    assert lines[2] == "# Emil on 10.0.0.1 (coordinator)" and lines[4] == "# Pippi on 10.0.0.2"
+    for robot, line in (("Emil", lines[3]), ("Pippi", lines[5])):
+        assert line.endswith(f"--robot {robot} --router tcp/10.0.0.1:7447"), line
+        assert "--listen" not in line and "--connect" not in line
+    given = cfgplan(*base, *hosts, "--router", "tcp/10.0.0.9:7447")
+    assert given.returncode == 0, given.stderr
+    assert "cfgplan router" not in given.stdout
+    assert given.stdout.count("--router tcp/10.0.0.9:7447") == 2
+    mixed = cfgplan(*base, *hosts, "--router", "tcp/10.0.0.9:7447", "--topology", "mesh")
+    assert mixed.returncode == 2 and "--router" in mixed.stderr
+    wrong = cfgplan(*base, *hosts, "--topology", "star")
+    assert wrong.returncode == 2 and "'star' is not a topology" in wrong.stderr
 
 
 def test_print_commands_needs_every_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
@@ -198,15 +232,19 @@ def test_host_without_print_commands_is_a_usage_error(cfgplan) -> None:  # type:
 
 
 def test_a_port_in_use_is_refused(cfgplan) -> None:  # type: ignore[no-untyped-def]
-    """Someone listens on the coordinator's --port: a clear error, no robot started."""
+    """Someone listens on the --port (the router's; in a mesh the
+    coordinator's): a clear error, no robot started."""
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()
         port = taken.getsockname()[1]
-        done = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--port", str(port))
-    assert done.returncode == 1
-    assert f"port {port} on 127.0.0.1 is in use: Emil cannot listen on it" in done.stderr
-    assert "started: pid" not in done.stdout
+        base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--port", str(port)]
+        done = cfgplan(*base)  # behind a router: the router's port
+        mesh = cfgplan(*base, "--topology", "mesh")  # the coordinator's
+    assert done.returncode == 1 and mesh.returncode == 1
+    assert f"port {port} on 127.0.0.1 is in use: router cannot listen on it" in done.stderr
+    assert f"port {port} on 127.0.0.1 is in use: Emil cannot listen on it" in mesh.stderr
+    assert "started: pid" not in done.stdout + mesh.stdout
 
 
 @pytest.mark.slow
@@ -222,7 +260,7 @@ def test_launch_runs_cross_door_switches_and_leaves_no_process(tmp_path: Path) -
     code, out, err = _finish(launched)
     pids = _pids(out)
     assert code == 0, f"{out}\n{err}"
-    assert list(pids) == ["Emil", "Pippi"], out  # the coordinator first
+    assert list(pids) == ["router", "Emil", "Pippi"], out  # the router, then the coordinator
     assert all(_gone(pid) for pid in pids.values()), out
     mine = read_trace(tmp_path / "run-emil.jsonl")
     theirs = read_trace(tmp_path / "run-pippi.jsonl")
@@ -260,7 +298,7 @@ def test_sigterm_to_launch_stops_every_robot() -> None:
         launched.kill()
     assert "Emil: robot Pippi seen" in seen, seen
     pids = _pids(seen)
-    assert sorted(pids) == ["Emil", "Pippi"]
+    assert sorted(pids) == ["Emil", "Pippi", "router"]
     launched.send_signal(signal.SIGTERM)
     try:
         launched.wait(LIMIT)
@@ -295,8 +333,8 @@ def test_a_robot_that_cannot_start_stops_the_launch(tmp_path: Path) -> None:
     code, out, err = _finish(_launch("--impl", str(partial), "--rate", "20"))
     pids = _pids(out)
     assert code == 1, f"{out}\n{err}"
-    assert "Pippi did not start (exit status 1)" in err and "measure-door" in err, err
-    assert list(pids) == ["Emil", "Pippi"]
+    assert "Pippi stopped (exit status 1)" in err and "measure-door" in err, err
+    assert list(pids) == ["router", "Emil", "Pippi"]
     assert all(_gone(pid) for pid in pids.values())
     assert "Traceback" not in out + err
 
@@ -427,4 +465,86 @@ def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
     emils = [int(p) for p in re.findall(r"^Emil +\| \(started(?: again)?: pid (\d+)", out, re.M)]
     assert len(emils) == 2 and emils[0] == emil, out
     assert all(_gone(pid) for pid in [*pids, *emils])
+    assert "Traceback" not in out + err
+
+
+def _connections(pid: int) -> list[int]:
+    """The remote ports of ``pid``'s established TCP connections (from /proc)."""
+    inodes = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        with contextlib.suppress(OSError):
+            target = os.readlink(fd)
+            if target.startswith("socket:["):
+                inodes.add(target[8:-1])
+    ports = []
+    for table in ("tcp", "tcp6"):
+        for line in Path(f"/proc/{pid}/net/{table}").read_text().splitlines()[1:]:
+            fields = line.split()
+            if fields[3] == "01" and fields[9] in inodes:  # ESTABLISHED, this process's
+                ports.append(int(fields[2].rsplit(":", 1)[1], 16))
+    return sorted(ports)
+
+
+@pytest.mark.slow
+def test_behind_a_router_each_robot_holds_one_connection_and_outlives_the_routers_death(
+    tmp_path: Path,
+) -> None:
+    """The default topology: launch starts a router, then every robot as its
+    client: each robot's only connection is to the router's port (in a mesh,
+    robot k holds one to each of the k-1 before it and more to it). The
+    router is killed (SIGKILL): the robots see each other lost; --respawn
+    starts the router again on its port after 1 s, the clients reconnect by
+    themselves, and the coordinator serves the goal again with Pippi's data.
+    SIGTERM then stops every process, the router last; no pid is left."""
+    trace = tmp_path / "run.jsonl"
+    launched = _launch(
+        "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--respawn", "--trace", str(trace)
+    )  # fmt: skip
+    assert launched.stdout is not None
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(launched.stdout), daemon=True)  # type: ignore[arg-type]
+    reader.start()
+
+    def until(what: str, found: Callable[[], bool]) -> None:
+        deadline = time.monotonic() + LIMIT
+        while not found():
+            if time.monotonic() > deadline or launched.poll() is not None:
+                launched.kill()
+                raise AssertionError(f"not seen: {what}\n{''.join(lines)}")
+            time.sleep(0.05)
+
+    def served_after(t: float) -> bool:
+        return any(
+            r["event"] == "call"
+            and r["functionality"] == "cross-door"
+            and r["status"] == "ran"
+            and float(r["t"]) > t  # type: ignore[arg-type]
+            and r["inputs"]
+            for r in read_trace(tmp_path / "run-emil.jsonl")
+        )
+
+    try:
+        until("Emil sees Pippi", lambda: "Emil: robot Pippi seen" in "".join(lines))
+        pids = _pids("".join(lines))
+        port = int(re.search(r"listening on tcp/127\.0\.0\.1:(\d+)", "".join(lines))[1])  # type: ignore[index]
+        for robot in ("Emil", "Pippi"):
+            until(f"{robot} connected", lambda r=robot: _connections(pids[r]) == [port])  # type: ignore[misc]
+        until("the goal served", lambda: served_after(0.0))
+        killed = time.time()
+        os.kill(pids["router"], signal.SIGKILL)
+        until("Emil sees Pippi lost", lambda: "Emil: robot Pippi lost" in "".join(lines))
+        until("the router again", lambda: "router | (started again" in "".join(lines))
+        until("the goal served again", lambda: served_after(killed + 1.0))
+        router = _newest_pid("".join(lines), "router")
+        assert router is not None and router != pids["router"]
+        launched.send_signal(signal.SIGTERM)
+        launched.wait(LIMIT)
+    finally:
+        if launched.poll() is None:
+            launched.kill()
+    reader.join(10.0)
+    out, err = "".join(lines), launched.stderr.read() if launched.stderr else ""
+    assert launched.returncode == 0, f"{out}\n{err}"
+    assert re.search(r"^router +\| \(died, exit status 137 .*started again in 1 s", out, re.M), out
+    assert all(_gone(pid) for pid in [*pids.values(), router])
     assert "Traceback" not in out + err

@@ -135,3 +135,22 @@ def test_a_session_whose_token_is_refused_is_closed(monkeypatch: pytest.MonkeyPa
     with pytest.raises(RunError, match="cannot declare Emil alive: refused"):
         ZenohTransport("Emil", ZenohOptions(listen=("tcp/127.0.0.1:7447",)))
     assert closed == [True]
+
+
+def test_a_client_of_a_router_connects_only_there_and_listens_nowhere() -> None:
+    """``--router``: Zenoh's client mode, the router its only link; what
+    cannot go with it is refused (a mesh's endpoints, the society's keys)."""
+    options = ZenohOptions(router=("tcp/10.0.0.1:7447",))
+    assert _get(options, "mode") == "client"
+    assert _get(options, "connect/endpoints") == ["tcp/10.0.0.1:7447"]
+    assert _get(options, "listen/endpoints") == []
+    assert _get(options, "scouting/multicast/enabled") is False
+    assert _get(options, "transport/link/tx/lease") == DEFAULT_LEASE * 1000
+    with pytest.raises(RunError, match="--router and --listen"):
+        ZenohOptions(router=("tcp/10.0.0.1:7447",), listen=("tcp/127.0.0.1:7448",))
+    with pytest.raises(RunError, match="--router and --connect"):
+        ZenohOptions(router=("tcp/10.0.0.1:7447",), connect=("tcp/127.0.0.1:7448",))
+    with pytest.raises(RunError, match="--router with --keys"):
+        ZenohOptions(router=("tcp/10.0.0.1:7447",), keys="keys")
+    with pytest.raises(RunError, match="--router 'nowhere'"):
+        ZenohOptions(router=("nowhere",))

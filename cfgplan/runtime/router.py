@@ -1,0 +1,133 @@
+"""A Zenoh router for a society whose robots are its clients (``cfgplan router``).
+
+In a mesh of peers (``--listen``/``--connect``) every robot holds a link to
+every other: N·(N−1)/2 connections, and an idle traffic of keep-alives and
+liveliness that grows with the square of the society. Zenoh's answer at
+scale is the router: each robot is a *client* (``cfgplan run --router
+ENDPOINT``) holding one link, to the router, which forwards what each says
+to whoever subscribed; connections and idle traffic grow with N.
+
+This is Zenoh's own router — the ``router`` mode of the Zenoh library's
+session, the same code as ``zenohd`` — opened with cfgplan's lease, so a
+robot that freezes is reported lost after the lease as among peers, and
+scouting off (nothing is found but the clients that connect). ``zenohd``,
+or ROS 2's ``rmw_zenohd``, serve the robots as well: ``--router`` names any
+of them.
+
+What a router costs: one process every message crosses (one hop more on
+loopback: tens of microseconds) and that the society needs. A router that
+ends cuts every robot off from every other — each sees every other lost and,
+following its coordinator, stops its part (``--without-coordinator``) —
+until it runs again on the same endpoint: the clients reconnect by
+themselves, and the coordinator takes its society back
+(``cfgplan launch --respawn`` starts it again).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import threading
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from types import FrameType
+from typing import Any
+
+from cfgplan.runtime.errors import RunError
+from cfgplan.runtime.zenoh_config import (
+    DEFAULT_LEASE,
+    ENDPOINT_HINT,
+    endpoint_problem,
+    load_zenoh,
+    reason,
+)
+
+__all__ = ["DEFAULT_LISTEN", "RouterOptions", "router_config", "serve"]
+
+DEFAULT_LISTEN = "tcp/[::]:7447"
+"""Where a router listens unless told: Zenoh's port on every interface, as ``zenohd``."""
+
+
+@dataclass(frozen=True)
+class RouterOptions:
+    """How a router is reached and how soon it gives a silent client up."""
+
+    listen: tuple[str, ...] = (DEFAULT_LISTEN,)
+    lease: float = DEFAULT_LEASE
+    """Seconds without a word after which a client is dropped (its tokens go:
+    the others see it lost), as a robot's ``--lease``."""
+    config_file: str | None = None
+    """A Zenoh configuration file under the options (``--zenoh-config``)."""
+
+    def __post_init__(self) -> None:
+        if not self.listen:
+            raise RunError("a router must listen somewhere", hint=ENDPOINT_HINT)
+        for endpoint in self.listen:
+            problem = endpoint_problem(endpoint)
+            if problem:
+                raise RunError(f"--listen {problem}", hint=ENDPOINT_HINT)
+        if not self.lease > 0:
+            raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")
+
+
+def router_config(options: RouterOptions) -> Any:
+    """The Zenoh configuration of a router: a file's (if any), then router
+    mode, the endpoints it listens on, no multicast scouting and the lease."""
+    z = load_zenoh()
+    if options.config_file is not None:
+        try:
+            config = z.Config.from_file(options.config_file)
+        except z.ZError as exc:
+            raise RunError(
+                f"cannot read the Zenoh configuration {options.config_file}: {reason(exc)}"
+            ) from None
+    else:
+        config = z.Config()
+    settings = (
+        ("mode", '"router"', "router mode"),
+        ("listen/endpoints", json.dumps(list(options.listen)), "--listen"),
+        ("scouting/multicast/enabled", "false", "scouting"),
+        ("transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease"),
+    )
+    for key, value, what in settings:
+        try:
+            config.insert_json5(key, value)
+        except Exception as exc:  # zenoh.ZError; zenoh is imported lazily
+            raise RunError(f"{what}: Zenoh refuses {value}: {reason(exc)}") from None
+    return config
+
+
+def serve(
+    options: RouterOptions,
+    say: Callable[[str], None],
+    stop: threading.Event | None = None,
+) -> None:
+    """Run a router until ``stop`` is set, or SIGINT or SIGTERM (on the main
+    thread): ``say`` is told where it listens, and when it stops."""
+    z = load_zenoh()
+    stop = stop or threading.Event()
+    try:
+        session = z.open(router_config(options))
+    except z.ZError as exc:
+        raise RunError(f"the router cannot open: {reason(exc)}", hint=ENDPOINT_HINT) from None
+    previous: dict[int, Any] = {}
+    if threading.current_thread() is threading.main_thread():
+
+        def handler(signum: int, frame: FrameType | None) -> None:
+            stop.set()
+
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            previous[signum] = signal.signal(signum, handler)
+    try:
+        say(f"router {session.info.zid()} listening on {_joined(options.listen)}")
+        while not stop.wait(0.5):
+            pass
+        say("router stopped")
+    finally:
+        session.close()
+        for number, was in previous.items():
+            signal.signal(number, was)
+
+
+def _joined(endpoints: Sequence[str]) -> str:
+    return ", ".join(endpoints)
