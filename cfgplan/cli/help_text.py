@@ -27,6 +27,7 @@ HELP = (
     "  record    Turn a run's trace into an MCAP file that Foxglove opens.\n"
     "  render    Draw a configuration (Fig. 4.3) or a method hierarchy (Fig. 4.4).\n"
     "  report    Draw any run (a trace or an MCAP recording): pictures and a page.\n"
+    "  router    Run a Zenoh router for robots started with --router.\n"
     "  run       Run a configuration: all robots here, or one on the network (5.2).\n"
     "  simulate  Run a thesis experiment in the 2-D simulator (chapter 6).\n"
 )

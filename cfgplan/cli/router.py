@@ -21,7 +21,7 @@ from cfgplan.runtime.options import LEASE, ZENOH_CONFIG, endpoint
 from cfgplan.runtime.zenoh_config import DEFAULT_LEASE
 
 
-@command(short_help="Run a Zenoh router whose clients are a society's robots (--router).")
+@command(short_help="Run a Zenoh router for robots started with --router.")
 def router(
     listen: Annotated[
         list[str] | None,

@@ -81,11 +81,6 @@ class ZenohOptions:
     society: str = DEFAULT_SOCIETY
     listen: tuple[str, ...] = ()
     connect: tuple[str, ...] = ()
-    router: tuple[str, ...] = ()
-    """Routers the robot is a Zenoh *client* of (``--router``): it connects to
-    one of them and listens nowhere, and everything it says and hears goes
-    through that router (connections that grow with the society, not with its
-    square). Empty: a peer, linked to every robot it reaches."""
     config_file: str | None = None
     lease: float | None = None  # seconds; None: the file's, else DEFAULT_LEASE
     keys: str | None = None  # a folder of society keys: TLS, mTLS, access control
@@ -98,6 +93,11 @@ class ZenohOptions:
     problem: ProblemId | None = None
     """The problem the robot runs, announced and checked against the society's
     (:mod:`cfgplan.security.identity`); ``None``: not known, not checked."""
+    router: tuple[str, ...] = ()
+    """Routers the robot is a Zenoh *client* of (``--router``): it connects to
+    one of them and listens nowhere, and everything it says and hears goes
+    through that router (connections that grow with the society, not with its
+    square). Empty: a peer, linked to every robot it reaches."""
 
     def __post_init__(self) -> None:
         if not self.society:
