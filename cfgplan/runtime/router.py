@@ -39,6 +39,8 @@ from cfgplan.runtime.zenoh_config import (
     ENDPOINT_HINT,
     endpoint_problem,
     load_zenoh,
+    put_setting,
+    read_config,
     reason,
 )
 
@@ -73,16 +75,10 @@ class RouterOptions:
 def router_config(options: RouterOptions) -> Any:
     """The Zenoh configuration of a router: a file's (if any), then router
     mode, the endpoints it listens on, no multicast scouting and the lease."""
-    z = load_zenoh()
-    if options.config_file is not None:
-        try:
-            config = z.Config.from_file(options.config_file)
-        except z.ZError as exc:
-            raise RunError(
-                f"cannot read the Zenoh configuration {options.config_file}: {reason(exc)}"
-            ) from None
+    if options.config_file is None:
+        config = load_zenoh().Config()
     else:
-        config = z.Config()
+        config = read_config(options.config_file)
     settings = (
         ("mode", '"router"', "router mode"),
         ("listen/endpoints", json.dumps(list(options.listen)), "--listen"),
@@ -90,10 +86,7 @@ def router_config(options: RouterOptions) -> Any:
         ("transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease"),
     )
     for key, value, what in settings:
-        try:
-            config.insert_json5(key, value)
-        except Exception as exc:  # zenoh.ZError; zenoh is imported lazily
-            raise RunError(f"{what}: Zenoh refuses {value}: {reason(exc)}") from None
+        put_setting(config, key, value, what)
     return config
 
 

@@ -32,6 +32,8 @@ __all__ = [
     "ZenohOptions",
     "endpoint_problem",
     "load_zenoh",
+    "put_setting",
+    "read_config",
     "reason",
     "zenoh_config",
 ]
@@ -170,47 +172,54 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
     z = load_zenoh()
     config: zenoh.Config
     if options.config_file is not None:
-        try:
-            config = z.Config.from_file(options.config_file)
-        except z.ZError as exc:
-            raise RunError(
-                f"cannot read the Zenoh configuration {options.config_file}: {reason(exc)}"
-            ) from None
+        config = read_config(options.config_file)
         zenohs = z.Config()
         for key, value, what in DEFAULTS:
             if config.get_json(key) == zenohs.get_json(key):  # the file leaves it
-                _set(config, key, value, what)
+                put_setting(config, key, value, what)
     else:
         config = z.Config()
         for key, value, what in DEFAULTS:
-            _set(config, key, value, what)
+            put_setting(config, key, value, what)
     if options.router:
-        _set(config, "mode", '"client"', "--router")
-        _set(config, "connect/endpoints", json.dumps(list(options.router)), "--router")
-        _set(config, "listen/endpoints", "[]", "--router (a client listens nowhere)")
-        _set(config, "scouting/multicast/enabled", "false", "scouting")
+        put_setting(config, "mode", '"client"', "--router")
+        put_setting(config, "connect/endpoints", json.dumps(list(options.router)), "--router")
+        put_setting(config, "listen/endpoints", "[]", "--router (a client listens nowhere)")
+        put_setting(config, "scouting/multicast/enabled", "false", "scouting")
     elif options.listen:
-        _set(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
+        put_setting(config, "listen/endpoints", json.dumps(list(options.listen)), "--listen")
     elif options.connect and config.get_json("listen/endpoints") == z.Config().get_json(
         "listen/endpoints"
     ):  # it reaches out; Zenoh's default would listen on every interface
-        _set(config, "listen/endpoints", "[]", "--connect (listens nowhere)")
+        put_setting(config, "listen/endpoints", "[]", "--connect (listens nowhere)")
     if options.connect:
-        _set(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
+        put_setting(config, "connect/endpoints", json.dumps(list(options.connect)), "--connect")
     if options.listen or options.connect:
-        _set(config, "scouting/multicast/enabled", "false", "scouting")
+        put_setting(config, "scouting/multicast/enabled", "false", "scouting")
     if options.lease is not None:
-        _set(config, "transport/link/tx/lease", str(max(1, round(options.lease * 1000))), "--lease")
+        lease = str(max(1, round(options.lease * 1000)))
+        put_setting(config, "transport/link/tx/lease", lease, "--lease")
     if options.keys is not None:  # last: every endpoint, the file's too, becomes TLS
         from cfgplan.security.zenoh_tls import secure
 
         if robot is None:
             raise RunError("--keys: whose keys? (no robot named)")
-        secure(config, options.keys, robot, options.society, _set)
+        secure(config, options.keys, robot, options.society, put_setting)
     return config
 
 
-def _set(config: Any, key: str, value: str, option: str) -> None:
+def read_config(path: str) -> zenoh.Config:
+    """A Zenoh configuration file (JSON5), or a clear error."""
+    z = load_zenoh()
+    try:
+        config: zenoh.Config = z.Config.from_file(path)
+    except z.ZError as exc:
+        raise RunError(f"cannot read the Zenoh configuration {path}: {reason(exc)}") from None
+    return config
+
+
+def put_setting(config: Any, key: str, value: str, option: str) -> None:
+    """Set ``key`` to ``value`` (JSON5) on ``config``; Zenoh's refusal said as ``option``'s."""
     try:
         config.insert_json5(key, value)
     except Exception as exc:  # zenoh.ZError; zenoh is imported lazily

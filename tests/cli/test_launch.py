@@ -62,6 +62,28 @@ def _gone(pid: int) -> bool:
     return False
 
 
+def _follow(
+    launched: subprocess.Popen[str],
+) -> tuple[list[str], threading.Thread, Callable[[str, Callable[[], bool]], None]]:
+    """The launch's output lines as they come (a reader thread), and
+    ``until(what, found)``: wait for ``found`` at most :data:`LIMIT` s while
+    the launch runs, else kill it and fail saying ``what`` and the output."""
+    assert launched.stdout is not None
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(launched.stdout), daemon=True)  # type: ignore[arg-type]
+    reader.start()
+
+    def until(what: str, found: Callable[[], bool]) -> None:
+        deadline = time.monotonic() + LIMIT
+        while not found():
+            if time.monotonic() > deadline or launched.poll() is not None:
+                launched.kill()
+                raise AssertionError(f"not seen: {what}\n{''.join(lines)}")
+            time.sleep(0.05)
+
+    return lines, reader, until
+
+
 def _finish(process: subprocess.Popen[str]) -> tuple[int, str, str]:
     try:
         out, err = process.communicate(timeout=LIMIT)
@@ -397,18 +419,7 @@ def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
     launched = _launch(
         "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--respawn", "--trace", str(trace)
     )  # fmt: skip
-    assert launched.stdout is not None
-    lines: list[str] = []
-    reader = threading.Thread(target=lambda: lines.extend(launched.stdout), daemon=True)  # type: ignore[arg-type]
-    reader.start()
-
-    def until(what: str, found: Callable[[], bool]) -> None:
-        deadline = time.monotonic() + LIMIT
-        while not found():
-            if time.monotonic() > deadline or launched.poll() is not None:
-                launched.kill()
-                raise AssertionError(f"not seen: {what}\n{''.join(lines)}")
-            time.sleep(0.05)
+    lines, reader, until = _follow(launched)
 
     try:
         until("Emil sees Pippi", lambda: "Emil: robot Pippi seen" in "".join(lines))
@@ -500,18 +511,7 @@ def test_behind_a_router_each_robot_holds_one_connection_and_outlives_the_router
     launched = _launch(
         "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--respawn", "--trace", str(trace)
     )  # fmt: skip
-    assert launched.stdout is not None
-    lines: list[str] = []
-    reader = threading.Thread(target=lambda: lines.extend(launched.stdout), daemon=True)  # type: ignore[arg-type]
-    reader.start()
-
-    def until(what: str, found: Callable[[], bool]) -> None:
-        deadline = time.monotonic() + LIMIT
-        while not found():
-            if time.monotonic() > deadline or launched.poll() is not None:
-                launched.kill()
-                raise AssertionError(f"not seen: {what}\n{''.join(lines)}")
-            time.sleep(0.05)
+    lines, reader, until = _follow(launched)
 
     def served_after(t: float) -> bool:
         return any(
