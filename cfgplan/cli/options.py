@@ -28,12 +28,12 @@ from cfgplan.notation import call_text
 from cfgplan.option_values import choice, number, whole
 from cfgplan.planner import plan
 from cfgplan.problem import GOAL_SOURCE, Problem, load
-from cfgplan.runtime.options import Option
 from cfgplan.syntax.reader import collection_paused
 
 if TYPE_CHECKING:
     from cfgplan.planner.report import Report
     from cfgplan.runtime.faults import Injection
+    from cfgplan.runtime.options import Option
 
 YOUNG = 50_000
 """New objects between two young collections of the cycle collector in a
