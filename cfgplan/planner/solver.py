@@ -1,0 +1,259 @@
+"""The cheapest configuration's cost, bracketed by an answer-set solver (thesis 4.5).
+
+The planner of 4.5 expands every *occurrence* of a method instance on its own,
+so an exact model of it needs a copy of an instance per occurrence (Fibonacci-many
+on a hierarchy whose levels share their children). Two models over the graph of
+ground instances (:mod:`cfgplan.planner.graph`), one copy per instance, bracket it
+instead (``configure.lp`` beside this module holds both):
+
+- **one expansion per instance** (``exact``): every occurrence of an instance is
+  expanded the same way, and no instance lies below itself. Each of its models is
+  a derivation of 4.5, so its optimum is an *upper* bound, and its optimal model a
+  configuration the depth-first planner also derives;
+- **the relaxation** (``relaxed``): an instance may be expanded several ways, and
+  a channel needs only one of the ways its ends can be re-wired. Every
+  derivation of 4.5 is one of its models, so its optimum is a *lower* bound.
+
+Where the two meet, that is the cost of the cheapest configuration
+(:attr:`Bracket.exact`), proven without enumerating derivations; where they do
+not, the cheapest lies between them. Costs are counted in the unit every weight
+and ``:cost`` is a multiple of (:mod:`cfgplan.planner.levels`); a task whose
+costs have no unit (a reliability weight adds logarithms) has no bracket.
+
+The facts written for the solver (what ``configure.lp`` reads):
+
+- ``goal(G)``; ``method(M)``; ``opt(M,O)``, O the expansion's number among the
+  method's choices (:attr:`cfgplan.planner.graph.Option.choice`);
+  ``body(M,O,I,Y)``: body item I is instance Y;
+- ``spec(M,O,S,K,Ra,Rb,Is,It,D,B)``: the option's channel S, of kind K
+  (``local``/``global``, an ``any`` channel resolved), declared on robots Ra, Rb,
+  from item Is to item It, with data D and bandwidth B (-1: none);
+- ``outp(M,O,D,I,B)``, ``inp(M,O,D,I)``: the option's ``:out`` and ``:in`` entries;
+- ``func(F)``; ``fbind(F,B)``, B the binding's number (state order);
+  ``fout(F,B,D)``, ``fin(F,B,D)``; ``robot(F,R)``, F's first argument; ``fcost(F,C)``;
+- ``agentw(R,W)``, ``chw(K,W)``, ``medium(N,Ra,Rb,Cap)`` and ``media`` when the
+  state declares media (4.6).
+
+Instances, data and robots are written as numbers (the order they are met in),
+costs in units, bandwidths in the unit of the bandwidths and capacities.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from importlib import resources
+
+from cfgplan.planner.graph import Graph, graph_of
+from cfgplan.planner.ground import Grounder
+from cfgplan.planner.levels import unit_of
+from cfgplan.planner.task import Ground, Task
+
+Choices = Mapping[Ground, int]
+"""Per method instance the number of its expansion (:attr:`Option.choice`), per
+functionality instance the number of its binding."""
+
+
+@dataclass(frozen=True, slots=True)
+class Model:
+    """The cheapest answer a solver run found: its cost and what it chose."""
+
+    cost: float
+    choices: Choices
+
+
+@dataclass(frozen=True, slots=True)
+class Bracket:
+    """Where the cheapest configuration's cost lies: ``lower`` <= it <= ``upper``.
+
+    ``lower`` is what the relaxation proved (its optimum, or the bound it reached
+    within the time given); math.inf when it has no model: nothing is
+    admissible. ``upper`` is the cheapest one-expansion-per-instance answer
+    found, a configuration of that cost (None: none found)."""
+
+    lower: float
+    upper: Model | None
+
+    @property
+    def exact(self) -> bool:
+        """Whether the bracket is closed: the cheapest cost is known (and is
+        ``upper.cost``), or it is known that nothing is admissible."""
+        if self.upper is None:
+            return self.lower == math.inf
+        return self.upper.cost <= self.lower
+
+
+class Unsupported(Exception):
+    """The task has no unit its costs (or bandwidths) are multiples of."""
+
+
+@dataclass
+class _Facts:
+    """The facts of one task and goal, and the names behind their numbers."""
+
+    lines: list[str]
+    calls: dict[Ground, int]
+    names: dict[int, Ground]
+    methods: set[int]
+
+
+def _units(values: list[float], unit: Fraction) -> list[int]:
+    out = []
+    for v in values:
+        q = Fraction(repr(float(v))) / unit
+        if q.denominator != 1:
+            raise Unsupported(f"{v} is not a whole multiple of {unit}")
+        out.append(int(q))
+    return out
+
+
+def _facts(task: Task, graph: Graph, goal: Ground) -> _Facts:
+    """The facts of ``goal``'s instances, walked from the goal over the graph."""
+    cost_unit = task.levels.unit
+    if cost_unit is None:
+        raise Unsupported("costs have no unit (a reliability weight adds logarithms)")
+    capacities = [m.capacity for m in task.media]
+    calls: dict[Ground, int] = {}
+    data: dict[Ground, int] = {}
+    agents: dict[str, int] = {}
+    lines: list[str] = []
+    methods: set[int] = set()
+    widthed: list[tuple[str, str, float | None]] = []  # facts waiting for the bandwidth unit
+
+    def number(call: Ground) -> int:
+        found = calls.get(call)
+        if found is None:
+            found = calls[call] = len(calls)
+            todo.append(call)
+        return found
+
+    def datum(d: Ground) -> int:
+        return data.setdefault(d, len(data))
+
+    def agent(a: str) -> int:
+        return agents.setdefault(a, len(agents))
+
+    todo: list[Ground] = []
+    lines.append(f"goal({number(goal)}).")
+    while todo:
+        call = todo.pop()
+        n = calls[call]
+        instance = graph.instance(call)
+        if instance.functionality:
+            schema = task.functionality(call)
+            assert schema is not None
+            lines.append(f"func({n}). robot({n},{agent(call[1])}).")
+            (cost,) = _units([task.functionality_cost(schema, call)], cost_unit)
+            lines.append(f"fcost({n},{cost}).")
+            for b, inst in enumerate(graph.grounder.instances(schema, call)):
+                ins, outs = inst.io
+                lines.append(f"fbind({n},{b}).")
+                lines.extend(f"fin({n},{b},{datum(d)})." for d in dict.fromkeys(ins))
+                lines.extend(f"fout({n},{b},{datum(d)})." for d in dict.fromkeys(outs))
+            continue
+        methods.add(n)
+        lines.append(f"method({n}).")
+        for option in instance.options:
+            o, e = option.choice, option.expansion
+            lines.append(f"opt({n},{o}).")
+            lines.extend(f"body({n},{o},{i},{number(y)})." for i, y in enumerate(e.body))
+            for s, (kind, robots, src, dst, d, bw) in enumerate(e.channels):
+                ra, rb = agent(robots[0]), agent(robots[-1])
+                args = f"{n},{o},{s},{kind},{ra},{rb},{src},{dst},{datum(d)}"
+                widthed.append(("spec", args, bw))
+            for d, (i, port) in e.outputs.items():
+                widthed.append(("outp", f"{n},{o},{datum(d)},{i}", port))
+            for d, offsets in e.inputs.items():
+                lines.extend(f"inp({n},{o},{datum(d)},{i})." for i in offsets)
+    bandwidths = [w for _, _, w in widthed if w is not None]
+    width_unit = unit_of([*bandwidths, *capacities]) if task.media else Fraction(1)
+    if width_unit is None:
+        raise Unsupported("bandwidths have no unit")
+    for predicate, args, width in widthed:
+        # Bandwidths matter only where the state declares media (4.6).
+        units = -1 if width is None or not task.media else _units([width], width_unit)[0]
+        lines.append(f"{predicate}({args},{units}).")
+    w = task.weights
+    g, loc = _units([w.global_, w.local], cost_unit)
+    lines.append(f"chw(global,{g}). chw(local,{loc}).")
+    for a, k in agents.items():
+        (aw,) = _units([task.agent_cost(a)], cost_unit)
+        lines.append(f"agentw({k},{aw}).")
+    if task.media:
+        lines.append("media.")
+        for i, m in enumerate(task.media):
+            if m.sender in agents and m.receiver in agents:
+                cap = _units([m.capacity], width_unit)[0]
+                lines.append(f"medium({i},{agents[m.sender]},{agents[m.receiver]},{cap}).")
+    return _Facts(lines, calls, {v: k for k, v in calls.items()}, methods)
+
+
+@dataclass(frozen=True, slots=True)
+class _Run:
+    """What one solver run found: its cheapest model (None: none), the bound it
+    proved (math.inf: no model at all), and whether it ended (the bound is then
+    the optimum, or the program has no model)."""
+
+    best: Model | None
+    bound: float
+    ended: bool
+
+
+def _optimum(facts: _Facts, program: str, unit: Fraction, seconds: float | None) -> _Run:
+    """Optimise ``program`` (``exact`` or ``relaxed``) over ``facts`` for at most
+    ``seconds`` (None: to the end). Core-guided optimisation (clasp's ``usc``)
+    proves lower bounds as it goes: on shapes with long plateaus of equal cost
+    it ends where branch and bound does not."""
+    import clingo  # imported here: only a run that brackets needs the solver
+
+    control = clingo.Control(["--opt-mode=opt", "--opt-strategy=usc", "--warn=none"])
+    control.add("base", [], resources.files(__package__).joinpath("configure.lp").read_text())
+    control.add("base", [], "\n".join(facts.lines))
+    control.ground([("base", []), (program, [])])
+    found: list[tuple[int, Sequence[clingo.Symbol]]] = []
+
+    def keep(model: clingo.Model) -> None:
+        found.append((sum(model.cost), model.symbols(atoms=True)))
+
+    with control.solve(on_model=keep, async_=True) as handle:
+        ended = handle.wait(seconds) if seconds is not None else handle.wait()
+        if not ended:
+            handle.cancel()
+        result = handle.get()
+    summary = control.statistics["summary"]
+    if result.unsatisfiable:
+        return _Run(None, math.inf, True)
+    bound = float(sum(summary["lower"])) if not found or not result.exhausted else found[-1][0]
+    best = None
+    if found:
+        cost, symbols = found[-1]
+        choices: dict[Ground, int] = {}
+        for symbol in symbols:
+            if symbol.name in ("use", "bind") and len(symbol.arguments) == 2:
+                instance, choice = (a.number for a in symbol.arguments)
+                choices.setdefault(facts.names[instance], choice)
+        best = Model(float(cost * unit), choices)
+    return _Run(best, float(max(0.0, bound) * unit), bool(result.exhausted))
+
+
+def bracket(grounder: Grounder, goal: Ground, seconds: float | None = None) -> Bracket:
+    """The two optima of ``goal`` (see the module's docstring), each solver run
+    given at most half of ``seconds`` (and the second what the first left);
+    None: no limit. Raises :class:`Unsupported` when costs or bandwidths have no
+    unit."""
+    task = grounder.task
+    unit = task.levels.unit
+    if unit is None:
+        raise Unsupported("costs have no unit (a reliability weight adds logarithms)")
+    started = time.monotonic()
+    facts = _facts(task, graph_of(grounder), goal)
+    half = None if seconds is None else max(0.0, seconds - (time.monotonic() - started)) / 2
+    relaxed = _optimum(facts, "relaxed", unit, half)
+    if relaxed.bound == math.inf:
+        return Bracket(math.inf, None)
+    rest = None if seconds is None else max(0.0, seconds - (time.monotonic() - started))
+    exact = _optimum(facts, "exact", unit, rest)
+    return Bracket(relaxed.bound, exact.best)
