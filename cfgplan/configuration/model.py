@@ -6,8 +6,6 @@ newest functionality first; each method's channels ahead of older ones), which
 the backends of chapter 5 rely on.
 """
 
-from __future__ import annotations
-
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field

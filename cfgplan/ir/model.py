@@ -8,8 +8,6 @@ Terms are plain strings: a variable starts with ``?`` (``?r``), anything else
 is a constant (``Pippi``, ``Door1``, ``200``). Symbols are case-sensitive.
 """
 
-from __future__ import annotations
-
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
