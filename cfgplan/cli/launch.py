@@ -285,12 +285,13 @@ def launch(
     each linked to every other, the coordinator first), on loopback with scouting off;
     each line of output prefixed with its robot.
 
-    Give --impl IMPL and any other option of cfgplan run (cfgplan run --help) after
-    launch's own: run parses them, and a mistake in one is a usage error before any
-    robot starts. Each goes unchanged to every robot, except that --cycles, --duration,
+    Give --impl IMPL and any other option of cfgplan run (cfgplan run --help) with
+    launch's own: run's command reads them, and a mistake in one is a usage error
+    before any robot starts. Each goes unchanged to every robot, except that --cycles, --duration,
     --live and --foxglove go to the coordinator, each --inject to the robot it aims at
     (a change of facts to the coordinator), --trace FILE and --record FILE to every
-    robot as FILE-NAME; launch sets --robot, --listen, --connect and --router itself.
+    robot as FILE-NAME. Launch adds each robot's --robot and its endpoints (--listen and
+    --connect, or --router); --listen and --transport are its own business.
 
     Ctrl-C or SIGTERM stops every robot (SIGTERM, at most 10 s, then SIGKILL). When the
     coordinator ends (--cycles, --duration, the task done), the others are stopped.
