@@ -7,15 +7,19 @@ launch starts first (``--topology router``; ``--router`` names one that runs
 already), or, in a mesh (``--topology mesh``, the default with ``--keys`` or
 ``--connect``), each linked to every other, the coordinator (the goal's
 robot, 5.5) first, on free loopback ports. Their output is one stream, each
-line prefixed with its robot. The logic is :mod:`cfgplan.runtime.spawn`; this module reads the
-command line and writes each robot's command. ``--print-commands`` writes,
-instead, the command each host runs (``--host NAME=ADDRESS``).
+line prefixed with its robot. The logic is :mod:`cfgplan.runtime.spawn`; this
+module reads the command line and writes each robot's command. Launch declares
+only its own options; those of ``cfgplan run`` are parsed by run's own command
+(:class:`LaunchCommand`) and passed on as written. ``--print-commands``
+writes, instead, the command each host runs (``--host NAME=ADDRESS``).
 """
 
 from __future__ import annotations
 
+import difflib
 import sys
 import tempfile
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -26,46 +30,20 @@ from cfgplan.cli import registry
 from cfgplan.cli.app import usage_error
 from cfgplan.cli.options import (
     DomainArg,
-    GoalsOpt,
-    RankOpt,
     StateArg,
     choice_of,
     choose,
     injections,
     load_problem,
-    number_of,
     option,
     parsed,
 )
+from cfgplan.cli.root import Command, click_command
+from cfgplan.cli.run import refuse_combinations
 from cfgplan.cli.sequence import first_step
-from cfgplan.configuration.cost import parse_weights
 from cfgplan.diagnostics import did_you_mean, run_error
-from cfgplan.live.address import parse_address
 from cfgplan.runtime.errors import RunError
-from cfgplan.runtime.options import (
-    BUDGET,
-    CYCLES,
-    DURATION,
-    FORCE,
-    IMPL,
-    INJECT,
-    KEYS,
-    LEASE,
-    MAX_VALUE_BYTES,
-    RATE,
-    RATE_ALLOWANCE,
-    RECORD,
-    RECORD_MAX_BYTES,
-    RESPAWN,
-    SOCIETY,
-    STALE_PERIODS,
-    TRACE,
-    TRACE_MAX_BYTES,
-    VERBOSE,
-    WITHOUT_COORDINATOR,
-    ZENOH_CONFIG,
-    endpoint,
-)
+from cfgplan.runtime.options import RESPAWN, endpoint
 from cfgplan.runtime.spawn import (
     Launch,
     RobotCommand,
@@ -92,16 +70,6 @@ DEFAULT_PORT = 7447
 """Zenoh's port: each robot's with --print-commands, the next for a second robot on a host."""
 
 
-def _weights(text: str) -> str:
-    parse_weights(text)  # its error, said as --weights's
-    return text
-
-
-def _address(text: str) -> str:
-    parse_address(text)  # its error, said as the option's
-    return text
-
-
 def _host(text: str) -> tuple[str, str]:
     name, sep, address = text.partition("=")
     if not sep or not name or not address:
@@ -119,19 +87,135 @@ def trace_of(path: str, robot: str) -> str:
     return str(p.with_name(f"{p.stem}-{name}{p.suffix}"))
 
 
-@registry.command(short_help="Start a whole society here, one process per robot (5.2.2).")
+COORDINATOR_ONLY = ("--cycles", "--duration", "--live", "--foxglove")
+"""The options of cfgplan run that go to the coordinator alone: its end ends the
+run, its page and its Foxglove server show the society."""
+ITS_OWN_FILE = ("--trace", "--record")
+"""The options of cfgplan run that give each robot its own file (:func:`trace_of`)."""
+SET_BY_LAUNCH = {
+    "--listen": "launch gives each robot its endpoints (see --topology, --port, --router)",
+    "--transport": "each robot runs in a process of its own, over Zenoh",
+}
+"""The options of cfgplan run that launch sets for each robot itself."""
+
+
+@dataclass(frozen=True)
+class Given:
+    """One option of ``cfgplan run`` as written on launch's command line: its
+    flag and its words (``--trace run.jsonl``, or ``--trace=run.jsonl``)."""
+
+    flag: str
+    words: tuple[str, ...]
+
+    @property
+    def value(self) -> str:
+        """The value it was given (a flag's: empty)."""
+        _, sep, attached = self.words[0].partition("=")
+        return attached if sep else " ".join(self.words[1:])
+
+
+@dataclass(frozen=True)
+class RunLine:
+    """The options of cfgplan run given to launch, in their order, and what
+    run's own command made of them (its parameters, by name)."""
+
+    given: tuple[Given, ...]
+    params: Mapping[str, Any]
+
+
+RUN_LINE = "cfgplan.launch.run"
+"""Where :class:`LaunchCommand` leaves the :class:`RunLine` in the context's ``meta``."""
+
+
+def split(
+    args: list[str], own: Sequence[Any], run: Sequence[Any], strict: bool = True
+) -> tuple[list[str], list[Given], list[str]]:
+    """``args`` parted into launch's own words (its arguments and options, of
+    the click parameters ``own``), the options of cfgplan run (of ``run``),
+    each with its value, in their order, and, with ``strict``, the options of
+    neither; an option of both is launch's."""
+    takes: dict[str, tuple[bool, bool]] = {}  # flag -> (launch's, takes a value)
+    for params, mine in ((run, False), (own, True)):
+        for p in params:
+            if p.param_type_name == "option":
+                for flag in (*p.opts, *p.secondary_opts):
+                    takes[flag] = (mine, not (p.is_flag or p.count))
+    words: list[str] = []
+    given: list[Given] = []
+    unknown: list[str] = []
+    i = 0
+    while i < len(args):
+        word = args[i]
+        flag = word.partition("=")[0]
+        if word == "--":
+            words += args[i:]
+            break
+        if not word.startswith("-") or word == "-" or (flag not in takes and not strict):
+            words.append(word)
+            i += 1
+            continue
+        if flag not in takes:
+            unknown.append(word)
+            i += 1
+            continue
+        mine, value = takes[flag]
+        n = 2 if value and "=" not in word else 1
+        if mine:
+            words += args[i : i + n]
+        else:
+            given.append(Given(flag, tuple(args[i : i + n])))
+        i += n
+    return words, given, unknown
+
+
+def _closeness(flag: str, params: Sequence[Any]) -> float:
+    """How close ``flag`` is to the nearest option of ``params`` (1: the same)."""
+    flags = [f for p in params for f in (*p.opts, *p.secondary_opts) if f.startswith("--")]
+    return max((difflib.SequenceMatcher(None, flag, f).ratio() for f in flags), default=0.0)
+
+
+class LaunchCommand(Command):
+    """launch's command line: its own arguments and options, and any option
+    of ``cfgplan run``, which goes on to the robots. Run's own command parses
+    those, with its own checks and messages, before anything starts: run
+    stays the only parser of its options."""
+
+    def collect_usage_pieces(self, ctx: Any) -> list[str]:
+        return [*super().collect_usage_pieces(ctx), "--impl IMPL", "[RUN OPTIONS]..."]
+
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
+        run = click_command("run")
+        strict = not ctx.resilient_parsing
+        words, given, unknown = split(args, self.get_params(ctx), run.params, strict)
+        try:
+            if unknown:  # "No such option", said by the parser with the closest option
+                flag = unknown[0].partition("=")[0]
+                if _closeness(flag, self.get_params(ctx)) > _closeness(flag, run.params):
+                    super().parse_args(ctx, unknown[:1])
+                run.make_context("run", unknown[:1])
+            for g in given:
+                if g.flag in SET_BY_LAUNCH and strict:
+                    raise typer.BadParameter(SET_BY_LAUNCH[g.flag], param_hint=f"'{g.flag}'")
+            rest: list[str] = super().parse_args(ctx, words)
+            if not strict:
+                return rest
+            line = [str(ctx.params["domain"]), str(ctx.params["state"])]
+            parsed_by_run = run.make_context("run", line + [w for g in given for w in g.words])
+        except Exception as exc:  # click's usage errors (typer keeps their classes to itself)
+            if hasattr(exc, "ctx"):
+                exc.ctx = ctx  # run's message under launch's usage line
+            raise
+        ctx.meta[RUN_LINE] = RunLine(tuple(given), parsed_by_run.params)
+        return rest
+
+
+@registry.command(
+    short_help="Start a whole society here, one process per robot (5.2.2).", cls=LaunchCommand
+)
 def launch(
+    ctx: typer.Context,
     domain: DomainArg,
     state: StateArg,
-    impl: Annotated[str, option(IMPL)],
-    goal: GoalsOpt = None,
-    rank: RankOpt = 1,
-    weights: Annotated[
-        str | None,
-        typer.Option(
-            "--weights", metavar="NAME=W,...", parser=parsed(_weights), help="As cfgplan run's."
-        ),
-    ] = None,
     only: Annotated[
         list[str] | None,
         typer.Option(
@@ -170,7 +254,6 @@ def launch(
             help="With --print-commands: the address robot NAME's host is reached at (repeatable).",
         ),
     ] = None,
-    society_name: Annotated[str, option(SOCIETY)] = SOCIETY.default,
     topology: Annotated[
         str | None,
         typer.Option(
@@ -195,86 +278,6 @@ def launch(
             show_default=False,
         ),
     ] = None,
-    connect: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--connect",
-            metavar="ENDPOINT",
-            parser=parsed(endpoint),
-            help="Also connect every robot to ENDPOINT, e.g. an rmw_zenohd router at "
-            "tcp/localhost:7447 (repeatable).",
-        ),
-    ] = None,
-    zenoh_config: Annotated[Path | None, option(ZENOH_CONFIG)] = None,
-    lease: Annotated[float | None, option(LEASE)] = LEASE.default,
-    keys: Annotated[Path | None, option(KEYS)] = None,
-    rate: Annotated[float, option(RATE)] = RATE.default,
-    rate_allowance: Annotated[float, option(RATE_ALLOWANCE)] = RATE_ALLOWANCE.default,
-    cycles: Annotated[int, option(CYCLES)] = CYCLES.default,
-    duration: Annotated[float | None, option(DURATION)] = DURATION.default,
-    stale_periods: Annotated[float, option(STALE_PERIODS)] = STALE_PERIODS.default,
-    budget: Annotated[float, option(BUDGET)] = BUDGET.default,
-    max_value_bytes: Annotated[int, option(MAX_VALUE_BYTES)] = MAX_VALUE_BYTES.default,
-    trace: Annotated[Path | None, option(TRACE)] = None,
-    trace_max_bytes: Annotated[int, option(TRACE_MAX_BYTES)] = TRACE_MAX_BYTES.default,
-    record: Annotated[Path | None, option(RECORD)] = None,
-    record_max_bytes: Annotated[int, option(RECORD_MAX_BYTES)] = RECORD_MAX_BYTES.default,
-    live: Annotated[
-        str | None,
-        typer.Option(
-            "--live",
-            metavar="[HOST:]PORT",
-            parser=parsed(_address),
-            help="The coordinator's live page, as cfgplan run's (port 0: any free one, its URL "
-            "printed).",
-            show_default=False,
-        ),
-    ] = None,
-    foxglove: Annotated[
-        str | None,
-        typer.Option(
-            "--foxglove",
-            metavar="[HOST:]PORT",
-            parser=parsed(_address),
-            help="The coordinator served to Foxglove live, as cfgplan run's.",
-            show_default=False,
-        ),
-    ] = None,
-    force: Annotated[bool, option(FORCE)] = FORCE.default,
-    verbose: Annotated[bool, option(VERBOSE)] = VERBOSE.default,
-    inject: Annotated[list[str] | None, option(INJECT)] = None,
-    ros2: Annotated[
-        bool, typer.Option("--ros2", help="Every robot a ROS 2 node (as cfgplan run --ros2).")
-    ] = False,
-    ros2_map: Annotated[
-        Path | None,
-        typer.Option("--ros2-map", metavar="FILE", help="As cfgplan run's: given to every robot."),
-    ] = None,
-    ros_domain_id: Annotated[
-        int | None,
-        typer.Option(
-            "--ros-domain-id",
-            metavar="N",
-            min=0,
-            max=232,
-            help="As cfgplan run's.",
-            show_default=False,
-        ),
-    ] = None,
-    reconfigure: Annotated[
-        bool, typer.Option("--reconfigure/--no-reconfigure", help="As cfgplan run's.")
-    ] = True,
-    hold: Annotated[
-        float | None,
-        typer.Option(
-            "--hold", metavar="S", parser=number_of(0, above=True), help="As cfgplan run's."
-        ),
-    ] = None,
-    margin: Annotated[
-        float | None,
-        typer.Option("--margin", metavar="F", parser=number_of(0), help="As cfgplan run's."),
-    ] = None,
-    without_coordinator: Annotated[str, option(WITHOUT_COORDINATOR)] = WITHOUT_COORDINATOR.default,
     respawn: Annotated[bool, option(RESPAWN)] = RESPAWN.default,
 ) -> None:
     """Start a whole society on this machine: every robot its own cfgplan run --robot
@@ -282,41 +285,45 @@ def launch(
     each linked to every other, the coordinator first), on loopback with scouting off;
     each line of output prefixed with its robot.
 
+    Give --impl IMPL and any other option of cfgplan run (cfgplan run --help) with
+    launch's own: run's command reads them, and a mistake in one is a usage error
+    before any robot starts. Each goes unchanged to every robot, except that --cycles, --duration,
+    --live and --foxglove go to the coordinator, each --inject to the robot it aims at
+    (a change of facts to the coordinator), --trace FILE and --record FILE to every
+    robot as FILE-NAME. Launch adds each robot's --robot and its endpoints (--listen and
+    --connect, or --router); --listen and --transport are its own business.
+
     Ctrl-C or SIGTERM stops every robot (SIGTERM, at most 10 s, then SIGKILL). When the
     coordinator ends (--cycles, --duration, the task done), the others are stopped.
-    --cycles, --duration, --live and --foxglove go to the coordinator, each --inject to
-    the robot it aims at (a change of facts to the coordinator), --trace FILE and
-    --record FILE to every robot as FILE-NAME.
     --print-commands starts nothing and prints the command of each robot's host
     instead (--host NAME=ADDRESS for each). Exit codes: the coordinator's (0 ran, 3 no
     configuration left), 1 invalid input or a robot that could not start or run its
     part, 2 usage.
     """
-    if ros2 and keys is not None:
-        usage_error("cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2")
-    if ros2_map is not None and keys is not None:
-        usage_error(
-            "cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2-map"
-        )
-    if ros_domain_id is not None and not (ros2 or ros2_map):
-        usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
+    line: RunLine = ctx.meta[RUN_LINE]
+    run_opts = line.params  # as run's command read them
+    refuse_combinations(
+        "zenoh",
+        keys=run_opts["keys"],
+        ros2=run_opts["ros2"],
+        ros2_map=run_opts["ros2_map"],
+        ros_domain_id=run_opts["ros_domain_id"],
+        ros2_via=run_opts["ros2_via"],
+        use_sim_time=run_opts["use_sim_time"],
+    )
     if hosts and not print_commands:
         usage_error("names the hosts of --print-commands: give --print-commands", "--host")
-    mesh = _mesh(topology, router, keys, connect)
+    mesh = _mesh(topology, router, run_opts["keys"], run_opts["connect"])
     addresses = dict(_parse_hosts(hosts or ()))
     problem = load_problem(
-        domain,
-        state,
-        goal,
-        None if weights is None else parse_weights(weights),
-        sequence=True,
-        lasting=True,
+        domain, state, run_opts["goal"], run_opts["weights"], sequence=True, lasting=True
     )
+    rank = run_opts["rank"]
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     from cfgplan.reconfigure.local import coordinator_of
 
     lead = coordinator_of(problem.goal_call, config)
-    known = list(problem.task.agents) if reconfigure else list(config.agents)
+    known = list(problem.task.agents) if run_opts["reconfigure"] else list(config.agents)
     for name in [*(only or ()), *addresses]:
         if name not in problem.task.agents:
             raise run_error(
@@ -329,57 +336,40 @@ def launch(
             raise run_error(
                 RunError(f"{name} has no part in this configuration (--no-reconfigure)")
             )
-    if ros2_map is not None:  # its mistakes said once, before any robot starts
+    if run_opts["ros2_map"] is not None:  # its mistakes said once, before any robot starts
         from cfgplan.ros2.topics import load_map
 
         try:
-            load_map(ros2_map, problem.domain, problem.task.agents)
+            load_map(run_opts["ros2_map"], problem.domain, problem.task.agents)
         except RunError as exc:
             raise run_error(exc) from None
     robots = [lead, *(r for r in known if r != lead)]
     if only:
         robots = [r for r in robots if r in only]
-    common = ["run", str(domain), str(state), "--impl", impl]
-    for g in goal or ():
-        common += ["--goal", g]
-    common += _flags(
-        rank=(rank, 1), weights=(weights, None), society=(society_name, SOCIETY.default),
-        lease=(lease, None), keys=(keys, None), rate=(rate, RATE.default),
-        rate_allowance=(rate_allowance, RATE_ALLOWANCE.default),
-        record_max_bytes=(record_max_bytes, RECORD_MAX_BYTES.default),
-        stale_periods=(stale_periods, STALE_PERIODS.default), budget=(budget, BUDGET.default),
-        max_value_bytes=(max_value_bytes, MAX_VALUE_BYTES.default),
-        trace_max_bytes=(trace_max_bytes, TRACE_MAX_BYTES.default), hold=(hold, None),
-        margin=(margin, None), ros_domain_id=(ros_domain_id, None), ros2_map=(ros2_map, None),
-        without_coordinator=(without_coordinator, WITHOUT_COORDINATOR.default),
-    )  # fmt: skip
-    for e in connect or ():
-        common += ["--connect", e]
-    common += [f for f, on in (("--force", force), ("--verbose", verbose), ("--ros2", ros2)) if on]
-    if not reconfigure:
-        common.append("--no-reconfigure")
+    common = ["run", str(domain), str(state)]
     extra: dict[str, list[str]] = {r: [] for r in robots}
-    led = _flags(
-        cycles=(cycles, 0), duration=(duration, None), live=(live, None), foxglove=(foxglove, None)
-    )
-    if led and lead not in extra:
-        usage_error(f"goes to the coordinator, {lead}, which --robot leaves out", led[0])
-    if led:
-        extra[lead] += led
-    for text, injection in zip(inject or (), injections(inject, problem), strict=True):
-        target = injection.robot or lead  # a state update: the coordinator plans
-        if target not in extra:
-            usage_error(f"aims at {target}, which --robot leaves out", "--inject")
-        extra[target] += ["--inject", text]
-    for flag, path in (("--trace", trace), ("--record", record)):
-        if path is not None:
+    aimed = iter(injections(run_opts["inject"], problem))
+    for one in line.given:
+        if one.flag in COORDINATOR_ONLY:
+            if lead not in extra:
+                usage_error(f"goes to the coordinator, {lead}, which --robot leaves out", one.flag)
+            extra[lead] += one.words
+        elif one.flag == "--inject":
+            target = next(aimed).robot or lead  # a state update: the coordinator plans
+            if target not in extra:
+                usage_error(f"aims at {target}, which --robot leaves out", "--inject")
+            extra[target] += one.words
+        elif one.flag in ITS_OWN_FILE:
             for r in robots:
-                extra[r] += [flag, trace_of(str(path), r)]
-    via = None if mesh else Via(router, lease)
+                extra[r] += [one.flag, trace_of(one.value, r)]
+        else:
+            common += one.words
+    via = None if mesh else Via(router, run_opts["lease"])
     if print_commands:
-        _print_commands(robots, lead, common, extra, addresses, port, zenoh_config, via)
+        _print_commands(robots, lead, common, extra, addresses, port, via)
         return
-    _launch(robots, lead, common, extra, port, zenoh_config, SpawnOptions(respawn=respawn), via)
+    config_file = run_opts["zenoh_config"]
+    _launch(robots, lead, common, extra, port, config_file, SpawnOptions(respawn=respawn), via)
 
 
 @dataclass(frozen=True)
@@ -430,18 +420,6 @@ def _parse_hosts(texts: list[str] | tuple[str, ...]) -> list[tuple[str, str]]:
         usage_error(str(exc), "--host")
 
 
-def _flags(**given: tuple[Any, Any]) -> list[str]:
-    """``--name value`` for each option given a value other than its default."""
-    out: list[str] = []
-    for name, (value, default) in given.items():
-        if value is not None and value != default:
-            text = str(value)  # a float exactly as given (repr), without a trailing .0
-            if isinstance(value, float) and text.endswith(".0"):
-                text = text[:-2]
-            out += [f"--{name.replace('_', '-')}", text]
-    return out
-
-
 def _print_commands(
     robots: list[str],
     lead: str,
@@ -449,7 +427,6 @@ def _print_commands(
     extra: dict[str, list[str]],
     addresses: dict[str, str],
     port: int | None,
-    zenoh_config: Path | None,
     via: Via | None,
 ) -> None:
     missing = [r for r in robots if r not in addresses]
@@ -459,8 +436,6 @@ def _print_commands(
     base = port or DEFAULT_PORT
     for r in robots:  # a second robot on a host takes the next port
         ports[r] = base + sum(1 for o in ports if addresses[o] == addresses[r])
-    if zenoh_config is not None:
-        common = [*common, "--zenoh-config", str(zenoh_config)]
     reach = None
     if via is not None:  # the router on the coordinator's host, unless one is named
         if via.given is None and lead not in addresses:
@@ -505,11 +480,10 @@ def _launch(
         started += [router] if router is not None else []
         reach = via.endpoint(host, at)
     with tempfile.TemporaryDirectory(prefix="cfgplan-launch-") as folder:
-        if zenoh_config is None:
+        if zenoh_config is None:  # else it is among the options of run given
             hermetic = Path(folder) / "zenoh-hermetic.json5"
             hermetic.write_text(HERMETIC, "utf-8")
-            zenoh_config = hermetic
-        common = [*common, "--zenoh-config", str(zenoh_config)]
+            common = [*common, "--zenoh-config", str(hermetic)]
         hosts = dict.fromkeys(robots, host)
         started += commands(robots, common, extra, hosts, ports, lead, reach)
         launched = Launch(started, options=options)

@@ -58,7 +58,7 @@ class Root(Group):
     def get_command(self, ctx: Any, cmd_name: str) -> Any:
         found = self.commands.get(cmd_name)
         if found is None and cmd_name in COMMANDS:
-            found = self.commands[cmd_name] = _click_command(cmd_name)
+            found = self.commands[cmd_name] = click_command(cmd_name)
         return found
 
     def resolve_command(self, ctx: Any, args: list[str]) -> Any:
@@ -70,7 +70,7 @@ class Root(Group):
         return super().resolve_command(ctx, args)
 
 
-def _click_command(name: str) -> Any:
+def click_command(name: str) -> Any:
     """The click command of ``name``: its function, marked with
     :func:`~cfgplan.cli.registry.command`, made a typer command; or its
     typer app of subcommands."""

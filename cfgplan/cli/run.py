@@ -251,25 +251,15 @@ def run(
     kind = transport or ("zenoh" if robot is not None else "inprocess")
     if robot is None and kind == "zenoh":
         usage_error("runs one robot per process: give --robot NAME", "--transport zenoh")
-    if keys is not None and kind != "zenoh":
-        usage_error("secures the network between robots: give --robot NAME", "--keys")
-    if ros2 and kind != "zenoh":
-        usage_error("publishes over the robot's Zenoh session: give --robot NAME", "--ros2")
-    if ros2 and keys is not None:  # mTLS and deny-by-default access control: no ROS node gets in
-        usage_error("cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2")
-    if ros2_map is not None and kind != "zenoh":
-        usage_error("binds topics on the robot's Zenoh session: give --robot NAME", "--ros2-map")
-    if ros2_map is not None and keys is not None:
-        usage_error(
-            "cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2-map"
-        )
-    if ros_domain_id is not None and not (ros2 or ros2_map):
-        usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
-    if ros2_via not in (None, "rclpy", "zenoh"):
-        usage_error(f"{ros2_via!r}: give rclpy or zenoh", "--ros2-via")
-    for flag, given in (("--ros2-via", ros2_via is not None), ("--use-sim-time", use_sim_time)):
-        if given and not (ros2 or ros2_map):
-            usage_error("says how --ros2 and --ros2-map speak ROS 2: give one of them", flag)
+    refuse_combinations(
+        kind,
+        keys=keys,
+        ros2=ros2,
+        ros2_map=ros2_map,
+        ros_domain_id=ros_domain_id,
+        ros2_via=ros2_via,
+        use_sim_time=use_sim_time,
+    )
     problem = load_problem(domain, state, goal, weights, sequence=True, lasting=True)
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
     parts = [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
@@ -427,3 +417,37 @@ def run(
         raise run_error(exc) from None
     if code:
         raise typer.Exit(code)
+
+
+def refuse_combinations(
+    kind: str,
+    *,
+    keys: Path | None,
+    ros2: bool,
+    ros2_map: Path | None,
+    ros_domain_id: int | None,
+    ros2_via: str | None,
+    use_sim_time: bool,
+) -> None:
+    """Refuse options that do not go together (exit 2); ``kind`` is the
+    transport. ``cfgplan launch`` asks the same of the options of run it passes
+    on (each robot runs over Zenoh), before any robot starts."""
+    if keys is not None and kind != "zenoh":
+        usage_error("secures the network between robots: give --robot NAME", "--keys")
+    if ros2 and kind != "zenoh":
+        usage_error("publishes over the robot's Zenoh session: give --robot NAME", "--ros2")
+    if ros2 and keys is not None:  # mTLS and deny-by-default access control: no ROS node gets in
+        usage_error("cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2")
+    if ros2_map is not None and kind != "zenoh":
+        usage_error("binds topics on the robot's Zenoh session: give --robot NAME", "--ros2-map")
+    if ros2_map is not None and keys is not None:
+        usage_error(
+            "cannot be combined with --keys yet (docs: Use cfgplan with ROS 2)", "--ros2-map"
+        )
+    if ros_domain_id is not None and not (ros2 or ros2_map):
+        usage_error("is the ROS domain of --ros2: give --ros2", "--ros-domain-id")
+    if ros2_via not in (None, "rclpy", "zenoh"):
+        usage_error(f"{ros2_via!r}: give rclpy or zenoh", "--ros2-via")
+    for flag, given in (("--ros2-via", ros2_via is not None), ("--use-sim-time", use_sim_time)):
+        if given and not (ros2 or ros2_map):
+            usage_error("says how --ros2 and --ros2-map speak ROS 2: give one of them", flag)

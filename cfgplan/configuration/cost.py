@@ -9,8 +9,8 @@ both default to 10, so the thesis's numbers do not change. And reliability
 reliable one between their robots); ``reliability=W`` adds ``W·(−ln
 reliability)`` to the cost (0 by default), that is ``W·(−ln p)`` for each part."""
 
-from __future__ import annotations
-
+# No ``from __future__ import annotations``: pydantic takes the models' annotations
+# as objects, with no string to evaluate for each field (start-up, docs/development.md).
 import math
 
 from pydantic import BaseModel, ConfigDict

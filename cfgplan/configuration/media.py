@@ -17,14 +17,13 @@ assignment whenever one exists without factorial work.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from cfgplan.configuration.cost import fmt
 from cfgplan.ir.model import Medium
 
 
-@dataclass(frozen=True)
-class Demand:
+class Demand(NamedTuple):
     """A global channel's need: from, to, bandwidth (0 when undeclared)."""
 
     sender: str
@@ -32,8 +31,7 @@ class Demand:
     bandwidth: float
 
 
-@dataclass(frozen=True)
-class MediaResult:
+class MediaResult(NamedTuple):
     """An assignment (channel index -> medium index), or why none exists."""
 
     assignment: dict[int, int] | None

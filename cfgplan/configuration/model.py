@@ -6,8 +6,8 @@ newest functionality first; each method's channels ahead of older ones), which
 the backends of chapter 5 rely on.
 """
 
-from __future__ import annotations
-
+# No ``from __future__ import annotations``: pydantic takes the models' annotations
+# as objects, with no string to evaluate for each field (start-up, docs/development.md).
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field

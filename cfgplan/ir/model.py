@@ -8,8 +8,8 @@ Terms are plain strings: a variable starts with ``?`` (``?r``), anything else
 is a constant (``Pippi``, ``Door1``, ``200``). Symbols are case-sensitive.
 """
 
-from __future__ import annotations
-
+# No ``from __future__ import annotations``: pydantic takes the models' annotations
+# as objects, with no string to evaluate for each field (start-up, docs/development.md).
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field

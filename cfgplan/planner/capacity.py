@@ -44,7 +44,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 from cfgplan.planner.prices import Counts, add, most
 from cfgplan.planner.room import Load, Room
@@ -61,8 +61,7 @@ STACKS = 64
 partitioned bound keeps their counts)."""
 
 
-@dataclass(frozen=True, slots=True)
-class Limit:
+class Limit(NamedTuple):
     """The carriers of one key on one pair: the least bandwidth one adds, and
     the groups each carrier instance may add (by instance number)."""
 
@@ -71,8 +70,7 @@ class Limit:
     groups: tuple[tuple[int, frozenset[int]], ...]
 
 
-@dataclass(frozen=True, slots=True)
-class Capped:
+class Capped(NamedTuple):
     """A key capped at one stack of pending items: its limits, and how many
     pending items are the functionality (or run on the agent) themselves."""
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
@@ -48,8 +49,7 @@ from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.task import Ground
 
 
-@dataclass(frozen=True, slots=True)
-class _Entry:
+class _Entry(NamedTuple):
     """One configuration of a part: what it adds to the forced steps' cost,
     and the choices below each of the part's items."""
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Container, Hashable, Mapping
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 from cfgplan.planner import clock
 from cfgplan.planner.ground import Grounder
@@ -48,8 +49,7 @@ Choices = Mapping[Address, tuple[int, ...]]
 """The choices a derivation makes below each choice item, in order."""
 
 
-@dataclass(frozen=True)
-class Parts:
+class Parts(NamedTuple):
     """The goal with its forced steps done, its choice items in parts."""
 
     node: Partial

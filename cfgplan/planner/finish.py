@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Container
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 from cfgplan.configuration.media import assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
@@ -172,8 +172,7 @@ class Finished(Protocol):
     def effects(self) -> Effects: ...
 
 
-@dataclass(frozen=True, slots=True)
-class Parts:
+class Parts(NamedTuple):
     """A complete node's parts a configuration is built from: smaller than
     the node (no stack, no indexes), to hold many until they are listed."""
 

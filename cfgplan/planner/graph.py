@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Container
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from cfgplan.planner.canonical import channel_number
 from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
@@ -36,8 +37,7 @@ from cfgplan.planner.task import Ground
 from cfgplan.planner.wiring import Channel
 
 
-@dataclass(frozen=True, slots=True)
-class Option:
+class Option(NamedTuple):
     """One expansion of a method, as the passes over the graph see it."""
 
     expansion: Expansion  # the grounder's, which it stands for (what the summaries read)
@@ -54,8 +54,7 @@ class Option:
         return self.expansion.body
 
 
-@dataclass(frozen=True, slots=True)
-class Instance:
+class Instance(NamedTuple):
     """A ground instance in the AND/OR graph: a functionality (no options, its
     weight) or a method with one option per feasible expansion."""
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner.match import Failure, bindings, exists
@@ -45,8 +46,7 @@ ChannelSpec = tuple[str, Ground, int, int, Ground, float | None]
 """(kind, robots, source offset, target offset, data, bandwidth)."""
 
 
-@dataclass(frozen=True, slots=True)
-class Expansion:
+class Expansion(NamedTuple):
     """A method version instantiated with one binding, labels as offsets from
     the first fresh label; the same for every node that expands it.
 
@@ -71,8 +71,7 @@ class Expansion:
     number: Numbering | None = None  # the numbering all of these come from
 
 
-@dataclass(frozen=True, slots=True)
-class FunctionalityInstance:
+class FunctionalityInstance(NamedTuple):
     """A functionality call under one binding of its preconditions, with the
     numbers canonical forms name it by (:class:`Numbering`): ``number`` for
     the call with its inputs and outputs, ``name`` for the call alone."""

@@ -17,14 +17,13 @@ back by that key (:attr:`Join.atoms`) when the join was reordered.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from cfgplan.ir.model import is_variable
 from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
 
 
-@dataclass(frozen=True, slots=True)
-class Join:
+class Join(NamedTuple):
     """The tests in the order they are matched; ``atoms``, the atoms in written
     order, give the bindings' sort key when ``reordered``."""
 

@@ -10,7 +10,7 @@ nothing was found" report.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from cfgplan.check.evaluate import EvalFailure, holds
 from cfgplan.diagnostics import did_you_mean
@@ -106,8 +106,7 @@ def exists(task: Task, tests: tuple[Test, ...], env: Bindings) -> bool:
     return any(index == done for index, _ in _walk(task, plan.tests, env))
 
 
-@dataclass(frozen=True)
-class Failure:
+class Failure(NamedTuple):
     """The first precondition that no binding got past."""
 
     condition: str

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.room import Load, Need
@@ -55,8 +55,7 @@ def most(options: Iterable[Counts]) -> Counts:
     return found
 
 
-@dataclass(frozen=True, slots=True)
-class Wire:
+class Wire(NamedTuple):
     """A channel as this bound prices it: ``weight / S``, S the sum of the
     counts of ``shares`` (the channels it might merge with, itself included);
     nothing when C holds a channel with key ``free``. Its occurrence counts

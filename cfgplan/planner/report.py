@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import NamedTuple
 
 from cfgplan.ir.model import Span
 
@@ -34,8 +35,7 @@ class StopReason(Enum):
     INTERRUPTED = "interrupted"
 
 
-@dataclass(frozen=True, slots=True)
-class DeadEnd:
+class DeadEnd(NamedTuple):
     """Why a branch ended: ``where`` it happened, the ``reason``, the source
     ``span`` when it points into the domain, and the condition broken."""
 

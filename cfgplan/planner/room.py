@@ -26,14 +26,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from cfgplan.planner.ground import ChannelSpec
 from cfgplan.planner.task import Task
 from cfgplan.planner.wiring import Channel
 
 
-@dataclass(frozen=True, slots=True)
-class Need:
+class Need(NamedTuple):
     """An expansion's own global channels of one group: the group's number,
     its robot pair's number and the largest bandwidth among them."""
 

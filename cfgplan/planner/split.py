@@ -21,15 +21,13 @@ apart; :class:`cfgplan.planner.search.BestFirst` watches for that.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
     from cfgplan.planner.graph import Instance
 
 
-@dataclass(frozen=True, slots=True)
-class Split:
+class Split(NamedTuple):
     """A node's bound without its top item (``rest``), and the price of each
     of the top item's expansions by choice number, as
     :func:`cfgplan.planner.successors.successors` numbers them (infinite

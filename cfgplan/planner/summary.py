@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Generator, Sequence
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 from cfgplan.planner import clock
 from cfgplan.planner.graph import graph_of
@@ -65,8 +66,7 @@ class Summary:
         return None
 
 
-@dataclass(frozen=True)
-class Expanded:
+class Expanded(NamedTuple):
     """One expansion of a method: what it certainly contains."""
 
     functionalities: frozenset[Key]

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from functools import cached_property
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import Medium, SExpr, Span, expr_variables, is_variable
@@ -70,14 +70,12 @@ class Test:
         return [t for t in self.pattern[1:] if is_variable(t)]
 
 
-@dataclass(frozen=True, slots=True)
-class EffectSpec:
+class EffectSpec(NamedTuple):
     positive: bool
     pattern: Pattern
 
 
-@dataclass(frozen=True, slots=True)
-class FunctionalitySchema:
+class FunctionalitySchema(NamedTuple):
     """A functionality operator (3.2) ready for instantiation."""
 
     name: str
@@ -92,15 +90,13 @@ class FunctionalitySchema:
     span: Span | None
 
 
-@dataclass(frozen=True, slots=True)
-class PortSchema:
+class PortSchema(NamedTuple):
     label: str
     data: Pattern
     bandwidth: float | None
 
 
-@dataclass(frozen=True, slots=True)
-class ChannelSchema:
+class ChannelSchema(NamedTuple):
     kind: str  # "local" | "global" | "any" (decided when instantiated)
     robots: Pattern
     source: str
@@ -109,8 +105,7 @@ class ChannelSchema:
     bandwidth: float | None
 
 
-@dataclass(frozen=True, slots=True)
-class MethodSchema:
+class MethodSchema(NamedTuple):
     """One version of a configuration method (4.4)."""
 
     name: str

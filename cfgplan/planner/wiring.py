@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.notation import atom_text, call_text
@@ -52,8 +52,7 @@ Port = tuple[int, float | None]
 of the ``:out`` entry it went through (None: it has none)."""
 
 
-@dataclass(frozen=True, slots=True)
-class Unwired:
+class Unwired(NamedTuple):
     """A channel that cannot be re-wired: no ``end`` entry (``:out`` or ``:in``) for ``data``."""
 
     end: str

@@ -145,7 +145,7 @@ def _guarded(schema: FunctionalitySchema, failed: bool, lost: bool) -> Functiona
         tests.append(Test(TestKind.NOT, (OUT_OF_SERVICE, schema.name, *schema.params)))
     if lost:
         tests.append(Test(TestKind.NOT, (LOST, schema.params[0])))
-    return dataclasses.replace(schema, tests=tuple(tests))
+    return schema._replace(tests=tuple(tests))
 
 
 def derive(base: Task, situation: Situation) -> Task:

@@ -138,6 +138,7 @@ def test_usage_and_help_speak_cfgplan(cfgplan: Run, command: str) -> None:
         "report": r"RUN\.\.\.",
         "keys": r"COMMAND \[ARGS\]\.\.\.",
         "router": "",
+        "launch": r"DOMAIN STATE --impl IMPL \[RUN OPTIONS\]\.\.\.",  # run's options go on
     }.get(command, r"DOMAIN (STATE|\[STATE\])")
     assert re.fullmatch(rf"Usage: cfgplan {command} \[OPTIONS\] ?{arguments}", usage)
     assert not [w for w in LIBRARY_WORDS if w in out.stdout]

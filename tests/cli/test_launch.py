@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import shlex
 import signal
 import socket
 import subprocess
@@ -25,6 +26,8 @@ from pathlib import Path
 
 import pytest
 
+from cfgplan.cli.root import click_command
+from cfgplan.runtime.monitor import HOLD
 from cfgplan.runtime.spawn import RobotCommand, again_args, commands, died, status_text
 from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
 from tests.runtime.netutil import read_trace
@@ -169,7 +172,7 @@ def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignor
     """--robot Pippi alone (the coordinator, Emil, runs elsewhere): Pippi's
     command, marked as no coordinator's; options that go to the coordinator,
     or a fault aimed at a robot left out, are usage errors naming it (before:
-    a KeyError traceback). Floats go on exactly as given."""
+    a KeyError traceback). Numbers go on exactly as written."""
     base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--robot", "Pippi"]
     shown = ["--print-commands", "--host", "Pippi=10.0.0.2"]
     unreached = cfgplan(*base, *shown)  # behind a router: which one?
@@ -179,7 +182,7 @@ def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignor
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines()[0] == "# Pippi on 10.0.0.2"
     assert done.stdout.splitlines()[1].endswith("--robot Pippi --router tcp/10.0.0.1:7447")
-    assert "--hold 1.23456789e-05" in done.stdout and "--rate 20.25" in done.stdout
+    assert "--hold 0.0000123456789 --rate 20.25" in done.stdout
     late = cfgplan(*base, *shown, "--duration", "86400.25")
     assert late.returncode == 2 and "the coordinator, Emil" in late.stderr
     assert "Traceback" not in late.stderr
@@ -188,6 +191,75 @@ def test_robots_started_without_the_coordinator(cfgplan) -> None:  # type: ignor
     typo = cfgplan(*base, *shown, "--inject", "kill Emli at cycle 9")
     assert typo.returncode == 2 and "no robot Emli in this society" in typo.stderr
     assert "did you mean Emil?" in typo.stderr and not typo.stdout
+
+
+def test_run_options_reach_every_robot_as_written(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """Every option of cfgplan run given to launch goes to each robot's command
+    word for word, in its order: also those equal to run's defaults, numbers
+    as written, and options launch never declared. Before, launch parsed its
+    own copies of run's options and wrote them out again: --rate 10.0 and
+    --rank 1 were dropped (run's defaults), --hold 0.50 became 0.5, and
+    --ros2-via or --use-sim-time were no options of launch."""
+    passed = ["--rate", "10.0", "--rank", "1", "--hold", "0.50", "--stale-periods=3", "--ros2",
+              "--ros2-via", "zenoh", "--use-sim-time", "--society", "lab"]  # fmt: skip
+    done = cfgplan(
+        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), *passed, "--print-commands",
+        "--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2", "--trace=run.jsonl",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    robots = [line for line in done.stdout.splitlines() if line.startswith("cfgplan run ")]
+    assert len(robots) == 2
+    for line, name in zip(robots, ("emil", "pippi"), strict=True):
+        words = shlex.split(line)
+        assert words[2:6] == [*STEP2, "--impl", str(EXAMPLE_IMPL)]
+        assert words[6 : 6 + len(passed)] == passed, line
+        assert f"--trace run-{name}.jsonl" in line
+
+
+def test_launch_leaves_runs_options_and_their_defaults_to_run(cfgplan) -> None:  # type: ignore[no-untyped-def]
+    """launch declares only its own options (and --robot and --router, which it
+    sets for each robot): no copy of run's, so no default of its own. Before,
+    it re-declared some 30 of them, --hold with a default (none) that was not
+    run's. A robot started without --hold holds run's default."""
+    launch, run = click_command("launch"), click_command("run")
+    flags = {f for p in launch.params for f in (*p.opts, *p.secondary_opts) if f.startswith("--")}
+    runs = {f for p in run.params for f in (*p.opts, *p.secondary_opts) if f.startswith("--")}
+    assert flags & runs == {"--robot", "--router"}
+    done = cfgplan(
+        "launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands",
+        "--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    (line, *_) = [line for line in done.stdout.splitlines() if line.startswith("cfgplan run ")]
+    assert "--hold" not in line
+    assert run.make_context("run", shlex.split(line)[2:]).params["hold"] == HOLD
+
+
+@pytest.mark.parametrize(
+    ("mistake", "said"),
+    [
+        (["--hodl", "2"], "No such option: --hodl"),
+        (["--hold", "-1"], "Invalid value for '--hold': -1: must be more than 0"),
+        (["--use-sim-time"], "says how --ros2 and --ros2-map speak ROS 2: give one of them"),
+        (["--ros2", "--ros2-via", "dds"], "'dds': give rclpy or zenoh"),
+        (["--listen", "tcp/127.0.0.1:7447"], "launch gives each robot its endpoints"),
+    ],
+    ids=["misspelt", "bad-value", "needs-another", "bad-choice", "launchs-own"],
+)
+def test_a_mistaken_run_option_is_a_usage_error_before_anything_starts(  # type: ignore[no-untyped-def]
+    cfgplan, mistake: list[str], said: str
+) -> None:
+    """Run's own command parses the options launch passes on, with run's
+    checks and words, before any robot starts: exit 2 under launch's usage.
+    Before, launch knew only its copies of them: --use-sim-time and --ros2-via
+    were "no such option", and run's checks of them were never made."""
+    done = cfgplan("launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--duration", "3", *mistake)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert said in done.stderr
+    assert done.stderr.startswith("Usage: cfgplan launch [OPTIONS] DOMAIN STATE")
+    assert "started: pid" not in done.stdout and "Traceback" not in done.stderr
+    if mistake[0] == "--hodl":
+        assert "--hold" in done.stderr  # the did-you-mean draws on run's options
 
 
 def test_print_commands_behind_a_router_start_it_on_the_coordinators_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
