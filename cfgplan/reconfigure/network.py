@@ -463,8 +463,7 @@ class NetworkAdaptive:
     def later(self, sender: str, epoch: str) -> None:
         """A message of ``sender``'s run ``epoch``, of a later generation than
         this coordinator's, reached its robot (:attr:`Member.on_later`)."""
-        if not self.retired and self.superseded is None:
-            self._later(sender, sender, epoch)
+        self._later(sender, sender, epoch)
 
     def _later(self, robot: str, leader: str, epoch: str) -> None:
         """``robot`` follows ``leader``'s run ``epoch``, of a later generation
@@ -475,6 +474,8 @@ class NetworkAdaptive:
         generation beyond it and sends ``robot`` its part again (a robot
         follows a later run once its coordinator is gone). Else it is not
         believed: a member's key alone makes no coordinator step down."""
+        if self.retired or self.superseded is not None:
+            return  # decided already (a rival and the later run's own greeting, in one pass)
         me, over = self.deployer.me, generation(epoch)
         alive = self.deployer.transport.alive
         if leader != me and leader in alive and leader in self.coordinators:

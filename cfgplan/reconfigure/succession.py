@@ -38,6 +38,8 @@ from collections.abc import Callable, Collection, Sequence
 
 from cfgplan.notation import call_text
 from cfgplan.planner.task import Ground
+from cfgplan.reconfigure.coordinate import Coordinator
+from cfgplan.reconfigure.local import Adaptive
 from cfgplan.reconfigure.network import NetworkAdaptive
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.member import Membership
@@ -45,7 +47,7 @@ from cfgplan.runtime.monitor import Detection
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.succession import TAKEOVER_AFTER, Succession
 
-__all__ = ["Steward", "succession_of"]
+__all__ = ["Steward", "coordinating", "succession_of"]
 
 
 def succession_of(
@@ -126,9 +128,9 @@ class Steward:
         return adaptive
 
     @property
-    def coordinator(self) -> NetworkAdaptive | None:
-        """The coordinator's hooks while this robot coordinates."""
-        return self.role if isinstance(self.role, NetworkAdaptive) else None
+    def coordinator(self) -> Coordinator | None:
+        """The coordinator while this robot coordinates."""
+        return self.role.coordinator if isinstance(self.role, NetworkAdaptive) else None
 
     @property
     def finished(self) -> str | None:
@@ -148,3 +150,12 @@ class Steward:
 
     def close(self) -> None:
         self.role.close()
+
+
+def coordinating(hooks: object) -> Coordinator | None:
+    """The coordinator among a run's hooks (:func:`cfgplan.reconfigure.setup.hooks`),
+    if this process runs it now: what the live page, Foxglove and ROS 2 show
+    the running configuration of (a :class:`Steward` that follows runs none)."""
+    if isinstance(hooks, Adaptive | NetworkAdaptive | Steward):
+        return hooks.coordinator
+    return None
