@@ -467,18 +467,22 @@ class NetworkAdaptive:
 
     def _later(self, robot: str, leader: str, epoch: str) -> None:
         """``robot`` follows ``leader``'s run ``epoch``, of a later generation
-        than this one's. If ``leader`` is alive and is the one next after this
-        coordinator in the order of succession, it took over while this one
-        stood still: this one steps down and follows it
-        (:attr:`superseded`). If it is gone, this coordinator counts a
-        generation beyond it and sends ``robot`` its part again (a robot
-        follows a later run once its coordinator is gone). Else it is not
-        believed: a member's key alone makes no coordinator step down."""
+        than this one's. If ``leader`` itself says so (its own key, or a
+        message of its run to this robot), is alive and is the one next after
+        this coordinator in the order of succession, it took over while this
+        one stood still: this one steps down and follows it
+        (:attr:`superseded`). Another robot's word is not enough — with its
+        own valid key a helper could otherwise make the coordinator step down
+        for a robot that coordinates nothing — and the successor's own
+        greeting comes soon (it greets every robot it sees). If ``leader`` is
+        gone, this coordinator counts a generation beyond it and sends
+        ``robot`` its part again (a robot follows a later run once its
+        coordinator is gone). Else it is not believed."""
         if self.retired or self.superseded is not None:
             return  # decided already (a rival and the later run's own greeting, in one pass)
         me, over = self.deployer.me, generation(epoch)
         alive = self.deployer.transport.alive
-        if leader != me and leader in alive and leader in self.coordinators:
+        if robot == leader != me and leader in alive and leader in self.coordinators:
             nxt = (
                 leader
                 if self.succession is None
@@ -502,6 +506,8 @@ class NetworkAdaptive:
                 )
             self.deployer.resync(robot)
             return
+        if robot != leader and leader in alive:
+            return  # its leader's own word decides (:meth:`later`)
         self._once(
             f"{robot} later run not believed",
             f"{robot} follows a later run ({printable(leader)}'s), but that robot is not "

@@ -341,6 +341,8 @@ class Member:
         if not self.forward and theirs > mine and self.on_later is not None:
             self.on_later(message.sender, message.epoch)  # a successor? (the coordinator decides)
             return True
+        if theirs > mine and message.sender == self.leader and not self._leader_gone:
+            return False  # the coordinator followed counts a later generation (told of one)
         claimed = self.succession is None or self._next(self.leader) == message.sender
         if self._leader_gone and theirs > mine and claimed:
             return False

@@ -94,16 +94,30 @@ def test_a_robot_fences_off_older_runs_and_follows_a_later_one_only_from_the_nex
     assert [m for _, m in network.sent] == [rival]
 
 
+def test_a_robot_follows_its_own_coordinator_into_a_later_generation() -> None:
+    """A coordinator told of a later run whose robot is gone counts a
+    generation beyond it: the robots that follow it, alive, follow it there
+    (before, they took it for a second coordinator and refused it)."""
+    _, member, network, own = _member()
+    member.succession = Succession((("Pippi", "Emil"),))
+    member.receive(_message("commit", 1, own, epoch="1.aa"))
+    member.receive(_message("commit", 1, own, epoch="3.aa"))
+    assert (member.epoch, member.leader, member.current) == ("3.aa", "Pippi", 1)
+    assert [m for _, m in network.sent if m["type"] == "rival"] == []
+
+
 def _steps(events: list[Event]) -> list[dict[str, object]]:
     return [dict(e.info) for e in events if isinstance(e, Adaptation) and e.what == "step-down"]
 
 
 def test_a_coordinator_steps_down_only_for_the_robot_next_in_the_order_alive() -> None:
-    """Pippi coordinates build-wall as run 1; the order is Pippi, Emil. A
-    robot that follows Emil's run 2 (he took over while she stood still)
-    makes her step down and follow him, once (his greeting and a robot's
-    rival may come in one pass); a run 2 of Rasmus (alive, but not next) is
-    not believed; a run 2 of a robot gone makes her count run 3."""
+    """Pippi coordinates build-wall as run 1; the order is Pippi, Emil, Rasmus.
+    Emil's own word that he runs a later run (he took over while she stood
+    still) makes her step down and follow him, once (his greeting and his
+    rival may come in one pass); a helper's word alone does not (with its
+    own key it could make her follow a robot that coordinates nothing); a
+    later run of Rasmus (alive, but not next) is not believed; a later run
+    of a robot gone makes her count a generation beyond it."""
     adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
     adaptive.deployer.member.robot.record = events.append  # type: ignore[attr-defined]
     adaptive.deployer.epoch = "1.aa"
@@ -115,9 +129,11 @@ def test_a_coordinator_steps_down_only_for_the_robot_next_in_the_order_alive() -
     adaptive.later("Emil", "2.ee")  # Emil is gone: this coordinator counts beyond him
     assert adaptive.superseded is None and generation(adaptive.deployer.epoch) == 3
     network.alive.add("Emil")
+    adaptive.receive(encode(Rival("Rasmus", adaptive.deployer.epoch, "Emil", "4.ee")), "Rasmus")
+    assert adaptive.superseded is None  # a helper's word: Emil's own is awaited
     adaptive.later("Emil", "4.ee")  # his greeting reached Pippi's robot
     assert adaptive.superseded == ("Emil", "4.ee")
-    # a robot's rival in the same pass: decided already, one step down
-    adaptive.receive(encode(Rival("Rasmus", adaptive.deployer.epoch, "Emil", "4.ee")), "Rasmus")
+    # his rival in the same pass: decided already, one step down
+    adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Emil", "4.ee")), "Emil")
     (down,) = _steps(events)
     assert (down["leader"], down["epoch"]) == ("Emil", "4.ee")
