@@ -326,6 +326,8 @@ class NetworkAdaptive:
         lost (its part with it) and the other is asked whether it is ready,
         as a robot seen again is: otherwise the live name would hide that
         death until its inputs went stale."""
+        if self.retired:
+            return
         if robot == self.deployer.me:  # another process of this robot: a second coordinator
             (self._twins.add if alive else self._twins.discard)(instance)
             return
@@ -620,7 +622,7 @@ def coordinate(
     is (from 0), ``succession``: the order of succession."""
     (robot,) = society.robots
     if member is None:
-        member = Member(robot, transport, Monitor(hold=hold), forward=False)
+        member = Member(robot, transport, Monitor(hold=hold), forward=False, hold=hold)
         assert member.monitor is not None
         member.monitor.watch(robot)
     monitor = member.monitor

@@ -145,6 +145,7 @@ def hooks(
             goals=goals[1:],
             succession=succession if steward else None,
         )
+        role.deployer.member.without = settings.without  # should it step down, then lose it
     else:
         monitor = Monitor(hold=settings.hold)
         monitor.watch(robot)

@@ -16,6 +16,7 @@ from cfgplan.runtime.events import Adaptation, Event
 from cfgplan.runtime.protocol import (
     Commit,
     ProtocolError,
+    Ready,
     Rival,
     encode,
     generation,
@@ -137,3 +138,10 @@ def test_a_coordinator_steps_down_only_for_the_robot_next_in_the_order_alive() -
     adaptive.receive(encode(Rival("Emil", adaptive.deployer.epoch, "Emil", "4.ee")), "Emil")
     (down,) = _steps(events)
     assert (down["leader"], down["epoch"]) == ("Emil", "4.ee")
+    adaptive.receive(encode(Ready("Emil", "a1a1a1a1a1a1a1a1")), "Emil")  # his process
+    adaptive.retire()  # it follows Emil now: what reaches the coordinator it was is not read
+    network.sent.clear()
+    adaptive.process("Emil", "a1a1a1a1a1a1a1a1", True)
+    adaptive.process("Emil", "b2b2b2b2b2b2b2b2", True)  # no duplicate from a run fenced off
+    adaptive.receive(encode(Ready("Rasmus", "c3c3c3c3c3c3c3c3")), "Rasmus")
+    assert network.sent == []
