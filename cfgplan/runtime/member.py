@@ -426,12 +426,13 @@ class Member:
         self.pending = {k: v for k, v in self.pending.items() if k > number}
         if same:
             return
+        run = (("epoch", self.epoch),) if self.epoch else ()  # whose switch it obeyed
         self.robot.record(
             Adaptation(
                 robot=self.robot.name,
                 t=time.time(),
                 what="install",
-                info=(("id", number), *installed.record()),
+                info=(("id", number), *installed.record(), *run),
             )
         )
 

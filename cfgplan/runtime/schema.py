@@ -325,6 +325,11 @@ class InstallEvent(Base):
     kept_channels: int = Field(description="A count.")
     stopped_channels: list[str]
     started_channels: list[str]
+    epoch: str | None = Field(
+        default=None,
+        description="Across processes: the coordinator's run whose switch this was "
+        "(absent when one process runs every robot).",
+    )
     problems: list[str] | None = Field(
         default=None,
         description="Stop hooks that raised or overran the call budget (`F11: compass(Pippi): "

@@ -89,7 +89,12 @@ def _served_to_the_end(folder: Path, again: Path, takeover: Record) -> None:
     t = float(takeover["t"])  # type: ignore[arg-type]
     (down,) = _events(pippi, "step-down")
     assert down["leader"] == "Emil" and down["epoch"] == takeover["epoch"]
-    assert _events(pippi, "switch", after=float(down["t"])) == []  # type: ignore[arg-type]
+    stepped = float(down["t"])  # type: ignore[arg-type]
+    assert _events(pippi, "switch", after=stepped) == []
+    # one coordinator's switches obeyed from then on, by both: Emil's run's
+    installs = [*_events(emil, "install", after=t), *_events(pippi, "install", after=stepped)]
+    obeyed = {str(r["epoch"]) for r in installs}
+    assert obeyed == {takeover["epoch"]}, obeyed
     done = [r["event"] for r in _events(emil, "achieved", "finish", after=t)]
     assert done == ["achieved", "achieved", "finish"], done
     assert _events(emil, "finish")[-1]["silent"] == []
