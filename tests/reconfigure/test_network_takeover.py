@@ -33,6 +33,7 @@ from typing import Any
 import pytest
 
 from cfgplan.runtime.schema import TRACE_EVENT
+from cfgplan.security.keys import make_society, plan_society, write_society
 from tests.reconfigure.test_network_restart import _after
 from tests.reconfigure.test_sequence_network import SEQUENCE, STEPS
 from tests.runtime.netutil import (
@@ -62,13 +63,20 @@ def _start(
 
 
 def _society(
-    running: Processes, folder: Path, society: str, *extra: str
+    running: Processes, folder: Path, society: str, *extra: str, keyed: bool = False
 ) -> tuple[Any, Any, list[str]]:
     """Emil (helping) and Pippi (coordinating, with ``extra``) once Pippi's
-    crossing is served: both processes and Pippi's network options."""
+    crossing is served: both processes and Pippi's network options. ``keyed``:
+    with the society's keys, both marked coordinators (as ``cfgplan keys new``
+    marks the robots the goals name)."""
     config = str(hermetic_config(folder))
     port = free_port()
     common = ["--zenoh-config", config, "--society", society, "--lease", f"{LEASE:g}"]
+    if keyed:
+        keys = folder / "keys"
+        both = plan_society(society, ["Emil", "Pippi"], (), ["Pippi", "Emil"])
+        write_society(keys, make_society(both), force=False)
+        common += ["--keys", str(keys)]
     pippi_net = ["--listen", endpoint(free_port()), "--connect", endpoint(port), *common]
     emil, _, _ = _start(running, folder, "Emil", ["--listen", endpoint(port), *common])
     pippi, pippi_trace, _ = _start(running, folder, "Pippi", [*pippi_net, *extra])
@@ -150,11 +158,14 @@ def test_the_coordinator_killed_in_a_switch_is_taken_over_and_followed_when_back
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("keyed", [False, True], ids=["open", "keys"])
 def test_the_coordinator_frozen_past_the_lease_is_taken_over_and_steps_down_when_let_go(
-    tmp_path: Path,
+    tmp_path: Path, keyed: bool
 ) -> None:
+    """With the society's keys too: the access control lets Emil, a
+    coordinator, send switches and read the reports once he takes over."""
     with processes() as running:
-        emil, pippi, _ = _society(running, tmp_path, "takeover-freeze")
+        emil, pippi, _ = _society(running, tmp_path, "takeover-freeze", keyed=keyed)
         time.sleep(0.5)
         stopped = time.time()
         os.kill(pippi.pid, signal.SIGSTOP)  # type: ignore[attr-defined]
