@@ -41,6 +41,12 @@ class Succession:
 
     def successor(self, step: int, alive: Collection[str], gone: str) -> str | None:
         """Who takes over from ``gone`` at step ``step``: the first robot of
-        the order that is in ``alive`` and is not ``gone``; ``None``: nobody
-        the remaining goals name is alive."""
-        return next((r for r in self.order(step) if r != gone and r in alive), None)
+        the order that is in ``alive`` and is not ``gone``; if none is, the
+        first such robot that an earlier goal names (it coordinates a step
+        whose robot is lost, until that robot comes back and follows it: a
+        goal's robot started again is no coordinator unless it owns the
+        first goal, so someone must be); ``None``: no robot the goals name is
+        alive."""
+        later = self.order(step)
+        every = (*later, *(r for r in self.order(0) if r not in later))
+        return next((r for r in every if r != gone and r in alive), None)

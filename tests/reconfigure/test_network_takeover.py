@@ -15,6 +15,8 @@ himself. The order of succession both derive from the goals is Pippi, Emil.
 * Pippi frozen past the lease: Emil takes over the same way; let go, Pippi
   (the same process) steps down and follows him, and the sequence is served
   to its end.
+* The successor killed in its turn, in its own step: the robot back takes
+  over from it, and the successor started again follows.
 
 Before, nobody took over: Emil ran on without a coordinator, and a Pippi
 started again took the society back. Hermetic: loopback, free ports,
@@ -51,6 +53,7 @@ LIMIT = 90.0  # seconds: interpreters, a Zenoh handshake and crossings on a load
 LEASE = 1.0
 SERVED = {"functionality": "cross-door", "status": "ran"}
 UPDATE = 60  # Pippi's cycle of the state update whose switch she dies in
+NEXT = "next step: do-cross-door(Emil, Door1)"  # the cause of the switch to the last step
 
 
 def _start(
@@ -64,9 +67,9 @@ def _start(
 
 def _society(
     running: Processes, folder: Path, society: str, *extra: str, keyed: bool = False
-) -> tuple[Any, Any, list[str]]:
+) -> tuple[Any, Any, dict[str, list[str]]]:
     """Emil (helping) and Pippi (coordinating, with ``extra``) once Pippi's
-    crossing is served: both processes and Pippi's network options. ``keyed``:
+    crossing is served: both processes and each one's network options. ``keyed``:
     with the society's keys, both marked coordinators (as ``cfgplan keys new``
     marks the robots the goals name)."""
     config = str(hermetic_config(folder))
@@ -77,11 +80,14 @@ def _society(
         both = plan_society(society, ["Emil", "Pippi"], (), ["Pippi", "Emil"])
         write_society(keys, make_society(both), force=False)
         common += ["--keys", str(keys)]
-    pippi_net = ["--listen", endpoint(free_port()), "--connect", endpoint(port), *common]
-    emil, _, _ = _start(running, folder, "Emil", ["--listen", endpoint(port), *common])
-    pippi, pippi_trace, _ = _start(running, folder, "Pippi", [*pippi_net, *extra])
+    nets = {
+        "Emil": ["--listen", endpoint(port), *common],
+        "Pippi": ["--listen", endpoint(free_port()), "--connect", endpoint(port), *common],
+    }
+    emil, _, _ = _start(running, folder, "Emil", nets["Emil"])
+    pippi, pippi_trace, _ = _start(running, folder, "Pippi", [*nets["Pippi"], *extra])
     wait_for("Pippi's crossing served", _after(pippi_trace, 0.0, "call", **SERVED), LIMIT)
-    return emil, pippi, pippi_net
+    return emil, pippi, nets
 
 
 def _events(trace: list[Record], *kinds: str, after: float = 0.0) -> list[Record]:
@@ -119,7 +125,7 @@ def test_the_coordinator_killed_in_a_switch_is_taken_over_and_followed_when_back
 ) -> None:
     with processes() as running:
         update = f"retract (compass Emil) at cycle {UPDATE}"
-        emil, pippi, pippi_net = _society(running, tmp_path, "takeover-kill", "--inject", update)
+        emil, pippi, nets = _society(running, tmp_path, "takeover-kill", "--inject", update)
         pippi_trace = tmp_path / "pippi.jsonl"
 
         def near() -> Record | None:  # 0.4 s before the update, at 20 cycles a second
@@ -140,7 +146,7 @@ def test_the_coordinator_killed_in_a_switch_is_taken_over_and_followed_when_back
         wait_for("Emil stops safely", _after(emil_trace, t - 1e-6, "no-configuration"), 10.0)
         again = tmp_path / "again"
         again.mkdir()
-        back, again_trace, _ = _start(running, again, "Pippi", pippi_net)
+        back, again_trace, _ = _start(running, again, "Pippi", nets["Pippi"])
         assert emil.wait(timeout=LIMIT) == 0  # type: ignore[attr-defined]
         assert back.wait(timeout=LIMIT) == 0  # type: ignore[attr-defined]
     assert (takeover["after"], takeover["step"]) == ("Pippi", 0)
@@ -179,3 +185,48 @@ def test_the_coordinator_frozen_past_the_lease_is_taken_over_and_steps_down_when
     assert t - stopped < LEASE + 1.0, t - stopped
     assert (takeover["after"], takeover["step"]) == ("Pippi", 0)
     _served_to_the_end(tmp_path, tmp_path / "pippi.jsonl", takeover)
+
+
+@pytest.mark.slow
+def test_a_successor_killed_in_its_own_step_is_taken_over_by_the_robot_back(
+    tmp_path: Path,
+) -> None:
+    """Pippi killed: Emil takes over (run 2); Pippi started again follows him
+    and crosses. Emil, coordinating his own crossing (the last step, which
+    names only him), is killed in turn: Pippi, whom the earlier goal names,
+    takes over (run 3) and stops safely; Emil started again — no coordinator
+    when he starts, for he does not own the first goal — follows her, and
+    the sequence is served to its end under her coordination. Without
+    someone to take over from the successor, both would wait for good."""
+    with processes() as running:
+        emil, pippi, nets = _society(running, tmp_path, "takeover-twice")
+        emil_trace = tmp_path / "emil.jsonl"
+        os.kill(pippi.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        first = wait_for("Emil takes over", _after(emil_trace, 0.0, "takeover"), LIMIT)
+        back = tmp_path / "pippi-back"
+        back.mkdir()
+        pippi, pippi_trace, _ = _start(running, back, "Pippi", nets["Pippi"])
+        wait_for("Pippi follows", _after(pippi_trace, 0.0, "step-down"), LIMIT)
+        step = wait_for("Emil's own step", _after(emil_trace, 0.0, "switch", cause=NEXT), LIMIT)
+        os.kill(emil.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        killed = time.time()
+        second = wait_for("Pippi takes over", _after(pippi_trace, killed, "takeover"), LIMIT)
+        wait_for("Pippi stops safely", _after(pippi_trace, killed, "no-configuration"), 10.0)
+        again = tmp_path / "emil-back"
+        again.mkdir()
+        emil, emil_again, _ = _start(running, again, "Emil", nets["Emil"])
+        assert pippi.wait(timeout=LIMIT) == 0  # type: ignore[attr-defined]
+        assert emil.wait(timeout=LIMIT) == 0  # type: ignore[attr-defined]
+    assert str(first["epoch"]).startswith("2.") and step["id"]
+    assert (second["after"], second["step"]) == ("Emil", 1)
+    assert second["goal"] == "do-cross-door(Emil, Door1)"
+    assert str(second["epoch"]).startswith("3.")
+    assert float(second["t"]) - killed < LEASE + 1.0  # type: ignore[arg-type]
+    hers = read_trace(pippi_trace)
+    after = float(second["t"])  # type: ignore[arg-type]
+    done = [r["event"] for r in _events(hers, "achieved", "finish", after=after)]
+    assert done == ["achieved", "finish"], done
+    his = read_trace(emil_again)
+    assert {str(r["epoch"]) for r in _events(his, "install")} == {second["epoch"]}
+    (finish,) = _events(his, "finish")
+    assert (finish["from"], finish["goal"]) == ("Pippi", "do-cross-door(Emil, Door1)")

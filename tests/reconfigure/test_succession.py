@@ -49,6 +49,11 @@ def test_the_order_of_succession_is_the_robots_the_remaining_goals_name() -> Non
     assert order.successor(0, {"Emil", "Rasmus"}, gone="Pippi") == "Emil"
     assert order.successor(5, {"Rasmus"}, gone="Pippi") == "Rasmus"  # past the end: the last
     assert order.successor(0, set(), gone="Pippi") is None
+    steps = Succession((("Pippi", "Emil"), ("Emil",)))
+    assert steps.successor(1, {"Pippi", "Emil"}, gone="Pippi") == "Emil"
+    # Emil, coordinating his own step, gone: Pippi, whom an earlier goal
+    # names, coordinates until he is back (started again, he only follows)
+    assert steps.successor(1, {"Pippi"}, gone="Emil") == "Pippi"
 
 
 def test_an_epoch_counts_its_generation_and_a_commit_says_its_step() -> None:
