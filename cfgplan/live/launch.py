@@ -22,8 +22,8 @@ import time
 from cfgplan.configuration.model import Configuration
 from cfgplan.live.address import Address
 from cfgplan.problem import Problem
-from cfgplan.reconfigure.local import Adaptive, coordinator_of
-from cfgplan.reconfigure.network import NetworkAdaptive
+from cfgplan.reconfigure.local import coordinator_of
+from cfgplan.reconfigure.succession import coordinating
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.launch import Hooks
 from cfgplan.runtime.society import Society
@@ -67,7 +67,7 @@ def open_live(
     from cfgplan.live.server import LiveServer
     from cfgplan.live.watch import Watch
 
-    coordinator = hooks.coordinator if isinstance(hooks, Adaptive | NetworkAdaptive) else None
+    coordinator = coordinating(hooks)
     lead = coordinator_of(problem.goal_call, config) if coordinator is None else coordinator.robot
     setup = Setup(
         title=title,

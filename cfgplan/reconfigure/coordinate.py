@@ -191,6 +191,15 @@ class Coordinator:
         if self.ahead is not None:
             self.ahead.notify()
 
+    def replan(self, cause: str) -> None:
+        """Plan the society afresh and install what is found (or stop it): a
+        robot that takes over coordination knows no configuration running
+        (:mod:`~cfgplan.reconfigure.succession`)."""
+        now = Detection("facts", self.robot, time.time(), how=cause)
+        self._apply(self.reconfigurator.replanned(cause), now)
+        if self.ahead is not None:
+            self.ahead.notify()
+
     def tick(self) -> None:
         """Act on settled stale suspicions; else compute a fallback (idle time)."""
         if self._deploying:

@@ -50,7 +50,6 @@ finishing is not lost to anyone (:meth:`~cfgplan.runtime.Robot.release`).
 
 from __future__ import annotations
 
-import secrets
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -69,6 +68,7 @@ from cfgplan.runtime.protocol import (
     Phase,
     Prepare,
     ToRobot,
+    new_epoch,
 )
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
@@ -115,9 +115,13 @@ class NetworkDeployer:
     """Robots taken as lost for not answering a prepare, with when (clock) to
     try them again should they still be alive (:meth:`due`)."""
     _wait: dict[str, float] = field(default_factory=dict)  # the last wait of each, doubled
-    epoch: str = field(default_factory=lambda: secrets.token_hex(8))
+    epoch: str = field(default_factory=new_epoch)
     """This coordinator's run, on every message it sends: a robot that hears a
-    new one (the coordinator started again) follows its numbering afresh."""
+    new one (the coordinator started again, or another robot took over)
+    follows its numbering afresh."""
+    step_of: Callable[[], int] | None = None
+    """The step of the sequence of goals the running configuration serves
+    (on every commit: a robot that takes over goes on from it)."""
     refused: list[tuple[str, str]] = field(default_factory=list)
     """Robots that could not install a configuration the others did, with why
     (:meth:`acked`): taken as lost by the coordinator (:class:`NetworkAdaptive`)."""
@@ -183,7 +187,7 @@ class NetworkDeployer:
         switch.deadline = self.clock() + self.timeout
         for robot in others:  # first: they install while this robot does
             leaving = None if robot in joining else part_to_json(switch.parts[robot])
-            self._to(robot, Commit(number, self.me, self.epoch, leaving))
+            self._to(robot, Commit(number, self.me, self.epoch, leaving, self.step()))
         own = switch.parts.get(self.me)
         if own is not None:
             self.member.install(number, own)
@@ -191,6 +195,9 @@ class NetworkDeployer:
         self.current = number
         if not joining:
             self._finish()
+
+    def step(self) -> int:
+        return 0 if self.step_of is None else self.step_of()
 
     def _finish(self) -> None:
         switch, self.switch = self.switch, None
@@ -225,7 +232,7 @@ class NetworkDeployer:
             if robot not in switch.resent:
                 switch.resent.add(robot)
                 part = part_to_json(switch.parts[robot])
-                self._to(robot, Commit(number, self.me, self.epoch, part))
+                self._to(robot, Commit(number, self.me, self.epoch, part, self.step()))
                 return
             self.refused.append((robot, reason))
         elif phase != switch.awaiting:
@@ -333,7 +340,8 @@ class NetworkDeployer:
             return
         part = self.parts.get(robot)
         if part is not None:
-            self._to(robot, Commit(self.current, self.me, self.epoch, part_to_json(part)))
+            commit = Commit(self.current, self.me, self.epoch, part_to_json(part), self.step())
+            self._to(robot, commit)
 
     def finish(self, goal: str) -> None:
         """The task (``goal``) is accomplished: every robot ends its run; those

@@ -54,15 +54,19 @@ from cfgplan.runtime.member import Member
 from cfgplan.runtime.monitor import HOLD, Detection, Monitor
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.protocol import (
+    MAX_GENERATION,
     Ack,
     CallError,
     ProtocolError,
     Ready,
     Report,
     Rival,
+    generation,
+    new_epoch,
     read_to_coordinator,
 )
 from cfgplan.runtime.society import Society
+from cfgplan.runtime.succession import Succession
 from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, ZenohTransport
 from cfgplan.security.rates import Throttle
 from cfgplan.security.zenoh_tls import society_of
@@ -74,6 +78,7 @@ __all__ = [
     "NetworkAdaptive",
     "NetworkDeployer",
     "coordinate",
+    "coordinators_of",
 ]
 
 
@@ -103,6 +108,7 @@ class NetworkAdaptive:
     _rivals: dict[str, tuple[Rival, float]] = field(default_factory=dict)  # said, by robot
     _ended: dict[str, tuple[str, float]] = field(default_factory=dict)  # process gone, name up
     _hidden: set[str] = field(default_factory=set)  # lost while a session held their name
+    _presence: Callable[[str, bool], None] | None = None  # the monitor's listener
     process_grace: float = 0.5
     """Seconds a robot's name may stay alive after its process ended (its two
     tokens go one after the other) before the name is taken as held by
@@ -110,6 +116,13 @@ class NetworkAdaptive:
     coordinators: frozenset[str] = frozenset()
     """The robots that may coordinate (coordinate(): with keys, those the
     society's keys mark so; without, the state's robots)."""
+    succession: Succession | None = None
+    """The order of succession (:mod:`cfgplan.runtime.succession`): who may
+    have taken over from this coordinator while it stood still."""
+    superseded: tuple[str, str] | None = None
+    """The coordinator, and its run, this one steps down for (a later
+    generation took over while this one stood still): it follows it now."""
+    retired: bool = False  # stepped down: what reaches it is no longer read
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)
@@ -257,6 +270,8 @@ class NetworkAdaptive:
     def receive(self, payload: bytes, sender: str) -> None:
         """A report, an acknowledgement or a robot's word that it is ready, on
         ``sender``'s key: one that says it is from another robot is dropped."""
+        if self.retired:
+            return
         try:
             message = read_to_coordinator(payload)
         except ProtocolError as exc:
@@ -311,6 +326,8 @@ class NetworkAdaptive:
         lost (its part with it) and the other is asked whether it is ready,
         as a robot seen again is: otherwise the live name would hide that
         death until its inputs went stale."""
+        if self.retired:
+            return
         if robot == self.deployer.me:  # another process of this robot: a second coordinator
             (self._twins.add if alive else self._twins.discard)(instance)
             return
@@ -420,7 +437,21 @@ class NetworkAdaptive:
         """A robot follows another coordinator: if it is this one that is the
         second, it stops — once what the robot says is borne out by this
         coordinator's own view (:meth:`_borne_out`), within a lease; else the
-        console says a second one was refused."""
+        console says a second one was refused. A robot that follows a run of
+        a later generation than this one's fences this one off
+        (:meth:`_later`); one that follows an older run is not believed (it
+        still sees that run's coordinator, and follows this one once that
+        one is gone)."""
+        mine, over = generation(self.deployer.epoch), generation(rival.over)
+        if rival.epoch == self.deployer.epoch and rival.over and over != mine:
+            if over > mine:
+                self._later(rival.robot, rival.leader, rival.over)
+            else:
+                self._once(
+                    f"{rival.robot} older run",
+                    f"{rival.robot} still follows an older run ({printable(rival.leader)}'s)",
+                )
+            return
         if rival.epoch == self.deployer.epoch:
             if self.refusal is None and rival.robot not in self._rivals:
                 lease = getattr(self.deployer.transport, "lease", DEFAULT_LEASE)
@@ -430,6 +461,69 @@ class NetworkAdaptive:
         self._once(
             f"{rival.robot} rival", f"a second coordinator of the society, refused by {rival.robot}"
         )
+
+    def later(self, sender: str, epoch: str) -> None:
+        """A message of ``sender``'s run ``epoch``, of a later generation than
+        this coordinator's, reached its robot (:attr:`Member.on_later`)."""
+        self._later(sender, sender, epoch)
+
+    def _later(self, robot: str, leader: str, epoch: str) -> None:
+        """``robot`` follows ``leader``'s run ``epoch``, of a later generation
+        than this one's. If ``leader`` itself says so (its own key, or a
+        message of its run to this robot), is alive and is the one next after
+        this coordinator in the order of succession, it took over while this
+        one stood still: this one steps down and follows it
+        (:attr:`superseded`). Another robot's word is not enough — with its
+        own valid key a helper could otherwise make the coordinator step down
+        for a robot that coordinates nothing — and the successor's own
+        greeting comes soon (it greets every robot it sees). If ``leader`` is
+        gone, this coordinator counts a generation beyond it and sends
+        ``robot`` its part again (a robot follows a later run once its
+        coordinator is gone). Else it is not believed."""
+        if self.retired or self.superseded is not None:
+            return  # decided already (a rival and the later run's own greeting, in one pass)
+        me, over = self.deployer.me, generation(epoch)
+        alive = self.deployer.transport.alive
+        if robot == leader != me and leader in alive and leader in self.coordinators:
+            nxt = (
+                leader
+                if self.succession is None
+                else self.succession.successor(self.deployer.step(), {*alive, me}, me)
+            )
+            if nxt == leader:
+                self.superseded = (leader, epoch)
+                info = (("leader", leader), ("epoch", epoch), ("was", self.deployer.epoch))
+                self.deployer.member.robot.record(
+                    Adaptation(robot=me, t=time.time(), what="step-down", info=info)
+                )
+                return
+        if leader not in alive and leader in self.coordinators and over < MAX_GENERATION:
+            raised = new_epoch(over + 1)
+            self.deployer.epoch = self.deployer.member.epoch = raised
+            if f"{robot} later run" not in self._noted:
+                self._noted.add(f"{robot} later run")
+                self.deployer.member.error(
+                    f"{robot} followed a later run ({printable(leader)}'s, gone): this "
+                    f"coordinator goes on as run {raised}"
+                )
+            self.deployer.resync(robot)
+            return
+        if robot != leader and leader in alive:
+            return  # its leader's own word decides (:meth:`later`)
+        self._once(
+            f"{robot} later run not believed",
+            f"{robot} follows a later run ({printable(leader)}'s), but that robot is not "
+            "alive and next in the order of succession: not believed, this one goes on",
+        )
+
+    def retire(self) -> None:
+        """This coordinator stepped down (:attr:`superseded`): it reads no more
+        messages, its threads end, its losses are no longer watched."""
+        self.retired = True
+        listeners = getattr(self.deployer.transport, "presence_listeners", None)
+        if listeners is not None and self._presence in listeners:
+            listeners.remove(self._presence)
+        self.close()
 
     def _borne_out(self, rival: Rival) -> bool:
         """Whether this coordinator's own view bears ``rival`` out. A robot that
@@ -507,7 +601,7 @@ def coordinate(
     task: Task,
     domain: Domain,
     goal: Ground,
-    config: Configuration,
+    config: Configuration | None,
     parts: dict[str, Part],
     injections: Sequence[Injection] = (),
     *,
@@ -516,17 +610,33 @@ def coordinate(
     goals: tuple[Ground, ...] = (),
     timeout: float = SWITCH_TIMEOUT,
     kill: Callable[[str], None] | None = None,
+    member: Member | None = None,
+    generation: int = 1,
+    step: int = 0,
+    succession: Succession | None = None,
 ) -> NetworkAdaptive:
-    """Make the one robot of ``society`` the coordinator of its society."""
+    """Make the one robot of ``society`` the coordinator of its society, its
+    run of ``generation`` (:func:`~cfgplan.runtime.protocol.new_epoch`);
+    ``member``: the robot's member when it followed another coordinator
+    until now (it takes over), ``step``: the step of the sequence ``goal``
+    is (from 0), ``succession``: the order of succession."""
     (robot,) = society.robots
-    monitor = Monitor(hold=hold)
-    monitor.watch(robot)
-    transport.presence_listeners.append(monitor.presence(robot.name))
-    member = Member(robot, transport, monitor, forward=False)
+    if member is None:
+        member = Member(robot, transport, Monitor(hold=hold), forward=False, hold=hold)
+        assert member.monitor is not None
+        member.monitor.watch(robot)
+    monitor = member.monitor
+    assert monitor is not None
+    presence = monitor.presence(robot.name)
+    transport.presence_listeners.append(presence)
+    member.succession = succession
     deployer = NetworkDeployer(transport, member, timeout, parts=dict(parts))
+    deployer.epoch = new_epoch(generation)
+    member.lead(deployer.epoch)
     reconfigurator = Reconfigurator(
         task, domain, goal, config, hysteresis or Hysteresis(), goals=goals
     )
+    deployer.step_of = lambda: step + len(goals) - len(reconfigurator.goals)
     coordinator = Coordinator(
         reconfigurator,
         robot.record,
@@ -539,8 +649,10 @@ def coordinate(
     )
     injector = Injector(injections, society, kill=kill)
     adaptive = NetworkAdaptive(coordinator, deployer, monitor, injector)
+    adaptive.succession, adaptive._presence = succession, presence
+    member.on_later = adaptive.later
     adaptive.members = frozenset(task.agents)
-    adaptive.coordinators = _coordinators(transport, adaptive.members)
+    adaptive.coordinators = coordinators_of(transport, adaptive.members)
     adaptive.heartbeat, adaptive.doubts = Heartbeat(), Doubts(transport.lease)
     adaptive.heartbeat.start()
     watch = getattr(transport, "watch_processes", None)
@@ -552,7 +664,7 @@ def coordinate(
     return adaptive
 
 
-def _coordinators(transport: ZenohTransport, members: frozenset[str]) -> frozenset[str]:
+def coordinators_of(transport: ZenohTransport, members: frozenset[str]) -> frozenset[str]:
     """The robots that may coordinate ``transport``'s society: with its keys,
     those its ``society.json`` marks so (only they may send switches); without,
     any robot of the state."""

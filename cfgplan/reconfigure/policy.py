@@ -264,6 +264,14 @@ class Reconfigurator:
         cause = f"next step: {call_text(self.goal)}"
         return self._to(best, "search", time.perf_counter() - started, why, (), cause)
 
+    def replanned(self, cause: str = "") -> Decision:
+        """The cheapest configuration of the current step in the current
+        situation, whatever runs (a robot that takes over coordination knows
+        nothing running, 5.5); none: the society stops, and why."""
+        started = time.perf_counter()
+        best, why = self._best()
+        return self._to(best, "search", time.perf_counter() - started, why, (), cause)
+
     def install(self, config: Configuration | None, cause: str = "") -> Decision:
         """Run ``config`` next (``None``: nothing), whatever it costs: the
         running labels kept for what both share, fresh ones for the rest.

@@ -9,8 +9,11 @@
   (:func:`~cfgplan.reconfigure.network.coordinate`), any other follows it
   (:class:`~cfgplan.runtime.member.Membership`); both apply the scripted
   faults aimed at their own robot, and only the coordinator the state
-  updates. ``kill`` of this process's robot ends the process at once, as a
-  crash: the trace is flushed first, nothing else is said to anyone.
+  updates. Where the goals name more than one robot (a sequence whose steps
+  name others), each such robot may take over coordination, and a
+  coordinator may step down (:mod:`~cfgplan.reconfigure.succession`).
+  ``kill`` of this process's robot ends the process at once, as a crash:
+  the trace is flushed first, nothing else is said to anyone.
 """
 
 from __future__ import annotations
@@ -22,7 +25,8 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.problem import Problem
 from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.local import adapt, coordinator_of
-from cfgplan.reconfigure.network import coordinate
+from cfgplan.reconfigure.network import NetworkAdaptive, coordinate, coordinators_of
+from cfgplan.reconfigure.succession import Steward, succession_of
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks
@@ -30,8 +34,10 @@ from cfgplan.runtime.main import crash
 from cfgplan.runtime.member import Member, Membership
 from cfgplan.runtime.monitor import HOLD, Monitor
 from cfgplan.runtime.part import Part
+from cfgplan.runtime.protocol import generation
 from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import Society
+from cfgplan.runtime.succession import TAKEOVER_AFTER
 from cfgplan.runtime.tracefile import TraceFile
 from cfgplan.runtime.zenoh_transport import ZenohTransport
 
@@ -48,6 +54,9 @@ class Settings:
     margin: float = 0.1
     without: str = "stop"
     """What a helper does once its coordinator is gone for the hold (``--without-coordinator``)."""
+    takeover: float = TAKEOVER_AFTER
+    """Seconds the next robot of the order of succession waits, once the
+    coordinator's token went, before it takes over."""
 
 
 def hooks(
@@ -90,8 +99,38 @@ def hooks(
     if not settings.reconfigure:
         injector = Injector(settings.injections, running, facts=False, kill=kill)
         return Scripted(injector) if injector.pending else None
+    agents = frozenset(problem.task.agents)
+    goals = problem.goal_calls
+    succession = succession_of(goals, agents, coordinators_of(transport, agents), settings.takeover)
+    steward = max((len(order) for order in succession.orders), default=0) > 1
+
+    def take_over(following: Membership) -> NetworkAdaptive:
+        member = following.member
+        step = min(member.step, len(goals) - 1)
+        adaptive = coordinate(
+            running,
+            transport,
+            problem.task,
+            problem.domain,
+            goals[step],
+            None,
+            {},
+            hysteresis=hysteresis,
+            hold=settings.hold,
+            kill=kill,
+            goals=goals[step + 1 :],
+            member=member,
+            generation=generation(member.epoch) + 1,
+            step=step,
+            succession=succession,
+        )
+        if following.injector is not None:
+            adaptive.injector = following.injector
+        return adaptive
+
+    role: NetworkAdaptive | Membership
     if robot.name == coordinator_of(problem.goal_call, config):
-        return coordinate(
+        role = coordinate(
             running,
             transport,
             problem.task,
@@ -103,9 +142,21 @@ def hooks(
             hysteresis=hysteresis,
             hold=settings.hold,
             kill=kill,
-            goals=problem.goal_calls[1:],
+            goals=goals[1:],
+            succession=succession if steward else None,
         )
-    monitor = Monitor(hold=settings.hold)
-    monitor.watch(robot)
-    member = Member(robot, transport, monitor, without=settings.without, hold=settings.hold)
-    return Membership(member, Injector(settings.injections, running, facts=False, kill=kill))
+        role.deployer.member.without = settings.without  # should it step down, then lose it
+    else:
+        monitor = Monitor(hold=settings.hold)
+        monitor.watch(robot)
+        member = Member(
+            robot,
+            transport,
+            monitor,
+            without=settings.without,
+            hold=settings.hold,
+            succession=succession if steward else None,
+        )
+        injector = Injector(settings.injections, running, facts=False, kill=kill)
+        role = Membership(member, injector)
+    return Steward(role, take_over) if steward else role

@@ -69,6 +69,8 @@ TOPICS: dict[type[BaseModel], str] = {
     s.SwitchEvent: "/cfgplan/switches",
     s.NoConfiguration: "/cfgplan/no-configuration",
     s.Abort: "/cfgplan/aborts",
+    s.Takeover: "/cfgplan/takeovers",
+    s.StepDown: "/cfgplan/step-downs",
 }
 """The topic of each kind of event (a model of :data:`cfgplan.runtime.schema.TraceEvent`),
 in the order their schemas are registered. ``{robot}`` and ``{channel}`` are the

@@ -62,11 +62,11 @@ def open_foxglove(
             "--foxglove needs the foxglove-sdk package, which is not installed",
             hint=FOXGLOVE_HINT,
         ) from None
-    from cfgplan.reconfigure.local import Adaptive, coordinator_of
-    from cfgplan.reconfigure.network import NetworkAdaptive
+    from cfgplan.reconfigure.local import coordinator_of
+    from cfgplan.reconfigure.succession import coordinating
     from cfgplan.record.foxglove_live import serve
 
-    coordinator = hooks.coordinator if isinstance(hooks, Adaptive | NetworkAdaptive) else None
+    coordinator = coordinating(hooks)
     running = None if coordinator is None else (lambda: coordinator.reconfigurator.running)
     here = [r.name for r in society.robots]
     lead = coordinator.robot if coordinator is not None else coordinator_of(goal, config)

@@ -63,6 +63,8 @@ AT_ONCE: frozenset[type[BaseModel]] = frozenset(
         s.Presence,
         s.Stop,
         s.InstallEvent,
+        s.Takeover,
+        s.StepDown,
     }
 )
 """Kinds of event whose chunk is written at once: what the society does (5.5)."""

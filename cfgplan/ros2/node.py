@@ -340,13 +340,11 @@ class RclpyEvents:
     def follow(self, hooks: object) -> None:
         """Take the running configuration from the coordinator among ``hooks``
         (:func:`cfgplan.reconfigure.setup.hooks`), if this process runs it."""
-        from cfgplan.reconfigure.local import Adaptive
-        from cfgplan.reconfigure.network import NetworkAdaptive
+        from cfgplan.reconfigure.succession import coordinating
 
-        if isinstance(hooks, Adaptive | NetworkAdaptive):
-            coordinator = hooks.coordinator
-            if coordinator is not None:
-                self.running = lambda: coordinator.reconfigurator.running
+        coordinator = coordinating(hooks)
+        if coordinator is not None:
+            self.running = lambda: coordinator.reconfigurator.running
 
     def __call__(self, event: Event) -> None:
         """Publish ``event`` if it is one of :data:`EVENT_KINDS`, a configuration

@@ -260,7 +260,11 @@ class Adaptation(Event):
     * ``no-configuration`` — nothing admissible is left: the action is
       stopped safely (``why``: the planner's explanation);
     * ``install`` — this robot installed its part of configuration ``id``;
-    * ``achieved`` — an action said its task is accomplished.
+    * ``achieved`` — an action said its task is accomplished;
+    * ``takeover`` — this robot coordinates from now on, its coordinator
+      gone (``epoch``, ``after``, ``step``, ``goal``, ``waited``);
+    * ``step-down`` — this coordinator follows the one that took over
+      (``leader``, ``epoch``, ``was``).
     """
 
     what: str

@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import secrets
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any, Protocol
 
@@ -86,8 +87,10 @@ from cfgplan.runtime.protocol import (
     ToCoordinator,
     ToRobot,
     encode,
+    generation,
     read_to_robot,
 )
+from cfgplan.runtime.succession import Succession
 from cfgplan.security.rates import Throttle
 
 __all__ = ["Member", "Membership", "Network", "send"]
@@ -124,8 +127,16 @@ class Member:
         forward: bool = True,
         without: str = "stop",
         hold: float = HOLD,
+        succession: Succession | None = None,
     ) -> None:
         self.robot = robot
+        self.succession = succession
+        """The order of succession (a robot that runs the problem knows it):
+        this robot takes over coordination when it is next
+        (:meth:`takeover_due`), and follows a later run only from the robot
+        that is next; ``None``: the access control alone says who may."""
+        self.step = 0  # the step of the sequence the configuration it runs serves
+        self._lost_at: float | None = None  # when the leader's token went (monotonic)
         self.without = without
         """What this robot does once its coordinator is gone for ``hold``
         seconds (``--without-coordinator``): ``stop`` its part, or ``run`` on."""
@@ -141,6 +152,10 @@ class Member:
         self.leader = ""  # the robot that coordinates that run
         self._leader_gone = False  # its token went since: a new epoch may be followed
         self._rivals: set[str] = set()  # epochs of second coordinators told (a few)
+        self._listening = False  # to the presence of the others and to its robot's calls
+        self.on_later: Callable[[str, str], None] | None = None
+        """While this robot coordinates: told of a message of a later run
+        (its sender and epoch), which may have taken over from it."""
         self.instance: str = getattr(network, "instance", None) or secrets.token_hex(8)
         """This process, in its ``ready`` (and its process token over Zenoh)."""
         self.refused: str | None = None
@@ -161,10 +176,56 @@ class Member:
             network.conflict_handled = True
         if forward:  # the subscriber exists: the coordinator may send a part now
             self._send(Ready(robot.name, self.instance))
-            robot.subscribe(self._event)
-            listeners = getattr(network, "presence_listeners", None)
-            if listeners is not None:
-                listeners.append(self._presence)
+            self._listen()
+
+    def _listen(self) -> None:
+        """Follow the others' presence and this robot's calls (once)."""
+        if self._listening:
+            return
+        self._listening = True
+        self.robot.subscribe(self._event)
+        listeners = getattr(self.network, "presence_listeners", None)
+        if listeners is not None:
+            listeners.append(self._presence)
+
+    def lead(self, epoch: str) -> None:
+        """This robot coordinates the run ``epoch`` from now on: it sends no
+        reports and fences off every other run (:meth:`_fenced`)."""
+        self.forward = False
+        self.epoch, self.leader, self._leader_gone = epoch, self.robot.name, False
+        self.pending, self._lost_at, self._gone = {}, None, None
+
+    def follow(self, leader: str, epoch: str) -> None:
+        """This robot, which coordinated, follows ``leader``'s run ``epoch``
+        from now on (a later generation took over while it stood still): it
+        says it is ready, and ``leader`` sends it its part."""
+        self.forward = True
+        self.epoch, self.leader, self._leader_gone = epoch, leader, False
+        self.current, self.pending = 0, {}
+        self._listen()
+        self._send(Ready(self.robot.name, self.instance))
+
+    def takeover_due(self) -> bool:
+        """Whether this robot takes over coordination now: the coordinator it
+        followed is gone for :attr:`Succession.after` seconds or more, and
+        this robot is the first of the order of succession still alive."""
+        if self.succession is None or not self.forward or self._lost_at is None:
+            return False
+        if self.finished is not None or self.refused is not None:
+            return False
+        if time.monotonic() - self._lost_at < self.succession.after:
+            return False
+        return self._next(self.leader) == self.robot.name
+
+    def gone_for(self) -> float:
+        """Seconds since the coordinator followed went (0 if it did not)."""
+        return 0.0 if self._lost_at is None else time.monotonic() - self._lost_at
+
+    def _next(self, gone: str) -> str | None:
+        """Who takes over from ``gone`` as this robot sees the society."""
+        assert self.succession is not None
+        alive = {*getattr(self.network, "alive", ()), self.robot.name}
+        return self.succession.successor(self.step, alive, gone)
 
     def _presence(self, other: str, alive: bool) -> None:
         """The coordinator followed went away (a message of its run, after it
@@ -176,9 +237,9 @@ class Member:
             return
         if not alive:
             self._leader_gone = True
-            self._gone = time.monotonic()
+            self._gone = self._lost_at = time.monotonic()
             return
-        self._gone = None
+        self._gone = self._lost_at = None
         if self.orphaned:
             self._send(Ready(self.robot.name, self.instance))
 
@@ -239,7 +300,7 @@ class Member:
         epoch = message.epoch
         if epoch == self.epoch:
             self._leader_gone = False  # it did not go, or came back as it was
-        elif self._rival(message):
+        elif self._fenced(message):
             return
         if isinstance(message, Hello):
             self._send(Ready(self.robot.name, self.instance))
@@ -249,31 +310,49 @@ class Member:
             # afresh, and this robot keeps running its part until that
             # coordinator installs one.
             self.epoch, self.current, self.pending = epoch, 0, {}
-            self.leader, self._leader_gone = message.sender, False
+            self.leader, self._leader_gone, self._lost_at = message.sender, False, None
         elif epoch != self.epoch and isinstance(message, Abort):
             return  # of a switch of a coordinator no longer followed
         if isinstance(message, Prepare):
             self._prepare(message.id, message.part)
         elif isinstance(message, Commit):
-            self._commit(message.id, message.part)
+            self._commit(message.id, message.part, message.step)
         elif isinstance(message, Abort):
             self.pending.pop(message.id, None)
         else:
             self._finish(message)
 
-    def _rival(self, message: ToRobot) -> bool:
-        """Whether ``message``, of another epoch than the one followed, is from
-        a second coordinator: one is followed and its robot has not gone
-        since. The first time, the rival is told (it stops) and the console
+    def _fenced(self, message: ToRobot) -> bool:
+        """Whether ``message``, of another epoch than the one followed, is not
+        obeyed: it is of a lower generation (fenced off: a run that was taken
+        over), or the coordinator followed has not gone since (a second
+        coordinator), or it is of a later generation from a robot that is
+        not next in the order of succession. Not fenced: a run of the same
+        generation (the coordinator started again) or of a later one from
+        the robot next in the order, once the one followed went. The first
+        time, the sender is told (:class:`~cfgplan.runtime.protocol.Rival`,
+        with the run followed: it stops, or steps down) and the console
         says so."""
-        if not self.epoch or self._leader_gone or isinstance(message, Duplicate):
+        if not self.epoch or isinstance(message, Duplicate):
+            return False
+        mine, theirs = generation(self.epoch), generation(message.epoch)
+        if self._leader_gone and theirs == mine:
+            return False
+        if not self.forward and theirs > mine and self.on_later is not None:
+            self.on_later(message.sender, message.epoch)  # a successor? (the coordinator decides)
+            return True
+        if theirs > mine and message.sender == self.leader and not self._leader_gone:
+            return False  # the coordinator followed counts a later generation (told of one)
+        claimed = self.succession is None or self._next(self.leader) == message.sender
+        if self._leader_gone and theirs > mine and claimed:
             return False
         if message.epoch not in self._rivals and len(self._rivals) < 16:
             self._rivals.add(message.epoch)
-            self._send(Rival(self.robot.name, message.epoch, self.leader))
+            self._send(Rival(self.robot.name, message.epoch, self.leader, self.epoch))
+            older = " (an older run, fenced off)" if theirs < mine else ""
             self.error(
-                f"a second coordinator ({message.sender}) of society {self.network.society} "
-                f"is ignored: {self.leader} coordinates it"
+                f"a second coordinator ({message.sender}){older} of society "
+                f"{self.network.society} is ignored: {self.leader} coordinates it"
             )
         return True
 
@@ -318,7 +397,9 @@ class Member:
         self.pending[number] = part
         self._ack(number, Phase.READY)
 
-    def _commit(self, number: int, data: object) -> None:
+    def _commit(self, number: int, data: object, step: int = 0) -> None:
+        if number >= self.current:
+            self.step = step  # the sequence's step (a successor goes on from it)
         if number == self.current and data is None:
             self._ack(number, Phase.INSTALLED)  # a repeated commit
             return
@@ -345,12 +426,13 @@ class Member:
         self.pending = {k: v for k, v in self.pending.items() if k > number}
         if same:
             return
+        run = (("epoch", self.epoch),) if self.epoch else ()  # whose switch it obeyed
         self.robot.record(
             Adaptation(
                 robot=self.robot.name,
                 t=time.time(),
                 what="install",
-                info=(("id", number), *installed.record()),
+                info=(("id", number), *installed.record(), *run),
             )
         )
 
@@ -400,13 +482,14 @@ class Membership:
 
     def __init__(self, member: Member, before: Any = None) -> None:
         self.member = member
-        self._before = before
+        self.injector = before
+        """What applies the scripted faults before each cycle (or None)."""
         self.stopped = False
         self.reconfigures = True
 
     def before(self, cycle: int, elapsed: float) -> None:
-        if self._before is not None:
-            self._before(cycle, elapsed)
+        if self.injector is not None:
+            self.injector(cycle, elapsed)
 
     def between(self, cycle: int, elapsed: float) -> None:
         self.member.report()

@@ -31,6 +31,8 @@ for all of ``cfgplan.runtime``, tests/runtime/test_imports.py).
 from __future__ import annotations
 
 import json
+import re
+import secrets
 from dataclasses import dataclass, field, fields
 from enum import StrEnum
 from typing import Any, ClassVar
@@ -40,6 +42,7 @@ from cfgplan.runtime.wire import is_whole, loads
 
 __all__ = [
     "MAX_BYTES",
+    "MAX_GENERATION",
     "MAX_ID",
     "MAX_NAME",
     "MAX_TEXT",
@@ -61,6 +64,8 @@ __all__ = [
     "ToRobot",
     "clip",
     "encode",
+    "generation",
+    "new_epoch",
     "read_to_coordinator",
     "read_to_robot",
 ]
@@ -93,6 +98,27 @@ class Phase(StrEnum):
     FINISHED = "finished"  # to a finish: this robot ends its run
 
 
+MAX_GENERATION = 10**15 - 1
+"""The highest generation an epoch counts (15 digits): a run claimed beyond
+it is not followed."""
+_GENERATION = re.compile(r"([0-9]{1,15})\.")
+
+
+def new_epoch(generation: int = 1) -> str:
+    """A coordinator's run, drawn when it starts coordinating:
+    ``<generation>.<16 hex digits>``. A robot that takes over coordination
+    counts one generation more than the run it followed; a robot fences
+    off every run of a lower generation than the one it follows."""
+    return f"{generation}.{secrets.token_hex(8)}"
+
+
+def generation(epoch: str) -> int:
+    """The generation an epoch counts (:func:`new_epoch`); 0 for one that
+    counts none (written before generations were, or by a stranger)."""
+    found = _GENERATION.match(epoch)
+    return int(found.group(1)) if found else 0
+
+
 def clip(text: str, most: int = MAX_TEXT) -> str:
     """``text`` cut to ``most`` characters (an ellipsis says it was)."""
     return text if len(text) <= most else text[: most - 1] + "…"
@@ -117,13 +143,16 @@ class Prepare:
 class Commit:
     """Phase two: install the part prepared for ``id`` (or ``part`` itself,
     which re-synchronises a robot that appeared). Answered ``installed`` or
-    ``refused``."""
+    ``refused``. ``step``: the step of the sequence of goals (7.3, from 0)
+    the configuration serves, which a robot that takes over coordination
+    goes on from."""
 
     OP: ClassVar[str] = "commit"
     id: int
     sender: str = field(metadata={"wire": "from"})
     epoch: str
     part: object = field(default=None, metadata={"part": True})
+    step: int = 0
 
 
 @dataclass(frozen=True)
@@ -240,13 +269,17 @@ class CallError:
 class Rival:
     """The robot follows a live coordinator, ``leader``, and a message of
     another coordinator's run (``epoch``) reached it: that one is a second
-    coordinator of the society and stops (no split brain). Sent once per
-    such epoch; the coordinator of another epoch only notes it."""
+    coordinator of the society and stops (no split brain), or, fenced off by
+    the later generation of the run the robot follows (``over``), steps
+    down and follows it. Sent once per such epoch; the coordinator of
+    another epoch only notes it."""
 
     TYPE: ClassVar[str] = "rival"
     robot: str
     epoch: str
     leader: str
+    over: str = ""
+    """The run the robot follows (``leader``'s epoch)."""
 
 
 ToCoordinator = Ack | Report | Ready | CallError | Rival
@@ -291,7 +324,7 @@ def encode(message: ToRobot | ToCoordinator) -> bytes:
     out: dict[str, object] = {key: value}
     for f in fields(message):
         data = getattr(message, f.name)
-        if data is None or (data == "" and f.default == ""):
+        if data is None or (f.default in ("", 0) and data == f.default):
             continue  # left at its default: not written
         if isinstance(data, Detection):
             data = json.loads(data.message())
@@ -322,10 +355,10 @@ def _text(data: dict[str, object], key: str, most: int, *, empty: bool = True) -
     return value
 
 
-def _id(data: dict[str, object]) -> int:
-    value = data.get("id")
+def _id(data: dict[str, object], key: str = "id", what: str = "a configuration id") -> int:
+    value = data.get(key)
     if not is_whole(value) or not 0 <= value <= MAX_ID:
-        raise ProtocolError(f"id is {value!r}, not a configuration id (0 to {MAX_ID})")
+        raise ProtocolError(f"{key} is {value!r}, not {what} (0 to {MAX_ID})")
     return value
 
 
@@ -335,9 +368,11 @@ def _fields(message: type[ToRobot] | type[ToCoordinator], data: dict[str, object
         key = f.metadata.get("wire", f.name)
         if f.name == "id":
             values[f.name] = _id(data)
+        elif f.name == "step":
+            values[f.name] = _id({key: data.get(key, 0)}, key, "a step of the sequence")
         elif f.name in ("sender", "robot", "leader"):
             values[f.name] = _text(data, key, MAX_NAME, empty=False)
-        elif f.name == "epoch":
+        elif f.name in ("epoch", "over"):
             values[f.name] = _text(data, key, MAX_NAME)
         elif f.name == "instance":
             values[f.name] = _text(data, key, MAX_NAME, empty=message is not Duplicate)

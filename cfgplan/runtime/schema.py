@@ -40,8 +40,10 @@ __all__ = [
     "Send",
     "Staleness",
     "Start",
+    "StepDown",
     "Stop",
     "SwitchEvent",
+    "Takeover",
     "TraceEvent",
 ]
 
@@ -280,6 +282,29 @@ class NoConfiguration(Base):
     latency: float | None = Field(default=None, description="Left out in a simulation's trace.")
 
 
+class Takeover(Base):
+    """This robot coordinates from now on: the coordinator it followed is gone,
+    and it is the first robot of the order of succession still alive."""
+
+    event: Literal["takeover"]
+    epoch: str = Field(description="Its run: one generation later than the one it followed.")
+    after: str = Field(description="The coordinator gone.")
+    step: int = Field(description="The step of the sequence it goes on from (0: the first).")
+    goal: str = Field(description="That step's goal.")
+    waited: float = Field(description="Seconds from the coordinator's token going to now.")
+
+
+class StepDown(Base):
+    """This coordinator follows another from now on: a robot told it that it
+    follows a run of a later generation, whose robot is alive and next in
+    the order of succession (it took over while this one stood still)."""
+
+    event: Literal["step-down"]
+    leader: str = Field(description="The coordinator followed now.")
+    epoch: str = Field(description="Its run.")
+    was: str = Field(description="This robot's own run, fenced off.")
+
+
 class Abort(Base):
     """A switch abandoned: robots refused or stayed silent."""
 
@@ -300,6 +325,11 @@ class InstallEvent(Base):
     kept_channels: int = Field(description="A count.")
     stopped_channels: list[str]
     started_channels: list[str]
+    epoch: str | None = Field(
+        default=None,
+        description="Across processes: the coordinator's run whose switch this was "
+        "(absent when one process runs every robot).",
+    )
     problems: list[str] | None = Field(
         default=None,
         description="Stop hooks that raised or overran the call budget (`F11: compass(Pippi): "
@@ -325,7 +355,9 @@ TraceEvent = Annotated[
     | SwitchEvent
     | NoConfiguration
     | Abort
-    | InstallEvent,
+    | InstallEvent
+    | Takeover
+    | StepDown,
     Field(discriminator="event"),
 ]
 """One line of the trace, told apart by ``"event"``."""

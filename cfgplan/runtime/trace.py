@@ -237,6 +237,16 @@ def adaptation(event: Adaptation) -> str | None:
         return "\n".join(lines)
     if event.what == "finish":
         return f"{head}: {_finish(event)}"
+    if event.what == "takeover":
+        return (
+            f"{head}: {f('after')}, the coordinator, is gone: {event.robot} coordinates from "
+            f"step {_number(f('step'))} on ({f('goal')}; run {f('epoch')})"
+        )
+    if event.what == "step-down":
+        return (
+            f"{head}: {f('leader')} took over coordination (run {f('epoch')}): "
+            f"{event.robot} steps down and follows it"
+        )
     if event.what == "achieved":
         return (
             f"{head}: {f('functionality')} accomplished its task: the configuration is played out"

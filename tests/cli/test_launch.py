@@ -39,9 +39,9 @@ STEP2 = [
 LIMIT = 90.0  # seconds: three interpreters, Zenoh handshakes and a run, on a loaded machine
 
 
-def _launch(*args: str) -> subprocess.Popen[str]:
+def _launch(*args: str, problem: list[str] = STEP2) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-m", "cfgplan", "launch", *STEP2, *args],
+        [sys.executable, "-m", "cfgplan", "launch", *problem, *args],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -548,6 +548,62 @@ def test_respawn_starts_a_killed_robot_again_and_the_society_takes_it_back(
     emils = [int(p) for p in re.findall(r"^Emil +\| \(started(?: again)?: pid (\d+)", out, re.M)]
     assert len(emils) == 2 and emils[0] == emil, out
     assert all(_gone(pid) for pid in [*pids, *emils])
+    assert "Traceback" not in out + err
+
+
+@pytest.mark.slow
+def test_a_sequence_whose_coordinator_is_killed_is_taken_over_and_served_to_its_end(
+    tmp_path: Path,
+) -> None:
+    """The 6.2.2 sequence launched with --respawn: Pippi, who owns the first
+    goal and coordinates, is killed (SIGKILL) while her crossing is served.
+    Emil, next in the order of succession, takes over within the lease and
+    1 s; the launch starts Pippi again 1 s later, she steps down and follows
+    him, and the sequence is served to its end under his coordination: both
+    crossings, every robot told, the launch ends by itself, exit 0, no pid
+    left. Before, nobody took over: Emil waited, stopped, for Pippi started
+    again to take her society back."""
+    from cfgplan.runtime.zenoh_config import DEFAULT_LEASE
+    from tests.reconfigure.test_sequence_network import SEQUENCE, STEPS
+
+    trace = tmp_path / "run.jsonl"
+    launched = _launch(
+        "--impl", str(STEPS), "--rate", "20", "--respawn", "--trace", str(trace), problem=SEQUENCE
+    )  # fmt: skip
+    lines, reader, until = _follow(launched)
+    emil_trace, again = tmp_path / "run-emil.jsonl", tmp_path / "run-pippi-2.jsonl"
+
+    def seen(path: Path, event: str, **fields: object) -> Callable[[], bool]:
+        return lambda: any(
+            r["event"] == event and all(r.get(k) == v for k, v in fields.items())
+            for r in read_trace(path)
+        )
+
+    try:
+        crossing = {"functionality": "cross-door", "status": "ran"}
+        until("Pippi's crossing served", seen(tmp_path / "run-pippi.jsonl", "call", **crossing))
+        pippi = _pids("".join(lines))["Pippi"]
+        killed = time.time()
+        os.kill(pippi, signal.SIGKILL)
+        until("Emil takes over", seen(emil_trace, "takeover"))
+        until("Pippi started again steps down", seen(again, "step-down", leader="Emil"))
+        launched.wait(LIMIT)
+    finally:
+        if launched.poll() is None:
+            launched.kill()
+    reader.join(10.0)
+    out, err = "".join(lines), launched.stderr.read() if launched.stderr else ""
+    assert launched.returncode == 0, f"{out}\n{err}"
+    emil = read_trace(emil_trace)
+    (takeover,) = [r for r in emil if r["event"] == "takeover"]
+    assert (takeover["after"], takeover["step"]) == ("Pippi", 0)
+    assert float(takeover["t"]) - killed < DEFAULT_LEASE + 1.0  # type: ignore[arg-type]
+    after = [r["event"] for r in emil if r["event"] in ("achieved", "finish")]
+    assert after == ["achieved", "achieved", "finish"], after
+    (finish,) = [r for r in read_trace(again) if r["event"] == "finish"]
+    assert finish["from"] == "Emil"
+    assert re.search(r"^Pippi +\| \(died, exit status 137", out, re.M), out
+    assert all(_gone(pid) for pid in _pids(out).values())
     assert "Traceback" not in out + err
 
 

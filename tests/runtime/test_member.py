@@ -189,7 +189,7 @@ def test_a_second_coordinator_is_told_it_is_a_rival_and_not_followed() -> None:
     for op, number in (("commit", 0), ("finish", 1), ("hello", 0)):
         member.receive(_message(op, number, own if op == "commit" else None, epoch="B"))
     assert member.current == 1 and member.epoch == "A" and member.finished is None
-    rival = {"type": "rival", "robot": "Emil", "epoch": "B", "leader": "Pippi"}
+    rival = {"type": "rival", "robot": "Emil", "epoch": "B", "leader": "Pippi", "over": "A"}
     assert [m for _, m in network.sent] == [rival]
     said = [dict(e.info)["message"] for e in emil.events if getattr(e, "what", "") == "error"]
     assert said == ["a second coordinator (Pippi) of society test is ignored: Pippi coordinates it"]

@@ -1,8 +1,10 @@
-"""The planner page's diagram (docs/explanation/planner.md: the graph,
-the strategies and the ranking in one picture) is laid out from its source,
-docs/images/planner.dot, by the Graphviz that pygraphviz bundles: the SVG the
-page shows must be what the source lays out now, so that an edit of the source
-without the picture (or the other way round) fails here.
+"""The site's diagrams — the planner page's (docs/explanation/planner.md: the
+graph, the strategies and the ranking in one picture) and the switch
+protocol's (docs/explanation/switch-protocol.md: who coordinates, takeover and
+fencing) — are laid out from their sources, docs/images/NAME.dot, by the
+Graphviz that pygraphviz bundles: the SVG a page shows must be what its source
+lays out now, so that an edit of the source without the picture (or the other
+way round) fails here.
 ``CFGPLAN_UPDATE_GOLDEN=1`` rewrites the SVG (look at it before committing)."""
 
 from __future__ import annotations
@@ -10,12 +12,13 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import pytest
+
 from cfgplan.backends.render import render
 from tests.backends.support import UPDATE
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "docs" / "images" / "planner.dot"
-PICTURE = ROOT / "docs" / "images" / "planner.svg"
 
 
 def _texts(svg: bytes) -> list[str]:
@@ -24,12 +27,14 @@ def _texts(svg: bytes) -> list[str]:
     return re.findall(r"<text[^>]*>([^<]*)</text>", svg.decode("utf-8"))
 
 
-def test_the_planner_diagram_is_laid_out_from_its_source() -> None:
-    laid_out = render(SOURCE.read_text(encoding="utf-8"), "svg")
+@pytest.mark.parametrize(("name", "words"), [("planner", 40), ("takeover", 20)])
+def test_a_diagram_is_laid_out_from_its_source(name: str, words: int) -> None:
+    source, picture = (ROOT / "docs" / "images" / f"{name}.{kind}" for kind in ("dot", "svg"))
+    laid_out = render(source.read_text(encoding="utf-8"), "svg")
     if UPDATE:
-        PICTURE.write_bytes(laid_out)
-    shown = _texts(PICTURE.read_bytes())
-    assert len(shown) > 40
+        picture.write_bytes(laid_out)
+    shown = _texts(picture.read_bytes())
+    assert len(shown) > words
     assert shown == _texts(laid_out)
 
 
