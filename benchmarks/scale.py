@@ -58,7 +58,7 @@ class Options:
     limit: float = 240.0  # seconds any one wait may take
     idle: float = 3.0  # seconds of the idle window
     kills: int = 3  # helpers in use killed in a row, one after the other's switch
-    between: float = 2.0  # seconds between a kill's goal data and the next kill
+    between: float = 2.0  # seconds from the killed helpers being back to the next kill
     switch_limit: float = 30.0  # seconds a kill waits for its switch
     quiet: float = 0.5  # cores others may use before a row starts (waited for)
     settle: float = 20.0  # seconds a row waits for the machine to be that quiet
@@ -263,6 +263,7 @@ class Row:
     rss_total: float = 0.0  # the robots and the router
     switches: list[float] = field(default_factory=list)  # kill -> switch, seconds
     again: list[float] = field(default_factory=list)  # kill -> goal data
+    seen: list[float] = field(default_factory=list)  # kill -> the coordinator's robot-lost
     load: tuple[float, float] = (0.0, 0.0)  # 1-min load average before, after
     others: float = 0.0  # cores the rest of the machine used during the row
 
@@ -301,7 +302,6 @@ def measure(n: int, topology: str, options: Options) -> Row:
             for _ in range(options.kills if first and n > 2 else 0):  # 2: no other helper
                 if not _kill(society, row, options):
                     break
-                time.sleep(options.between)
             ours = society.cpu()
         finally:
             os.killpg(process.pid, signal.SIGTERM)
@@ -333,6 +333,7 @@ def _kill(society: Society, row: Row, options: Options) -> bool:
     data again; False when there was none to kill or nothing followed."""
     if _until(lambda: back(society), options.switch_limit) is None:
         return False
+    time.sleep(options.between)  # the coordinator's fallbacks for the new situation
     helper = in_use(society.trace("Vacu"))
     pid = society.pids().get(helper or "")
     if helper is None or pid is None:
@@ -355,6 +356,16 @@ def _kill(society: Society, row: Row, options: Options) -> bool:
     if again is None:
         return False
     row.switches.append(float(switch) - killed)  # type: ignore[arg-type]
+    lost = next(
+        (
+            _t(r)
+            for r in society.trace("Vacu")
+            if r.get("event") == "robot-lost" and r.get("other") == helper and _t(r) > killed
+        ),
+        None,
+    )
+    if lost is not None:
+        row.seen.append(lost - killed)
     row.again.append(float(again) - killed)  # type: ignore[arg-type]
     return True
 
@@ -441,7 +452,7 @@ START_HEADER = [
     "TCP segments/s idle", "goal messages/s", "RSS per robot", "RSS total",
 ]  # fmt: skip
 KILL_HEADER = [
-    "robots", "topology", "kills", "kill → switch", "kill → goal data",
+    "robots", "topology", "kills", "kill → loss seen", "kill → switch", "kill → goal data",
     f"switch ÷ {BASE} robots'", "load before / after", "others' CPU",
 ]  # fmt: skip
 PROGRAM_HEADER = ["robot process", "CPU to its first trace line", "RSS"]
@@ -474,7 +485,8 @@ def kill_cells(row: Row, rows: list[Row]) -> list[str]:
     if base is not None and base.switches and row.switches:
         ratio = f"{statistics.median(row.switches) / statistics.median(base.switches):.1f}×"
     return [
-        str(row.n), row.topology, str(len(row.switches)), _ms(row.switches), _ms(row.again),
+        str(row.n), row.topology, str(len(row.switches)), _ms(row.seen), _ms(row.switches),
+        _ms(row.again),
         ratio, f"{row.load[0]:.1f} / {row.load[1]:.1f}", f"{row.others:.2f} cores",
     ]  # fmt: skip
 
@@ -498,9 +510,13 @@ received per second; the RSS of a robot process (the median) and of them
 all with the router. Then the helper in use is killed (SIGKILL) {kills}
 times in a row, each once the one killed before is back (launch's
 `--respawn` starts a killed helper again, and the coordinator has seen it
-recover, so that a small society has every helper to switch to): the time
+recover, and {between:g} s more for its fallbacks, so that a small society
+has every helper to switch to and the coordinator a plan ready): the time
 from the kill to the coordinator's switch and to the goal's data again
-(median, min–max), and the median switch over the same topology's among
+(median, min–max), the first of them split off: the kill to the
+coordinator's `robot-lost` (Zenoh: the router, or the peer, sees the
+connection close and withdraws the robot's liveliness token), and the
+median switch over the same topology's among
 {base} robots. The machine is shared: each row waits until other work takes
 under {quiet:g} cores, records the load average before and after (the
 society's own processes raise it), and the cores everything else used
@@ -521,10 +537,31 @@ TARGETS = """\
 
 {findings}
 
-What a robot process is, as it starts: most of its CPU at start is the
-interpreter and the libraries the planner is built on (pydantic, Lark,
-typer) and the planner's own modules; the program `cfgplan emit --lang
-python` writes for a robot imports only the runtime:
+**Why a switch among many takes longer.** The coordinator's own part, from
+its `robot-lost` to the switch from fallbacks planned ahead, stays at a
+few milliseconds at every size (the `latency` of its `switch` event); what
+grows is the kill to `robot-lost` (the column "kill → loss seen"): the
+router sees the killed robot's connection close, withdraws everything that
+robot declared (liveliness tokens, subscribers, interests) from every other
+client, and the coordinator's token deletion is one of those messages.
+Every robot declares a handful of tokens and subscribers and watches every
+other's, so that work grows with N at each death, on two cores that the
+idle society and other work share.
+
+**Why all 50 take seconds to come up.** Started together, the robots share
+the machine's cores: what each does before its trace begins is CPU, and
+that CPU times N over the cores is the floor. Alone, a robot process of
+`cfgplan run --robot` takes about 0.3 s of CPU to its first trace line
+(`python -X importtime`: about 0.25 s of it imports — the interpreter's
+site, typer, pydantic and the intermediate representation's models, Lark,
+the planner's modules, the runtime and Zenoh — then reading the domain and
+planning, 0.06 s); 50 of them on 2 cores are 7 to 8 s of that alone, and
+under contention each takes more. Without bytecode on disk
+(`PYTHONDONTWRITEBYTECODE` in a source checkout, as this machine's
+environment sets) every robot compiles cfgplan again: 0.47 s each, 12 s at
+50. What would cut it further is a helper that does not plan: the program
+`cfgplan emit --lang python` writes for a robot imports only the runtime
+and follows its coordinator, installing the parts it is sent:
 
 {programs}
 """
@@ -562,7 +599,7 @@ def findings(rows: list[Row]) -> str:
         out.append(f"- **Connections** through the router: {links} (one per robot).")
         if meshed:
             mesh = ", ".join(f"{r.connections} at {r.n}" for r in meshed)
-            out.append(f"  In a mesh: {mesh} (N·(N−1)/2).")
+            out.append(f"  In a mesh: {mesh} (launch asks for N·(N−1)/2; Zenoh may add more).")
         per = ", ".join(f"{r.idle_segments / r.n:.1f} at {r.n}" for r in routed)
         out.append(f"- **Idle traffic** per robot, TCP segments a second: {per}.")
         if meshed:
@@ -590,30 +627,77 @@ def findings(rows: list[Row]) -> str:
     return "\n".join(out)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+def page(shown: str, options: Options, facts: str, tables: list[str], found: str) -> str:
+    """The documentation page of a run: ``tables`` the start, kill and program tables."""
+    intro = INTRO.format(
+        rate=options.rate, idle=options.idle, kills=options.kills, base=BASE,
+        between=options.between,
+        quiet=options.quiet, limit=options.limit,
+    )  # fmt: skip
+    start, kills, program = tables
+    targets = TARGETS.format(findings=found, programs=program)
+    return PAGE_TEXT.format(
+        shown=shown, intro=intro, facts=facts, start=start, kills=kills, targets=targets
+    )
+
+
+def rewrite(path: Path) -> None:
+    """Write the page at ``path`` again with this module's words, its run's
+    facts, tables and findings kept (nothing is measured)."""
+    text = path.read_text(encoding="utf-8")
+    made = re.search(r"^Made with `python -m benchmarks\.scale ?(.*?)`; run it again", text, re.M)
+    run = text.split("## The last run\n", 1)
+    if made is None or len(run) != 2:
+        raise SystemExit(f"{path}: not a page benchmarks.scale wrote")
+    blocks = [b.strip("\n") for b in run[1].split("\n\n")]
+    facts = next(b for b in blocks if b.startswith("- machine:"))
+    tables = [b.strip() for b in blocks if b.startswith("|")][:3]
+    said = run[1].split("## What the table says\n\n", 1)[1].split("\n\n", 1)[0]
+    args = parser().parse_args(shlex.split(made[1]))
+    shown = shlex.join(["python", "-m", "benchmarks.scale", *shlex.split(made[1])])
+    path.write_text(page(shown, options_of(args), facts, tables, said), encoding="utf-8")
+
+
+def parser() -> argparse.ArgumentParser:
+    """The command line of ``python -m benchmarks.scale``."""
+    out = argparse.ArgumentParser(
         prog="python -m benchmarks.scale", description=__doc__.split("\n")[0]
     )
-    parser.add_argument(
+    out.add_argument(
         "--sizes", default="2,3,5,10,20,50", help="robots in the society (2,3,5,10,20,50)"
     )
-    parser.add_argument(
+    out.add_argument(
         "--mesh-sizes",
         default="2,3,5,10",
         help="sizes also run as a mesh (2,3,5,10; a mesh of 50 takes minutes to start)",
     )
-    parser.add_argument("--kills", type=int, default=3, help="helpers killed per row (3)")
-    parser.add_argument("--limit", type=float, default=240.0, help="seconds each wait may take")
-    parser.add_argument("--idle", type=float, default=3.0, help="seconds of the idle window")
-    parser.add_argument("--quiet", type=float, default=0.3, help="others' cores a row allows")
-    parser.add_argument("--no-compile", action="store_true", help="do not compile cfgplan first")
-    parser.add_argument("--markdown", type=Path, help="also write the documentation page here")
-    args = parser.parse_args(argv)
+    out.add_argument("--kills", type=int, default=3, help="helpers killed per row (3)")
+    out.add_argument("--limit", type=float, default=240.0, help="seconds each wait may take")
+    out.add_argument("--idle", type=float, default=3.0, help="seconds of the idle window")
+    out.add_argument("--quiet", type=float, default=0.5, help="others' cores a row allows (0.5)")
+    out.add_argument("--no-compile", action="store_true", help="do not compile cfgplan first")
+    out.add_argument("--markdown", type=Path, help="also write the documentation page here")
+    out.add_argument(
+        "--rewrite", type=Path, metavar="PAGE", help="write PAGE again in this module's words"
+    )
+    return out
+
+
+def options_of(args: argparse.Namespace) -> Options:
+    return Options(limit=args.limit, idle=args.idle, kills=args.kills, quiet=args.quiet)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    if args.rewrite:
+        rewrite(args.rewrite)
+        print(f"wrote {args.rewrite}")
+        return 0
     # SIGTERM (a timeout) ends the run as Ctrl-C does: each launch is stopped by its finally
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     sizes = [int(s) for s in args.sizes.split(",")]
     meshes = {int(s) for s in args.mesh_sizes.split(",") if s}
-    options = Options(limit=args.limit, idle=args.idle, kills=args.kills, quiet=args.quiet)
+    options = options_of(args)
     if not args.no_compile:
         compileall.compile_dir(ROOT / "cfgplan", quiet=1)
     started, load = time.monotonic(), os.getloadavg()[0]
@@ -649,15 +733,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.markdown:
         given = sys.argv[1:] if argv is None else argv
         shown = shlex.join(["python", "-m", "benchmarks.scale", *given])
-        intro = INTRO.format(
-            rate=options.rate, idle=options.idle, kills=options.kills, base=BASE,
-            quiet=options.quiet, limit=options.limit,
-        )  # fmt: skip
-        targets = TARGETS.format(findings=findings(rows), programs=program)
-        text = PAGE_TEXT.format(
-            shown=shown, intro=intro, facts="\n".join(facts), start=start, kills=kills,
-            targets=targets,
-        )  # fmt: skip
+        text = page(shown, options, "\n".join(facts), [start, kills, program], findings(rows))
         args.markdown.write_text(text, encoding="utf-8")
         print(f"\nwrote {args.markdown}")
     return 0
