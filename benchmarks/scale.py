@@ -537,16 +537,19 @@ TARGETS = """\
 
 {findings}
 
-**Why a switch among many takes longer.** The coordinator's own part, from
-its `robot-lost` to the switch from fallbacks planned ahead, stays at a
-few milliseconds at every size (the `latency` of its `switch` event); what
-grows is the kill to `robot-lost` (the column "kill → loss seen"): the
-router sees the killed robot's connection close, withdraws everything that
-robot declared (liveliness tokens, subscribers, interests) from every other
-client, and the coordinator's token deletion is one of those messages.
-Every robot declares a handful of tokens and subscribers and watches every
-other's, so that work grows with N at each death, on two cores that the
-idle society and other work share.
+**Why a switch among many takes longer.** A switch after a kill has two
+parts, and the table splits them: Zenoh's, the kill to the coordinator's
+`robot-lost` ("kill → loss seen": the router sees the killed robot's
+connection close and withdraws everything that robot declared, liveliness
+tokens, subscribers and interests, from every other client, the
+coordinator's token deletion among them), and cfgplan's, from that
+`robot-lost` to the `switch` (the rest of "kill → switch": the failure
+taken, the fallback planned ahead chosen, the steps of the switch sent).
+Both grow with N here: every robot declares a handful of tokens and
+subscribers and watches every other's, and the coordinator's loop, which
+takes the loss on its next pass, shares two cores with the idle society
+and other work. Profiling the coordinator's pass at 50 robots is what is
+left to do.
 
 **Why all 50 take seconds to come up.** Started together, the robots share
 the machine's cores: what each does before its trace begins is CPU, and
