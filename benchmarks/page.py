@@ -87,6 +87,11 @@ every size of a grid on the [sweeps page](benchmark-sweeps.md)
 steps planned alone, delegation to any robot, and randomised structured
 domains.
 
+Planning is one side of a society's speed; the runtime is the other: the
+[scale page](scale.md) (`python -m benchmarks.scale`) launches societies of 2
+to 50 robots and measures their start-up, idle traffic, memory and the time
+to switch when the helper in use is killed, with the router and in a mesh.
+
 `--against REV` prints instead one table that puts cfgplan at git revision REV
 beside this one, each instance planned by both in turn. Where planning takes
 milliseconds, times are mostly noise: the [instruction counts](instructions.md)

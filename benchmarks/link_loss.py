@@ -1,0 +1,334 @@
+"""Loss on one link, a healthy robot beside it: ``python -m benchmarks.link_loss``.
+
+Carry-bar with three robots (6.3.2 with a third): Pippi carries the bar and
+coordinates, Emil and Rasmus can each help her (each has a laser; the
+cheapest configuration uses Emil). Pippi and Rasmus share one network
+namespace, a healthy link between them; Emil sits in another, behind the
+lossy link of :mod:`benchmarks.lossy_link` (a forwarder between two TUN
+devices that drops a seeded share of the packets: TCP sees real loss). After
+the goal is served, Emil's link loses ``--loss`` of its packets for
+``--seconds``; then it heals. Emil is lost, and the goal should go on with
+Rasmus; Rasmus, on the healthy link, should never be lost.
+
+Each topology runs ``--trials`` times, side by side:
+
+* *router* — ``cfgplan launch``'s default: every robot a client of one Zenoh
+  router (``cfgplan router``) in Pippi's namespace;
+* *mesh* — every robot a peer linked to every other (``--topology mesh``).
+
+The table counts the trials in which Pippi lost Rasmus (``robot-lost`` or a
+failure of him), the longest time the goal stood still (a
+``no-configuration`` to the next switch), the trials in which Emil was lost
+(the loss bit), and the share of the loss's cycles in which Pippi's action
+ran. ``--markdown FILE`` writes the documentation's page
+(``docs/explanation/link-loss.md``). Needs root, ``ip`` (iproute2) and
+``/dev/net/tun``; every process is stopped by its pid and the namespaces are
+deleted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import shlex
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from benchmarks.fault_conditions import Record, read_trace
+from benchmarks.lossy_link import LinkUnavailable, NetnsLink
+from benchmarks.page import revision
+from benchmarks.reconfigure import ROOT, table
+from benchmarks.run import machine
+
+DOMAIN = ROOT / "domains" / "carry-bar" / "domain.lisp"
+STATE = """\
+(state robot(Pippi), robot(Emil), robot(Rasmus), sonar(Pippi), sonar(Emil), sonar(Rasmus),
+       odometer(Pippi), odometer(Emil), odometer(Rasmus), laser(Emil), laser(Rasmus),
+       in(Pippi, Room1), in(Emil, Room1), in(Rasmus, Room1))
+(goal (do-carry-bar Pippi))
+"""
+HERMETIC = "{ scouting: { multicast: { enabled: false }, gossip: { enabled: false } } }"
+TOPOLOGIES = ("router", "mesh")
+PORT = 7447  # inside the namespaces: nobody else listens there
+SIDES = {"Pippi": 0, "Rasmus": 0, "Emil": 1}
+GOAL = "lead-robot"  # Pippi's action
+
+
+@dataclass(frozen=True)
+class Options:
+    """Tuning of the benchmark."""
+
+    trials: int = 3
+    loss: float = 0.5
+    seconds: float = 30.0  # how long the loss lasts
+    settle: float = 3.0  # seconds of service before the loss
+    startup: float = 90.0  # bound on the first service
+    watch: float = 20.0  # bound on the service again after the link heals
+    seed: int = 57
+
+
+@dataclass
+class Trial:
+    """What one trial saw in Pippi's trace."""
+
+    healthy_lost: bool = False
+    lossy_lost: bool = False
+    stopped: float = 0.0  # the longest no-configuration, seconds
+    served: float = 0.0  # share of the loss's cycles in which the goal ran
+    events: list[str] = field(default_factory=list)  # Pippi's, from the loss on
+
+
+def network(topology: str, link: NetnsLink) -> dict[str, list[str]]:
+    """Each robot's network options: clients of a router in Pippi's namespace,
+    or (``mesh``) peers each linked to every other, as launch starts them."""
+    here, there = link.addresses
+    if topology == "router":
+        return {r: ["--router", f"tcp/{here}:{PORT}"] for r in SIDES}
+    pippi, rasmus, emil = f"tcp/{here}:{PORT}", f"tcp/{here}:{PORT + 1}", f"tcp/{there}:{PORT}"
+    return {
+        "Pippi": ["--listen", pippi],
+        "Rasmus": ["--listen", rasmus, "--connect", pippi],
+        "Emil": ["--listen", emil, "--connect", pippi, "--connect", rasmus],
+    }
+
+
+def about(record: Record, robot: str) -> bool:
+    """A loss of ``robot``: its ``robot-lost``, or a failure of it."""
+    return (record["event"] == "robot-lost" and record.get("other") == robot) or (
+        record["event"] == "failure" and record.get("resource") == robot
+    )
+
+
+def _t(record: Record) -> float:
+    return float(record["t"])  # type: ignore[arg-type]
+
+
+def _ran(trace: Path, after: float) -> Record | None:
+    for r in read_trace(trace):
+        if (
+            r["event"] == "call"
+            and r.get("functionality") == GOAL
+            and r.get("status") == "ran"
+            and _t(r) > after
+        ):
+            return r
+    return None
+
+
+def _until(found: object, limit: float) -> Record | None:
+    deadline = time.monotonic() + limit
+    while time.monotonic() < deadline:
+        got = found()  # type: ignore[operator]
+        if got is not None:
+            return got  # type: ignore[no-any-return]
+        time.sleep(0.05)
+    return None
+
+
+def run_trial(topology: str, options: Options, link: NetnsLink, folder: Path) -> Trial:
+    """One trial (see the module's docstring)."""
+    config, state, impl = folder / "zenoh.json5", folder / "state.lisp", folder / "impl.py"
+    config.write_text(HERMETIC)
+    state.write_text(STATE)
+    example = (ROOT / "examples" / "carry-bar" / "impl.py").read_text("utf-8")
+    impl.write_text(f'{example}\nWORLD["Rasmus"] = (3.5, 4.0, 0.0)\n')
+    traces = {r: folder / f"{r.lower()}.jsonl" for r in SIDES}
+    common = ["--impl", str(impl), "--zenoh-config", str(config), "--society", "link-loss"]
+    bound = options.startup + options.settle + options.seconds + options.watch + 30
+    common += ["--rate", "10", "--duration", f"{bound:g}"]
+    started: list[subprocess.Popen[bytes]] = []
+
+    def start(side: int, args: list[str], name: str) -> None:
+        with open(folder / f"{name}.log", "wb") as log:
+            command = link.wrap(side, [sys.executable, "-m", "cfgplan", *args])
+            started.append(
+                subprocess.Popen(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
+            )
+
+    try:
+        if topology == "router":
+            start(0, ["router", "--listen", f"tcp/{link.addresses[0]}:{PORT}"], "router")
+        for robot, extra in network(topology, link).items():
+            args = ["run", str(DOMAIN), str(state), "--robot", robot, *common, *extra]
+            start(SIDES[robot], [*args, "--trace", str(traces[robot])], robot)
+        if _until(lambda: _ran(traces["Pippi"], 0.0), options.startup) is None:
+            raise RuntimeError(f"{GOAL} never ran within {options.startup:g} s")
+        time.sleep(options.settle)
+        began = time.time()
+        link.set(loss=options.loss)
+        time.sleep(options.seconds)
+        link.set()
+        healed = time.time()
+        _until(lambda: _ran(traces["Pippi"], healed), options.watch)
+    finally:
+        link.set()
+        for process in started:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(process.pid, signal.SIGTERM)
+        for process in started:
+            try:
+                process.wait(10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(10)
+    return measure(read_trace(traces["Pippi"]), began, healed)
+
+
+def measure(pippi: list[Record], began: float, healed: float) -> Trial:
+    """The trial's figures from Pippi's trace; the loss lasted ``began`` to ``healed``."""
+    trial = Trial()
+    trial.healthy_lost = any(about(r, "Rasmus") for r in pippi)
+    trial.lossy_lost = any(about(r, "Emil") for r in pippi)
+    stop: float | None = None
+    for r in pippi:
+        if r["event"] == "no-configuration" and stop is None:
+            stop = _t(r)
+        elif r["event"] == "switch" and stop is not None:
+            trial.stopped = max(trial.stopped, _t(r) - stop)
+            stop = None
+    if stop is not None and pippi:
+        trial.stopped = max(trial.stopped, _t(pippi[-1]) - stop)
+    ran = sum(
+        1
+        for r in pippi
+        if r["event"] == "call"
+        and r.get("functionality") == GOAL
+        and r.get("status") == "ran"
+        and began <= _t(r) <= healed
+    )
+    trial.served = ran / max(1.0, 10 * (healed - began))
+    for r in pippi:
+        if _t(r) >= began - 0.5 and r["event"] in ("robot-lost", "no-configuration", "switch"):
+            what = r.get("other") or r.get("cause") or ""
+            trial.events.append(f"+{_t(r) - began:.2f}s {r['event']} {what}")
+    return trial
+
+
+HEADER = [
+    "topology",
+    "trials",
+    "healthy Rasmus lost",
+    "goal stopped, longest",
+    "lossy Emil lost",
+    "served during loss",
+]
+
+
+def row(topology: str, trials: list[Trial]) -> list[str]:
+    n = len(trials)
+    served = statistics.median(t.served for t in trials) if trials else 0.0
+    return [
+        topology,
+        str(n),
+        f"{sum(t.healthy_lost for t in trials)}/{n}",
+        f"{max((t.stopped for t in trials), default=0.0):.1f} s",
+        f"{sum(t.lossy_lost for t in trials)}/{n}",
+        f"{100 * served:.0f} %",
+    ]
+
+
+INTRO = """\
+`python -m benchmarks.link_loss` asks whether loss on one robot's link can
+cost a robot on a healthy one. Carry-bar with a third robot: Pippi carries
+the bar and coordinates; Emil and Rasmus can each help her (the cheapest
+configuration uses Emil). Pippi and Rasmus share a network namespace (a
+healthy link); Emil sits in another, behind a forwarder between two TUN
+devices that drops {loss:.0%} of the packets for {seconds:g} s, then heals.
+Emil is lost and the goal should go on with Rasmus; Rasmus should never be
+lost. Each topology runs {trials} times: *router*, launch's default (every
+robot a client of one Zenoh router beside Pippi), and *mesh* (every robot
+a peer linked to every other).
+
+Columns, from Pippi's trace: the trials in which she lost Rasmus, the
+longest time her goal stood still (no configuration, until the next
+switch), the trials in which Emil was lost (the loss bit), and the share of
+the loss's cycles in which her action ran (median).
+"""
+
+PAGE = """\
+<!-- Written by `{shown}`: do not edit by hand. -->
+
+# Loss on one link
+
+{intro}
+## The last run
+
+{facts}
+
+{table}
+
+{evidence}Made with `{shown}`; run it again to regenerate this page. What the
+figures mean, and what is left, is on the [faults page](faults.md).
+"""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.link_loss", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument("--trials", type=int, default=3, help="trials per topology (3)")
+    parser.add_argument("--seconds", type=float, default=30.0, help="the loss lasts (30)")
+    parser.add_argument("--loss", type=float, default=0.5, help="share of packets dropped (0.5)")
+    parser.add_argument("--topology", action="append", choices=TOPOLOGIES, help="default: both")
+    parser.add_argument("--seed", type=int, default=57, help="the link's dropped packets (57)")
+    parser.add_argument("--markdown", type=Path, help="also write the documentation page here")
+    args = parser.parse_args(argv)
+    options = Options(trials=args.trials, loss=args.loss, seconds=args.seconds, seed=args.seed)
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
+    try:
+        link = NetnsLink(seed=options.seed)
+    except LinkUnavailable as error:
+        print(f"error: {error} (sudo apt-get install -y iproute2; run as root)", file=sys.stderr)
+        return 1
+    load, started = os.getloadavg()[0], time.monotonic()
+    rows, evidence = [], []
+    try:
+        for topology in args.topology or TOPOLOGIES:
+            trials = []
+            for k in range(options.trials):
+                with tempfile.TemporaryDirectory(prefix="cfgplan-link-loss-") as name:
+                    trial = run_trial(topology, options, link, Path(name))
+                trials.append(trial)
+                print(f"{topology} #{k + 1}: {row(topology, [trial])}", file=sys.stderr)
+                if trial.healthy_lost:
+                    evidence.append(f"- {topology}, trial {k + 1}:")
+                    evidence += [f"    {e}" for e in trial.events]
+            rows.append(row(topology, trials))
+    finally:
+        link.close()
+    facts = [
+        f"- machine: {machine()}",
+        f"- date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",
+        f"- revision: `{revision()}`",
+        f"- link: {link.kind}; loss seed {options.seed}",
+        f"- load average (1 min) before / after: {load:.2f} / {os.getloadavg()[0]:.2f}; "
+        f"{time.monotonic() - started:.0f} s in all",
+    ]
+    lines = table(HEADER, rows)
+    print("\n".join([*facts, "", lines]))
+    if evidence:
+        print("\nTrials in which Rasmus was lost (Pippi's events from the loss on):")
+        print("\n".join(evidence))
+    if args.markdown:
+        given = sys.argv[1:] if argv is None else argv
+        shown = shlex.join(["python", "-m", "benchmarks.link_loss", *given])
+        heading = "### Trials in which Rasmus was lost: Pippi's events from the loss on"
+        over = "\n".join([heading, "", "```text", *evidence, "```", "", ""]) if evidence else ""
+        intro = INTRO.format(loss=options.loss, seconds=options.seconds, trials=options.trials)
+        text = PAGE.format(
+            shown=shown, intro=intro, facts="\n".join(facts), table=lines, evidence=over
+        )
+        args.markdown.write_text(text, encoding="utf-8")
+        print(f"\nwrote {args.markdown}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
