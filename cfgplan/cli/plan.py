@@ -36,6 +36,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
 from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
+from cfgplan.planner.options import SearchOptions
 from cfgplan.problem import Problem
 
 if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-up)
@@ -46,6 +47,7 @@ if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-u
 # nothing is found.
 
 FORMATS = ("table", "lisp", "json", "jsonl")
+ENGINES = ("search", "solver")
 K = 10
 """How many configurations ``plan`` lists without ``-k``."""
 
@@ -60,6 +62,7 @@ def _plan(
     distinct: bool,
     time_limit: float | None,
     asked: _Asked,
+    options: SearchOptions,
 ) -> tuple[Run, list[Configuration], bool | None]:
     """Plan (streaming what is proven when asked to); with ``-k N`` the search
     looks ahead for one more, within as much work again, to say whether more
@@ -72,7 +75,9 @@ def _plan(
         distinct,
         time_limit,
         _progress,
-        ahead=limit is not None and asked.listing,
+        # The solver finds the first configuration and looks no further.
+        ahead=limit is not None and asked.listing and not options.solver,
+        options=options,
     )
     configs: list[Configuration] = []
     for config in search:
@@ -235,6 +240,20 @@ def plan(
             show_default=False,
         ),
     ] = 0.0,
+    engine: Annotated[
+        str,
+        typer.Option(
+            "--engine",
+            metavar="|".join(ENGINES),
+            parser=choice_of(ENGINES, "an engine"),
+            autocompletion=completing(ENGINES),
+            help="How -k 1 finds the cheapest: search (best first, the default) or solver "
+            "(clingo proves the cheapest cost, then a walk in the thesis's order finds the "
+            "same configuration as the search; where the cost is not proven within the time "
+            "limit, the search goes on).",
+            show_default=False,
+        ),
+    ] = "search",
     fallbacks: Annotated[
         bool,
         typer.Option(
@@ -256,19 +275,26 @@ def plan(
         usage_error("shows one configuration; -k and --all list several: give one", "--rank")
     if all_ and k is not None:
         usage_error("lists that many; --all lists every one: give one", "-k")
+    if engine == "solver" and (all_ or (k or K) != 1 or (rank or 1) != 1):
+        usage_error("finds the cheapest configuration only: it goes with -k 1", "--engine")
     with errors_as_json(format_):  # input errors on stdout too, as JSON
         if output is not None:
             check_target(output, force)  # before planning, which may take long
         problem = load_problem(domain, state, goal, weights, sequence=True)
         limit = rank if rank is not None else (None if all_ else (k or K))
         if len(problem.goals) > 1:
+            if engine == "solver":
+                usage_error("plans one goal: a sequence is planned by the search", "--engine")
             from cfgplan.cli.sequence import SequenceOptions, plan_sequences
 
             options = SequenceOptions(limit, switch, time_limit, verbose, details, rank)
             write_output(plan_sequences(problem, options, format_), output, force)
             return
         asked = _Asked(format_, details, rank or 1, rank is None, output, force)
-        search, configs, more = _plan(problem, limit, not derivations, time_limit, asked)
+        engine_options = SearchOptions(solver=engine == "solver")
+        search, configs, more = _plan(
+            problem, limit, not derivations, time_limit, asked, engine_options
+        )
         if verbose:
             _verbose(search)
         if search.stopped:

@@ -110,6 +110,13 @@ class SearchOptions:
     a shorter walk costs less than pricing its deviations (the wall family's
     are one or two)."""
 
+    solver: bool = False
+    """``-k 1`` by the solver (:mod:`cfgplan.planner.solver`): the cheapest cost
+    bracketed, then the first configuration of that cost in the thesis's order
+    by a walk the relaxation guides; the same configuration as the search's,
+    found without its ties. Where the bracket does not close in the time
+    given (or costs have no unit), the search plans as without it."""
+
     dive: bool = True
     """When a limit stops the search before anything was proven, dive greedily
     from the open nodes for a configuration (:mod:`cfgplan.planner.dive`,

@@ -187,6 +187,8 @@ class Run:
     """The strategies' settings and switches (parts apart, the look-ahead's
     least work, ...), given to every grower of the run."""
     more: bool | None = field(init=False, default=False)
+    solved: bool = field(init=False, default=False)
+    """The solver's bracket closed (:attr:`SearchOptions.solver`)."""
     """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
     strategy: BestFirst | Combined | Windows = field(init=False)
     explained: Report | None = field(init=False, default=None)
@@ -206,8 +208,34 @@ class Run:
 
     def _search(self) -> Iterator[Configuration]:
         """The configurations, cheapest first: the goal's parts apart, if it has some."""
+        if self.options.solver and self.limit == 1 and isinstance(self.strategy, BestFirst):
+            solved = self._solved()
+            if solved is not None:
+                yield solved
+                return
         self._divide()
         yield from self.strategy
+
+    def _solved(self) -> Configuration | None:
+        """:attr:`SearchOptions.solver`: the first cheapest configuration by the
+        solver's bracket and walk, or None (the bracket did not close within
+        half the time limit, or nothing is admissible: the search goes on from
+        the start, and says why nothing is). What comes after it is not looked
+        for (:attr:`more` is None)."""
+        from cfgplan.planner import solver
+
+        grower = self.strategy.grower
+        left = clock.remaining()
+        try:  # the bracket takes at most half of a time limit, the search has the rest
+            found = solver.bracket(grower.grounder, self.goal, None if left is None else left / 2)
+            if not found.exact or found.upper is None:
+                # Open, or nothing admissible: the search says why (its dead ends).
+                return None
+            config = solver.first(grower, self.goal, found.lower)
+        except (solver.Unsupported, clock.OutOfTime):
+            return None  # the search goes on (and stops at once when out of time)
+        self.solved = config is not None
+        return config
 
     def _divide(self) -> None:
         """Search the goal's independent parts apart, if it has some (:func:`in_parts`)."""
@@ -236,7 +264,7 @@ class Run:
                 for config in prefix.take(self._search()):
                     listed += 1
                     yield config
-            self.more = prefix.more
+            self.more = None if self.solved and listed else prefix.more
             if prefix.cut:
                 self.stats.complete = False
         except KeyboardInterrupt:

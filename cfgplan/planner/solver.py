@@ -47,9 +47,15 @@ from dataclasses import dataclass
 from fractions import Fraction
 from importlib import resources
 
+from cfgplan.configuration.model import Configuration
+from cfgplan.planner import clock
 from cfgplan.planner.graph import Graph, graph_of
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.grow import Grower
 from cfgplan.planner.levels import unit_of
+from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.report import DeadEnd
+from cfgplan.planner.successors import successors
 from cfgplan.planner.task import Ground, Task
 
 Choices = Mapping[Ground, int]
@@ -257,3 +263,91 @@ def bracket(grounder: Grounder, goal: Ground, seconds: float | None = None) -> B
     rest = None if seconds is None else max(0.0, seconds - (time.monotonic() - started))
     exact = _optimum(facts, "exact", unit, rest)
     return Bracket(relaxed.bound, exact.best)
+
+
+def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None:
+    """The first configuration of cost ``cheapest`` in the thesis's order: the
+    depth-first walk of 4.5 (method versions in domain order, bindings in state
+    order), entering a child only while its settled cost is at most ``cheapest``
+    and the relaxation, with every expansion and binding made on the way to it
+    assumed, still has a model that costs at most ``cheapest``.
+
+    The relaxation admits every completion of a derivation, so a child it rules
+    out has no completion at that cost: the walk skips no configuration of cost
+    ``cheapest``, and the first it completes is the first in the thesis's order
+    (labels and all). Where the relaxation is as tight as the bracket (every
+    shape measured), the walk goes straight down, one solver call per choice it
+    declines; where it is not, it backtracks. ``grower`` finishes the complete
+    nodes (step 4, and in distinct mode a derivation seen before is skipped);
+    None: nothing costs ``cheapest``."""
+    import clingo
+
+    task = grower.grounder.task
+    unit = task.levels.unit
+    if unit is None:
+        raise Unsupported("costs have no unit (a reliability weight adds logarithms)")
+    facts = _facts(task, graph_of(grower.grounder), goal)
+    bound = Fraction(repr(cheapest)) / unit
+    # Core-guided under an initial bound: a refusal is a lower bound above it,
+    # which usc proves as it goes (an enumeration to the bound took minutes).
+    control = clingo.Control([f"--opt-mode=opt,{int(bound)}", "--opt-strategy=usc", "--warn=none"])
+    control.add("base", [], resources.files(__package__).joinpath("configure.lp").read_text())
+    control.add("base", [], "\n".join(facts.lines))
+    control.ground([("base", []), ("relaxed", [])])
+
+    witness: set[clingo.Symbol] = set()
+    """The choices of the last model found: any assumptions it makes true need no call."""
+
+    def possible(assumed: frozenset[clingo.Symbol]) -> bool:
+        """Whether the relaxation has a model of cost at most ``cheapest`` with
+        ``assumed`` (the first model within the bound ends the call)."""
+        if assumed <= witness:
+            return True
+        clock.check()
+
+        def keep(model: clingo.Model) -> bool:
+            witness.clear()
+            witness.update(a for a in model.symbols(atoms=True) if a.name in ("use", "bind"))
+            return False
+
+        result = control.solve(assumptions=[(a, True) for a in assumed], on_model=keep)
+        return bool(result.satisfiable)
+
+    def atom(node: Partial, child: Partial) -> clingo.Symbol | None:
+        """What ``child`` chose for ``node``'s top item, as an atom of the model."""
+        item = node.stack[0]
+        if item.call in node.labels:  # a functionality already in C: reused
+            return None
+        n = facts.calls[item.call]
+        if n in facts.methods:
+            return clingo.Function("use", [clingo.Number(n), clingo.Number(child.path[-1])])
+        chose = child.path[-1] if len(child.path) > len(node.path) else 0
+        return clingo.Function("bind", [clingo.Number(n), clingo.Number(chose)])
+
+    if not possible(frozenset()):
+        return None
+    stack: list[tuple[Partial, frozenset[clingo.Symbol]]] = [(root(goal), frozenset())]
+    while stack:
+        clock.check()
+        node, assumed = stack.pop()
+        grower.stats.nodes += 1
+        if node.done:
+            total = task.levels.cost(node.cost)
+            admitted = grower.admit(node, total) if total == cheapest else None
+            if admitted is not None:
+                return grower.build(admitted)
+            continue
+        entered = []
+        grower.stats.expansions += 1
+        for child in successors(grower.grounder, node):
+            if isinstance(child, DeadEnd):
+                grower.report.note(child)
+                continue
+            if task.levels.cost(child.cost) > cheapest:
+                continue
+            chosen = atom(node, child)
+            more = assumed if chosen is None or chosen in assumed else assumed | {chosen}
+            if more is assumed or possible(more):
+                entered.append((child, more))
+        stack.extend(reversed(entered))
+    return None

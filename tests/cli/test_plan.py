@@ -248,3 +248,22 @@ def test_table_says_when_more_configurations_exist(cfgplan: Run) -> None:
     assert "note: at least one more configuration exists: -k 11 lists up to 11" in cut.stdout
     whole = cfgplan("plan", *CROSS, "-k", "2")
     assert "more configuration" not in whole.stdout
+
+
+def test_the_solver_engine_lists_what_the_search_lists_first(cfgplan: Run) -> None:
+    """``--engine solver`` (-k 1): the configuration the search lists first, the
+    cost-44 one of 6.2.2 step 1 (Fig. 6.3), byte for byte in JSON but for the
+    search's statistics; without -k 1 it is a usage error (exit 2)."""
+    searched = cfgplan("plan", *CROSS, "-k", "1", "--format", "json")
+    solved = cfgplan("plan", *CROSS, "-k", "1", "--format", "json", "--engine", "solver")
+    assert solved.returncode == 0, solved.stderr
+    by_search, by_solver = json.loads(searched.stdout), json.loads(solved.stdout)
+    assert by_solver["configurations"] == by_search["configurations"]
+    assert by_solver["configurations"][0]["cost"] == 44
+    assert by_solver["stats"]["more"] is False  # the solver does not look for a second
+    for more in ([], ["--all"], ["-k", "2"], ["--rank", "2"]):
+        wrong = cfgplan("plan", *CROSS, "--engine", "solver", *more)
+        assert wrong.returncode == 2 and "-k 1" in wrong.stderr, more
+    steps = ("domains/cross-door/domain-steps.lisp", "domains/cross-door/state-6.2.2-sequence.lisp")
+    sequence = cfgplan("plan", *steps, "-k", "1", "--engine", "solver")
+    assert sequence.returncode == 2 and "sequence" in sequence.stderr

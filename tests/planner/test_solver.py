@@ -16,9 +16,11 @@ from hypothesis import given
 
 from benchmarks.families import any_delegation, conversion, dag, structured
 from benchmarks.families.weak import mutual
+from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.solver import Bracket, Unsupported, bracket
 from cfgplan.problem import Problem
 from tests.planner.generated import generated
@@ -180,3 +182,50 @@ def test_a_bracket_cut_short_still_brackets() -> None:
         cut = bracket(Grounder(p.task), p.goal_call, seconds)
         assert cut.lower <= full.lower
         assert cut.upper is None or cut.upper.cost >= full.lower
+
+
+SOLVER = SearchOptions(solver=True)
+
+
+@pytest.mark.quick(25)
+@PROPERTY
+@given(generated())
+def test_the_solver_engine_finds_the_searchs_first_configuration(example: Generated) -> None:
+    """``-k 1`` by the solver (the bracket, then the walk the relaxation guides)
+    lists what the best-first search lists first: the same configuration of the
+    same cost, the first of that cost in the thesis's order, with its labels,
+    channel order and derivation number; or, like it, nothing."""
+    searched, _ = plan(solve(example).task, solve(example).goal_call, limit=1)
+    p = solve(example)
+    solved, run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
+    assert [c.model_dump() for c in solved] == [c.model_dump() for c in searched]
+    if solved and not p.task.weights.reliability:
+        assert run.solved  # found by the solver, not by the search it falls back to
+
+
+@pytest.mark.parametrize("pieces", [20, 24])
+def test_the_solver_engine_plans_past_the_searchs_cliff(pieces: int) -> None:
+    """``structured`` at 20 and 24 pieces: the search does not end within 20 s
+    (docs/explanation/planner.md); the solver engine plans it, at the cost the
+    bracket proves, and the configuration is admissible by the independent
+    checker (:mod:`cfgplan.configuration.admissible`)."""
+    p = load_text(*structured(1, pieces=pieces))
+    (config,), run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
+    assert run.solved
+    assert config.cost == of(load_text(*structured(1, pieces=pieces))).lower
+    assert problems(config, p.domain, p.state) == []
+
+
+def test_where_the_solver_cannot_bracket_the_search_plans() -> None:
+    """With a reliability weight costs have no unit and there is no bracket:
+    the solver engine leaves ``-k 1`` to the search, which lists the same."""
+    texts = (
+        (DOMAINS / "cross-door/domain.lisp").read_text(encoding="utf-8"),
+        (DOMAINS / "cross-door/state-6.2.2-step1.lisp").read_text(encoding="utf-8"),
+    )
+    p = load_text(*texts, Weights(reliability=2))
+    searched, _ = plan(p.task, p.goal_call, limit=1)
+    p = load_text(*texts, Weights(reliability=2))
+    solved, run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
+    assert not run.solved
+    assert [c.model_dump() for c in solved] == [c.model_dump() for c in searched] != []
