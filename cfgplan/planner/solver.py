@@ -276,8 +276,9 @@ def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None
     out has no completion at that cost: the walk skips no configuration of cost
     ``cheapest``, and the first it completes is the first in the thesis's order
     (labels and all). Where the relaxation is as tight as the bracket (every
-    shape measured), the walk goes straight down, one solver call per choice it
-    declines; where it is not, it backtracks. ``grower`` finishes the complete
+    shape measured), the walk goes straight down, with a solver call for each
+    choice it declines and each one the last model found does not make; where
+    it is not, it backtracks. ``grower`` finishes the complete
     nodes (step 4, and in distinct mode a derivation seen before is skipped);
     None: nothing costs ``cheapest``."""
     import clingo
@@ -324,12 +325,14 @@ def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None
         chose = child.path[-1] if len(child.path) > len(node.path) else 0
         return clingo.Function("bind", [clingo.Number(n), clingo.Number(chose)])
 
-    if not possible(frozenset()):
-        return None
+    # A child is checked when the walk comes to it, not when it is made: where
+    # its elder sibling completes, it is never checked.
     stack: list[tuple[Partial, frozenset[clingo.Symbol]]] = [(root(goal), frozenset())]
     while stack:
         clock.check()
         node, assumed = stack.pop()
+        if not possible(assumed):
+            continue
         grower.stats.nodes += 1
         if node.done:
             total = task.levels.cost(node.cost)
@@ -346,8 +349,6 @@ def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None
             if task.levels.cost(child.cost) > cheapest:
                 continue
             chosen = atom(node, child)
-            more = assumed if chosen is None or chosen in assumed else assumed | {chosen}
-            if more is assumed or possible(more):
-                entered.append((child, more))
+            entered.append((child, assumed if chosen is None else assumed | {chosen}))
         stack.extend(reversed(entered))
     return None
