@@ -46,6 +46,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from importlib import resources
+from typing import TYPE_CHECKING
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
@@ -57,6 +58,9 @@ from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.report import DeadEnd
 from cfgplan.planner.successors import successors
 from cfgplan.planner.task import Ground, Task
+
+if TYPE_CHECKING:
+    import clingo
 
 Choices = Mapping[Ground, int]
 """Per method instance the number of its expansion (:attr:`Option.choice`), per
@@ -104,6 +108,8 @@ class _Facts:
     calls: dict[Ground, int]
     names: dict[int, Ground]
     methods: set[int]
+    unit: Fraction
+    """The unit costs are counted in (:attr:`cfgplan.planner.task.Task.levels`)."""
 
 
 def _units(values: list[float], unit: Fraction) -> list[int]:
@@ -194,7 +200,21 @@ def _facts(task: Task, graph: Graph, goal: Ground) -> _Facts:
             if m.sender in agents and m.receiver in agents:
                 cap = _units([m.capacity], width_unit)[0]
                 lines.append(f"medium({i},{agents[m.sender]},{agents[m.receiver]},{cap}).")
-    return _Facts(lines, calls, {v: k for k, v in calls.items()}, methods)
+    return _Facts(lines, calls, {v: k for k, v in calls.items()}, methods, cost_unit)
+
+
+def _grounded(facts: _Facts, program: str, mode: str) -> clingo.Control:
+    """The encoding and ``facts`` grounded with ``program`` (``exact`` or
+    ``relaxed``), for clasp's optimisation ``mode``, core-guided (``usc``): it
+    proves lower bounds as it goes, and on shapes with long plateaus of equal
+    cost ends where branch and bound does not."""
+    import clingo  # imported here: only a run that asks for the solver loads it
+
+    control = clingo.Control([f"--opt-mode={mode}", "--opt-strategy=usc", "--warn=none"])
+    control.add("base", [], resources.files(__package__).joinpath("configure.lp").read_text())
+    control.add("base", [], "\n".join(facts.lines))
+    control.ground([("base", []), (program, [])])
+    return control
 
 
 @dataclass(frozen=True, slots=True)
@@ -208,17 +228,10 @@ class _Run:
     ended: bool
 
 
-def _optimum(facts: _Facts, program: str, unit: Fraction, seconds: float | None) -> _Run:
+def _optimum(facts: _Facts, program: str, seconds: float | None) -> _Run:
     """Optimise ``program`` (``exact`` or ``relaxed``) over ``facts`` for at most
-    ``seconds`` (None: to the end). Core-guided optimisation (clasp's ``usc``)
-    proves lower bounds as it goes: on shapes with long plateaus of equal cost
-    it ends where branch and bound does not."""
-    import clingo  # imported here: only a run that brackets needs the solver
-
-    control = clingo.Control(["--opt-mode=opt", "--opt-strategy=usc", "--warn=none"])
-    control.add("base", [], resources.files(__package__).joinpath("configure.lp").read_text())
-    control.add("base", [], "\n".join(facts.lines))
-    control.ground([("base", []), (program, [])])
+    ``seconds`` (None: to the end)."""
+    control = _grounded(facts, program, "opt")
     found: list[tuple[int, Sequence[clingo.Symbol]]] = []
 
     def keep(model: clingo.Model) -> None:
@@ -241,8 +254,8 @@ def _optimum(facts: _Facts, program: str, unit: Fraction, seconds: float | None)
             if symbol.name in ("use", "bind") and len(symbol.arguments) == 2:
                 instance, choice = (a.number for a in symbol.arguments)
                 choices.setdefault(facts.names[instance], choice)
-        best = Model(float(cost * unit), choices)
-    return _Run(best, float(max(0.0, bound) * unit), bool(result.exhausted))
+        best = Model(float(cost * facts.unit), choices)
+    return _Run(best, float(max(0.0, bound) * facts.unit), bool(result.exhausted))
 
 
 def bracket(grounder: Grounder, goal: Ground, seconds: float | None = None) -> Bracket:
@@ -250,18 +263,14 @@ def bracket(grounder: Grounder, goal: Ground, seconds: float | None = None) -> B
     given at most half of ``seconds`` (and the second what the first left);
     None: no limit. Raises :class:`Unsupported` when costs or bandwidths have no
     unit."""
-    task = grounder.task
-    unit = task.levels.unit
-    if unit is None:
-        raise Unsupported("costs have no unit (a reliability weight adds logarithms)")
     started = time.monotonic()
-    facts = _facts(task, graph_of(grounder), goal)
+    facts = _facts(grounder.task, graph_of(grounder), goal)
     half = None if seconds is None else max(0.0, seconds - (time.monotonic() - started)) / 2
-    relaxed = _optimum(facts, "relaxed", unit, half)
+    relaxed = _optimum(facts, "relaxed", half)
     if relaxed.bound == math.inf:
         return Bracket(math.inf, None)
     rest = None if seconds is None else max(0.0, seconds - (time.monotonic() - started))
-    exact = _optimum(facts, "exact", unit, rest)
+    exact = _optimum(facts, "exact", rest)
     return Bracket(relaxed.bound, exact.best)
 
 
@@ -284,17 +293,10 @@ def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None
     import clingo
 
     task = grower.grounder.task
-    unit = task.levels.unit
-    if unit is None:
-        raise Unsupported("costs have no unit (a reliability weight adds logarithms)")
     facts = _facts(task, graph_of(grower.grounder), goal)
-    bound = Fraction(repr(cheapest)) / unit
     # Core-guided under an initial bound: a refusal is a lower bound above it,
     # which usc proves as it goes (an enumeration to the bound took minutes).
-    control = clingo.Control([f"--opt-mode=opt,{int(bound)}", "--opt-strategy=usc", "--warn=none"])
-    control.add("base", [], resources.files(__package__).joinpath("configure.lp").read_text())
-    control.add("base", [], "\n".join(facts.lines))
-    control.ground([("base", []), ("relaxed", [])])
+    control = _grounded(facts, "relaxed", f"opt,{int(Fraction(repr(cheapest)) / facts.unit)}")
 
     witness: set[clingo.Symbol] = set()
     """The choices of the last model found: any assumptions it makes true need no call."""
