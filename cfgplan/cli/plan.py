@@ -85,6 +85,8 @@ def _plan(
         if asked.stream:  # printed as soon as it is proven
             sys.stdout.write(formats.streamed(problem, config, len(configs), asked.format))
             sys.stdout.flush()
+    if options.solver:  # it finds the first and does not look for a second
+        return search, configs, None
     return search, configs, search.more if search.ahead else False
 
 
@@ -290,7 +292,9 @@ def plan(
             options = SequenceOptions(limit, switch, time_limit, verbose, details, rank)
             write_output(plan_sequences(problem, options, format_), output, force)
             return
-        asked = _Asked(format_, details, rank or 1, rank is None, output, force)
+        # The solver's one configuration is no listing: the table says nothing of more.
+        listing = rank is None and engine != "solver"
+        asked = _Asked(format_, details, rank or 1, listing, output, force)
         engine_options = SearchOptions(solver=engine == "solver")
         search, configs, more = _plan(
             problem, limit, not derivations, time_limit, asked, engine_options

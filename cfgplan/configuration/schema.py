@@ -116,7 +116,8 @@ class SearchStats(Closed):
     more: bool | None = Field(
         description="True when `-k` cut the list and more configurations exist; null when "
         "that is not known (the search for one more stopped at its work limit: as much "
-        "work again as the listed ones took)."
+        "work again as the listed ones took; or `--engine solver`, which finds the first "
+        "and does not look for a second)."
     )
     nodes: int = Field(description="Partial configurations created.")
     expansions: int = Field(description="Nodes expanded.")

@@ -260,7 +260,9 @@ def test_the_solver_engine_lists_what_the_search_lists_first(cfgplan: Run) -> No
     by_search, by_solver = json.loads(searched.stdout), json.loads(solved.stdout)
     assert by_solver["configurations"] == by_search["configurations"]
     assert by_solver["configurations"][0]["cost"] == 44
-    assert by_solver["stats"]["more"] is False  # the solver does not look for a second
+    assert by_solver["stats"]["more"] is None  # the solver does not look for a second
+    table = cfgplan("plan", *CROSS, "-k", "1", "--engine", "solver")
+    assert "44" in table.stdout and "more configuration" not in table.stdout  # nor claims one
     for more in ([], ["--all"], ["-k", "2"], ["--rank", "2"]):
         wrong = cfgplan("plan", *CROSS, "--engine", "solver", *more)
         assert wrong.returncode == 2 and "-k 1" in wrong.stderr, more
