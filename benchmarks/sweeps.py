@@ -30,6 +30,7 @@ alike; the two must agree on the best cost.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
@@ -39,6 +40,7 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 from benchmarks import families
 from benchmarks.run import ROOT, checkout, machine
@@ -63,11 +65,14 @@ class Measured:
         return f"{self.seconds:.2f}" if self.seconds is not None else f"> {cap:g}"
 
 
-def measure(command: list[str], cwd: Path, cap: float) -> Measured:
+def measure(command: list[str], cwd: Path, cap: float, out: IO[bytes] | None = None) -> Measured:
     """Run ``command`` (a ``cfgplan plan ... --format json``) as a fresh
-    process: wall time from start to exit, and its own peak RSS."""
+    process: wall time from start to exit, and its own peak RSS; its output
+    is left in ``out`` when given."""
     start = time.perf_counter()
-    with tempfile.TemporaryFile() as out:
+    with contextlib.ExitStack() as stack:
+        if out is None:
+            out = stack.enter_context(tempfile.TemporaryFile())
         process = subprocess.Popen(command, cwd=cwd, stdout=out, stderr=subprocess.DEVNULL)
         try:
             _, status, usage = os.wait4(process.pid, 0)

@@ -51,6 +51,7 @@ def stats(search: Run, more: bool | None = False) -> dict[str, object]:
     s = search.stats
     return {
         "more": more,
+        "engine": search.engine.value,
         "nodes": s.nodes,
         "expansions": s.expansions,
         "derivations": s.derivations,

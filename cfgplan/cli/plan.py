@@ -36,7 +36,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
 from cfgplan.notation import call_text
 from cfgplan.planner import Run, Stats
-from cfgplan.planner.options import SearchOptions
+from cfgplan.planner.options import RACE, SearchOptions
 from cfgplan.problem import Problem
 
 if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-up)
@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-u
 # nothing is found.
 
 FORMATS = ("table", "lisp", "json", "jsonl")
-ENGINES = ("search", "solver")
+ENGINES = ("both", "search", "solver")
 K = 10
 """How many configurations ``plan`` lists without ``-k``."""
 
@@ -85,7 +85,7 @@ def _plan(
         if asked.stream:  # printed as soon as it is proven
             sys.stdout.write(formats.streamed(problem, config, len(configs), asked.format))
             sys.stdout.flush()
-    if options.solver:  # it finds the first and does not look for a second
+    if options.solver or search.raced:  # the first is found, and no second looked for
         return search, configs, None
     return search, configs, search.more if search.ahead else False
 
@@ -161,9 +161,9 @@ def _print(
         if backups is not None:
             text += fallback_lisp(configs[0], backups, first)
     else:
-        text = formats.table(
-            problem, configs, asked.details, more if asked.listing else False, first
-        )
+        # Where the solver ran (alone or racing), no second was looked for: nothing to say.
+        noted = more if asked.listing and not search.raced else False
+        text = formats.table(problem, configs, asked.details, noted, first)
         if backups is not None:
             text += fallback_table(configs[0], backups, first)
     write_output(text, asked.output, asked.force)
@@ -249,13 +249,15 @@ def plan(
             metavar="|".join(ENGINES),
             parser=choice_of(ENGINES, "an engine"),
             autocompletion=completing(ENGINES),
-            help="How -k 1 finds the cheapest: search (best first, the default) or solver "
-            "(clingo proves the cheapest cost, then a walk in the thesis's order finds the "
-            "same configuration as the search; where the cost is not proven within the time "
-            "limit, the search goes on).",
+            help="How -k 1 finds the cheapest: both (the default: the search, and where it "
+            "has not ended after a moment the solver beside it in a second process; the "
+            "first to end answers, with the same configuration), search (best first, alone) "
+            "or solver (clingo proves the cheapest cost, then a walk in the thesis's order "
+            "finds the same configuration as the search; where the cost is not proven within "
+            "the time limit, the search goes on).",
             show_default=False,
         ),
-    ] = "search",
+    ] = "both",
     fallbacks: Annotated[
         bool,
         typer.Option(
@@ -295,7 +297,9 @@ def plan(
         # The solver's one configuration is no listing: the table says nothing of more.
         listing = rank is None and engine != "solver"
         asked = _Asked(format_, details, rank or 1, listing, output, force)
-        engine_options = SearchOptions(solver=engine == "solver")
+        engine_options = SearchOptions(
+            solver=engine == "solver", race=RACE if engine == "both" else None
+        )
         search, configs, more = _plan(
             problem, limit, not derivations, time_limit, asked, engine_options
         )

@@ -111,13 +111,21 @@ class MediumEntry(Closed):
 
 
 class SearchStats(Closed):
-    """How the search went."""
+    """How the search went: the work of the engine that answered. Where the
+    solver raced the search (`-k 1`, `--engine both`, once the search had not
+    ended after a moment), which one answered first may differ from run to run;
+    the configurations do not."""
 
     more: bool | None = Field(
         description="True when `-k` cut the list and more configurations exist; null when "
         "that is not known (the search for one more stopped at its work limit: as much "
-        "work again as the listed ones took; or `--engine solver`, which finds the first "
-        "and does not look for a second)."
+        "work again as the listed ones took; or the solver ran, alone or racing the "
+        "search: it finds the first and does not look for a second)."
+    )
+    engine: Literal["search", "solver"] = Field(
+        description="Which engine found the configurations: the best-first search, or the "
+        "solver (`--engine solver`, or the solver's process that raced the search and ended "
+        "first)."
     )
     nodes: int = Field(description="Partial configurations created.")
     expansions: int = Field(description="Nodes expanded.")

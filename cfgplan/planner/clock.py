@@ -11,7 +11,7 @@ through every call, :func:`limit` sets it for the search that runs in its
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -30,6 +30,9 @@ class Work:
 
 
 _work: ContextVar[Work | None] = ContextVar("cfgplan_work", default=None)
+
+_beside: ContextVar[Callable[[], None] | None] = ContextVar("cfgplan_beside", default=None)
+"""Called at every :func:`check` (:func:`beside`)."""
 
 
 class OutOfTime(Exception):
@@ -61,9 +64,22 @@ def limit(deadline: float | None) -> Iterator[None]:
         _deadline.reset(token)
 
 
+@contextmanager
+def beside(tick: Callable[[], None]) -> Iterator[None]:
+    """Call ``tick`` at every :func:`check` of the block: what runs beside the
+    search and may end it, by raising (the solver's process racing it,
+    :mod:`cfgplan.planner.portfolio`)."""
+    token = _beside.set(tick)
+    try:
+        yield
+    finally:
+        _beside.reset(token)
+
+
 def check() -> None:
     """Raise :class:`OutOfTime` if the current deadline has passed, and
-    :class:`OutOfWork` if the work allowed is spent (one step of it)."""
+    :class:`OutOfWork` if the work allowed is spent (one step of it); call what
+    runs :func:`beside` the block."""
     deadline = _deadline.get()
     if deadline is not None and time.perf_counter() > deadline:
         raise OutOfTime
@@ -72,6 +88,9 @@ def check() -> None:
         work.done += 1
         if work.most is not None and work.done > work.most:
             raise OutOfWork
+    tick = _beside.get()
+    if tick is not None:
+        tick()
 
 
 def remaining() -> float | None:

@@ -20,6 +20,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+RACE = 2_000
+"""The :attr:`SearchOptions.race` of ``cfgplan plan``: about a fifth of a second
+of search (the thesis's instances take under a hundred steps), after which the
+solver's process costs the search nothing on a second core."""
+
 
 @dataclass(frozen=True)
 class SearchOptions:
@@ -117,6 +122,14 @@ class SearchOptions:
     found without its ties. Where the bracket does not close in the time
     given (or costs have no unit), the search plans as without it."""
 
+    race: int | None = None
+    """``-k 1``: the steps of the clock (:func:`cfgplan.planner.clock.check`, a
+    measure of work that is the same on every machine) the search makes alone
+    before the solver's process is started beside it, the first of the two to
+    end answering (:mod:`cfgplan.planner.portfolio`); None: the search alone.
+    ``cfgplan plan`` races after :data:`RACE` steps (its ``--engine both``); a
+    library caller that runs threads of its own (a robot's runtime, with
+    Zenoh's) does not: a fork copies only the thread that forks."""
     dive: bool = True
     """When a limit stops the search before anything was proven, dive greedily
     from the open nodes for a configuration (:mod:`cfgplan.planner.dive`,

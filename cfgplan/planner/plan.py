@@ -35,7 +35,7 @@ from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
-from cfgplan.planner.report import Report, Stats, StopReason
+from cfgplan.planner.report import Engine, Report, Stats, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
@@ -187,9 +187,16 @@ class Run:
     """The strategies' settings and switches (parts apart, the look-ahead's
     least work, ...), given to every grower of the run."""
     more: bool | None = field(init=False, default=False)
-    solved: bool = field(init=False, default=False)
-    """The solver's bracket closed (:attr:`SearchOptions.solver`)."""
-    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
+    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`; None
+    when the solver ran (it finds the first configuration and looks no further)."""
+    engine: Engine = field(init=False, default=Engine.SEARCH)
+    """Which engine found the configurations."""
+    raced: bool = field(init=False, default=False)
+    """The solver's process was started beside the search
+    (:attr:`SearchOptions.race`): whoever answered, the first configuration is
+    all the run looks for (:attr:`more` is None)."""
+    answered: Stats | None = field(init=False, default=None)
+    """The work of the solver's process, when it answered the race."""
     strategy: BestFirst | Combined | Windows = field(init=False)
     explained: Report | None = field(init=False, default=None)
     """Why nothing was found, when the bounds cut the dead ends before the
@@ -207,34 +214,83 @@ class Run:
             self.strategy = BestFirst(made, pricer, self.goal, self.progress)
 
     def _search(self) -> Iterator[Configuration]:
-        """The configurations, cheapest first: the goal's parts apart, if it has some."""
-        if self.options.solver and self.limit == 1 and isinstance(self.strategy, BestFirst):
+        """The configurations, cheapest first: the goal's parts apart, if it
+        has some; for ``-k 1`` by the solver (:attr:`SearchOptions.solver`),
+        or with the solver's process racing the search (:attr:`SearchOptions.race`)."""
+        first_only = self.limit == 1 and isinstance(self.strategy, BestFirst)
+        if self.options.solver and first_only:
             solved = self._solved()
             if solved is not None:
                 yield solved
                 return
+        if self.options.race is not None and first_only and self.task.levels.unit is not None:
+            # (costs without a unit have no bracket: nothing to race)
+            from cfgplan.planner import portfolio  # loaded when asked for (start-up)
+
+            if portfolio.FORKS:
+                yield from self._race(self.options.race)
+                return
         self._divide()
         yield from self.strategy
 
+    def _race(self, after: int) -> Iterator[Configuration]:
+        """The first configuration, by the search or by the solver's process
+        started beside it after ``after`` steps (:mod:`cfgplan.planner.portfolio`),
+        whichever ends first. Nothing is yielded while the child runs: the
+        caller's own clock steps are not the race's."""
+        from cfgplan.planner import portfolio
+
+        found: Configuration | None = None
+        try:
+            with portfolio.racing(self._in_child, after) as rival:
+                self._divide()
+                searched = iter(self.strategy)
+                found = next(searched, None)
+        except portfolio.Overtaken as won:
+            self.raced = True
+            self.engine = Engine.SOLVER
+            config, self.answered = won.answer
+            yield config
+            return
+        self.raced = rival.started
+        if found is None:
+            return
+        yield found
+        if not self.raced:  # alone all along: as without the race
+            yield from searched
+
+    def _in_child(self) -> tuple[Configuration, Stats] | None:
+        """The solver's answer and its work, in the racing child."""
+        grower = growing(self.task, self.options, self.distinct)[0]
+        config = self._by_solver(grower, share=1.0)
+        return None if config is None else (config, grower.stats)
+
+    def _by_solver(self, grower: Grower, share: float = 0.5) -> Configuration | None:
+        """The first cheapest configuration by the solver's bracket (in at most
+        ``share`` of the time left) and walk; None when the bracket does not close or
+        nothing is admissible. Raises :class:`solver.Unsupported` (costs without
+        a unit) and :class:`clock.OutOfTime`."""
+        from cfgplan.planner import solver
+
+        left = clock.remaining()
+        found = solver.bracket(grower.grounder, self.goal, None if left is None else left * share)
+        if not found.exact or found.upper is None:
+            return None  # open, or nothing admissible: the search says why (its dead ends)
+        return solver.first(grower, self.goal, found.lower)
+
     def _solved(self) -> Configuration | None:
         """:attr:`SearchOptions.solver`: the first cheapest configuration by the
-        solver's bracket and walk, or None (the bracket did not close within
-        half the time limit, or nothing is admissible: the search goes on from
-        the start, and says why nothing is). What comes after it is not looked
+        solver (:meth:`_by_solver`), or None: the search goes on from the start
+        (and stops at once when out of time). What comes after it is not looked
         for (:attr:`more` is None)."""
         from cfgplan.planner import solver
 
-        grower = self.strategy.grower
-        left = clock.remaining()
-        try:  # the bracket takes at most half of a time limit, the search has the rest
-            found = solver.bracket(grower.grounder, self.goal, None if left is None else left / 2)
-            if not found.exact or found.upper is None:
-                # Open, or nothing admissible: the search says why (its dead ends).
-                return None
-            config = solver.first(grower, self.goal, found.lower)
+        try:
+            config = self._by_solver(self.strategy.grower)
         except (solver.Unsupported, clock.OutOfTime):
-            return None  # the search goes on (and stops at once when out of time)
-        self.solved = config is not None
+            return None
+        if config is not None:
+            self.engine = Engine.SOLVER
         return config
 
     def _divide(self) -> None:
@@ -244,7 +300,8 @@ class Run:
 
     @property
     def stats(self) -> Stats:
-        return self.strategy.stats
+        """The work of the engine that answered."""
+        return self.strategy.stats if self.answered is None else self.answered
 
     @property
     def report(self) -> Report:
@@ -264,8 +321,9 @@ class Run:
                 for config in prefix.take(self._search()):
                     listed += 1
                     yield config
-            self.more = None if self.solved and listed else prefix.more
-            if prefix.cut:
+            first_only = self.engine is Engine.SOLVER or self.raced
+            self.more = None if first_only and listed else prefix.more
+            if prefix.cut or self.raced:
                 self.stats.complete = False
         except KeyboardInterrupt:
             self.stats.complete = False

@@ -35,6 +35,14 @@ class StopReason(Enum):
     INTERRUPTED = "interrupted"
 
 
+class Engine(Enum):
+    """Which engine found a run's configurations: the best-first search, or
+    the solver (:mod:`cfgplan.planner.solver`, :mod:`cfgplan.planner.portfolio`)."""
+
+    SEARCH = "search"
+    SOLVER = "solver"
+
+
 class DeadEnd(NamedTuple):
     """Why a branch ended: ``where`` it happened, the ``reason``, the source
     ``span`` when it points into the domain, and the condition broken."""

@@ -274,6 +274,14 @@ def bracket(grounder: Grounder, goal: Ground, seconds: float | None = None) -> B
     return Bracket(relaxed.bound, exact.best)
 
 
+def upper(grounder: Grounder, goal: Ground, seconds: float | None = None) -> Model | None:
+    """The cheapest configuration that expands every instance one way (the
+    ``exact`` program alone, for at most ``seconds``): what a planner built on a
+    solver over the ground instances answers, without the relaxation's proof.
+    The benchmarks' reference (``python -m benchmarks.engines``); None: none found."""
+    return _optimum(_facts(grounder.task, graph_of(grounder), goal), "exact", seconds).best
+
+
 def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None:
     """The first configuration of cost ``cheapest`` in the thesis's order: the
     depth-first walk of 4.5 (method versions in domain order, bindings in state

@@ -21,6 +21,7 @@ from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
+from cfgplan.planner.report import Engine
 from cfgplan.planner.solver import Bracket, Unsupported, bracket
 from cfgplan.problem import Problem
 from tests.planner.generated import generated
@@ -200,7 +201,9 @@ def test_the_solver_engine_finds_the_searchs_first_configuration(example: Genera
     solved, run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
     assert [c.model_dump() for c in solved] == [c.model_dump() for c in searched]
     if solved and not p.task.weights.reliability:
-        assert run.solved  # found by the solver, not by the search it falls back to
+        assert (
+            run.engine is Engine.SOLVER
+        )  # found by the solver, not by the search it falls back to
 
 
 @pytest.mark.parametrize("pieces", [20, 24])
@@ -211,7 +214,7 @@ def test_the_solver_engine_plans_past_the_searchs_cliff(pieces: int) -> None:
     checker (:mod:`cfgplan.configuration.admissible`)."""
     p = load_text(*structured(1, pieces=pieces))
     (config,), run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
-    assert run.solved
+    assert run.engine is Engine.SOLVER
     assert config.cost == of(load_text(*structured(1, pieces=pieces))).lower
     assert problems(config, p.domain, p.state) == []
 
@@ -227,5 +230,5 @@ def test_where_the_solver_cannot_bracket_the_search_plans() -> None:
     searched, _ = plan(p.task, p.goal_call, limit=1)
     p = load_text(*texts, Weights(reliability=2))
     solved, run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
-    assert not run.solved
+    assert run.engine is Engine.SEARCH
     assert [c.model_dump() for c in solved] == [c.model_dump() for c in searched] != []

@@ -1,0 +1,175 @@
+"""The search and the solver's process racing for ``-k 1`` (:mod:`cfgplan.planner.portfolio`).
+
+The race itself with stand-in engines (who wins, that the child is gone by its
+pid however the race ends, that nothing forks within the search's own budget or
+beside other threads), then the planner's race: the same configuration as the
+search alone on random domains, and past the search's cliff the solver's.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import replace
+from typing import cast
+
+import pytest
+from hypothesis import given
+
+from benchmarks.families import structured
+from cfgplan.configuration.admissible import problems
+from cfgplan.planner import clock, plan
+from cfgplan.planner.options import SearchOptions
+from cfgplan.planner.portfolio import Answer, Overtaken, Rival, racing
+from cfgplan.planner.report import Engine
+from tests.planner.generated import generated
+from tests.planner.problems import PROPERTY, Generated, load_text, solve
+from tests.planner.test_thesis import problem
+
+LIMIT = 20.0
+"""No wait below is longer (seconds)."""
+
+
+def searching(rival: Rival, until: float = LIMIT) -> Iterator[int]:
+    """Steps of a stand-in search's clock for at most ``until`` seconds, the child's pid as it runs."""
+    end = time.monotonic() + until
+    while time.monotonic() < end:
+        clock.check()
+        yield -1 if rival.pid is None else rival.pid
+        time.sleep(0.001)
+
+
+def gone(pid: int) -> bool:
+    """Whether process ``pid`` has ended and been waited for."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def answering() -> Answer:
+    return cast(Answer, ("the solver's configuration", "its work"))
+
+
+def sleeping() -> Answer:
+    time.sleep(LIMIT)
+    return answering()  # not if it is killed first
+
+
+def failing() -> Answer:
+    raise RuntimeError("no bracket")
+
+
+def test_the_childs_answer_ends_the_search_and_the_child() -> None:
+    pids = set()
+    with pytest.raises(Overtaken) as won, racing(answering, after=3) as rival:
+        for pid in searching(rival):
+            pids.add(pid)
+    assert won.value.answer == answering()
+    assert rival.started and rival.pid is None
+    started = pids - {-1}
+    assert len(started) == 1 and gone(started.pop())
+
+
+def test_a_search_that_ends_first_has_the_child_killed() -> None:
+    with racing(sleeping, after=0) as rival:
+        for steps, pid in enumerate(searching(rival)):
+            if steps == 50:
+                break
+    assert rival.started and rival.pid is None
+    assert pid > 0 and gone(pid)
+    assert rival.status is not None and os.WIFSIGNALED(rival.status)
+    assert os.WTERMSIG(rival.status) == signal.SIGKILL
+
+
+@pytest.mark.parametrize("engine", [lambda: None, failing])
+def test_a_child_without_an_answer_leaves_the_search_alone(engine: object) -> None:
+    pids = set()
+    with racing(cast("type[Answer]", engine), after=0) as rival:
+        for pid in searching(rival):
+            pids.add(pid)
+            if rival.gave_up:
+                break
+        for _ in range(100):  # the search goes on; no second child
+            clock.check()
+            pids.add(-1 if rival.pid is None else rival.pid)
+    assert rival.gave_up and rival.started and rival.pid is None
+    started = pids - {-1}
+    assert len(started) == 1 and gone(started.pop())
+
+
+def test_nothing_forks_within_the_searchs_budget() -> None:
+    with racing(answering, after=1000) as rival:
+        for _ in range(999):
+            clock.check()
+    assert not rival.started
+
+
+def test_nothing_forks_beside_other_threads() -> None:
+    """A fork copies only the thread that forks (a robot's runtime runs Zenoh's)."""
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait, args=(LIMIT,))
+    other.start()
+    try:
+        with racing(answering, after=0) as rival:
+            for _ in range(100):
+                clock.check()
+    finally:
+        stop.set()
+        other.join(LIMIT)
+    assert not rival.started and rival.gave_up
+
+
+RACE = SearchOptions(race=0)
+"""The solver's process is started at the search's first step."""
+
+
+@pytest.mark.quick(10)
+@PROPERTY
+@given(generated())
+def test_the_race_finds_the_searchs_first_configuration(example: Generated) -> None:
+    """Whoever wins, the race lists what the search alone lists first: the same
+    configuration of the same cost, labels, channel order and derivation number."""
+    p = solve(example)
+    searched, _ = plan(p.task, p.goal_call, limit=1)
+    p = solve(example)
+    raced, run = plan(p.task, p.goal_call, limit=1, options=RACE)
+    assert [c.model_dump() for c in raced] == [c.model_dump() for c in searched]
+    if raced and not p.task.weights.reliability:  # costs with a unit: a race was run
+        assert run.raced and run.more is None
+
+
+def test_a_search_within_its_budget_runs_alone() -> None:
+    """The thesis's 6.2.2 step 1 (Fig. 6.3, cost 44) ends long before the
+    solver would start: nothing forks, and the run lists and counts what the
+    search alone does (the more note included)."""
+    p = problem("cross-door/domain.lisp", "cross-door/state-6.2.2-step1.lisp")
+    alone, run_alone = plan(p.task, p.goal_call, limit=1)
+    p = problem("cross-door/domain.lisp", "cross-door/state-6.2.2-step1.lisp")
+    raced, run = plan(p.task, p.goal_call, limit=1, options=SearchOptions(race=2_000))
+    assert [c.model_dump() for c in raced] == [c.model_dump() for c in alone]
+    assert raced[0].cost == 44
+    assert not run.raced and run.engine is Engine.SEARCH
+    assert replace(run.stats, seconds=0) == replace(run_alone.stats, seconds=0)
+
+
+@pytest.mark.slow
+def test_past_the_searchs_cliff_the_solver_answers() -> None:
+    """``structured`` seed 2 with 16 pieces: the search alone takes about 13 s
+    (docs/explanation/planner.md), the solver about one. Raced, the solver's
+    process answers: the configuration the solver alone finds (the search's
+    first, as the solver's own tests show), admissible by the independent
+    checker, with the solver's work."""
+    texts = structured(2, pieces=16)
+    p = load_text(*texts)
+    (alone,), _ = plan(p.task, p.goal_call, limit=1, options=SearchOptions(solver=True))
+    p = load_text(*texts)
+    (raced,), run = plan(p.task, p.goal_call, limit=1, options=RACE)
+    assert run.engine is Engine.SOLVER and run.raced and run.more is None
+    assert raced.model_dump() == alone.model_dump()
+    assert problems(raced, p.domain, p.state) == []
+    assert run.stats.derivations == 1  # the walk's, not the search's thousands of nodes
