@@ -20,8 +20,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-RACE = 2_000
-"""The :attr:`SearchOptions.race` of ``cfgplan plan``: about a fifth of a second
+RACE = 1_000
+"""The :attr:`SearchOptions.race` of ``cfgplan plan``: about a tenth of a second
 of search (the thesis's instances take under a hundred steps), after which the
 solver's process costs the search nothing on a second core."""
 

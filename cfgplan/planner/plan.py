@@ -261,19 +261,21 @@ class Run:
 
     def _in_child(self) -> tuple[Configuration, Stats] | None:
         """The solver's answer and its work, in the racing child."""
+        from cfgplan.planner import solver
+
         grower = growing(self.task, self.options, self.distinct)[0]
-        config = self._by_solver(grower, share=1.0)
+        config = solver.cheapest(grower, self.goal, clock.remaining())
         return None if config is None else (config, grower.stats)
 
-    def _by_solver(self, grower: Grower, share: float = 0.5) -> Configuration | None:
+    def _by_solver(self, grower: Grower) -> Configuration | None:
         """The first cheapest configuration by the solver's bracket (in at most
-        ``share`` of the time left) and walk; None when the bracket does not close or
+        half the time left) and walk; None when the bracket does not close or
         nothing is admissible. Raises :class:`solver.Unsupported` (costs without
         a unit) and :class:`clock.OutOfTime`."""
         from cfgplan.planner import solver
 
         left = clock.remaining()
-        found = solver.bracket(grower.grounder, self.goal, None if left is None else left * share)
+        found = solver.bracket(grower.grounder, self.goal, None if left is None else left / 2)
         if not found.exact or found.upper is None:
             return None  # open, or nothing admissible: the search says why (its dead ends)
         return solver.first(grower, self.goal, found.lower)

@@ -298,16 +298,59 @@ def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None
     it is not, it backtracks. ``grower`` finishes the complete
     nodes (step 4, and in distinct mode a derivation seen before is skipped);
     None: nothing costs ``cheapest``."""
-    import clingo
-
-    task = grower.grounder.task
-    facts = _facts(task, graph_of(grower.grounder), goal)
+    facts = _facts(grower.grounder.task, graph_of(grower.grounder), goal)
     # Core-guided under an initial bound: a refusal is a lower bound above it,
     # which usc proves as it goes (an enumeration to the bound took minutes).
     control = _grounded(facts, "relaxed", f"opt,{int(Fraction(repr(cheapest)) / facts.unit)}")
+    return _walk(grower, goal, cheapest, facts, control, set())
 
-    witness: set[clingo.Symbol] = set()
-    """The choices of the last model found: any assumptions it makes true need no call."""
+
+def cheapest(grower: Grower, goal: Ground, seconds: float | None = None) -> Configuration | None:
+    """The first cheapest configuration in the thesis's order, with the
+    relaxation alone: its optimum L (within ``seconds``), then the walk of
+    :func:`first` at L, on the same grounded program, from L's model. Nothing
+    costs less than a lower bound, so a configuration of cost L is the
+    cheapest; the exact program's proof that one exists is not needed, the
+    walk finds it. None: nothing is admissible (the relaxation has no model),
+    L was not proven within ``seconds``, or no configuration costs L (the
+    relaxation is looser than the thesis's planner here, and the walk has been
+    through every choice it leaves). Raises :class:`Unsupported` (costs without
+    a unit) and :class:`~cfgplan.planner.clock.OutOfTime`. What the racing
+    solver's process runs (:mod:`cfgplan.planner.portfolio`)."""
+    facts = _facts(grower.grounder.task, graph_of(grower.grounder), goal)
+    control = _grounded(facts, "relaxed", "opt")
+    found: list[tuple[int, list[clingo.Symbol]]] = []
+
+    def keep(model: clingo.Model) -> None:
+        chosen = [a for a in model.symbols(atoms=True) if a.name in ("use", "bind")]
+        found.append((sum(model.cost), chosen))
+
+    with control.solve(on_model=keep, async_=True) as handle:
+        if not (handle.wait(seconds) if seconds is not None else handle.wait()):
+            handle.cancel()
+        result = handle.get()
+    if not found or not result.exhausted:
+        return None  # nothing admissible, or L not proven in time
+    bound, chosen = found[-1]
+    control.configuration.solve.opt_mode = f"opt,{bound}"  # type: ignore[union-attr]
+    return _walk(grower, goal, float(bound * facts.unit), facts, control, set(chosen))
+
+
+def _walk(
+    grower: Grower,
+    goal: Ground,
+    cheapest: float,
+    facts: _Facts,
+    control: clingo.Control,
+    witness: set[clingo.Symbol],
+) -> Configuration | None:
+    """:func:`first`'s walk, with ``control`` grounded with the relaxation for
+    models of cost at most ``cheapest``. ``witness``: the choices of the last
+    model found (updated as the walk goes); any assumptions it makes true need
+    no call."""
+    import clingo
+
+    task = grower.grounder.task
 
     def possible(assumed: frozenset[clingo.Symbol]) -> bool:
         """Whether the relaxation has a model of cost at most ``cheapest`` with

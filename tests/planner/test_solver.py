@@ -21,8 +21,9 @@ from cfgplan.configuration.cost import Weights
 from cfgplan.planner import plan
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
+from cfgplan.planner.plan import growing
 from cfgplan.planner.report import Engine
-from cfgplan.planner.solver import Bracket, Unsupported, bracket
+from cfgplan.planner.solver import Bracket, Unsupported, bracket, cheapest
 from cfgplan.problem import Problem
 from tests.planner.generated import generated
 from tests.planner.oracle import depth_first
@@ -232,3 +233,24 @@ def test_where_the_solver_cannot_bracket_the_search_plans() -> None:
     solved, run = plan(p.task, p.goal_call, limit=1, options=SOLVER)
     assert run.engine is Engine.SEARCH
     assert [c.model_dump() for c in solved] == [c.model_dump() for c in searched] != []
+
+
+@pytest.mark.quick(25)
+@PROPERTY
+@given(generated())
+def test_the_relaxations_optimum_walked_is_the_searchs_first(example: Generated) -> None:
+    """:func:`cfgplan.planner.solver.cheapest` (what the racing process runs:
+    the relaxation's optimum, then the walk at it, without the exact program)
+    finds the search's first configuration wherever the bracket closes, and
+    nothing else anywhere: a configuration it returns is the search's first."""
+    p = solve(example)
+    searched, _ = plan(p.task, p.goal_call, limit=1)
+    if p.task.weights.reliability:
+        return  # costs without a unit: no relaxation to walk
+    p = solve(example)
+    grower = growing(p.task, SearchOptions(), distinct=True)[0]
+    found = cheapest(grower, p.goal_call)
+    if found is not None:
+        assert [found.model_dump()] == [c.model_dump() for c in searched]
+    elif searched:
+        assert not of(solve(example)).exact  # only where the relaxation is loose
