@@ -128,8 +128,8 @@ class SearchOptions:
     before the solver's process is started beside it, the first of the two to
     end answering (:mod:`cfgplan.planner.portfolio`); None: the search alone.
     ``cfgplan plan`` races after :data:`RACE` steps (its ``--engine both``); a
-    library caller that runs threads of its own (a robot's runtime, with
-    Zenoh's) does not: a fork copies only the thread that forks."""
+    library caller chooses (a robot's runtime, a long-lived process with Zenoh's
+    threads, plans small problems and does not race)."""
     dive: bool = True
     """When a limit stops the search before anything was proven, dive greedily
     from the open nodes for a configuration (:mod:`cfgplan.planner.dive`,

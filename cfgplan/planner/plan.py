@@ -17,7 +17,7 @@ of a run as they are proven, so a caller may print them at once;
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -259,13 +259,19 @@ class Run:
         if not self.raced:  # alone all along: as without the race
             yield from searched
 
-    def _in_child(self) -> tuple[Configuration, Stats] | None:
-        """The solver's answer and its work, in the racing child."""
+    def _in_child(self) -> Callable[[], tuple[Configuration, Stats] | None]:
+        """The solver in the racing child: its program grounded at once (while
+        the search works), and its answer and work once the race starts."""
         from cfgplan.planner import solver
 
         grower = growing(self.task, self.options, self.distinct)[0]
-        config = solver.cheapest(grower, self.goal, clock.remaining())
-        return None if config is None else (config, grower.stats)
+        grounded = solver.relaxation(grower, self.goal)
+
+        def answer() -> tuple[Configuration, Stats] | None:
+            config = solver.cheapest(grower, self.goal, clock.remaining(), grounded)
+            return None if config is None else (config, grower.stats)
+
+        return answer
 
     def _by_solver(self, grower: Grower) -> Configuration | None:
         """The first cheapest configuration by the solver's bracket (in at most

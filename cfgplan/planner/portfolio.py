@@ -13,21 +13,24 @@ with two cores both run, and the first to end answers.
 
 The search runs alone first, for :attr:`~cfgplan.planner.options.SearchOptions.race`
 steps of the clock (:func:`cfgplan.planner.clock.check`, the same count on every
-machine): a run that ends within them (the thesis's instances, every small
-domain) forks nothing, and its output is the same to the byte, its work counts
-included. Then a child process is forked — it shares the grounding made so far —
-and runs the solver; it writes its answer back through a pipe, which the search
-looks at as it checks the clock (:class:`Rival`, called :func:`~cfgplan.planner.clock.beside`
-the search). The child's answer ends the search by :class:`Overtaken`. A child that
-finds nothing (its bracket did not close in the time left, or nothing is
-admissible) leaves the search to go on alone, and one that ends first has the
-child killed: either way the child is gone, by its pid, when the race is
+machine). A child process is forked at the search's first step — it shares the
+grounding made so far — and *prepares* the solver on the second core (imports it,
+grounds its program) while the search works, but solves nothing until the search's
+budget is spent and the parent says *go*. A run that ends within the budget (the
+thesis's instances, every small domain) has the child killed before it solves:
+no race was run, and its output is the same to the byte, its work counts
+included. Once raced, the child writes its answer back through a pipe, which the
+search looks at as it checks the clock (:class:`Rival`, called
+:func:`~cfgplan.planner.clock.beside` the search); the child's answer ends the
+search by :class:`Overtaken`. A child that finds nothing (its relaxation is
+looser than the thesis's planner here, or nothing is admissible, or time ran
+out) leaves the search to go on alone; a search that ends first has the child
+killed: either way the child is gone, by its pid, when the race is
 (:func:`racing`). Which engine answered is the only thing that can differ from
 one run to the next, and only in the run's statistics.
 
-Only where a process can fork safely (:data:`FORKS`), and not from a process
-that runs threads of its own (a fork copies only the thread that forks); elsewhere
-the search runs alone.
+Only where a process can fork safely (:data:`FORKS`); elsewhere the search runs
+alone.
 """
 
 from __future__ import annotations
@@ -38,7 +41,6 @@ import pickle
 import select
 import signal
 import sys
-import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass
@@ -50,6 +52,10 @@ from cfgplan.planner.report import Stats
 
 Answer = tuple[Configuration, Stats]
 """A configuration and the work of the engine that found it."""
+
+Prepare = Callable[[], Callable[[], Answer | None]]
+"""The solver as the child runs it: prepared at once, the answer (or None: it has
+none) once the race starts."""
 
 FORKS = hasattr(os, "fork") and sys.platform != "darwin"
 """Whether this platform forks a Python process safely (not macOS, whose
@@ -70,57 +76,70 @@ class Overtaken(Exception):
 
 @dataclass
 class Rival:
-    """The solver's process beside a search: started once the search has made
-    :attr:`after` steps of the clock, looked at every :data:`POLL` steps."""
+    """The solver's process beside a search: forked at the search's first step
+    to prepare, told to go once the search has made :attr:`after` steps of the
+    clock, looked at every :data:`POLL` steps from then on."""
 
-    engine: Callable[[], Answer | None]
-    """What the child runs: the solver's answer, or None (it has none)."""
+    engine: Prepare
     after: int
     steps: int = 0
     pid: int | None = None
     """The child's, while it runs."""
     started: bool = False
-    """Whether the child was started (the race was run, whoever won it)."""
+    """Whether the child was told to go (the race was run, whoever won it)."""
     gave_up: bool = False
     """The child ended without an answer: the search goes on alone."""
     status: int | None = None
     """How the child ended (:func:`os.waitpid`'s status), once it has."""
-    _pipe: int | None = None
+    _answers: int | None = None
+    _go: int | None = None
     _in_child: bool = False
 
     def tick(self) -> None:
-        """One step of the search's clock: start the child, or look for its answer."""
+        """One step of the search's clock: fork, say go, or look for the answer."""
         if self._in_child or self.gave_up:
             return
         self.steps += 1
+        if self.pid is None and not self.started:
+            self._fork()
         if not self.started:
             if self.steps >= self.after:
                 self._start()
         elif self.steps % POLL == 0:
             self._look()
 
-    def _start(self) -> None:
-        if threading.active_count() > 1:  # a fork copies only this thread: not safe
-            self.gave_up = True
-            return
-        self.started = True
-        read, write = os.pipe()
+    def _fork(self) -> None:
+        # A fork copies only the thread that forks: a lock another thread held
+        # stays held in the child. The child touches little (the solver, two
+        # pipes), and should it hang, the search never waits for it: it
+        # answers alone, and the child is killed.
+        answers, answer = os.pipe()
+        hear, go = os.pipe()
         pid = os.fork()
         if pid == 0:
             self._in_child = True
-            os.close(read)
-            _answer(self.engine, write)
-        os.close(write)
-        self.pid, self._pipe = pid, read
+            os.close(answers)
+            os.close(go)
+            _answer(self.engine, hear, answer)
+        os.close(answer)
+        os.close(hear)
+        self.pid, self._answers, self._go = pid, answers, go
+
+    def _start(self) -> None:
+        """Tell the child to solve."""
+        assert self._go is not None
+        self.started = True
+        with suppress(BrokenPipeError):  # it died preparing: read as giving up
+            os.write(self._go, b"!")
 
     def _look(self) -> None:
         """Raise :class:`Overtaken` if the child has answered; note that it gave up."""
-        assert self._pipe is not None
-        ready, _, _ = select.select([self._pipe], [], [], 0)
+        assert self._answers is not None
+        ready, _, _ = select.select([self._answers], [], [], 0)
         if not ready:
             return
         chunks = []  # the child writes its answer whole, then exits: read to the end
-        while chunk := os.read(self._pipe, 1 << 16):
+        while chunk := os.read(self._answers, 1 << 16):
             chunks.append(chunk)
         self.close()
         # From this process's own fork, never from outside: pickle is safe here.
@@ -137,31 +156,34 @@ class Rival:
                 os.kill(self.pid, signal.SIGKILL)
             self.status = os.waitpid(self.pid, 0)[1]
             self.pid = None
-        if self._pipe is not None:
-            os.close(self._pipe)
-            self._pipe = None
+        for end in (self._answers, self._go):
+            if end is not None:
+                os.close(end)
+        self._answers = self._go = None
 
 
-def _answer(engine: Callable[[], Answer | None], pipe: int) -> NoReturn:
-    """The child: run ``engine`` and write its answer (pickled) to ``pipe``;
-    exit without returning into the search it was forked from, nor flushing
-    what the parent had buffered (``os._exit``)."""
+def _answer(engine: Prepare, hear: int, answer: int) -> NoReturn:
+    """The child: prepare ``engine``, wait for the word on ``hear``, then write
+    its answer (pickled) to ``answer``; exit without returning into the search
+    it was forked from, nor flushing what the parent had buffered (``os._exit``)."""
     code = 1
     try:
         signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C: the parent reports
         gc.freeze()  # the parent's objects stay out of the child's collections (fewer copies)
-        answer = engine()
-        with os.fdopen(pipe, "wb") as out:
-            pickle.dump(answer, out, protocol=pickle.HIGHEST_PROTOCOL)
-        code = 0
-    except BaseException:  # out of time, or no bracket: the parent reads nothing
+        solve = engine()
+        if os.read(hear, 1):  # the race starts (nothing: the parent has gone)
+            found = solve()
+            with os.fdopen(answer, "wb") as out:
+                pickle.dump(found, out, protocol=pickle.HIGHEST_PROTOCOL)
+            code = 0
+    except BaseException:  # out of time, or no relaxation: the parent reads nothing
         pass
     finally:
         os._exit(code)
 
 
 @contextmanager
-def racing(engine: Callable[[], Answer | None], after: int) -> Iterator[Rival]:
+def racing(engine: Prepare, after: int) -> Iterator[Rival]:
     """Run the block (a search) with the solver's process beside it
     (:class:`Rival`); the child is gone when the block is, however it ends."""
     rival = Rival(engine, after)

@@ -305,20 +305,40 @@ def first(grower: Grower, goal: Ground, cheapest: float) -> Configuration | None
     return _walk(grower, goal, cheapest, facts, control, set())
 
 
-def cheapest(grower: Grower, goal: Ground, seconds: float | None = None) -> Configuration | None:
-    """The first cheapest configuration in the thesis's order, with the
-    relaxation alone: its optimum L (within ``seconds``), then the walk of
-    :func:`first` at L, on the same grounded program, from L's model. Nothing
-    costs less than a lower bound, so a configuration of cost L is the
-    cheapest; the exact program's proof that one exists is not needed, the
-    walk finds it. None: nothing is admissible (the relaxation has no model),
-    L was not proven within ``seconds``, or no configuration costs L (the
-    relaxation is looser than the thesis's planner here, and the walk has been
-    through every choice it leaves). Raises :class:`Unsupported` (costs without
-    a unit) and :class:`~cfgplan.planner.clock.OutOfTime`. What the racing
-    solver's process runs (:mod:`cfgplan.planner.portfolio`)."""
+@dataclass(frozen=True)
+class Relaxation:
+    """The relaxation grounded for one goal (:func:`relaxation`), to be
+    optimised and walked (:func:`cheapest`)."""
+
+    facts: _Facts
+    control: clingo.Control
+
+
+def relaxation(grower: Grower, goal: Ground) -> Relaxation:
+    """The relaxation for ``goal``, grounded: the part of :func:`cheapest` that
+    can be done before the race starts. Raises :class:`Unsupported` (costs
+    without a unit)."""
     facts = _facts(grower.grounder.task, graph_of(grower.grounder), goal)
-    control = _grounded(facts, "relaxed", "opt")
+    return Relaxation(facts, _grounded(facts, "relaxed", "opt"))
+
+
+def cheapest(
+    grower: Grower, goal: Ground, seconds: float | None = None, grounded: Relaxation | None = None
+) -> Configuration | None:
+    """The first cheapest configuration in the thesis's order, with the
+    relaxation alone (``grounded``, or grounded here): its optimum L (within
+    ``seconds``), then the walk of :func:`first` at L, on the same grounded
+    program, from L's model. Nothing costs less than a lower bound, so a
+    configuration of cost L is the cheapest; the exact program's proof that one
+    exists is not needed, the walk finds it. None: nothing is admissible (the
+    relaxation has no model), L was not proven within ``seconds``, or no
+    configuration costs L (the relaxation is looser than the thesis's planner
+    here, and the walk has been through every choice it leaves). Raises
+    :class:`Unsupported` (costs without a unit) and
+    :class:`~cfgplan.planner.clock.OutOfTime`. What the racing solver's process
+    runs (:mod:`cfgplan.planner.portfolio`)."""
+    prepared = grounded or relaxation(grower, goal)
+    facts, control = prepared.facts, prepared.control
     found: list[tuple[int, list[clingo.Symbol]]] = []
 
     def keep(model: clingo.Model) -> None:

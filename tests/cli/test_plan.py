@@ -269,3 +269,42 @@ def test_the_solver_engine_lists_what_the_search_lists_first(cfgplan: Run) -> No
     steps = ("domains/cross-door/domain-steps.lisp", "domains/cross-door/state-6.2.2-sequence.lisp")
     sequence = cfgplan("plan", *steps, "-k", "1", "--engine", "solver")
     assert sequence.returncode == 2 and "sequence" in sequence.stderr
+
+
+def test_the_default_race_within_its_budget_is_the_search_to_the_byte(cfgplan: Run) -> None:
+    """``-k 1`` races the solver only past the search's budget (--engine both,
+    the default): 6.2.2 step 1 (Fig. 6.3, cost 44) ends long before, so the
+    table (its "more exist" note included) and the JSON (work counts included)
+    are the search's, byte for byte."""
+    for shown in ([], ["--format", "json"]):
+        both = cfgplan("plan", *CROSS, "-k", "1", *shown)
+        alone = cfgplan("plan", *CROSS, "-k", "1", "--engine", "search", *shown)
+        assert both.returncode == alone.returncode == 0, both.stderr
+        assert both.stdout == alone.stdout
+    assert json.loads(both.stdout)["stats"]["engine"] == "search"
+
+
+@pytest.mark.slow
+def test_past_the_searchs_cliff_the_default_race_is_answered_by_the_solver(
+    cfgplan: Run, tmp_path: Path
+) -> None:
+    """``structured`` seed 2 with 16 pieces: the search alone takes about 13 s
+    (docs/explanation/planner.md), the solver about one; ``cfgplan plan -k 1``
+    answers with the solver's process, the configuration ``--engine solver``
+    finds (the search's first), and says so in the JSON; no second is looked
+    for, so the JSON's more is null and the table claims nothing about more."""
+    from benchmarks.families import structured
+
+    domain, state = tmp_path / "domain.lisp", tmp_path / "state.lisp"
+    for path, text in zip((domain, state), structured(2, pieces=16), strict=True):
+        path.write_text(text, encoding="utf-8")
+    raced = cfgplan("plan", str(domain), str(state), "-k", "1", "--format", "json")
+    solved = cfgplan("plan", str(domain), str(state), "-k", "1", "--format", "json",
+                     "--engine", "solver")  # fmt: skip
+    assert raced.returncode == solved.returncode == 0, raced.stderr
+    by_race, by_solver = json.loads(raced.stdout), json.loads(solved.stdout)
+    assert by_race["configurations"] == by_solver["configurations"]
+    assert by_race["stats"]["engine"] == "solver" and by_race["stats"]["more"] is None
+    table = cfgplan("plan", str(domain), str(state), "-k", "1")
+    assert f"│ {by_race['configurations'][0]['cost']:g} │" in table.stdout.replace("  ", " ")
+    assert "more configuration" not in table.stdout

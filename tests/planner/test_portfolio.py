@@ -1,8 +1,8 @@
 """The search and the solver's process racing for ``-k 1`` (:mod:`cfgplan.planner.portfolio`).
 
 The race itself with stand-in engines (who wins, that the child is gone by its
-pid however the race ends, that nothing forks within the search's own budget or
-beside other threads), then the planner's race: the same configuration as the
+pid however the race ends, that nothing is raced within the search's own budget),
+then the planner's race: the same configuration as the
 search alone on random domains, and past the search's cliff the solver's.
 """
 
@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import os
 import signal
-import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from typing import cast
 
@@ -23,7 +22,7 @@ from benchmarks.families import structured
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import clock, plan
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.portfolio import Answer, Overtaken, Rival, racing
+from cfgplan.planner.portfolio import Answer, Overtaken, Prepare, Rival, racing
 from cfgplan.planner.report import Engine
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
@@ -52,17 +51,34 @@ def gone(pid: int) -> bool:
     return False
 
 
-def answering() -> Answer:
-    return cast(Answer, ("the solver's configuration", "its work"))
+ANSWER = cast(Answer, ("the solver's configuration", "its work"))
 
 
-def sleeping() -> Answer:
-    time.sleep(LIMIT)
-    return answering()  # not if it is killed first
+def answering() -> Callable[[], Answer | None]:
+    return lambda: ANSWER
 
 
-def failing() -> Answer:
-    raise RuntimeError("no bracket")
+def sleeping() -> Callable[[], Answer | None]:
+    def solve() -> Answer:
+        time.sleep(LIMIT)
+        return ANSWER  # not if it is killed first
+
+    return solve
+
+
+def failing_to_prepare() -> Callable[[], Answer | None]:
+    raise RuntimeError("costs without a unit")
+
+
+def failing() -> Callable[[], Answer | None]:
+    def solve() -> Answer:
+        raise RuntimeError("out of time")
+
+    return solve
+
+
+def nothing() -> Callable[[], Answer | None]:
+    return lambda: None
 
 
 def test_the_childs_answer_ends_the_search_and_the_child() -> None:
@@ -70,7 +86,7 @@ def test_the_childs_answer_ends_the_search_and_the_child() -> None:
     with pytest.raises(Overtaken) as won, racing(answering, after=3) as rival:
         for pid in searching(rival):
             pids.add(pid)
-    assert won.value.answer == answering()
+    assert won.value.answer == ANSWER
     assert rival.started and rival.pid is None
     started = pids - {-1}
     assert len(started) == 1 and gone(started.pop())
@@ -90,10 +106,10 @@ def test_a_search_that_ends_first_has_the_child_killed() -> None:
     assert os.WTERMSIG(rival.status) == signal.SIGKILL
 
 
-@pytest.mark.parametrize("engine", [lambda: None, failing])
-def test_a_child_without_an_answer_leaves_the_search_alone(engine: object) -> None:
+@pytest.mark.parametrize("engine", [nothing, failing, failing_to_prepare])
+def test_a_child_without_an_answer_leaves_the_search_alone(engine: Prepare) -> None:
     pids = set()
-    with racing(cast("type[Answer]", engine), after=0) as rival:
+    with racing(engine, after=0) as rival:
         for pid in searching(rival):
             pids.add(pid)
             if rival.gave_up:
@@ -106,26 +122,14 @@ def test_a_child_without_an_answer_leaves_the_search_alone(engine: object) -> No
     assert len(started) == 1 and gone(started.pop())
 
 
-def test_nothing_forks_within_the_searchs_budget() -> None:
+def test_nothing_is_raced_within_the_searchs_budget() -> None:
+    """The child prepares from the first step, but is killed before it solves."""
     with racing(answering, after=1000) as rival:
         for _ in range(999):
             clock.check()
-    assert not rival.started
-
-
-def test_nothing_forks_beside_other_threads() -> None:
-    """A fork copies only the thread that forks (a robot's runtime runs Zenoh's)."""
-    stop = threading.Event()
-    other = threading.Thread(target=stop.wait, args=(LIMIT,))
-    other.start()
-    try:
-        with racing(answering, after=0) as rival:
-            for _ in range(100):
-                clock.check()
-    finally:
-        stop.set()
-        other.join(LIMIT)
-    assert not rival.started and rival.gave_up
+        pid = rival.pid
+    assert not rival.started and pid is not None and gone(pid)
+    assert rival.status is not None and os.WIFSIGNALED(rival.status)
 
 
 RACE = SearchOptions(race=0)
