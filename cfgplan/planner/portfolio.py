@@ -168,6 +168,7 @@ def _answer(engine: Prepare, hear: int, answer: int) -> NoReturn:
     it was forked from, nor flushing what the parent had buffered (``os._exit``)."""
     code = 1
     try:
+        _die_with(os.getppid())
         signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C: the parent reports
         gc.freeze()  # the parent's objects stay out of the child's collections (fewer copies)
         solve = engine()
@@ -180,6 +181,21 @@ def _answer(engine: Prepare, hear: int, answer: int) -> NoReturn:
         pass
     finally:
         os._exit(code)
+
+
+def _die_with(parent: int) -> None:
+    """Have the kernel kill this process when ``parent`` ends, however it ends
+    (``kill -9`` included: no ``finally`` of the parent's runs then), so that a
+    child never outlives the search it races (Linux's PR_SET_PDEATHSIG; elsewhere
+    the child ends when it next writes to the parent's closed pipe)."""
+    if sys.platform != "linux":
+        return
+    import ctypes
+
+    pr_set_pdeathsig = 1
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+    if os.getppid() != parent:  # the parent ended before the request was made
+        os._exit(1)
 
 
 @contextmanager

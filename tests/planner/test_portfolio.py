@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import replace
+from pathlib import Path
 from typing import cast
 
 import pytest
@@ -43,12 +46,17 @@ def searching(rival: Rival, until: float = LIMIT) -> Iterator[int]:
 
 
 def gone(pid: int) -> bool:
-    """Whether process ``pid`` has ended and been waited for."""
+    """Whether process ``pid`` has ended (a zombie its parent has not waited
+    for yet counts: it runs no more)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return True
-    return False
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return True
+    return state == "Z"
 
 
 ANSWER = cast(Answer, ("the solver's configuration", "its work"))
@@ -181,3 +189,37 @@ def test_past_the_searchs_cliff_the_solver_answers() -> None:
     assert raced.model_dump() == alone.model_dump()
     assert problems(raced, p.domain, p.state) == []
     assert run.stats.derivations == 1  # the walk's, not the search's thousands of nodes
+
+
+RACER = """
+import sys, time
+from cfgplan.planner import clock
+from cfgplan.planner.portfolio import racing
+
+def prepare():
+    def solve():
+        time.sleep(60)
+    return solve
+
+with racing(prepare, after=0) as rival:
+    clock.check()
+    print(rival.pid, flush=True)
+    time.sleep(60)
+"""
+
+
+def test_the_child_does_not_outlive_a_parent_killed_outright() -> None:
+    """``kill -9`` of the planning process runs none of its ``finally``: the
+    kernel ends the racing child with it (it would otherwise solve on, alone)."""
+    parent = subprocess.Popen([sys.executable, "-c", RACER], stdout=subprocess.PIPE, text=True)
+    try:
+        assert parent.stdout is not None
+        child = int(parent.stdout.readline())
+        assert not gone(child)
+    finally:
+        os.kill(parent.pid, signal.SIGKILL)
+        parent.wait(LIMIT)
+    end = time.monotonic() + LIMIT
+    while not gone(child) and time.monotonic() < end:
+        time.sleep(0.01)
+    assert gone(child)
