@@ -88,7 +88,8 @@ class Rival:
     started: bool = False
     """Whether the child was told to go (the race was run, whoever won it)."""
     gave_up: bool = False
-    """The child ended without an answer: the search goes on alone."""
+    """The child ended without an answer, or could not be forked: the search
+    goes on alone."""
     status: int | None = None
     """How the child ended (:func:`os.waitpid`'s status), once it has."""
     _answers: int | None = None
@@ -113,9 +114,17 @@ class Rival:
         # stays held in the child. The child touches little (the solver, two
         # pipes), and should it hang, the search never waits for it: it
         # answers alone, and the child is killed.
-        answers, answer = os.pipe()
-        hear, go = os.pipe()
-        pid = os.fork()
+        ends: list[int] = []
+        try:
+            ends += os.pipe()
+            ends += os.pipe()
+            pid = os.fork()
+        except OSError:  # no process or pipe to spare: the search runs alone
+            for end in ends:
+                os.close(end)
+            self.gave_up = True
+            return
+        answers, answer, hear, go = ends
         if pid == 0:
             self._in_child = True
             os.close(answers)

@@ -140,6 +140,24 @@ def test_nothing_is_raced_within_the_searchs_budget() -> None:
     assert rival.status is not None and os.WIFSIGNALED(rival.status)
 
 
+def test_where_no_process_can_be_forked_the_search_runs_alone(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Out of processes (``fork`` fails with EAGAIN): the search goes on, alone,
+    and the pipes made for the child are closed again."""
+
+    def refused() -> int:
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    before = len(os.listdir("/proc/self/fd"))
+    monkeypatch.setattr(os, "fork", refused)
+    with racing(answering, after=0) as rival:
+        for _ in range(100):
+            clock.check()
+    assert rival.gave_up and not rival.started and rival.pid is None
+    assert len(os.listdir("/proc/self/fd")) == before
+
+
 RACE = SearchOptions(race=0)
 """The solver's process is started at the search's first step."""
 
