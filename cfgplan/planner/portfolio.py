@@ -103,6 +103,8 @@ class Rival:
         self.steps += 1
         if self.pid is None and not self.started:
             self._fork()
+            if self.gave_up:
+                return
         if not self.started:
             if self.steps >= self.after:
                 self._start()
