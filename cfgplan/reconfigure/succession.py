@@ -36,7 +36,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Collection, Sequence
 
-from cfgplan.notation import call_text
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner.task import Ground
 from cfgplan.reconfigure.coordinate import Coordinator
 from cfgplan.reconfigure.local import Adaptive
@@ -107,13 +107,17 @@ class Steward:
         gone, waited = member.leader, member.gone_for()
         adaptive = self._take_over(following)
         me, now = member.robot.name, time.time()
-        goal = call_text(adaptive.coordinator.reconfigurator.goal)
+        reconfigurator = adaptive.coordinator.reconfigurator
+        known = reconfigurator.situation  # what the society committed (committed.py)
         info = (
             ("epoch", member.epoch),
             ("after", gone),
             ("step", member.step),
-            ("goal", goal),
+            ("goal", call_text(reconfigurator.goal)),
             ("waited", round(waited, 3)),
+            ("added", [atom_text(f) for f in known.asserted]),
+            ("removed", [atom_text(f) for f in known.retracted]),
+            ("failed", [call_text(i) for i in known.failed]),
         )
         member.robot.record(Adaptation(robot=me, t=now, what="takeover", info=info))
         detail = f"{gone}, the coordinator, is gone: {me} takes over"
