@@ -316,6 +316,7 @@ def run(
                 problem=problem_id(problem, domain, state),
                 allowance=rate_allowance,
                 router=router or (),
+                plans=reconfigure,  # it may take over coordination (5.5)
             )
             via = None
             if ros2 or topics is not None:  # rclpy is imported only if so chosen

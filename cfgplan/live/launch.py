@@ -12,7 +12,10 @@ knows it: every switch, failure and recovery, the fallbacks. On another
 robot (``--robot NAME``, not the coordinator) it shows that robot's view: its
 own channels' freshness, the robots it exchanges data with, the faults
 injected there and the configurations it installs; the drawing stays the
-first configuration, and the fallbacks are the coordinator's to show.
+first configuration, and the fallbacks are the coordinator's to show. A
+robot that takes over coordination shows the society from then on (its
+switches, its drawing, its fallbacks); one that steps down, its own view
+again (its drawing the last configuration it coordinated).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.live.address import Address
 from cfgplan.problem import Problem
 from cfgplan.reconfigure.local import coordinator_of
-from cfgplan.reconfigure.succession import coordinating
+from cfgplan.reconfigure.succession import Shown, coordinating
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.launch import Hooks
 from cfgplan.runtime.society import Society
@@ -69,6 +72,7 @@ def open_live(
 
     coordinator = coordinating(hooks)
     lead = coordinator_of(problem.goal_call, config) if coordinator is None else coordinator.robot
+    shown = Shown(hooks, config)  # a robot that takes over shows its coordination from then on
     setup = Setup(
         title=title,
         robots=tuple(dict.fromkeys([*config.agents, *problem.task.agents])),
@@ -77,8 +81,7 @@ def open_live(
         cost=config.cost,
         started=time.time(),
     )
-    reconfigurator = None if coordinator is None else coordinator.reconfigurator
-    watch = Watch(setup, config, problem.goal_call[1:], reconfigurator)
+    watch = Watch(setup, config, problem.goal_call[1:], shown.reconfigurator)
     watch.drawing()  # the first layout loads Graphviz: now, not while the robots run
     society.subscribe(watch)
     server = LiveServer(watch, address)

@@ -12,8 +12,11 @@ one at a time, in :meth:`Page.apply`, and keeps what the page shows:
   ``lost``, ``stopped`` or ``unknown``, with its last cycle;
 * **failed** — the resources that failed and have not recovered (``failure``
   and ``recovery`` events, 5.5);
+* **coordinator** — the robot that decides the switches: the setup's, then
+  whoever a ``takeover``, ``step-down`` or ``install`` event names (5.5);
 * **timeline** — switches, failures, recoveries, state updates, injected
-  faults, losses and the like, each with its cause, in the words of the
+  faults, losses, coordination taken over or handed back and the like, each
+  with its cause, in the words of the
   console (:func:`cfgplan.runtime.trace.notice`), the newest
   :attr:`Limits.timeline` kept.
 
@@ -46,7 +49,9 @@ from cfgplan.runtime.trace import notice
 
 __all__ = ["TIMELINE_KINDS", "Limits", "Page", "Setup", "input_key", "model"]
 
-TIMELINE_KINDS = frozenset({*STORY_KINDS, "finish", "robot-seen", "robot-lost", "stop", "error"})
+TIMELINE_KINDS = frozenset(
+    {*STORY_KINDS, "finish", "robot-seen", "robot-lost", "stop", "error", "takeover", "step-down"}
+)
 """Events the timeline shows (``install`` too, on a robot that is not the coordinator)."""
 
 
@@ -75,16 +80,13 @@ class Setup:
     here: tuple[str, ...]
     """The robots run in this process, whose events the page gets."""
     coordinator: str
-    """The robot that decides the switches (:func:`~cfgplan.reconfigure.local.coordinator_of`)."""
+    """The robot that decides the switches at the start
+    (:func:`~cfgplan.reconfigure.local.coordinator_of`); the page follows
+    whoever decides them later (:attr:`Page.coordinator`)."""
     cost: float | None = None
     """The first configuration's cost."""
     started: float = 0.0
     """When the run began (seconds since the epoch)."""
-
-    @property
-    def decides(self) -> bool:
-        """Whether the coordinator runs in this process (its switches are seen here)."""
-        return self.coordinator in self.here
 
 
 @dataclass
@@ -107,11 +109,16 @@ class Page:
     switches: int = 0
     halted: str | None = None
     """Why nothing runs (``no-configuration``), while nothing does."""
+    coordinator: str = ""
+    """The robot that decides the switches now: the setup's, then whoever took
+    over (a ``takeover`` event of a robot here), was stepped down for
+    (``step-down``), or whose switch a robot here installed (``install``)."""
     last: float = 0.0
     """The time of the newest event."""
 
     def __post_init__(self) -> None:
         self.cost = self.setup.cost
+        self.coordinator = self.setup.coordinator
         for name in self.setup.robots:
             self.robots[name] = {"state": "unknown", "cycle": None, "t": None}
 
@@ -136,8 +143,13 @@ class Page:
             self._robot(event.robot, "stopped", event.t)
         elif isinstance(event, Adaptation):
             self._adaptation(event)
-        if event.kind in TIMELINE_KINDS or (event.kind == "install" and not self.setup.decides):
+        if event.kind in TIMELINE_KINDS or (event.kind == "install" and not self.decides):
             self._note(event)
+
+    @property
+    def decides(self) -> bool:
+        """Whether the coordinator runs in this process (its switches are seen here)."""
+        return self.coordinator in self.setup.here
 
     def _call(self, event: Call) -> None:
         if event.status == "ran":
@@ -193,6 +205,10 @@ class Page:
             to_cost = f("to_cost")
             self.cost = float(to_cost) if isinstance(to_cost, int | float) else None
             self.halted = None
+        elif what == "takeover":
+            self.coordinator = event.robot
+        elif what in ("step-down", "install") and isinstance(f("leader"), str):
+            self.coordinator = str(f("leader"))
         elif what == "no-configuration":
             self.configuration = _int(f("id"), self.configuration)
             self.cost = None
@@ -235,9 +251,9 @@ class Page:
         return {
             "version": self.version,
             "title": self.setup.title,
-            "coordinator": self.setup.coordinator,
+            "coordinator": self.coordinator,
             "here": list(self.setup.here),
-            "decides": self.setup.decides,
+            "decides": self.decides,
             "started": self.setup.started,
             "last": self.last,
             "configuration": self.configuration,

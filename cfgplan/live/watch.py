@@ -5,15 +5,15 @@ event updates its :class:`~cfgplan.live.model.Page` under a lock, in a few
 dictionary updates, so the robots' cycles are not slowed. The server's
 thread reads, under the same lock, the page's state and new timeline entries,
 and, from the coordinator's :class:`~cfgplan.reconfigure.policy.Reconfigurator`
-(when this process runs the coordinator), the running configuration and its
-fallbacks computed ahead of time (5.5, 7.2) — it never plans, and nothing it
-reads changes the society.
+(while this process runs the coordinator: from the start, or once its robot
+took over), the running configuration and its fallbacks computed ahead of
+time (5.5, 7.2) — it never plans, and nothing it reads changes the society.
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from cfgplan.configuration.model import Configuration
@@ -63,11 +63,13 @@ class Watch:
         setup: Setup,
         config: Configuration,
         first: Sequence[str] = (),
-        reconfigurator: Reconfigurator | None = None,
+        reconfigurator: Reconfigurator | Callable[[], Reconfigurator | None] | None = None,
         limits: Limits | None = None,
     ) -> None:
         self.first = tuple(first)
-        self.reconfigurator = reconfigurator
+        self._source = reconfigurator
+        """The coordinator's reconfigurator, or what says which it is now
+        (``None`` while this process does not coordinate)."""
         self._page = Page(setup, limits or Limits())
         self._lock = threading.Lock()
         self._config: Configuration | None = config
@@ -75,6 +77,12 @@ class Watch:
         self._drawing: tuple[int, str, str | None] | None = None
         self._draw_lock = threading.Lock()  # one layout at a time
         self._config_lock = threading.Lock()  # _config and _drawn
+
+    @property
+    def reconfigurator(self) -> Reconfigurator | None:
+        """The reconfigurator of the coordinator this process runs now, if any."""
+        source = self._source
+        return source() if callable(source) else source
 
     def __call__(self, event: Event) -> None:
         """A robot's event (the robots' thread): update the page."""

@@ -101,6 +101,11 @@ class Coordinator:
         self._suspects = Suspicions(self.clock, self.grace, self.robot, self.reported)
         self._blamed = Blamed(self.hold)
 
+    @property
+    def deploying(self) -> bool:
+        """Whether a switch is being deployed (its detections wait)."""
+        return self._deploying
+
     def excuse(self, robot: str, seconds: float) -> None:
         """``robot``'s process stood still: what went stale with it is not
         blamed for ``seconds`` (:meth:`~cfgplan.reconfigure.suspect.Suspicions.excuse`)."""

@@ -67,6 +67,7 @@ from cfgplan.runtime.protocol import (
     Hello,
     Phase,
     Prepare,
+    State,
     ToRobot,
     new_epoch,
 )
@@ -307,6 +308,10 @@ class NetworkDeployer:
         """``robot`` says its subscriber exists: it may be sent its part."""
         self.ready.add(robot)
         self._greeting.pop(robot, None)
+
+    def tell(self, robot: str, state: State) -> None:
+        """Send ``robot`` what the society committed (:mod:`~cfgplan.reconfigure.committed`)."""
+        self._to(robot, state)
 
     def refuse(self, robot: str, instance: str) -> None:
         """A second process of ``robot`` (its ``instance``) stops."""

@@ -38,10 +38,12 @@ from cfgplan.ir.model import Domain
 from cfgplan.notation import call_text
 from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.ahead import Ahead
+from cfgplan.reconfigure.committed import state_of
 from cfgplan.reconfigure.coordinate import Coordinator
 from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.deployer import RETRY, RETRY_MOST, SWITCH_TIMEOUT, NetworkDeployer
 from cfgplan.reconfigure.policy import Reconfigurator
+from cfgplan.reconfigure.situation import Situation
 from cfgplan.reconfigure.stall import Doubts, Heartbeat
 from cfgplan.reconfigure.trust import beyond_its_own
 from cfgplan.runtime.errors import printable
@@ -61,12 +63,13 @@ from cfgplan.runtime.protocol import (
     Ready,
     Report,
     Rival,
+    State,
     generation,
     new_epoch,
     read_to_coordinator,
 )
 from cfgplan.runtime.society import Society
-from cfgplan.runtime.succession import Succession
+from cfgplan.runtime.succession import Succession, candidates
 from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, ZenohTransport
 from cfgplan.security.rates import Throttle
 from cfgplan.security.zenoh_tls import society_of
@@ -123,6 +126,9 @@ class NetworkAdaptive:
     """The coordinator, and its run, this one steps down for (a later
     generation took over while this one stood still): it follows it now."""
     retired: bool = False  # stepped down: what reaches it is no longer read
+    _shared: tuple[object, ...] = ()  # what the last State said (situation, step, id, epoch)
+    _state: State | None = None  # that State (None: too large to send)
+    _told: set[str] = field(default_factory=set)  # the robots sent it
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)
@@ -160,6 +166,7 @@ class NetworkAdaptive:
             detail = f"could not install what the others did: {reason}"
             self.take(Detection("lost", me, time.time(), other=robot, how="refused", detail=detail))
         self.coordinator.tick()
+        self._share()
         if self.coordinator.finished and self.deployer.ending is None:
             self.deployer.finish(call_text(self.coordinator.reconfigurator.goal))
         if self.deployer.ending is not None and self._silent is None:
@@ -170,6 +177,33 @@ class NetworkAdaptive:
                 self.deployer.member.robot.record(
                     Adaptation(robot=me, t=time.time(), what="finish", info=info)
                 )
+
+    def _share(self) -> None:
+        """Once nothing is in flight, tell every robot that is ready what the
+        society committed — the situation on top of the state, and the step —
+        each time it changed, and each robot that is ready anew
+        (:mod:`~cfgplan.reconfigure.committed`): a robot that takes over plans
+        from it."""
+        deployer = self.deployer
+        if deployer.switch is not None or self.coordinator.deploying or deployer.ending:
+            return
+        situation = self.coordinator.reconfigurator.situation
+        step = deployer.step()
+        now = (situation, step, deployer.current, deployer.epoch)
+        if now != self._shared:
+            self._shared, self._told = now, set()
+            self._state = state_of(situation, deployer.current, deployer.me, deployer.epoch, step)
+            if self._state is None:
+                self._once(
+                    "situation too large",
+                    "the situation is too large to tell the robots (a robot that takes over "
+                    "plans from the state it was started with)",
+                )
+        if self._state is None:
+            return
+        for robot in sorted(deployer.ready - self._told - {deployer.me}):
+            deployer.tell(robot, self._state)
+            self._told.add(robot)
 
     def _stalled(self) -> None:
         """Whether this process stood still for half the lease or more since the last
@@ -257,6 +291,7 @@ class NetworkAdaptive:
             self._present.add(robot)
             self.deployer.resync(robot)
         elif detection.kind == "lost":  # its token went (or it refused): ready no more
+            self._told.discard(robot)
             self._present.discard(robot)
             self._held.pop(robot, None)
             self._instances.pop(robot, None)
@@ -488,7 +523,9 @@ class NetworkAdaptive:
             nxt = (
                 leader
                 if self.succession is None
-                else self.succession.successor(self.deployer.step(), {*alive, me}, me)
+                else self.succession.successor(
+                    self.deployer.step(), candidates(self.deployer.transport, me), me
+                )
             )
             if nxt == leader:
                 self.superseded = (leader, epoch)
@@ -571,6 +608,7 @@ class NetworkAdaptive:
         if robot == self.deployer.me:
             return
         self.deployer.said_ready(robot)
+        self._told.discard(robot)  # a process that says so anew may know nothing yet
         self._hidden.discard(robot)  # a process of it answers: its losses are its own again
         held = self._held.pop(robot, None)
         if held is not None:
@@ -614,12 +652,15 @@ def coordinate(
     generation: int = 1,
     step: int = 0,
     succession: Succession | None = None,
+    situation: Situation | None = None,
 ) -> NetworkAdaptive:
     """Make the one robot of ``society`` the coordinator of its society, its
     run of ``generation`` (:func:`~cfgplan.runtime.protocol.new_epoch`);
     ``member``: the robot's member when it followed another coordinator
     until now (it takes over), ``step``: the step of the sequence ``goal``
-    is (from 0), ``succession``: the order of succession."""
+    is (from 0), ``succession``: the order of succession, ``situation``: what
+    the society committed on top of the state (:mod:`~cfgplan.reconfigure.committed`:
+    a robot that takes over goes on from it)."""
     (robot,) = society.robots
     if member is None:
         member = Member(robot, transport, Monitor(hold=hold), forward=False, hold=hold)
@@ -634,7 +675,13 @@ def coordinate(
     deployer.epoch = new_epoch(generation)
     member.lead(deployer.epoch)
     reconfigurator = Reconfigurator(
-        task, domain, goal, config, hysteresis or Hysteresis(), goals=goals
+        task,
+        domain,
+        goal,
+        config,
+        hysteresis or Hysteresis(),
+        goals=goals,
+        situation=situation or Situation(),
     )
     deployer.step_of = lambda: step + len(goals) - len(reconfigurator.goals)
     coordinator = Coordinator(

@@ -23,9 +23,11 @@ from dataclasses import dataclass
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.problem import Problem
+from cfgplan.reconfigure.committed import situation_of
 from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.local import adapt, coordinator_of
 from cfgplan.reconfigure.network import NetworkAdaptive, coordinate, coordinators_of
+from cfgplan.reconfigure.situation import Situation
 from cfgplan.reconfigure.succession import Steward, succession_of
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
@@ -107,6 +109,11 @@ def hooks(
     def take_over(following: Membership) -> NetworkAdaptive:
         member = following.member
         step = min(member.step, len(goals) - 1)
+        situation, dropped = (
+            (Situation(), ()) if member.known is None else situation_of(member.known, problem.task)
+        )
+        for line in dropped:  # what the coordinator said that this problem does not know
+            member.error(f"what the society committed, dropped: {line}")
         adaptive = coordinate(
             running,
             transport,
@@ -120,9 +127,10 @@ def hooks(
             kill=kill,
             goals=goals[step + 1 :],
             member=member,
-            generation=generation(member.epoch) + 1,
+            generation=max(1, generation(member.epoch)) + 1,  # none heard yet: the first's
             step=step,
             succession=succession,
+            situation=situation,
         )
         if following.injector is not None:
             adaptive.injector = following.injector
@@ -156,6 +164,7 @@ def hooks(
             without=settings.without,
             hold=settings.hold,
             succession=succession if steward else None,
+            leader=coordinator_of(problem.goal_call, config),  # lost before first contact too
         )
         injector = Injector(settings.injections, running, facts=False, kill=kill)
         role = Membership(member, injector)

@@ -36,18 +36,20 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Collection, Sequence
 
-from cfgplan.notation import call_text
+from cfgplan.configuration.model import Configuration
+from cfgplan.notation import atom_text, call_text
 from cfgplan.planner.task import Ground
 from cfgplan.reconfigure.coordinate import Coordinator
 from cfgplan.reconfigure.local import Adaptive
 from cfgplan.reconfigure.network import NetworkAdaptive
+from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.member import Membership
 from cfgplan.runtime.monitor import Detection
 from cfgplan.runtime.part import Part
 from cfgplan.runtime.succession import TAKEOVER_AFTER, Succession
 
-__all__ = ["Steward", "coordinating", "succession_of"]
+__all__ = ["Shown", "Steward", "coordinating", "succession_of"]
 
 
 def succession_of(
@@ -106,14 +108,19 @@ class Steward:
         member = following.member
         gone, waited = member.leader, member.gone_for()
         adaptive = self._take_over(following)
+        self.role = adaptive  # coordinating from here: what its events say is shown as such
         me, now = member.robot.name, time.time()
-        goal = call_text(adaptive.coordinator.reconfigurator.goal)
+        reconfigurator = adaptive.coordinator.reconfigurator
+        known = reconfigurator.situation  # what the society committed (committed.py)
         info = (
             ("epoch", member.epoch),
             ("after", gone),
             ("step", member.step),
-            ("goal", goal),
+            ("goal", call_text(reconfigurator.goal)),
             ("waited", round(waited, 3)),
+            ("added", [atom_text(f) for f in known.asserted]),
+            ("removed", [atom_text(f) for f in known.retracted]),
+            ("failed", [call_text(i) for i in known.failed]),
         )
         member.robot.record(Adaptation(robot=me, t=now, what="takeover", info=info))
         detail = f"{gone}, the coordinator, is gone: {me} takes over"
@@ -159,3 +166,27 @@ def coordinating(hooks: object) -> Coordinator | None:
     if isinstance(hooks, Adaptive | NetworkAdaptive | Steward):
         return hooks.coordinator
     return None
+
+
+class Shown:
+    """What the viewers of a run (the live page, Foxglove, the ROS 2 node) show
+    of its coordination, asked anew each time: a robot that takes over
+    coordinates from then on, and one that steps down no longer does."""
+
+    def __init__(self, hooks: object, first: Configuration | None) -> None:
+        self.hooks = hooks
+        self._last = first
+
+    def reconfigurator(self) -> Reconfigurator | None:
+        """The reconfigurator of the coordinator this process runs now, if any."""
+        coordinator = coordinating(self.hooks)
+        return None if coordinator is None else coordinator.reconfigurator
+
+    def running(self) -> Configuration | None:
+        """The configuration the coordinator this process runs has running
+        (``None``: nothing runs); while this process does not coordinate, the
+        last one it saw (the first, on a robot that never did)."""
+        reconfigurator = self.reconfigurator()
+        if reconfigurator is not None:
+            self._last = reconfigurator.running
+        return self._last

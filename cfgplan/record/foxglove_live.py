@@ -20,7 +20,10 @@ logs reaches it. What a client sees:
   ``/cfgplan/channels/CHANNEL`` published by its source and subscribed by its
   target; each robot a node publishing its own topics above, the coordinator
   those of the society. After a switch (5.5) the graph is the new
-  configuration's, as the coordinator's reconfigurator holds it.
+  configuration's, as the coordinator's reconfigurator holds it; when it
+  stops (no configuration), it has no functionality. A robot that takes
+  over coordination publishes the society's topics from then on, and its
+  graph follows its switches; one that steps down keeps the last.
 
 Only this module imports ``foxglove``, and only when ``--foxglove`` is given.
 """
@@ -57,6 +60,9 @@ __all__ = ["FoxgloveLive", "Graph", "graph_of", "serve"]
 
 CHANNELS = "/cfgplan/channels/"
 """Where the configuration's channels are in the connection graph."""
+REDRAWN = frozenset({"switch", "no-configuration", "takeover", "step-down"})
+"""Events after which the graph is drawn again: the configuration, or who
+coordinates, changed."""
 
 
 @dataclass
@@ -119,6 +125,7 @@ class FoxgloveLive:
         self._config = config
         self._channels: dict[str, foxglove.Channel] = {}
         self._topics: dict[str, str] = {}  # topic -> the robot that publishes it
+        self._society: set[str] = set()  # the society's topics, the coordinator's
         self._lock = threading.Lock()
         self.refused = 0
         for model, template in TOPICS.items():  # advertised ahead
@@ -126,6 +133,7 @@ class FoxgloveLive:
                 continue
             if "{robot}" not in template:
                 self._open(template, model, (), lead)
+                self._society.add(template)
             for robot in robots if "{robot}" in template else ():
                 topic = template.format(robot=segment(robot))
                 self._open(topic, model, (("robot", robot),), robot)
@@ -143,8 +151,8 @@ class FoxgloveLive:
             return
         with self._lock:
             self._log(e)
-            if isinstance(event, Adaptation) and event.what == "switch":
-                self._switched()
+            if isinstance(event, Adaptation) and event.what in REDRAWN:
+                self._switched(event)
 
     def _log(self, e: Entry) -> None:
         channel = self._channels.get(e.topic)
@@ -175,7 +183,12 @@ class FoxgloveLive:
         self._topics[topic] = robot
         return channel
 
-    def _switched(self) -> None:
+    def _switched(self, event: Adaptation) -> None:
+        """The configuration changed (or who coordinates): the graph again."""
+        lead = {"takeover": event.robot, "step-down": event.field("leader")}.get(event.what)
+        if isinstance(lead, str):  # the society's topics are the new coordinator's
+            for topic in self._society:
+                self._topics[topic] = lead
         if self._running is not None:
             self._config = self._running()
         self.graph = self._graph()

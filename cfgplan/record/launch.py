@@ -51,10 +51,11 @@ def open_foxglove(
     title: str,
 ) -> FoxgloveLive:
     """Serve the run to Foxglove at ``address``; print its ``ws://`` URL. The
-    graph follows the coordinator's running configuration when this process
-    runs the coordinator (``hooks``), else stays ``config``. The society's
-    topics are published by the coordinator, the robot of ``goal`` (the goal's
-    ground call)."""
+    graph follows the coordinator's running configuration while this process
+    runs the coordinator (``hooks``: from the start, or once its robot took
+    over), else stays the last one it showed (``config`` at first). The
+    society's topics are published by the coordinator: the robot of ``goal``
+    (the goal's ground call), then whoever takes over."""
     try:
         import foxglove  # noqa: F401  (the foxglove extra)
     except ImportError:
@@ -63,11 +64,11 @@ def open_foxglove(
             hint=FOXGLOVE_HINT,
         ) from None
     from cfgplan.reconfigure.local import coordinator_of
-    from cfgplan.reconfigure.succession import coordinating
+    from cfgplan.reconfigure.succession import Shown, coordinating
     from cfgplan.record.foxglove_live import serve
 
     coordinator = coordinating(hooks)
-    running = None if coordinator is None else (lambda: coordinator.reconfigurator.running)
+    running = Shown(hooks, config).running  # a robot that takes over: its configurations
     here = [r.name for r in society.robots]
     lead = coordinator.robot if coordinator is not None else coordinator_of(goal, config)
     try:

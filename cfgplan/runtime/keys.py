@@ -9,6 +9,7 @@ societies on one network stay apart::
     cfgplan/<society>/<robot>/configure                                 switches, to it
     cfgplan/<society>/coordinator/<robot>                               its reports, acks (5.5)
     cfgplan/<society>/<robot>/problem/<fingerprint>/<about>            the problem it runs
+    cfgplan/<society>/<robot>/problem/<fingerprint>                     it plans it (5.5)
 
 ``<robot>`` is the robot that *receives*, ``<sender>`` the robot that sends;
 ``<source>`` and ``<target>`` are the channel's functionality labels and
@@ -39,6 +40,9 @@ __all__ = [
     "chunk",
     "configure_key",
     "coordinator_key",
+    "planner_key",
+    "planner_of_token",
+    "planner_pattern",
     "problem_key",
     "problem_of_token",
     "problem_pattern",
@@ -144,3 +148,22 @@ def problem_of_token(key: str, society: str) -> tuple[str, str, str] | None:
         return None
     named = _token(key, society, "problem", 6)
     return None if named is None else (named[0], named[1], named[2])
+
+
+def planner_key(society: str, robot: str, fingerprint: str) -> str:
+    """The liveliness token by which ``robot`` says it runs the problem of
+    ``fingerprint`` with the planner, so that it may take over coordination
+    (:func:`cfgplan.runtime.succession.candidates`; a robot run from emitted
+    code announces its problem but not this)."""
+    return f"{PREFIX}/{chunk(society)}/{chunk(robot)}/problem/{chunk(fingerprint)}"
+
+
+def planner_pattern(society: str) -> str:
+    """The planner tokens of every robot of ``society``."""
+    return f"{PREFIX}/{chunk(society)}/*/problem/*"
+
+
+def planner_of_token(key: str, society: str) -> tuple[str, str] | None:
+    """The robot and fingerprint a planner token of ``society`` names, or ``None``."""
+    named = _token(key, society, "problem", 5)
+    return None if named is None else (named[0], named[1])

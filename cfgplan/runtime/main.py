@@ -217,12 +217,15 @@ def network_options(
     problem: ProblemId | None = None,
     allowance: float | None = None,
     router: Sequence[str] = (),
+    plans: bool = False,
 ) -> ZenohOptions:
     """The Zenoh options of a robot, as ``cfgplan run`` and emitted programs
     take them: with keys and no ``--society``, the keys' society; ``problem``:
     the one it runs, announced to the society (:mod:`cfgplan.security.identity`);
     ``allowance``: ``--rate-allowance`` (:mod:`cfgplan.security.rates`);
-    ``router``: ``--router``, the routers it is a client of."""
+    ``router``: ``--router``, the routers it is a client of; ``plans``: it
+    runs the problem with the planner (``cfgplan run``, reconfiguring): it
+    may take over coordination, and says so."""
     if keys is not None:  # the keys name the society, unless --society does
         from cfgplan.security.zenoh_tls import society_for
 
@@ -237,6 +240,7 @@ def network_options(
         keys=keys,
         problem=problem,
         rates=RateLimits() if allowance is None else RateLimits(allowance=allowance),
+        plans=plans and problem is not None,
     )
 
 

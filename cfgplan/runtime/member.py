@@ -84,13 +84,14 @@ from cfgplan.runtime.protocol import (
     Ready,
     Report,
     Rival,
+    State,
     ToCoordinator,
     ToRobot,
     encode,
     generation,
     read_to_robot,
 )
-from cfgplan.runtime.succession import Succession
+from cfgplan.runtime.succession import Succession, candidates
 from cfgplan.security.rates import Throttle
 
 __all__ = ["Member", "Membership", "Network", "send"]
@@ -128,6 +129,7 @@ class Member:
         without: str = "stop",
         hold: float = HOLD,
         succession: Succession | None = None,
+        leader: str = "",
     ) -> None:
         self.robot = robot
         self.succession = succession
@@ -136,6 +138,10 @@ class Member:
         (:meth:`takeover_due`), and follows a later run only from the robot
         that is next; ``None``: the access control alone says who may."""
         self.step = 0  # the step of the sequence the configuration it runs serves
+        self.known: State | None = None
+        """The last :class:`~cfgplan.runtime.protocol.State` of the run it
+        follows: what the society committed on top of the state it was
+        started with (a robot that takes over plans from it)."""
         self._lost_at: float | None = None  # when the leader's token went (monotonic)
         self.without = without
         """What this robot does once its coordinator is gone for ``hold``
@@ -149,7 +155,10 @@ class Member:
         self.forward = forward
         self.current = 0  # the configuration id it runs
         self.epoch = ""  # the coordinator's run it follows (``epoch`` of its messages)
-        self.leader = ""  # the robot that coordinates that run
+        self.leader = leader
+        """The robot that coordinates that run; before any message of it, the
+        robot expected to (the goal's, for a robot that runs the problem): its
+        token going then is a coordinator lost before first contact."""
         self._leader_gone = False  # its token went since: a new epoch may be followed
         self._rivals: set[str] = set()  # epochs of second coordinators told (a few)
         self._listening = False  # to the presence of the others and to its robot's calls
@@ -224,8 +233,8 @@ class Member:
     def _next(self, gone: str) -> str | None:
         """Who takes over from ``gone`` as this robot sees the society."""
         assert self.succession is not None
-        alive = {*getattr(self.network, "alive", ()), self.robot.name}
-        return self.succession.successor(self.step, alive, gone)
+        able = candidates(self.network, self.robot.name)
+        return self.succession.successor(self.step, able, gone)
 
     def _presence(self, other: str, alive: bool) -> None:
         """The coordinator followed went away (a message of its run, after it
@@ -299,21 +308,25 @@ class Member:
             return
         epoch = message.epoch
         if epoch == self.epoch:
-            self._leader_gone = False  # it did not go, or came back as it was
+            if self._alive(message.sender):  # it did not go, or came back as it was
+                self._leader_gone = False
         elif self._fenced(message):
             return
         if isinstance(message, Hello):
             self._send(Ready(self.robot.name, self.instance))
             return
-        if epoch != self.epoch and isinstance(message, Prepare | Commit):
-            # A coordinator started again: it numbers its configurations
-            # afresh, and this robot keeps running its part until that
-            # coordinator installs one.
+        if epoch != self.epoch and isinstance(message, Prepare | Commit | State):
+            # A coordinator started again (or one that took over): it numbers
+            # its configurations afresh, and this robot keeps running its part
+            # until that coordinator installs one.
             self.epoch, self.current, self.pending = epoch, 0, {}
-            self.leader, self._leader_gone, self._lost_at = message.sender, False, None
+            self._lead_by(message.sender)
         elif epoch != self.epoch and isinstance(message, Abort):
             return  # of a switch of a coordinator no longer followed
-        if isinstance(message, Prepare):
+        if isinstance(message, State):
+            if self.known is None or self.known.epoch != epoch or message.id >= self.known.id:
+                self.known, self.step = message, message.step
+        elif isinstance(message, Prepare):
             self._prepare(message.id, message.part)
         elif isinstance(message, Commit):
             self._commit(message.id, message.part, message.step)
@@ -321,6 +334,25 @@ class Member:
             self.pending.pop(message.id, None)
         else:
             self._finish(message)
+
+    def _alive(self, robot: str) -> bool:
+        """Whether ``robot``'s token is up as the network sees it now (ahead of
+        the presence changes this robot has taken: a message of a robot may
+        wait in the queue while its token goes)."""
+        return robot in getattr(self.network, "alive", (robot,))
+
+    def _lead_by(self, sender: str) -> None:
+        """Follow ``sender``'s run from now on. Alive, it is a coordinator again:
+        no hold runs out, nobody takes over. Gone already — its message waited
+        in the queue while its token went — it is lost as if its token went
+        now (unless it was lost before): a takeover is not missed."""
+        self.leader = sender
+        if self._alive(sender):
+            self._leader_gone, self._lost_at, self._gone = False, None, None
+            return
+        self._leader_gone = True
+        if self._lost_at is None:
+            self._lost_at = self._gone = time.monotonic()
 
     def _fenced(self, message: ToRobot) -> bool:
         """Whether ``message``, of another epoch than the one followed, is not
@@ -426,7 +458,8 @@ class Member:
         self.pending = {k: v for k, v in self.pending.items() if k > number}
         if same:
             return
-        run = (("epoch", self.epoch),) if self.epoch else ()  # whose switch it obeyed
+        # whose switch it obeyed (the live page follows its leader)
+        run = (("epoch", self.epoch), ("leader", self.leader)) if self.epoch else ()
         self.robot.record(
             Adaptation(
                 robot=self.robot.name,

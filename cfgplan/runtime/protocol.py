@@ -38,13 +38,15 @@ from enum import StrEnum
 from typing import Any, ClassVar
 
 from cfgplan.runtime.monitor import Detection
-from cfgplan.runtime.wire import is_whole, loads
+from cfgplan.runtime.wire import is_number, is_whole, loads
 
 __all__ = [
     "MAX_BYTES",
+    "MAX_FACTS",
     "MAX_GENERATION",
     "MAX_ID",
     "MAX_NAME",
+    "MAX_TERMS",
     "MAX_TEXT",
     "MESSAGES",
     "Abort",
@@ -60,6 +62,7 @@ __all__ = [
     "Ready",
     "Report",
     "Rival",
+    "State",
     "ToCoordinator",
     "ToRobot",
     "clip",
@@ -79,6 +82,14 @@ MAX_NAME = 256
 """The longest robot name or epoch, in characters."""
 MAX_TEXT = 4000
 """The longest text (a reason, a goal), in characters; longer ones are clipped when written."""
+MAX_FACTS = 4096
+"""The most facts (or instances, media, reliabilities) one list of a
+:class:`State` carries; a coordinator whose situation holds more sends none."""
+MAX_TERMS = 64
+"""The most terms of one fact or instance (its predicate or name first)."""
+
+Fact = tuple[str, ...]
+"""A fact or a functionality instance as the wire carries it: ``("compass", "Emil")``."""
 
 
 class ProtocolError(ValueError):
@@ -202,7 +213,31 @@ class Hello:
     epoch: str
 
 
-ToRobot = Prepare | Commit | Abort | Finish | Duplicate | Hello
+@dataclass(frozen=True)
+class State:
+    """What the society knows on top of the state it was started with, as it
+    stands with configuration ``id`` committed (5.5, 7.2): the facts added and
+    removed (by the operator, by the postconditions of the steps accomplished),
+    the functionality instances out of service, the media down (indexes into
+    the state's media), the reliabilities lowered, and the ``step`` of the
+    sequence. Sent to every robot that is ready after each commit and each
+    change that needed no switch; each keeps the last one of the run it
+    follows, and a robot that takes over coordination plans from it
+    (:mod:`cfgplan.reconfigure.committed`). Not answered."""
+
+    OP: ClassVar[str] = "state"
+    id: int
+    sender: str = field(metadata={"wire": "from"})
+    epoch: str
+    step: int = 0
+    added: tuple[Fact, ...] = ()
+    removed: tuple[Fact, ...] = ()
+    failed: tuple[Fact, ...] = ()
+    down: tuple[int, ...] = ()
+    reliability: tuple[tuple[Fact, float], ...] = ()
+
+
+ToRobot = Prepare | Commit | Abort | Finish | Duplicate | Hello | State
 """A message on a robot's ``configure`` key."""
 
 
@@ -292,6 +327,7 @@ MESSAGES: tuple[type[ToRobot] | type[ToCoordinator], ...] = (
     Finish,
     Duplicate,
     Hello,
+    State,
     Ack,
     Report,
     Ready,
@@ -301,7 +337,7 @@ MESSAGES: tuple[type[ToRobot] | type[ToCoordinator], ...] = (
 """Every message of the protocol (the docs' protocol page is checked against it)."""
 
 _TO_ROBOT: dict[str, type[ToRobot]] = {
-    m.OP: m for m in (Prepare, Commit, Abort, Finish, Duplicate, Hello)
+    m.OP: m for m in (Prepare, Commit, Abort, Finish, Duplicate, Hello, State)
 }
 _TO_COORDINATOR: dict[str, type[ToCoordinator]] = {
     m.TYPE: m for m in (Ack, Report, Ready, CallError, Rival)
@@ -324,7 +360,7 @@ def encode(message: ToRobot | ToCoordinator) -> bytes:
     out: dict[str, object] = {key: value}
     for f in fields(message):
         data = getattr(message, f.name)
-        if data is None or (f.default in ("", 0) and data == f.default):
+        if data is None or (f.default in ("", 0, ()) and data == f.default):
             continue  # left at its default: not written
         if isinstance(data, Detection):
             data = json.loads(data.message())
@@ -362,6 +398,36 @@ def _id(data: dict[str, object], key: str = "id", what: str = "a configuration i
     return value
 
 
+def _list(data: dict[str, object], key: str) -> list[object]:
+    """The list under ``key`` (empty if absent), at most :data:`MAX_FACTS` long."""
+    value = data.get(key, [])
+    if not isinstance(value, list):
+        raise ProtocolError(f"{key} is {value!r:.80}, not a list")
+    if len(value) > MAX_FACTS:
+        raise ProtocolError(f"{key} has {len(value)} entries (at most {MAX_FACTS})")
+    return value
+
+
+def _fact(value: object, key: str) -> Fact:
+    """A fact or an instance: a list of 1 to :data:`MAX_TERMS` names."""
+    if not isinstance(value, list) or not 1 <= len(value) <= MAX_TERMS:
+        raise ProtocolError(f"{key}: {value!r:.80} is not a fact (1 to {MAX_TERMS} names)")
+    for term in value:
+        if not isinstance(term, str) or not 0 < len(term) <= MAX_NAME:
+            raise ProtocolError(f"{key}: {term!r:.80} is not a name (1 to {MAX_NAME} characters)")
+    return tuple(value)
+
+
+def _reliability(value: object) -> tuple[Fact, float]:
+    """An instance and its reliability, a number above 0 and at most 1 (7.2)."""
+    if not isinstance(value, list) or len(value) != 2:
+        raise ProtocolError(f"reliability: {value!r:.80} is not [instance, number]")
+    instance, p = value
+    if not is_number(p) or not 0.0 < p <= 1.0:
+        raise ProtocolError(f"reliability: {p!r:.80} is not a number above 0, at most 1")
+    return _fact(instance, "reliability"), float(p)
+
+
 def _fields(message: type[ToRobot] | type[ToCoordinator], data: dict[str, object]) -> object:
     values: dict[str, Any] = {}
     for f in fields(message):
@@ -389,6 +455,12 @@ def _fields(message: type[ToRobot] | type[ToCoordinator], data: dict[str, object
             if key not in data and message is Prepare:
                 raise ProtocolError("a prepare carries no part")
             values[f.name] = data.get(key)
+        elif f.name in ("added", "removed", "failed"):
+            values[f.name] = tuple(_fact(v, key) for v in _list(data, key))
+        elif f.name == "down":
+            values[f.name] = tuple(_id({key: v}, key, "a medium's index") for v in _list(data, key))
+        elif f.name == "reliability":
+            values[f.name] = tuple(_reliability(v) for v in _list(data, key))
         elif f.name == "detection":
             try:
                 values[f.name] = Detection.read(json.dumps(data.get(key)).encode())

@@ -292,6 +292,18 @@ class Takeover(Base):
     step: int = Field(description="The step of the sequence it goes on from (0: the first).")
     goal: str = Field(description="That step's goal.")
     waited: float = Field(description="Seconds from the coordinator's token going to now.")
+    added: list[str] = Field(
+        default_factory=list,
+        description="Facts the society had added to the state when it last committed "
+        "(the operator's, the postconditions of the steps accomplished), which it plans with.",
+    )
+    removed: list[str] = Field(
+        default_factory=list, description="Facts it had removed from the state, as `added`."
+    )
+    failed: list[str] = Field(
+        default_factory=list,
+        description="Functionality instances out of service when it last committed.",
+    )
 
 
 class StepDown(Base):
@@ -329,6 +341,11 @@ class InstallEvent(Base):
         default=None,
         description="Across processes: the coordinator's run whose switch this was "
         "(absent when one process runs every robot).",
+    )
+    leader: str | None = Field(
+        default=None,
+        description="Across processes: the robot that coordinates that run (absent when "
+        "one process runs every robot).",
     )
     problems: list[str] | None = Field(
         default=None,

@@ -238,9 +238,12 @@ def adaptation(event: Adaptation) -> str | None:
     if event.what == "finish":
         return f"{head}: {_finish(event)}"
     if event.what == "takeover":
+        said = (("added", "added"), ("removed", "removed"), ("failed", "out of service"))
+        learnt = [f"{what} {_names(f(key))}" for key, what in said if f(key)]
+        known = f"; the society had {', '.join(learnt)}" if learnt else ""
         return (
             f"{head}: {f('after')}, the coordinator, is gone: {event.robot} coordinates from "
-            f"step {_number(f('step'))} on ({f('goal')}; run {f('epoch')})"
+            f"step {_number(f('step'))} on ({f('goal')}; run {f('epoch')}){known}"
         )
     if event.what == "step-down":
         return (

@@ -95,6 +95,10 @@ class ZenohOptions:
     problem: ProblemId | None = None
     """The problem the robot runs, announced and checked against the society's
     (:mod:`cfgplan.security.identity`); ``None``: not known, not checked."""
+    plans: bool = False
+    """The robot runs ``problem`` with the planner (``cfgplan run --robot``, not
+    an emitted program): it says so with a token of its own, and may take over
+    coordination (:func:`cfgplan.runtime.succession.candidates`)."""
     router: tuple[str, ...] = ()
     """Routers the robot is a Zenoh *client* of (``--router``): it connects to
     one of them and listens nowhere, and everything it says and hears goes

@@ -57,6 +57,9 @@ from cfgplan.runtime.keys import (
     alive_pattern,
     channel_key,
     channels_pattern,
+    planner_key,
+    planner_of_token,
+    planner_pattern,
     problem_key,
     problem_of_token,
     problem_pattern,
@@ -158,6 +161,9 @@ class ZenohTransport:
         self._aliens: dict[tuple[str, str], tuple[ProblemId, float]] = {}  # another problem's
         self._said_aliens: set[tuple[str, str]] = set()
         self._ours: set[str] = set()  # robots whose token of this one's problem is up
+        self._planners: set[str] = set()  # those of them that plan it (their planner token)
+        self._planner_token: Any = None
+        self._planner_watch: Any = None
         self._up: set[tuple[str, str]] = set()  # the tokens of _aliens up now
         if self.options.problem is not None:
             self._announce(self.options.problem)
@@ -265,9 +271,29 @@ class ZenohTransport:
                 problem_pattern(self.society), self._on_problem, history=True
             )
             self._problem_token = liveliness.declare_token(key)
+            if self.options.plans:  # it may take over coordination: the others know, it knows
+                self._planner_watch = liveliness.declare_subscriber(
+                    planner_pattern(self.society), self._on_planner, history=True
+                )
+                planner = planner_key(self.society, self.robot, problem.fingerprint)
+                self._planner_token = liveliness.declare_token(planner)
         except self._z.ZError as exc:
             self.close()
             raise RunError(f"cannot announce {self.robot}'s problem: {reason(exc)}") from None
+
+    def _on_planner(self, sample: Any) -> None:
+        """On a Zenoh thread: a robot says it runs this robot's problem with the
+        planner (:attr:`ZenohOptions.plans`), or no longer does."""
+        mine = self.options.problem
+        named = planner_of_token(str(sample.key_expr), self.society)
+        if mine is None or named is None or named[1] != mine.fingerprint:
+            return
+        robot = named[0]
+        with self._lock:
+            if sample.kind != self._z.SampleKind.PUT:
+                self._planners.discard(robot)
+            elif robot != self.robot and len(self._planners) < 4096:
+                self._planners.add(robot)
 
     def _on_problem(self, sample: Any) -> None:
         """On a Zenoh thread: a robot of the society says which problem it runs
@@ -303,6 +329,14 @@ class ZenohTransport:
                 self._aliens.setdefault((robot, fingerprint), (theirs, time.monotonic()))
                 self._up.add((robot, fingerprint))
         self._arrived.set()
+
+    def planners(self) -> set[str]:
+        """The other robots that say they run this robot's problem with the
+        planner (their planner token is up; a robot run from emitted code
+        announces its problem, not this): they may take over coordination
+        (:func:`cfgplan.runtime.succession.candidates`)."""
+        with self._lock:
+            return set(self._planners)
 
     def foreign(self, robot: str) -> ProblemId | None:
         """The other problem ``robot`` runs, if a token of another problem is up
@@ -489,8 +523,9 @@ class ZenohTransport:
         """Leave: the token goes, so the others see this robot lost at once."""
         if self._session.is_closed():
             return
-        if self._problem_token is not None:
-            self._problem_token.undeclare()
+        for token in (self._planner_token, self._problem_token):
+            if token is not None:
+                token.undeclare()
         self._process.undeclare()
         self._token.undeclare()
         self._session.close()

@@ -147,6 +147,28 @@ def test_installs_are_on_the_timeline_only_away_from_the_coordinator() -> None:
     assert [e["kind"] for e in page["timeline"]] == ["install"] and page["decides"] is False
 
 
+def test_the_page_follows_whoever_coordinates() -> None:
+    """Pippi's page, a helper's: Emil coordinates (his switches installed
+    here say so); Pippi takes over (her own ``takeover``), and her page
+    decides from then on (her installs leave the timeline); she steps down
+    for Rasmus, and it is a helper's again (5.5)."""
+    member = Setup(title="x", robots=("Emil", "Pippi"), here=("Pippi",), coordinator="Pippi")
+
+    def event(what: str, t: float, **info: object) -> Adaptation:
+        return Adaptation(robot="Pippi", t=t, what=what, info=tuple(info.items()))
+
+    run = [event("install", 1.0, id=1, epoch="1.a", leader="Emil")]
+    assert (model(run, member)["coordinator"], model(run, member)["decides"]) == ("Emil", False)
+    run.append(event("takeover", 2.0, epoch="2.b", after="Emil", step=0, goal="g", waited=0.3))
+    run.append(event("install", 2.1, id=0, epoch="2.b", leader="Pippi"))
+    page = model(run, member)
+    assert (page["coordinator"], page["decides"]) == ("Pippi", True)
+    assert [e["kind"] for e in page["timeline"]] == ["install", "takeover"]
+    run.append(event("step-down", 3.0, leader="Rasmus", epoch="3.c", was="2.b"))
+    page = model(run, member)
+    assert (page["coordinator"], page["decides"]) == ("Rasmus", False)
+
+
 def test_long_texts_from_the_run_are_clipped() -> None:
     """A cause of any length costs the page at most Limits.text characters."""
     long = Adaptation(robot="Emil", t=1.0, what="abort", info=(("reason", "x" * 5000),))

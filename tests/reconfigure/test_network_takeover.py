@@ -66,12 +66,17 @@ def _start(
 
 
 def _society(
-    running: Processes, folder: Path, society: str, *extra: str, keyed: bool = False
+    running: Processes,
+    folder: Path,
+    society: str,
+    *extra: str,
+    keyed: bool = False,
+    emil: tuple[str, ...] = (),
 ) -> tuple[Any, Any, dict[str, list[str]]]:
-    """Emil (helping) and Pippi (coordinating, with ``extra``) once Pippi's
-    crossing is served: both processes and each one's network options. ``keyed``:
-    with the society's keys, both marked coordinators (as ``cfgplan keys new``
-    marks the robots the goals name)."""
+    """Emil (helping, with ``emil``) and Pippi (coordinating, with ``extra``)
+    once Pippi's crossing is served: both processes and each one's network
+    options. ``keyed``: with the society's keys, both marked coordinators (as
+    ``cfgplan keys new`` marks the robots the goals name)."""
     config = str(hermetic_config(folder))
     port = free_port()
     common = ["--zenoh-config", config, "--society", society, "--lease", f"{LEASE:g}"]
@@ -84,7 +89,7 @@ def _society(
         "Emil": ["--listen", endpoint(port), *common],
         "Pippi": ["--listen", endpoint(free_port()), "--connect", endpoint(port), *common],
     }
-    emil, _, _ = _start(running, folder, "Emil", nets["Emil"])
+    emil, _, _ = _start(running, folder, "Emil", [*nets["Emil"], *emil])
     pippi, pippi_trace, _ = _start(running, folder, "Pippi", [*nets["Pippi"], *extra])
     wait_for("Pippi's crossing served", _after(pippi_trace, 0.0, "call", **SERVED), LIMIT)
     return emil, pippi, nets
@@ -92,6 +97,29 @@ def _society(
 
 def _events(trace: list[Record], *kinds: str, after: float = 0.0) -> list[Record]:
     return [r for r in trace if r["event"] in kinds and float(r["t"]) > after]  # type: ignore[arg-type]
+
+
+def _taken_over_then_back(
+    running: Processes,
+    folder: Path,
+    emil: Any,
+    network: list[str],
+    since: float,
+    limit: float = LIMIT,
+) -> tuple[Record, Path]:
+    """Emil takes over after ``since`` (within ``limit`` seconds) and stops
+    safely; Pippi, started again with ``network``, and he end the sequence:
+    the takeover and her new trace."""
+    emil_trace = folder / "emil.jsonl"
+    takeover = wait_for("Emil takes over", _after(emil_trace, since, "takeover"), limit)
+    t = float(takeover["t"])  # type: ignore[arg-type]
+    wait_for("Emil stops safely", _after(emil_trace, t - 1e-6, "no-configuration"), 10.0)
+    again = folder / "again"
+    again.mkdir()
+    back, again_trace, _ = _start(running, again, "Pippi", network)
+    assert emil.wait(timeout=LIMIT) == 0
+    assert back.wait(timeout=LIMIT) == 0
+    return takeover, again_trace
 
 
 def _served_to_the_end(folder: Path, again: Path, takeover: Record) -> None:
@@ -140,15 +168,9 @@ def test_the_coordinator_killed_in_a_switch_is_taken_over_and_followed_when_back
         assert pippi.wait(timeout=30) == -signal.SIGKILL  # type: ignore[attr-defined]
         os.kill(emil.pid, signal.SIGCONT)  # type: ignore[attr-defined]
         let_go = time.time()
-        emil_trace = tmp_path / "emil.jsonl"
-        takeover = wait_for("Emil takes over", _after(emil_trace, let_go, "takeover"), LIMIT)
-        t = float(takeover["t"])  # type: ignore[arg-type]
-        wait_for("Emil stops safely", _after(emil_trace, t - 1e-6, "no-configuration"), 10.0)
-        again = tmp_path / "again"
-        again.mkdir()
-        back, again_trace, _ = _start(running, again, "Pippi", nets["Pippi"])
-        assert emil.wait(timeout=LIMIT) == 0  # type: ignore[attr-defined]
-        assert back.wait(timeout=LIMIT) == 0  # type: ignore[attr-defined]
+        back = nets["Pippi"]
+        takeover, again_trace = _taken_over_then_back(running, tmp_path, emil, back, let_go)
+    t = float(takeover["t"])  # type: ignore[arg-type]
     assert (takeover["after"], takeover["step"]) == ("Pippi", 0)
     assert takeover["goal"] == "do-cross-door(Pippi, Door1)"
     assert str(takeover["epoch"]).startswith("2.")  # one generation after Pippi's first run

@@ -201,7 +201,8 @@ function show(state) {
   note.textContent = state.decides
     ? ""
     : "This page runs on " + state.here.join(", ") + ", not on the coordinator (" +
-      state.coordinator + "): it shows this robot's channels and what it installs; the drawing is the first configuration.";
+      state.coordinator + "): it shows this robot's channels and what it installs; the drawing is the first configuration " +
+      "(or the last this robot coordinated, if it took over and stepped down since).";
   if (state.drawing !== page.drawing) loadDrawing(state.drawing);
   colour(state);
   robots(state);
