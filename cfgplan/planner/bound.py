@@ -42,7 +42,7 @@ from itertools import compress, repeat
 
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.partial import Item, Key, Partial
+from cfgplan.planner.partial import Item, Partial
 from cfgplan.planner.parts import Part, least, own_part
 from cfgplan.planner.summary import ChannelId, Summaries, Summary
 from cfgplan.planner.task import Ground, Task
@@ -91,7 +91,7 @@ class Bound:
         together least cost is always counted where some item has slack)."""
         task = self.task
         placed = node.labels
-        needed: set[Key] = set()
+        needed: set[Ground] = set()
         new_robots: set[str] = set()
         future: set[ChannelId] = set()
         pending: dict[int, tuple[Ground, Summary]] = {}
@@ -156,7 +156,7 @@ class Bound:
         pending: dict[int, tuple[Ground, Summary]],
         methods: dict[int, Ground],
         future: set[ChannelId],
-    ) -> frozenset[Key]:
+    ) -> frozenset[Ground]:
         """Pending functionality instances (and ends of channels waiting for
         an end) that no pending method item can derive, as only its
         ancestors call them (:meth:`Summaries.beyond`): each is a part of its
@@ -177,10 +177,10 @@ class Bound:
         node: Partial,
         pending: dict[int, tuple[Ground, Summary]],
         methods: dict[int, Ground],
-        alone: frozenset[Key],
+        alone: frozenset[Ground],
         have: Have,
         counted: bool = True,
-    ) -> _Parts:
+    ) -> _Pending:
         """Each pending item as a part of the three least costs.
 
         Functionalities: an item's ``minimum``, less what C already has of the
@@ -196,7 +196,7 @@ class Bound:
         nothing pending)."""
         guarded = self._guarded(node, methods)
         reach = self.summaries.reach.of
-        parts = _Parts(slack=counted and any(sub.slack for _, sub in pending.values()))
+        parts = _Pending(slack=counted and any(sub.slack for _, sub in pending.values()))
         placed, resolved = have  # (often empty: no call then)
         for label, (call, sub) in pending.items():
             names, data, both = reach(call)
@@ -283,7 +283,7 @@ class Estimator:
 
 
 @dataclass(slots=True)
-class _Parts:
+class _Pending:
     """The pending items as parts of the three least costs of
     :meth:`Bound.estimate`: one part per item in each list, the items'
     labels in :attr:`labels`, in the same order."""
@@ -315,7 +315,7 @@ Have = tuple[dict[str, float], dict[str, float]]
 functionality name, and of its resolved channels by data predicate (:func:`_have`)."""
 
 
-def _have(node: Partial, resolved: set[tuple[str, Ground, Key, Key]], task: Task) -> Have:
+def _have(node: Partial, resolved: set[tuple[str, Ground, Ground, Ground]], task: Task) -> Have:
     """:data:`Have` of ``node``, whose resolved channels are ``resolved``."""
     functionalities: dict[str, float] = {}
     if node.placed:

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from cfgplan.configuration.model import Assignment, Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.canonical import canonical
-from cfgplan.planner.finish import Parts, admissible, build, fingerprint
+from cfgplan.planner.finish import Pieces, admissible, build, fingerprint
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.pricer import Heuristic, Pricer
@@ -63,7 +63,7 @@ class Found:
 
     cost: float
     index: int
-    parts: Parts | None
+    parts: Pieces | None
     media: tuple[Assignment, ...] = ()
     repeat: bool = False  # its configuration was met before in this window
     dead: DeadEnd | None = None  # why it is inadmissible (reported when listed)
@@ -214,7 +214,7 @@ class Windows:
             return Found(cost, index, None, dead=media)
         if ident is not None:
             admitted.add(ident)
-        return Found(cost, index, Parts(node.placed, node.channels, node.effects), media)
+        return Found(cost, index, Pieces(node.placed, node.channels, node.effects), media)
 
     def _list(self, found: list[Found]) -> Iterator[Configuration]:
         """Sorted derivations of a window, numbered as :meth:`Grower.admit`

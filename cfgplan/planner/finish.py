@@ -162,7 +162,7 @@ def fingerprint(node: Partial, number: Numbering) -> bytes:
 
 class Finished(Protocol):
     """What a configuration is built from: a complete :class:`Partial`, or
-    the three parts of one kept to be built later (:class:`Parts`)."""
+    the three parts of one kept to be built later (:class:`Pieces`)."""
 
     @property
     def placed(self) -> tuple[Placed, ...]: ...
@@ -172,7 +172,7 @@ class Finished(Protocol):
     def effects(self) -> Effects: ...
 
 
-class Parts(NamedTuple):
+class Pieces(NamedTuple):
     """A complete node's parts a configuration is built from: smaller than
     the node (no stack, no indexes), to hold many until they are listed."""
 

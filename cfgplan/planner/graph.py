@@ -3,7 +3,7 @@ option per feasible expansion (its method versions in domain order, the
 bindings of their preconditions in state order), every functionality
 instance with its weight. Made on demand from the grounder's expansions,
 each instance once, and kept with the grounder (:func:`graph_of`: one per task,
-as the grounder is, :func:`cfgplan.planner.plan.parts`), numbered by its
+as the grounder is, :func:`cfgplan.planner.plan.analysis`), numbered by its
 numbering.
 
 The passes over it are elsewhere: what every expansion of an instance

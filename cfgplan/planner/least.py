@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from math import inf as INF
 from typing import TYPE_CHECKING
 
-from cfgplan.planner.prices import Key, Prices, price_options
+from cfgplan.planner.prices import PriceKey, Prices, price_options
 from cfgplan.planner.room import Room
 
 if TYPE_CHECKING:
@@ -51,7 +51,7 @@ class Least:
 
     room: Room
     """The media (its ``fits`` looked up at each use, so that it can be watched)."""
-    number: Callable[[Key], int]
+    number: Callable[[PriceKey], int]
     made: list[Instance]
     """The graph's instances in the order made (:attr:`cfgplan.planner.graph.Graph.made`):
     those after the first :attr:`indexed` are indexed when first needed (a

@@ -5,7 +5,7 @@ or its order, only how much work finding it takes (the property tests of
 ``tests/planner`` check that with the extreme settings).
 
 Not here: the sizes of what a task's bounds keep (made once per task and
-shared by every search of it, :func:`cfgplan.planner.plan.parts`), which no
+shared by every search of it, :func:`cfgplan.planner.plan.analysis`), which no
 search could set for itself: how many stacks' counts are kept
 (:data:`cfgplan.planner.occurrences.STACKS`,
 :data:`cfgplan.planner.capacity.STACKS`), and where

@@ -26,9 +26,6 @@ from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import FunctionalitySchema, Ground, Task
 from cfgplan.planner.wiring import Channel, ChannelKey, Port, Unwired, rewire, settle
 
-Key = Ground
-"""A functionality instance's identity: ``("camera", "Emil")``."""
-
 
 @dataclass(slots=True)  # not frozen: cheaper to build; never mutated
 class Item:
@@ -48,7 +45,7 @@ class Placed:
     (its first argument), with its inputs and outputs instantiated."""
 
     label: int
-    call: Key
+    call: Ground
     schema: FunctionalitySchema
     robot: str
     inputs: tuple[Ground, ...]
@@ -63,7 +60,7 @@ class Partial:
 
     stack: tuple[Item, ...]
     placed: tuple[Placed, ...]  # in the order added
-    labels: dict[Key, int]  # functionality instance -> its label
+    labels: dict[Ground, int]  # functionality instance -> its label
     located: dict[int, Placed]  # label -> placed functionality
     channels: tuple[Channel, ...]  # in the thesis's list order (newest block first)
     effects: tuple[tuple[bool, Ground], ...]

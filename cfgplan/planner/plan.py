@@ -20,6 +20,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from functools import partial
+from typing import NamedTuple
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
@@ -41,17 +42,30 @@ from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
 
 
-def parts(task: Task, media: bool = True) -> tuple[Grounder, Bound, Partition]:
-    """The grounding memo and the bounds of ``task``, made once per task and
-    kept on it (:attr:`Task.memo`): they are freed with the task, as a run that
-    reconfigures plans on one derived task after another. ``media``:
+class Analysis(NamedTuple):
+    """What the planner works out about a task once (:func:`analysis`), for
+    every search of it: the grounding memo and the two bounds made on it."""
+
+    grounder: Grounder
+    """The ground instances, made on demand and kept (:mod:`cfgplan.planner.ground`)."""
+    bound: Bound
+    """The first bound: what every expansion contains (:mod:`cfgplan.planner.bound`)."""
+    partition: Partition
+    """The second bound: passes over the graph of ground instances
+    (:mod:`cfgplan.planner.partition`)."""
+
+
+def analysis(task: Task, media: bool = True) -> Analysis:
+    """The :class:`Analysis` of ``task``, made once per task and kept on it
+    (:attr:`Task.memo`): it is freed with the task, as a run that reconfigures
+    plans on one derived task after another. ``media``:
     :attr:`SearchOptions.media` (a partitioned bound each way)."""
-    key = "parts" if media else "parts-without-media"
-    found: tuple[Grounder, Bound, Partition] | None = task.memo.get(key)
+    key = "analysis" if media else "analysis-without-media"
+    found: Analysis | None = task.memo.get(key)
     if found is None:
         grounder = Grounder(task)
         partition = Partition(grounder, media)
-        found = task.memo[key] = (grounder, Bound(task, grounder, media), partition)
+        found = task.memo[key] = Analysis(grounder, Bound(task, grounder, media), partition)
     return found
 
 
@@ -65,7 +79,7 @@ def divided(task: Task, goal: Ground, media: bool = True) -> Parts | None:
     if goal not in made:
         found = None
         if task.levels.unit is not None:
-            grounder, _, partition = parts(task, media)
+            grounder, _, partition = analysis(task, media)
             unrolled = unroll(grounder, goal)
             if unrolled is not None:
                 found = divide(grounder, partition, *unrolled)
@@ -118,7 +132,7 @@ def growing(
     (:func:`parts`), children priced from splits (unless ``splits`` is
     False, or :attr:`SearchOptions.splits` is); ``given``:
     :attr:`Grower.given`. Every strategy's grower and pricer are made here."""
-    grounder, bound, partition = parts(task, options.media)
+    grounder, bound, partition = analysis(task, options.media)
     made = Grower(grounder, distinct, given, options=options, replays=replays and options.replays)
     pricer = Pricer(
         task.levels,
@@ -208,7 +222,7 @@ class Run:
             self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
-            bound = parts(self.task, self.options.media)[1]
+            bound = analysis(self.task, self.options.media)[1]
             self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
         else:
             self.strategy = BestFirst(made, pricer, self.goal, self.progress)
@@ -367,7 +381,7 @@ class Run:
     def _explain(self, started: float, deadline: float | None) -> None:
         """The bounds cut branches before their dead ends were met: search them
         without the bounds, so the report can say why nothing is admissible."""
-        grounder = parts(self.task, self.options.media)[0]
+        grounder = analysis(self.task, self.options.media)[0]
         unbounded = Grower(grounder, self.distinct)
         explaining = BestFirst(
             unbounded, Pricer(self.task.levels, _no_bound, stats=unbounded.stats), self.goal

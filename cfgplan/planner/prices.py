@@ -20,7 +20,7 @@ Fits = Callable[[tuple[Need, ...], Load], bool]
 """Whether the media carry an expansion's needs on top of a node's load
 (:meth:`cfgplan.planner.room.Room.fits`)."""
 
-Key = tuple[object, ...]
+PriceKey = tuple[object, ...]
 """What costs, as counted: ``("f", call)`` for a functionality (so that no
 call, a tuple of names, is ever mistaken for another key); ``("@", agent)``; for
 channels of one kind and data: ``("=", kind, data, sender, receiver)`` (both
@@ -72,15 +72,15 @@ class Wire(NamedTuple):
 
 def wire_keys(
     kind: str, data: object, sender: Ground | None, receiver: Ground | None
-) -> tuple[tuple[Key, ...], tuple[Key, ...], Key]:
+) -> tuple[tuple[PriceKey, ...], tuple[PriceKey, ...], PriceKey]:
     """What a channel whose known ends (functionality calls) are given counts
     towards, what it shares with, and what makes it free (:class:`Wire`)."""
-    every: Key = ("*", kind, data)
-    opened: Key = ("?", kind, data)
+    every: PriceKey = ("*", kind, data)
+    opened: PriceKey = ("?", kind, data)
     if sender is not None and receiver is not None:
-        key: Key = ("=", kind, data, sender, receiver)
-        to: Key = ("to", kind, data, receiver)
-        by: Key = ("from", kind, data, sender)
+        key: PriceKey = ("=", kind, data, sender, receiver)
+        to: PriceKey = ("to", kind, data, receiver)
+        by: PriceKey = ("from", kind, data, sender)
         shares = (key, ("?r", kind, data, receiver), ("?s", kind, data, sender), opened)
         return (key, every, to, by), shares, key
     if receiver is not None:
@@ -104,7 +104,7 @@ class Prices:
     certain: frozenset[str]
     totals: Counts
     present: set[int]
-    number: Callable[[Key], int]
+    number: Callable[[PriceKey], int]
     load: Load  # what the node's global channels load the media with (room.py)
     agents: dict[str, float] = field(default_factory=dict)  # the agent prices found so far
     shared: dict[int, float] = field(default_factory=dict)

@@ -46,7 +46,7 @@ from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Effects
 from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.plan import Run, growing, in_parts, parts
+from cfgplan.planner.plan import Run, analysis, growing, in_parts
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, StopReason
@@ -183,7 +183,7 @@ def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects |
     postcondition, it is in every feasible expansion of the goal (its
     summary's, :mod:`cfgplan.planner.summary`), it has one binding of its
     preconditions, and no method version it can reach has a postcondition."""
-    grounder, bound, _ = parts(task, options.media)
+    grounder, bound, _ = analysis(task, options.media)
     summary = bound.summaries.summary(goal)
     if not summary.feasible:
         return None

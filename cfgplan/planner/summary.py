@@ -24,13 +24,12 @@ from cfgplan.planner import clock
 from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Expansion, Grounder
 from cfgplan.planner.match import exists
-from cfgplan.planner.partial import Key
 from cfgplan.planner.parts import Part, least, own_part
 from cfgplan.planner.reach import Reach
 from cfgplan.planner.task import Ground, Task
 from cfgplan.planner.unify import bind_name, substitute
 
-ChannelId = tuple[str, Ground, Key | None, Key | None]
+ChannelId = tuple[str, Ground, Ground | None, Ground | None]
 """(kind, data, sender, receiver): None where the end is not known yet."""
 
 
@@ -39,10 +38,10 @@ class Summary:
     """What every feasible expansion of one ground instance contains."""
 
     feasible: bool
-    functionalities: frozenset[Key] = frozenset()
+    functionalities: frozenset[Ground] = frozenset()
     robots: frozenset[str] = frozenset()  # where some functionality runs, in every expansion
     channels: frozenset[ChannelId] = frozenset()
-    producers: tuple[tuple[Ground, Key | None], ...] = ()  # :out data -> certain producer
+    producers: tuple[tuple[Ground, Ground | None], ...] = ()  # :out data -> certain producer
     minimum: float = 0.0  # the least its functionalities can cost, if none is in C yet
     wiring: float = 0.0  # the least the channels of its expansions can cost, likewise
     together: float = 0.0
@@ -59,7 +58,7 @@ class Summary:
     def __post_init__(self) -> None:
         object.__setattr__(self, "slack", self.together > self.minimum + self.wiring + 1e-9)
 
-    def producer(self, data: Ground) -> Key | None:
+    def producer(self, data: Ground) -> Ground | None:
         for d, key in self.producers:
             if d == data:
                 return key
@@ -69,10 +68,10 @@ class Summary:
 class Expanded(NamedTuple):
     """One expansion of a method: what it certainly contains."""
 
-    functionalities: frozenset[Key]
+    functionalities: frozenset[Ground]
     robots: frozenset[str]
     channels: frozenset[ChannelId]
-    producers: dict[Ground, Key | None]
+    producers: dict[Ground, Ground | None]
     minimum: float
     wiring: float
     together: float
@@ -296,7 +295,7 @@ class Summaries:
         self, caller: Ground, expansion: Expansion
     ) -> Generator[Ground, Summary, Expanded | None]:
         body: list[tuple[Ground, Summary, bool]] = []
-        funcs: set[Key] = set()
+        funcs: set[Ground] = set()
         robots: set[str] = set()
         channels: set[ChannelId] = set()
         for call in expansion.body:
@@ -319,7 +318,7 @@ class Summaries:
             sender = src_call if src_func else src_sum.producer(data)
             receiver = dst_call if dst_func else None
             channels.add((kind, data, sender, receiver))
-        producers: dict[Ground, Key | None] = {}
+        producers: dict[Ground, Ground | None] = {}
         for data, (offset, _) in expansion.outputs.items():
             call, sub, is_functionality = body[offset]
             producers[data] = call if is_functionality else sub.producer(data)

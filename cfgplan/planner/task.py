@@ -8,7 +8,7 @@ from those fields is kept with the task, so that it goes when the task goes
 (a running society plans on one derived task after another): its own derived
 values as cached properties (:attr:`Task.recursive`, :attr:`Task.levels`),
 and what the planner makes once per task (the grounding memo and the bounds,
-:func:`cfgplan.planner.plan.parts`; the matching orders,
+:func:`cfgplan.planner.plan.analysis`; the matching orders,
 :mod:`cfgplan.planner.join`) in :attr:`Task.memo`. Nothing kept there ever
 changes what the task says. (A table beside the task, keyed weakly by it,
 would never let it go: what the planner keeps refers to the task.)
@@ -147,7 +147,7 @@ class Task:
     state_names: frozenset[str]
     """Every symbol of the state: for "differs only in case" hints."""
     memo: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
-    """What the planner works out once per task (:func:`cfgplan.planner.plan.parts`),
+    """What the planner works out once per task (:func:`cfgplan.planner.plan.analysis`),
     by kind: a cache, the one slot written after the task is built (see the
     module's docstring); a derived task starts empty."""
 

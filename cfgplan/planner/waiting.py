@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Set
 
-from cfgplan.planner.partial import Key, Partial
+from cfgplan.planner.partial import Partial
 from cfgplan.planner.parts import Part, own_part
 from cfgplan.planner.summary import ChannelId, Summary
 from cfgplan.planner.task import Ground
 
-Resolved = tuple[str, Ground, Key, Key]
+Resolved = tuple[str, Ground, Ground, Ground]
 """A channel whose two ends are placed: kind, data, sender, receiver."""
 
 APART = own_part("channels")
@@ -40,10 +40,10 @@ def sort_channels(
             resolved.add((ch.kind, ch.data, source.call, target.call))
             continue
         if source is not None:
-            src: Key | None = source.call
+            src: Ground | None = source.call
         else:
             src = _pending_end(pending, methods, ch.source, ch.data)
-        dst: Key | None = None
+        dst: Ground | None = None
         if target is not None:
             dst = target.call
         elif ch.target not in methods:
@@ -70,7 +70,7 @@ def waiting_parts(
     channel_cost: Callable[[str], float],
     future: set[ChannelId],
     resolved: set[Resolved],
-    alone: frozenset[Key],
+    alone: frozenset[Ground],
     unreached: Set[str],
 ) -> list[Part]:
     """The channels waiting for an end (``future``) as parts of
@@ -87,8 +87,8 @@ def waiting_parts(
     were joined with every level below, by their data)."""
     names: set[str] = set()  # the data predicates of the channels not apart
     full = [0.0, 0.0]  # fully known channels not in C: not apart, apart
-    covered: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
-    open_ends: tuple[set[tuple[str, Ground, Key]], ...] = (set(), set())
+    covered: tuple[set[tuple[str, Ground, Ground]], ...] = (set(), set())
+    open_ends: tuple[set[tuple[str, Ground, Ground]], ...] = (set(), set())
     apart = bool(alone or unreached)  # (seldom: most nodes have no channel apart)
     for channel in future:
         kind, data, sender, receiver = channel
@@ -128,7 +128,7 @@ def waiting_parts(
 
 def _pending_end(
     pending: dict[int, tuple[Ground, Summary]], methods: dict[int, Ground], label: int, data: Ground
-) -> Key | None:
+) -> Ground | None:
     """The certain producer of ``data`` behind a pending label, if there is one."""
     entry = pending.get(label)
     if entry is None:

@@ -16,7 +16,7 @@ from benchmarks.families import gateway
 from cfgplan.configuration.cost import Weights
 from cfgplan.planner.capacity import Capacity
 from cfgplan.planner.partial import root
-from cfgplan.planner.plan import parts
+from cfgplan.planner.plan import analysis
 from cfgplan.planner.prices import Counts
 from cfgplan.planner.room import Load
 from cfgplan.planner.task import Ground
@@ -47,7 +47,7 @@ def lowered() -> Iterator[list[int]]:
 
 
 def root_bound(problem: Problem) -> float | None:
-    _, bound, partition = parts(problem.task)
+    _, bound, partition = analysis(problem.task)
     node = root(problem.goal_call)
     return partition.estimate(node, bound.certain_agents(node))
 
@@ -114,7 +114,7 @@ def test_a_robot_watched_twice_is_not_capped() -> None:
     domain = domain.replace("(?w0 (watch-one R1))", "(?w0 (watch-one R1)) (?x0 (watch-one R1))")
     problem = load_text(domain, state)
     node = root(problem.goal_call)
-    _, bound, partition = parts(problem.task)
+    _, bound, partition = analysis(problem.task)
     with lowered() as seen:
         partition.estimate(node, bound.certain_agents(node))
     assert seen == []

@@ -7,7 +7,7 @@ import gc
 import weakref
 
 from cfgplan.planner import plan
-from cfgplan.planner.plan import parts
+from cfgplan.planner.plan import analysis
 from cfgplan.problem import load
 from tests.backends.support import DOMAINS
 
@@ -24,7 +24,7 @@ def test_the_grounding_and_bounds_of_a_task_are_made_once_and_go_with_it() -> No
         assert task.memo == {}  # derived: nothing worked out yet
         configs, search = plan(task, problem.goal_call, limit=2)
         assert [c.cost for c in configs] == [44, 47]  # 6.2.2 step 1
-        assert parts(task) is parts(task)  # made once, then found
+        assert analysis(task) is analysis(task)  # made once, then found
         gone.append(weakref.ref(task))
         del task, search
     gc.collect()

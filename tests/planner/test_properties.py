@@ -39,7 +39,7 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.plan import Run, parts
+from cfgplan.planner.plan import Run, analysis
 from cfgplan.planner.report import Condition
 from cfgplan.planner.room import Load, Need, Room
 from tests.planner.generated import generated
@@ -237,7 +237,7 @@ def _coverage(example: Generated) -> Coverage:
     text = example.domain
     wrapped = "(?f0 (do-act" in text or ("(?f0 (w" in text and "(?f0 (p" not in text)
     channels = re.findall(r"\(\((?:local|global) [^()]*\) [^()]*\([^()]*\)", text)
-    room = parts(problem.task)[2].room
+    room = analysis(problem.task)[2].room
     cut: list[bool] = []
 
     def fits(needs: tuple[Need, ...], load: Load) -> bool:
