@@ -16,11 +16,10 @@ back by that key (:attr:`Join.atoms`) when the join was reordered.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import NamedTuple
 
 from cfgplan.ir.model import is_variable
-from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
+from cfgplan.planner.task import Pattern, Task, Test, TestKind
 
 
 class Join(NamedTuple):
@@ -46,14 +45,6 @@ def join(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
     made = _plan(task, tests, bound)
     joins[(id(tests), bound)] = (tests, made)  # the tests kept: their id stays theirs
     return made
-
-
-def positions(task: Task) -> Mapping[Ground, int]:
-    """Each fact's position in the state (the bindings' sort key)."""
-    found: dict[Ground, int] | None = task.memo.get("positions")
-    if found is None:
-        found = task.memo["positions"] = {fact: i for i, fact in enumerate(task.facts)}
-    return found
 
 
 def _plan(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
@@ -90,22 +81,10 @@ def _estimate(task: Task, p: Pattern, known: set[str]) -> float:
     """How many facts ``p`` may match once ``known`` are bound."""
     arity = len(p) - 1
     count = float(len(task.facts_by_predicate.get((p[0], arity), ())))
-    distinct = _distinct(task)
+    distinct = task.argument_values
     for position, term in enumerate(p[1:], 1):
         if not is_variable(term):
             count = min(count, len(task.facts_by_argument.get((p[0], arity, position, term), ())))
         elif term in known:
             count /= distinct.get((p[0], arity, position), 1)
     return count
-
-
-def _distinct(task: Task) -> Mapping[tuple[str, int, int], int]:
-    """How many distinct values each argument of each predicate takes in the state."""
-    found: dict[tuple[str, int, int], int] | None = task.memo.get("distinct")
-    if found is None:
-        found = {}
-        for predicate, arity, position, _ in task.facts_by_argument:
-            key = (predicate, arity, position)
-            found[key] = found.get(key, 0) + 1
-        task.memo["distinct"] = found
-    return found

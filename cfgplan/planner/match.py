@@ -17,7 +17,7 @@ from cfgplan.diagnostics import did_you_mean
 from cfgplan.ir.model import Span, is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
-from cfgplan.planner.join import join, positions
+from cfgplan.planner.join import join
 from cfgplan.planner.task import Ground, Pattern, Task, Test, TestKind
 from cfgplan.planner.unify import Bindings, substitute, unify
 
@@ -93,7 +93,7 @@ def bindings(task: Task, tests: tuple[Test, ...], env: Bindings) -> Iterator[Bin
                 yield current
         return
     found = [current for index, current in _walk(task, plan.tests, env) if index == done]
-    position = positions(task)
+    position = task.positions
     found.sort(key=lambda b: tuple(position[substitute(atom, b)] for atom in plan.atoms))
     yield from found
 

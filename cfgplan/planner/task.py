@@ -6,10 +6,13 @@ no pydantic on the hot path. Built once from the IR
 (:func:`derive`), and frozen: no field of it ever changes. What is worked out
 from those fields is kept with the task, so that it goes when the task goes
 (a running society plans on one derived task after another): its own derived
-values as cached properties (:attr:`Task.recursive`, :attr:`Task.levels`),
-and what the planner makes once per task (the grounding memo and the bounds,
-:func:`cfgplan.planner.plan.analysis`; the matching orders,
-:mod:`cfgplan.planner.join`) in :attr:`Task.memo`. Nothing kept there ever
+values as cached properties (:attr:`Task.recursive`, :attr:`Task.levels`,
+:attr:`Task.positions`, ...), and what the planner makes once per task in
+:attr:`Task.memo`: the grounding memo and the bounds
+(:func:`cfgplan.planner.plan.analysis`), the goal's independent parts
+(:func:`cfgplan.planner.plan.divided`), the replays' rules
+(:mod:`cfgplan.planner.grow`) and the matching orders
+(:mod:`cfgplan.planner.join`). Nothing kept there ever
 changes what the task says. (A table beside the task, keyed weakly by it,
 would never let it go: what the planner keeps refers to the task.)
 
@@ -209,6 +212,22 @@ class Task:
                         if len(component) > 1 or sig in reach[sig]:
                             found.update(component)
         return frozenset(found)
+
+    @cached_property
+    def positions(self) -> Mapping[Ground, int]:
+        """Each fact's position in the state: the sort key of bindings (state order)."""
+        return {fact: i for i, fact in enumerate(self.facts)}
+
+    @cached_property
+    def argument_values(self) -> Mapping[tuple[str, int, int], int]:
+        """How many distinct values each argument (predicate, arity, position)
+        takes in the state: what a matching order estimates by
+        (:mod:`cfgplan.planner.join`)."""
+        found: dict[tuple[str, int, int], int] = {}
+        for predicate, arity, position, _ in self.facts_by_argument:
+            key = (predicate, arity, position)
+            found[key] = found.get(key, 0) + 1
+        return found
 
     @cached_property
     def levels(self) -> Levels:
