@@ -15,9 +15,10 @@ start to exit with its own peak memory:
   the goal is set against.
 
 "goal" is ✓ when cfgplan took at most max(1 s, 2 × the reference's time). The
-cost is cfgplan's; where the reference's differs it is shown after a slash (one
-expansion per instance can cost more than the thesis's planner, which expands
-each occurrence its own way; never less). The memory of cfgplan is its first
+cost is cfgplan's ("none": it proved that nothing is admissible); where the
+reference's differs it is shown after a slash (one expansion per instance can
+cost more than the thesis's planner, which expands each occurrence its own way;
+never less). The memory of cfgplan is its first
 process's: the solver's process, when it is started, is a fork of it and peaks
 at about the reference's. "> cap" is a run stopped at ``--cap`` seconds.
 """
@@ -125,9 +126,9 @@ def rows(cap: float, only: str | None, step: int) -> Iterator[list[str]]:
                 goal = "✓" if ours.seconds and ours.seconds <= max(1.0, 2 * ref.seconds) else "✗"
             elif ours.seconds is not None:
                 goal = "✓"  # the reference did not end within the cap
-            cost = "" if ours.best is None else f"{ours.best:g}"
-            if ref.cost is not None and ref.cost != ours.best:
-                cost += f" / {ref.cost:g}"
+            cost = "" if ours.seconds is None else "none" if ours.best is None else f"{ours.best:g}"
+            if ref.seconds is not None and ref.cost != ours.best:
+                cost += " / " + ("none" if ref.cost is None else f"{ref.cost:g}")
             yield [
                 name,
                 str(size),

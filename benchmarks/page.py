@@ -85,7 +85,11 @@ The shapes that fell off cliffs between the sizes of this table are swept over
 every size of a grid on the [sweeps page](benchmark-sweeps.md)
 (`python -m benchmarks.sweeps`): sequences of independent goals against their
 steps planned alone, delegation to any robot, and randomised structured
-domains.
+domains. The search alone, `cfgplan plan -k 1` as it is (the search raced by
+the solver) and a reference planner on an answer-set solver are swept side by
+side over every family's sizes on the
+[planner page](planner.md#the-race-both-engines-the-first-to-end-answers)
+(`python -m benchmarks.engines`).
 
 Planning is one side of a society's speed; the runtime is the other: the
 [scale page](scale.md) (`python -m benchmarks.scale`) launches societies of 2

@@ -59,7 +59,7 @@ class Measured:
 
     seconds: float | None  # None: stopped at the cap, or failed
     mib: float
-    best: float | None
+    best: float | None  # None: nothing (admissible, when it ended)
 
     def text(self, cap: float) -> str:
         return f"{self.seconds:.2f}" if self.seconds is not None else f"> {cap:g}"
@@ -84,7 +84,7 @@ def measure(command: list[str], cwd: Path, cap: float, out: IO[bytes] | None = N
         out.seek(0)
         text = out.read().decode()
     mib = usage.ru_maxrss / 1024
-    if process.returncode != 0:
+    if process.returncode not in (0, 3):  # 3: it ended, and nothing is admissible
         return Measured(None, mib, None)
     found = json.loads(text)
     if found["stats"]["stopped"]:

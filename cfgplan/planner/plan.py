@@ -211,6 +211,9 @@ class Run:
     all the run looks for (:attr:`more` is None)."""
     answered: Stats | None = field(init=False, default=None)
     """The work of the solver's process, when it answered the race."""
+    inadmissible: bool = field(init=False, default=False)
+    """The solver's process proved that nothing is admissible (its relaxation
+    has no model) before the search could."""
     strategy: BestFirst | Combined | Windows = field(init=False)
     explained: Report | None = field(init=False, default=None)
     """Why nothing was found, when the bounds cut the dead ends before the
@@ -264,6 +267,9 @@ class Run:
             self.raced = True
             self.engine = Engine.SOLVER
             config, self.answered = won.answer
+            if config is None:
+                self.inadmissible = True  # why: :meth:`_explain`
+                return
             yield config
             return
         self.raced = rival.started
@@ -273,16 +279,21 @@ class Run:
         if not self.raced:  # alone all along: as without the race
             yield from searched
 
-    def _in_child(self) -> Callable[[], tuple[Configuration, Stats] | None]:
+    def _in_child(self) -> Callable[[], tuple[Configuration | None, Stats] | None]:
         """The solver in the racing child: its program grounded at once (while
-        the search works), and its answer and work once the race starts."""
+        the search works), and its answer and work once the race starts: the
+        first cheapest configuration, or None where it proved that nothing is
+        admissible (the search may take long to find that out)."""
         from cfgplan.planner import solver
 
         grower = growing(self.task, self.options, self.distinct)[0]
         grounded = solver.relaxation(grower, self.goal)
 
-        def answer() -> tuple[Configuration, Stats] | None:
-            config = solver.cheapest(grower, self.goal, clock.remaining(), grounded)
+        def answer() -> tuple[Configuration | None, Stats] | None:
+            try:
+                config = solver.cheapest(grower, self.goal, clock.remaining(), grounded)
+            except solver.Inadmissible:
+                return None, grower.stats  # an answer too: nothing is admissible
             return None if config is None else (config, grower.stats)
 
         return answer
@@ -345,7 +356,7 @@ class Run:
                     yield config
             first_only = self.engine is Engine.SOLVER or self.raced
             self.more = None if first_only and listed else prefix.more
-            if prefix.cut or self.raced:
+            if prefix.cut or (self.raced and listed):
                 self.stats.complete = False
         except KeyboardInterrupt:
             self.stats.complete = False
@@ -357,7 +368,7 @@ class Run:
             else:  # nothing found, nothing proved
                 self.report.unfinished = self.report.undecided = True
             return
-        if not listed and self.stats.pruned and self.stats.complete:
+        if not listed and (self.inadmissible or (self.stats.pruned and self.stats.complete)):
             self._explain(started, deadline)
 
     def _dive(self, deadline: float | None) -> Configuration | None:
@@ -379,8 +390,9 @@ class Run:
             return None
 
     def _explain(self, started: float, deadline: float | None) -> None:
-        """The bounds cut branches before their dead ends were met: search them
-        without the bounds, so the report can say why nothing is admissible."""
+        """The bounds cut branches before their dead ends were met, or the
+        solver's process proved that nothing is admissible before the search
+        met them: search without the bounds, so the report can say why."""
         grounder = analysis(self.task, self.options.media)[0]
         unbounded = Grower(grounder, self.distinct)
         explaining = BestFirst(

@@ -50,8 +50,9 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.report import Stats
 
-Answer = tuple[Configuration, Stats]
-"""A configuration and the work of the engine that found it."""
+Answer = tuple[Configuration | None, Stats]
+"""A configuration (None: nothing is admissible, proven) and the work of the
+engine that found it."""
 
 Prepare = Callable[[], Callable[[], Answer | None]]
 """The solver as the child runs it: prepared at once, the answer (or None: it has

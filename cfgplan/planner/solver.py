@@ -100,6 +100,10 @@ class Unsupported(Exception):
     """The task has no unit its costs (or bandwidths) are multiples of."""
 
 
+class Inadmissible(Exception):
+    """The relaxation has no model: no configuration is admissible (proven)."""
+
+
 @dataclass
 class _Facts:
     """The facts of one task and goal, and the names behind their numbers."""
@@ -349,8 +353,10 @@ def cheapest(
         if not (handle.wait(seconds) if seconds is not None else handle.wait()):
             handle.cancel()
         result = handle.get()
+    if result.unsatisfiable:
+        raise Inadmissible
     if not found or not result.exhausted:
-        return None  # nothing admissible, or L not proven in time
+        return None  # L not proven in time
     bound, chosen = found[-1]
     control.configuration.solve.opt_mode = f"opt,{bound}"  # type: ignore[union-attr]
     return _walk(grower, goal, float(bound * facts.unit), facts, control, set(chosen))
