@@ -241,3 +241,17 @@ def test_the_child_does_not_outlive_a_parent_killed_outright() -> None:
     while not gone(child) and time.monotonic() < end:
         time.sleep(0.01)
     assert gone(child)
+
+
+@pytest.mark.slow
+def test_the_solver_proves_nothing_admissible_where_the_search_cannot() -> None:
+    """``structured`` seed 1 with media at 12 pieces admits nothing: the
+    relaxation has no model, which the solver proves in about two seconds and
+    the search alone did not decide in 20 (docs/explanation/planner.md). Raced,
+    the run lists nothing, says the solver proved it, and still explains why
+    from a search without the bounds (dead ends met)."""
+    p = load_text(*structured(1, pieces=12, media=True))
+    configs, run = plan(p.task, p.goal_call, limit=1, options=RACE)
+    assert configs == []
+    assert run.inadmissible and run.engine is Engine.SOLVER
+    assert run.report.dead  # the dead ends of the search for why
