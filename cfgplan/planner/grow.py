@@ -42,6 +42,11 @@ class Completion(NamedTuple):
     derivation: int
 
 
+ReplayKey = tuple[tuple[Ground, ...], int, int]
+"""A search's roots, :attr:`SearchOptions.replay_least` and
+:attr:`SearchOptions.replay_worth`: what the replays' rules are made for."""
+
+
 @dataclass
 class Grower:
     """Expands, settles and finishes nodes for one search."""
@@ -65,6 +70,10 @@ class Grower:
     (:attr:`SearchOptions.replay_trial`)."""
     roots: tuple[Ground, ...] = ()
     """The calls on the stack the search started from (what may repeat is below them)."""
+    kept: dict[ReplayKey, Replays] = field(default_factory=dict)
+    """Where the replays' rules are kept, made once per search root and
+    settings: the task's (:attr:`cfgplan.planner.plan.Analysis.replays`), for
+    every search of it; by default this grower's own."""
     _replays: Replays | None = field(default=None, init=False)
     _gave_up: int = field(default=0, init=False)
     """Sub-derivations remembered and not replayed (:meth:`_missed`)."""
@@ -166,11 +175,7 @@ class Grower:
             return None
         if self._replays is None:
             graph = graph_of(self.grounder, self.options.media)
-            memo: dict[tuple[tuple[Ground, ...], int, int], Replays] = (
-                self.grounder.task.memo.setdefault(
-                    "replays" if self.options.media else "replays-without-media", {}
-                )
-            )
+            memo = self.kept
             key = (self.roots, self.options.replay_least, self.options.replay_worth)
             found = memo.get(key)
             if found is None:

@@ -16,19 +16,8 @@ back by that key (:attr:`Join.atoms`) when the join was reordered.
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 from cfgplan.ir.model import is_variable
-from cfgplan.planner.task import Pattern, Task, Test, TestKind
-
-
-class Join(NamedTuple):
-    """The tests in the order they are matched; ``atoms``, the atoms in written
-    order, give the bindings' sort key when ``reordered``."""
-
-    tests: tuple[Test, ...]
-    atoms: tuple[Pattern, ...]
-    reordered: bool
+from cfgplan.planner.task import Join, Pattern, Task, Test, TestKind
 
 
 def join(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
@@ -37,8 +26,7 @@ def join(task: Task, tests: tuple[Test, ...], bound: frozenset[str]) -> Join:
     (:func:`~cfgplan.planner.task.derive`) keeps the orders made for
     the one it comes from: an order changes how fast bindings are found,
     never which, nor in what order they are given."""
-    joins: dict[tuple[int, frozenset[str]], tuple[tuple[Test, ...], Join]]
-    joins = task.memo.setdefault("joins", {})
+    joins = task.joins
     found = joins.get((id(tests), bound))
     if found is not None and found[0] is tests:
         return found[1]

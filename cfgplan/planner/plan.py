@@ -20,7 +20,6 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from functools import partial
-from typing import NamedTuple
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
@@ -30,21 +29,25 @@ from cfgplan.planner.components import Parts, divide, unroll
 from cfgplan.planner.dive import dive
 from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.grow import Grower
+from cfgplan.planner.grow import Grower, ReplayKey
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
+from cfgplan.planner.replay import Replays
 from cfgplan.planner.report import Engine, Report, Stats, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
 
 
-class Analysis(NamedTuple):
-    """What the planner works out about a task once (:func:`analysis`), for
-    every search of it: the grounding memo and the two bounds made on it."""
+@dataclass(eq=False)
+class Analysis:
+    """What the planner works out about a task once, for every search of it
+    (:func:`analysis`): the grounding memo, the two bounds made on it, and what
+    is made on demand and kept: the goals' independent parts and the replays'
+    rules."""
 
     grounder: Grounder
     """The ground instances, made on demand and kept (:mod:`cfgplan.planner.ground`)."""
@@ -53,19 +56,22 @@ class Analysis(NamedTuple):
     partition: Partition
     """The second bound: passes over the graph of ground instances
     (:mod:`cfgplan.planner.partition`)."""
+    components: dict[Ground, Parts | None] = field(default_factory=dict)
+    """Each goal's independent parts (:func:`divided`)."""
+    replays: dict[ReplayKey, Replays] = field(default_factory=dict)
+    """The replays' rules (:attr:`cfgplan.planner.grow.Grower.kept`)."""
 
 
 def analysis(task: Task, media: bool = True) -> Analysis:
-    """The :class:`Analysis` of ``task``, made once per task and kept on it
-    (:attr:`Task.memo`): it is freed with the task, as a run that reconfigures
-    plans on one derived task after another. ``media``:
+    """The :class:`Analysis` of ``task``, made at its first search and kept on
+    it (:attr:`Task.analyses`): it is freed with the task, as a run that
+    reconfigures plans on one derived task after another. ``media``:
     :attr:`SearchOptions.media` (a partitioned bound each way)."""
-    key = "analysis" if media else "analysis-without-media"
-    found: Analysis | None = task.memo.get(key)
+    found: Analysis | None = task.analyses.get(media)
     if found is None:
         grounder = Grounder(task)
         partition = Partition(grounder, media)
-        found = task.memo[key] = Analysis(grounder, Bound(task, grounder, media), partition)
+        found = task.analyses[media] = Analysis(grounder, Bound(task, grounder, media), partition)
     return found
 
 
@@ -73,16 +79,15 @@ def divided(task: Task, goal: Ground, media: bool = True) -> Parts | None:
     """The goal's independent parts (:mod:`cfgplan.planner.components`), made
     once per task and goal; None when there are not two, or when costs have
     no unit (:mod:`cfgplan.planner.levels`: then sums of parts may not rank
-    as whole configurations do). ``media``: as :func:`parts`."""
-    key = "components" if media else "components-without-media"
-    made: dict[Ground, Parts | None] = task.memo.setdefault(key, {})
+    as whole configurations do). ``media``: as :func:`analysis`."""
+    analysed = analysis(task, media)
+    made = analysed.components
     if goal not in made:
         found = None
         if task.levels.unit is not None:
-            grounder, _, partition = analysis(task, media)
-            unrolled = unroll(grounder, goal)
+            unrolled = unroll(analysed.grounder, goal)
             if unrolled is not None:
-                found = divide(grounder, partition, *unrolled)
+                found = divide(analysed.grounder, analysed.partition, *unrolled)
         made[goal] = found if found is not None and len(found.parts) > 1 else None
     return made[goal]
 
@@ -129,11 +134,19 @@ def growing(
     replays: bool = False,
 ) -> tuple[Grower, Pricer]:
     """A grower for ``task`` and a pricer with the task's bounds
-    (:func:`parts`), children priced from splits (unless ``splits`` is
+    (:func:`analysis`), children priced from splits (unless ``splits`` is
     False, or :attr:`SearchOptions.splits` is); ``given``:
     :attr:`Grower.given`. Every strategy's grower and pricer are made here."""
-    grounder, bound, partition = analysis(task, options.media)
-    made = Grower(grounder, distinct, given, options=options, replays=replays and options.replays)
+    analysed = analysis(task, options.media)
+    grounder, bound, partition = analysed.grounder, analysed.bound, analysed.partition
+    made = Grower(
+        grounder,
+        distinct,
+        given,
+        options=options,
+        replays=replays and options.replays,
+        kept=analysed.replays,
+    )
     pricer = Pricer(
         task.levels,
         bound.estimator(options),
@@ -225,7 +238,7 @@ class Run:
             self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
-            bound = analysis(self.task, self.options.media)[1]
+            bound = analysis(self.task, self.options.media).bound
             self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
         else:
             self.strategy = BestFirst(made, pricer, self.goal, self.progress)
@@ -393,7 +406,7 @@ class Run:
         """The bounds cut branches before their dead ends were met, or the
         solver's process proved that nothing is admissible before the search
         met them: search without the bounds, so the report can say why."""
-        grounder = analysis(self.task, self.options.media)[0]
+        grounder = analysis(self.task, self.options.media).grounder
         unbounded = Grower(grounder, self.distinct)
         explaining = BestFirst(
             unbounded, Pricer(self.task.levels, _no_bound, stats=unbounded.stats), self.goal

@@ -183,7 +183,8 @@ def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects |
     postcondition, it is in every feasible expansion of the goal (its
     summary's, :mod:`cfgplan.planner.summary`), it has one binding of its
     preconditions, and no method version it can reach has a postcondition."""
-    grounder, bound, _ = analysis(task, options.media)
+    analysed = analysis(task, options.media)
+    grounder, bound = analysed.grounder, analysed.bound
     summary = bound.summaries.summary(goal)
     if not summary.feasible:
         return None

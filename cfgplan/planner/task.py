@@ -7,12 +7,10 @@ no pydantic on the hot path. Built once from the IR
 from those fields is kept with the task, so that it goes when the task goes
 (a running society plans on one derived task after another): its own derived
 values as cached properties (:attr:`Task.recursive`, :attr:`Task.levels`,
-:attr:`Task.positions`, ...), and what the planner makes once per task in
-:attr:`Task.memo`: the grounding memo and the bounds
-(:func:`cfgplan.planner.plan.analysis`), the goal's independent parts
-(:func:`cfgplan.planner.plan.divided`), the replays' rules
-(:mod:`cfgplan.planner.grow`) and the matching orders
-(:mod:`cfgplan.planner.join`). Nothing kept there ever
+:attr:`Task.positions`, ...), and what the planner makes once per task in two
+slots: its analysis (:attr:`Task.analyses`: the grounding memo, the bounds, the
+goal's independent parts and the replays' rules, :func:`cfgplan.planner.plan.analysis`)
+and the matching orders (:attr:`Task.joins`, :mod:`cfgplan.planner.join`). Nothing kept there ever
 changes what the task says. (A table beside the task, keyed weakly by it,
 would never let it go: what the planner keeps refers to the task.)
 
@@ -99,6 +97,16 @@ class PortSchema(NamedTuple):
     bandwidth: float | None
 
 
+class Join(NamedTuple):
+    """A schema's preconditions in the order they are matched
+    (:func:`cfgplan.planner.join.join`); ``atoms``, the atoms in written order,
+    give the bindings' sort key when ``reordered``."""
+
+    tests: tuple[Test, ...]
+    atoms: tuple[Pattern, ...]
+    reordered: bool
+
+
 class ChannelSchema(NamedTuple):
     kind: str  # "local" | "global" | "any" (decided when instantiated)
     robots: Pattern
@@ -149,10 +157,19 @@ class Task:
     """(sender, receiver) -> the most reliable medium's reliability (1 if unsaid)."""
     state_names: frozenset[str]
     """Every symbol of the state: for "differs only in case" hints."""
-    memo: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
-    """What the planner works out once per task (:func:`cfgplan.planner.plan.analysis`),
-    by kind: a cache, the one slot written after the task is built (see the
-    module's docstring); a derived task starts empty."""
+    analyses: dict[bool, Any] = field(default_factory=dict, init=False, repr=False)
+    """The planner's analysis of this task, by :attr:`SearchOptions.media`:
+    a :class:`cfgplan.planner.plan.Analysis` (typed there: this lower module
+    cannot name it), made by :func:`cfgplan.planner.plan.analysis` at the first
+    search. A cache, written after the task is built (see the module's
+    docstring); a derived task starts without."""
+    joins: dict[tuple[int, frozenset[str]], tuple[tuple[Test, ...], Join]] = field(
+        default_factory=dict, init=False, repr=False
+    )
+    """The matching orders made for this task's schemas
+    (:func:`cfgplan.planner.join.join`), by the tests' identity and the
+    variables bound at the start; valid in any state, so a derived task with
+    the same schemas starts with them."""
 
     @cached_property
     def agents(self) -> tuple[str, ...]:
@@ -344,7 +361,7 @@ def derive(
     society's guards, :mod:`cfgplan.reconfigure.situation`), media and
     reliabilities (7.2). No domain is read, checked or compiled: a sequence's
     later steps, or a running society's changed state, are planned from it.
-    What the planner worked out for ``task`` (:attr:`Task.memo`) is not
+    What the planner worked out for ``task`` (:attr:`Task.analyses`) is not
     carried, but for the matching orders (:mod:`cfgplan.planner.join`),
     valid in any state while the schemas are the same."""
     unique = tuple(dict.fromkeys(facts))
@@ -366,6 +383,6 @@ def derive(
         state_names=frozenset(t for fact in unique for t in fact),
         **changes,
     )
-    if "joins" in task.memo and functionalities is None:
-        derived.memo["joins"] = task.memo["joins"]
+    if functionalities is None:
+        derived.joins.update(task.joins)
     return derived

@@ -47,7 +47,8 @@ def lowered() -> Iterator[list[int]]:
 
 
 def root_bound(problem: Problem) -> float | None:
-    _, bound, partition = analysis(problem.task)
+    analysed = analysis(problem.task)
+    bound, partition = analysed.bound, analysed.partition
     node = root(problem.goal_call)
     return partition.estimate(node, bound.certain_agents(node))
 
@@ -114,7 +115,8 @@ def test_a_robot_watched_twice_is_not_capped() -> None:
     domain = domain.replace("(?w0 (watch-one R1))", "(?w0 (watch-one R1)) (?x0 (watch-one R1))")
     problem = load_text(domain, state)
     node = root(problem.goal_call)
-    _, bound, partition = analysis(problem.task)
+    analysed = analysis(problem.task)
+    bound, partition = analysed.bound, analysed.partition
     with lowered() as seen:
         partition.estimate(node, bound.certain_agents(node))
     assert seen == []

@@ -21,7 +21,7 @@ def test_the_grounding_and_bounds_of_a_task_are_made_once_and_go_with_it() -> No
     gone = []
     for _ in range(3):
         task = dataclasses.replace(problem.task)  # as a derived task is made
-        assert task.memo == {}  # derived: nothing worked out yet
+        assert task.analyses == {}  # derived: nothing worked out yet
         configs, search = plan(task, problem.goal_call, limit=2)
         assert [c.cost for c in configs] == [44, 47]  # 6.2.2 step 1
         assert analysis(task) is analysis(task)  # made once, then found

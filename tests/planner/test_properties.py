@@ -237,7 +237,7 @@ def _coverage(example: Generated) -> Coverage:
     text = example.domain
     wrapped = "(?f0 (do-act" in text or ("(?f0 (w" in text and "(?f0 (p" not in text)
     channels = re.findall(r"\(\((?:local|global) [^()]*\) [^()]*\([^()]*\)", text)
-    room = analysis(problem.task)[2].room
+    room = analysis(problem.task).partition.room
     cut: list[bool] = []
 
     def fits(needs: tuple[Need, ...], load: Load) -> bool:

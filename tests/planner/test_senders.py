@@ -35,7 +35,7 @@ def test_a_channel_from_a_method_that_sends_only_elsewhere_is_a_dead_end_with_it
     text = "\n".join(explain(run.report, "go(A)"))
     assert "go(A), version 1" in text
     assert "declared (local A) but feed(A) can send (img A) only from B" in text
-    grounder, _, _ = analysis(problem.task)
+    grounder = analysis(problem.task).grounder
     assert grounder.placement.senders(("feed", "A")) == {("img", "A"): frozenset({"B"})}
 
 
@@ -46,7 +46,7 @@ def test_where_a_camera_is_on_the_robot_itself_nothing_is_cut() -> None:
     problem = load_text(RELAY, "(state (robot A) (robot B) (cam A) (cam B)) (goal (go A))")
     configs, _ = plan(problem.task, problem.goal_call, limit=None)
     assert [(c.cost, c.agents) for c in configs] == [(13, ["A"]), (17, ["A"])]
-    grounder, _, _ = analysis(problem.task)
+    grounder = analysis(problem.task).grounder
     assert grounder.placement.senders(("feed", "A")) == {("img", "A"): frozenset({"A", "B"})}
 
 
@@ -57,7 +57,7 @@ def test_delegation_to_any_robot_is_the_least_fixpoint_of_its_recursion() -> Non
     walked to find that out; --all at 6 robots expands a few hundred method
     instances (the search without the cut: over 74,000 at 5 robots for -k 1)."""
     problem = load_text(*any_delegation(6))
-    grounder, _, _ = analysis(problem.task)
+    grounder = analysis(problem.task).grounder
     assert grounder.placement.senders(("get", "r3", "o1")) == {("e", "r3", "o1"): frozenset({"r2"})}
     assert grounder.placement.senders(("get", "r4", "r1", "o1")) == {
         ("e", "r1", "o1"): frozenset({"r2"})
