@@ -32,6 +32,7 @@ import argparse
 import contextlib
 import os
 import shlex
+import shutil
 import signal
 import statistics
 import subprocess
@@ -72,6 +73,14 @@ class Options:
     startup: float = 90.0  # bound on the first service
     watch: float = 20.0  # bound on the service again after the link heals
     seed: int = 57
+    zenoh_log: str | None = None  # Zenoh's log level in every process (its RUST_LOG)
+
+
+LOGGED = (
+    "import sys, zenoh; zenoh.init_log_from_env_or(sys.argv.pop(1)); "
+    "sys.argv[0] = 'cfgplan'; from cfgplan.cli.app import console; console()"
+)
+"""``python -m cfgplan`` with Zenoh's log on (the level its first argument)."""
 
 
 @dataclass
@@ -132,8 +141,11 @@ def _until(found: object, limit: float) -> Record | None:
     return None
 
 
-def run_trial(topology: str, options: Options, link: NetnsLink, folder: Path) -> Trial:
-    """One trial (see the module's docstring)."""
+def run_trial(
+    topology: str, options: Options, link: NetnsLink, folder: Path, code: Path = ROOT
+) -> Trial:
+    """One trial (see the module's docstring), the robots and the router
+    running the ``cfgplan`` of the checkout ``code``."""
     config, state, impl = folder / "zenoh.json5", folder / "state.lisp", folder / "impl.py"
     config.write_text(HERMETIC)
     state.write_text(STATE)
@@ -147,9 +159,12 @@ def run_trial(topology: str, options: Options, link: NetnsLink, folder: Path) ->
 
     def start(side: int, args: list[str], name: str) -> None:
         with open(folder / f"{name}.log", "wb") as log:
-            command = link.wrap(side, [sys.executable, "-m", "cfgplan", *args])
+            program = ["-m", "cfgplan"]
+            if options.zenoh_log is not None:
+                program = ["-c", LOGGED, options.zenoh_log]
+            command = link.wrap(side, [sys.executable, *program, *args])
             started.append(
-                subprocess.Popen(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
+                subprocess.Popen(command, cwd=code, stdout=log, stderr=subprocess.STDOUT)
             )
 
     try:
@@ -244,12 +259,41 @@ devices that drops {loss:.0%} of the packets for {seconds:g} s, then heals.
 Emil is lost and the goal should go on with Rasmus; Rasmus should never be
 lost. Each topology runs {trials} times: *router*, launch's default (every
 robot a client of one Zenoh router beside Pippi), and *mesh* (every robot
-a peer linked to every other).
+a peer linked to every other).{baseline}
 
 Columns, from Pippi's trace: the trials in which she lost Rasmus, the
 longest time her goal stood still (no configuration, until the next
 switch), the trials in which Emil was lost (the loss bit), and the share of
 the loss's cycles in which her action ran (median).
+
+## Why a healthy robot was lost, and what cfgplan sets
+
+Zenoh sends declarations (liveliness tokens, subscribers, interests) with
+congestion control *block*: a send to a link whose queue (two batches per
+priority) is full waits for room, up to
+`transport/link/tx/queue/congestion_control/block/wait_before_close`, 5 s
+by default, and then closes that link. The wait is not on the link's own
+transmit task: it is on the thread that sends. In a router that thread is
+the receive task of the link the declaration came on (its `read_loop`
+hands each batch to the routing, which pushes into every other client's
+queue; `io/zenoh-transport/src/unicast/universal/link.rs` and
+`common/pipeline.rs`), one of the two worker threads of Zenoh's RX runtime.
+While Emil's TCP window is closed by the loss, his queue fills; the next
+declaration from Rasmus or Pippi (a switch declares publishers and
+subscribers) waits there up to 5 s, and that healthy link goes unread. Its
+lease (2 s) runs out meanwhile, and when the task wakes, `read_loop`'s
+`select!` finds both a batch to read and the lease expired, and takes one
+at random: the router drops the healthy client in about half of such
+stalls (`RX task failed ... expired after 2000 milliseconds` in its debug
+log), and everyone sees it lost. In a mesh each peer does the same on its
+own links.
+
+cfgplan now sets `wait_before_close` to a twentieth of the lease (100 ms
+with the 2 s lease), for the router (`cfgplan router`, which launch
+starts) and for every robot, unless a `--zenoh-config` file sets it: a link
+that cannot take a control message for that long is closed, as Zenoh does
+after 5 s, and its robot is lost, as it would be anyway; the link it
+stalled is held up for 100 ms at most, far inside its lease.
 """
 
 PAGE = """\
@@ -278,9 +322,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--loss", type=float, default=0.5, help="share of packets dropped (0.5)")
     parser.add_argument("--topology", action="append", choices=TOPOLOGIES, help="default: both")
     parser.add_argument("--seed", type=int, default=57, help="the link's dropped packets (57)")
+    parser.add_argument(
+        "--baseline",
+        type=Path,
+        help="also run every trial with the cfgplan of this checkout (e.g. from git archive), "
+        "alternating with this one's",
+    )
+    parser.add_argument(
+        "--zenoh-log", metavar="LEVEL", help="Zenoh's log in each process's log (e.g. debug)"
+    )
+    parser.add_argument("--keep", type=Path, help="keep each trial's logs and traces here")
     parser.add_argument("--markdown", type=Path, help="also write the documentation page here")
     args = parser.parse_args(argv)
-    options = Options(trials=args.trials, loss=args.loss, seconds=args.seconds, seed=args.seed)
+    options = Options(
+        trials=args.trials,
+        loss=args.loss,
+        seconds=args.seconds,
+        seed=args.seed,
+        zenoh_log=args.zenoh_log,
+    )
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     try:
         link = NetnsLink(seed=options.seed)
@@ -289,18 +349,26 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     load, started = os.getloadavg()[0], time.monotonic()
     rows, evidence = [], []
+    codes = {"": ROOT}
+    if args.baseline is not None:
+        codes = {" (this)": ROOT, f" ({args.baseline.name})": args.baseline}
     try:
         for topology in args.topology or TOPOLOGIES:
-            trials = []
+            trials: dict[str, list[Trial]] = {label: [] for label in codes}
             for k in range(options.trials):
-                with tempfile.TemporaryDirectory(prefix="cfgplan-link-loss-") as name:
-                    trial = run_trial(topology, options, link, Path(name))
-                trials.append(trial)
-                print(f"{topology} #{k + 1}: {row(topology, [trial])}", file=sys.stderr)
-                if trial.healthy_lost:
-                    evidence.append(f"- {topology}, trial {k + 1}:")
-                    evidence += [f"    {e}" for e in trial.events]
-            rows.append(row(topology, trials))
+                for label, code in codes.items():  # side by side, in turn
+                    with tempfile.TemporaryDirectory(prefix="cfgplan-link-loss-") as name:
+                        trial = run_trial(topology, options, link, Path(name), code)
+                        if args.keep is not None:
+                            kept = args.keep / f"{topology}-{code.name}-{k + 1}"
+                            shutil.copytree(name, kept, dirs_exist_ok=True)
+                    trials[label].append(trial)
+                    shown = f"{topology}{label}"
+                    print(f"{shown} #{k + 1}: {row(shown, [trial])}", file=sys.stderr)
+                    if trial.healthy_lost:
+                        evidence.append(f"- {shown}, trial {k + 1}:")
+                        evidence += [f"    {e}" for e in trial.events]
+            rows += [row(f"{topology}{label}", trials[label]) for label in codes]
     finally:
         link.close()
     facts = [
@@ -321,7 +389,15 @@ def main(argv: list[str] | None = None) -> int:
         shown = shlex.join(["python", "-m", "benchmarks.link_loss", *given])
         heading = "### Trials in which Rasmus was lost: Pippi's events from the loss on"
         over = "\n".join([heading, "", "```text", *evidence, "```", "", ""]) if evidence else ""
-        intro = INTRO.format(loss=options.loss, seconds=options.seconds, trials=options.trials)
+        baseline = (
+            ""
+            if args.baseline is None
+            else " Each trial runs twice in turn: with this checkout's cfgplan (*this*), and "
+            f"with the one in `{args.baseline.name}` (Zenoh's 5 s `wait_before_close`)."
+        )
+        intro = INTRO.format(
+            loss=options.loss, seconds=options.seconds, trials=options.trials, baseline=baseline
+        )
         text = PAGE.format(
             shown=shown, intro=intro, facts="\n".join(facts), table=lines, evidence=over
         )

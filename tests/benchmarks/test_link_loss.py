@@ -49,5 +49,5 @@ def test_the_committed_page_was_written_by_the_benchmark() -> None:
     text = (ROOT / "docs" / "explanation" / "link-loss.md").read_text(encoding="utf-8")
     assert text.startswith("<!-- Written by `python -m benchmarks.link_loss")
     assert "| " + " | ".join(HEADER) + " |" in text
-    assert "| router |" in text and "| mesh |" in text
+    assert "| router" in text and "| mesh" in text  # alone, or beside a baseline
     assert "- link: " in text and "Made with `python -m benchmarks.link_loss" in text
