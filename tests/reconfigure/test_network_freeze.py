@@ -25,14 +25,8 @@ import pytest
 from tests.backends.support import EXAMPLE_IMPL
 from tests.reconfigure.test_network import LIMIT, _network, _robot
 from tests.reconfigure.test_network_restart import SERVED_FIELDS, _after, served_step2
-from tests.runtime.netutil import (
-    endpoint,
-    free_port,
-    hermetic_config,
-    processes,
-    read_trace,
-    wait_for,
-)
+from tests.runtime import netutil
+from tests.runtime.netutil import processes, read_trace, wait_for
 
 HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
 
@@ -111,8 +105,8 @@ def test_a_router_frozen_past_the_lease_costs_no_robot(tmp_path: Path) -> None:
     frozen 3 s (the 2 s lease): both robots lose their link to it and see
     each other go. The coordinator says it lost its own link, holds the
     loss, lets it go when Pippi is seen again, and serves the goal again."""
-    config = str(hermetic_config(tmp_path))
-    router = endpoint(free_port())
+    config = str(netutil.hermetic_config(tmp_path))
+    router = netutil.endpoint(netutil.free_port())
     network = ["--router", router, "--zenoh-config", config, "--society", "router-freeze"]
     with processes() as running:
         serving = running.start(
