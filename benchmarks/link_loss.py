@@ -322,6 +322,16 @@ column), but the coordinator no longer blames a healthy robot for it, nor
 stops everything when he comes back (`tests/reconfigure/test_network_freeze.py`
 freezes the router 3 s: before, the coordinator recorded its helper's
 failure; now none).
+
+**In a mesh** each peer gets the same `wait_before_close`, but the hold does
+not apply: a peer's link that closes is the loss of the robot at its other
+end, and nothing tells it from a stall of the link. There the healthy link
+between Pippi and Rasmus still went in some trials, both seeing the other
+lost at the same moment and back only seconds later: the second stall, in
+a peer's session. What is left: find that stall in Zenoh (a router's or a
+peer's receive tasks stopping with no send failing), or judge a robot's
+liveliness over a second path (its data still arriving, or a peer that
+still hears it) before a loss is taken.
 """
 
 
@@ -377,7 +387,8 @@ def _intro(args: argparse.Namespace) -> str:
         ""
         if args.baseline is None
         else " Each trial runs twice in turn: with this checkout's cfgplan (*this*), and "
-        f"with the one in `{args.baseline.name}`, the baseline."
+        f"with the one in `{args.baseline.name}`, the baseline (`git archive REV | tar -x -C "
+        "DIR` of the code before)."
     )
     return INTRO.format(loss=args.loss, seconds=args.seconds, trials=args.trials, baseline=baseline)
 
