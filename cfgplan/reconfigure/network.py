@@ -129,6 +129,7 @@ class NetworkAdaptive:
     _shared: tuple[object, ...] = ()  # what the last State said (situation, step, id, epoch)
     _state: State | None = None  # that State (None: too large to send)
     _told: set[str] = field(default_factory=set)  # the robots sent it
+    _cut_off: bool = False  # its own link to its router is lost (said once per cut)
 
     def before(self, cycle: int, elapsed: float) -> None:
         self.injector(cycle, elapsed)
@@ -152,6 +153,7 @@ class NetworkAdaptive:
             self._weigh_rivals()
         detections = self.monitor.drain()
         self._stalled()  # after the drain: a stall before any loss drained is seen
+        self._cut_from_router()
         for detection in detections:
             if not self._doubt(detection):
                 self.take(detection)
@@ -222,6 +224,32 @@ class NetworkAdaptive:
                 f"{self.deployer.me}'s process stood still for {pause:.1f} s, half the lease "
                 f"or more (the lease is {lease:g} s); robots seen lost now are "
                 "checked again before anything is withdrawn"
+            )
+
+    def _cut_from_router(self) -> None:
+        """Whether this robot, a client of a router, lost its own link to it
+        since the last pass, or has none (:meth:`ZenohTransport.router_link_lost`):
+        then every robot it watched went at once in its own session, whether
+        it stopped or not. A router that stopped reading the links of healthy
+        clients past the lease (while another client's lossy link held it
+        up) drops them all, and they connect again when it reads again.
+        Losses seen then are held, as after this process's own stall
+        (:meth:`_stalled`), for as long as the cut lasts and two leases more
+        (:meth:`Doubts.cut_off`): let go if the robot is seen again by the
+        same process, taken at their deadline if it is still gone."""
+        lost = getattr(self.deployer.transport, "router_link_lost", None)
+        if self.doubts is None or lost is None:
+            return
+        if not lost():
+            self._cut_off = False
+            return
+        self.doubts.cut_off(time.monotonic())
+        self.coordinator.excuse(self.deployer.me, 2 * self.doubts.lease)
+        if not self._cut_off:
+            self._cut_off = True
+            self.deployer.member.error(
+                f"{self.deployer.me} lost its own link to the router; robots seen lost now "
+                "are checked again before anything is withdrawn"
             )
 
     def _doubt(self, detection: Detection) -> bool:

@@ -17,7 +17,9 @@ later, with a failure on record that never was.
   wait unread), each loss seen within two leases is
   held until its own deadline (two leases after it was held): let go if the
   robot is seen again by the same process, taken if the robot is still gone,
-  or came back as another process, at the deadline.
+  or came back as another process, at the deadline. A robot that lost its own
+  link to its router (:meth:`Doubts.cut_off`) holds the losses it sees the
+  same way, for as long as the cut lasts and two leases more.
 
 :class:`cfgplan.reconfigure.network.NetworkAdaptive` uses both.
 """
@@ -111,6 +113,16 @@ class Doubts:
         """The process stood still longer than :attr:`threshold`: losses seen
         in the next two leases are held."""
         self.until = now + 2 * self.lease
+
+    def cut_off(self, now: float) -> None:
+        """This robot is cut off from the others (its own link to its router
+        is gone): as after a stall, and every loss held waits at least two
+        leases more. Nothing can be decided of a robot that cannot be heard;
+        once the link is back, a robot still not seen two leases later is
+        taken as lost."""
+        self.stalled(now)
+        for robot, (detection, deadline) in self.held.items():
+            self.held[robot] = (detection, max(deadline, now + 2 * self.lease))
 
     def hold(self, detection: Detection, now: float) -> bool:
         """Whether ``detection``, a loss, is held (seen while in doubt)."""

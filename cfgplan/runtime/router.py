@@ -37,7 +37,9 @@ from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.zenoh_config import (
     DEFAULT_LEASE,
     ENDPOINT_HINT,
+    WAIT_BEFORE_CLOSE,
     endpoint_problem,
+    follow_lease,
     load_zenoh,
     put_setting,
     read_config,
@@ -74,11 +76,15 @@ class RouterOptions:
 
 def router_config(options: RouterOptions) -> Any:
     """The Zenoh configuration of a router: a file's (if any), then router
-    mode, the endpoints it listens on, no multicast scouting and the lease."""
-    if options.config_file is None:
-        config = load_zenoh().Config()
-    else:
-        config = read_config(options.config_file)
+    mode, the endpoints it listens on, no multicast scouting and the lease;
+    unless the file sets it, a client's link that stays full is closed after a
+    small share of the lease (:data:`~cfgplan.runtime.zenoh_config.STUCK_LINK`):
+    the router sends a client declarations on the thread that reads the link
+    they came on, and a client behind a lossy link would stall that link (a
+    healthy robot's) for up to Zenoh's 5 s, past its lease."""
+    zenohs = load_zenoh().Config()
+    config = zenohs if options.config_file is None else read_config(options.config_file)
+    leaves_wait = config.get_json(WAIT_BEFORE_CLOSE) == zenohs.get_json(WAIT_BEFORE_CLOSE)
     settings = (
         ("mode", '"router"', "router mode"),
         ("listen/endpoints", json.dumps(list(options.listen)), "--listen"),
@@ -87,6 +93,8 @@ def router_config(options: RouterOptions) -> Any:
     )
     for key, value, what in settings:
         put_setting(config, key, value, what)
+    if leaves_wait:
+        follow_lease(config)
     return config
 
 

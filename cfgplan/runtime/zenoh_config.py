@@ -29,12 +29,16 @@ __all__ = [
     "DEFAULT_SOCIETY",
     "OPEN_TIMEOUT_MS",
     "RETRY",
+    "STUCK_LINK",
+    "WAIT_BEFORE_CLOSE",
     "ZenohOptions",
     "endpoint_problem",
+    "follow_lease",
     "load_zenoh",
     "put_setting",
     "read_config",
     "reason",
+    "stuck_link_wait",
     "zenoh_config",
 ]
 
@@ -64,6 +68,23 @@ retried :data:`RETRY` 0.5 s later, an attempt goes out on the link at least
 every second. A link that needs longer to open (a TLS handshake over a link of
 300 ms round trips) needs a longer one: a ``--zenoh-config`` file's
 ``transport/unicast/open_timeout``."""
+
+STUCK_LINK = 20
+"""A link that cannot take a control message for a twentieth of the lease
+is closed (Zenoh's ``wait_before_close``, 5 s by default; 100 ms with the
+2 s lease), instead of stalling whoever sends to it.
+
+Declarations (liveliness tokens, subscribers, interests) are sent with
+congestion control *block*: a send to a link whose queue is full waits for
+room, up to ``wait_before_close``, on the thread that sends it. In a router
+that thread is the one reading the link the declaration came on: behind a
+router, a robot declaring something while another robot's link was losing
+half of its packets had its own link left unread for up to 5 s, and the
+router dropped it past the lease, a healthy robot lost (2 of 4 trials of
+``python -m benchmarks.link_loss``; none of 3 with 100 ms). Closed at once,
+the stuck link's robot is lost, as it would be anyway, and connects again
+when its link lets it; several sends may wait in a row before the close
+takes hold, hence a small share of the lease."""
 
 ENDPOINT = re.compile(r"^[A-Za-z0-9+.-]+/\S+$")
 ENDPOINT_HINT = "e.g. tcp/127.0.0.1:7447, tcp/[::1]:7447 or tcp/robot-1.local:7447"
@@ -154,6 +175,15 @@ def reason(exc: BaseException) -> str:
     return re.sub(r" at \S+\.rs:\d+\.?", "", text).strip()
 
 
+WAIT_BEFORE_CLOSE = "transport/link/tx/queue/congestion_control/block/wait_before_close"
+
+
+def stuck_link_wait(lease_ms: int) -> str:
+    """Microseconds (JSON5) a send waits on a full link before the link is
+    closed, for a lease of ``lease_ms`` (:data:`STUCK_LINK`)."""
+    return str(max(1, round(lease_ms * 1000 / STUCK_LINK)))
+
+
 DEFAULTS: tuple[tuple[str, str, str], ...] = (
     ("mode", '"peer"', "peer mode"),
     ("connect/retry", RETRY, "the connection retry"),
@@ -167,7 +197,8 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
     """The session configuration of a robot program: cfgplan's :data:`DEFAULTS`
     (peer mode, the connection retry, a lease of :data:`DEFAULT_LEASE` s, an
     :data:`OPEN_TIMEOUT_MS` to open a link), then a configuration file's
-    settings, then the options.
+    settings, then the options; last, unless the file sets it, a stuck link is
+    closed after a :data:`STUCK_LINK` th of the lease (:func:`follow_lease`).
 
     A file is read whole by Zenoh, which fills in its own default for every
     key the file leaves out; so a key whose value in the file is Zenoh's own
@@ -175,8 +206,10 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
     Zenoh's 10 s lease)."""
     z = load_zenoh()
     config: zenoh.Config
+    file_wait = None
     if options.config_file is not None:
         config = read_config(options.config_file)
+        file_wait = config.get_json(WAIT_BEFORE_CLOSE)
         zenohs = z.Config()
         for key, value, what in DEFAULTS:
             if config.get_json(key) == zenohs.get_json(key):  # the file leaves it
@@ -203,6 +236,8 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
     if options.lease is not None:
         lease = str(max(1, round(options.lease * 1000)))
         put_setting(config, "transport/link/tx/lease", lease, "--lease")
+    if file_wait is None or file_wait == z.Config().get_json(WAIT_BEFORE_CLOSE):
+        follow_lease(config)  # the file leaves it
     if options.keys is not None:  # last: every endpoint, the file's too, becomes TLS
         from cfgplan.security.zenoh_tls import secure
 
@@ -210,6 +245,13 @@ def zenoh_config(options: ZenohOptions, robot: str | None = None) -> zenoh.Confi
             raise RunError("--keys: whose keys? (no robot named)")
         secure(config, options.keys, robot, options.society, put_setting)
     return config
+
+
+def follow_lease(config: Any) -> None:
+    """Set the wait before a stuck link is closed from ``config``'s lease
+    (:data:`STUCK_LINK`): for a configuration whose file does not set it."""
+    lease_ms = int(json.loads(config.get_json("transport/link/tx/lease")))
+    put_setting(config, WAIT_BEFORE_CLOSE, stuck_link_wait(lease_ms), "the wait on a stuck link")
 
 
 def read_config(path: str) -> zenoh.Config:

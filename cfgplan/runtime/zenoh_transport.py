@@ -122,12 +122,18 @@ class ZenohTransport:
         except z.ZError as exc:
             self._session.close()
             raise RunError(f"cannot declare {robot} alive: {reason(exc)}") from None
+        self._lock = threading.Lock()
+        self._router_drops = 0  # links to a router that closed, since the last ask
+        self._router_events: Any = None
+        if self.options.router:  # a client: its own link to the router may go
+            self._router_events = self._session.info.declare_transport_events_listener(
+                self._router_event
+            )
         self._subscribers: list[Any] = []
         self._channels: Any = None  # the subscriber of cfgplan/<society>/<robot>/ch/**
         self._receivers: dict[str, Receiver] = {}  # by key expression (with the sender)
         self._attached: dict[ChannelKey, str] = {}  # each channel's key expression
         self._newest: dict[str, bytes] = {}  # per key, what arrived since the last poll
-        self._lock = threading.Lock()
         self._arrived = threading.Event()
         self._publishers: dict[str, Any] = {}
         self._arrivals: queue.SimpleQueue[tuple[str, bool]] = queue.SimpleQueue()
@@ -382,6 +388,30 @@ class ZenohTransport:
             self._publishers[where] = publisher
         publisher.put(payload)
         self.sent += 1
+
+    def _router_event(self, event: Any) -> None:
+        if event.kind == self._z.SampleKind.DELETE and event.transport.whatami == (
+            self._z.WhatAmI.ROUTER
+        ):
+            with self._lock:
+                self._router_drops += 1
+
+    def router_link_lost(self) -> bool:
+        """Whether this robot, a client of a router (``--router``), lost its
+        own link to it since the last ask, or has none now. Every robot it
+        watched then goes at once in its session, lost or not: a router that
+        stopped reading this robot's link past the lease (another client's
+        lossy link held it up) drops it, and it connects again a moment
+        later. Always false for a peer.
+
+        Zenoh closes the link first, then tells the liveliness subscribers
+        (the losses), then the transport's listeners: a loss already drained
+        may come before the event, but never while the link is still listed."""
+        if self._router_events is None:
+            return False
+        with self._lock:
+            drops, self._router_drops = self._router_drops, 0
+        return drops > 0 or not list(self._session.info.links())
 
     def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
         """Report ``partners`` appearing and lost; called again (after a

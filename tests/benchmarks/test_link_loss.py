@@ -5,7 +5,9 @@ real processes, 30 s of loss each) run in the benchmark, not here."""
 
 from __future__ import annotations
 
-from benchmarks.link_loss import HEADER, measure, network, row
+from pathlib import Path
+
+from benchmarks.link_loss import HEADER, measure, network, rewrite, row
 from benchmarks.lossy_link import NetnsLink
 from benchmarks.reconfigure import ROOT
 
@@ -49,5 +51,19 @@ def test_the_committed_page_was_written_by_the_benchmark() -> None:
     text = (ROOT / "docs" / "explanation" / "link-loss.md").read_text(encoding="utf-8")
     assert text.startswith("<!-- Written by `python -m benchmarks.link_loss")
     assert "| " + " | ".join(HEADER) + " |" in text
-    assert "| router |" in text and "| mesh |" in text
+    assert "| router" in text and "| mesh" in text  # alone, or beside a baseline
     assert "- link: " in text and "Made with `python -m benchmarks.link_loss" in text
+
+
+def test_rewrite_puts_the_modules_words_around_the_run_it_keeps(tmp_path: Path) -> None:
+    """``--rewrite PAGE``: the words before the run are this module's, for the
+    command that made the page; the run (facts, table, evidence) is kept."""
+    shown = "python -m benchmarks.link_loss --trials 2 --loss 0.2 --markdown x.md"
+    run = "- date: then\n\n| a |\n|---|\n| 1 |\n\nMade with `" + shown + "`; run it again.\n"
+    page = tmp_path / "link-loss.md"
+    page.write_text(f"<!-- old -->\n\n# Loss on one link\n\nold words\n## The last run\n\n{run}")
+    rewrite(page)
+    text = page.read_text(encoding="utf-8")
+    assert "old words" not in text and text.endswith("## The last run\n\n" + run)
+    assert "drops 20% of the packets" in text and "runs 2 times" in text
+    assert text.startswith(f"<!-- Written by `{shown}`")

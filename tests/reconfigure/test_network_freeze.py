@@ -25,6 +25,7 @@ import pytest
 from tests.backends.support import EXAMPLE_IMPL
 from tests.reconfigure.test_network import LIMIT, _network, _robot
 from tests.reconfigure.test_network_restart import SERVED_FIELDS, _after, served_step2
+from tests.runtime import netutil
 from tests.runtime.netutil import processes, read_trace, wait_for
 
 HOLD = 1.0  # cfgplan run's default hysteresis hold (--hold)
@@ -92,3 +93,53 @@ def test_a_coordinator_frozen_and_let_go_does_not_blame_its_helper(
     assert failed == [], failed
     assert [r for r in mine if r["event"] == "no-configuration"] == []
     assert float(again["t"]) - let_go < HOLD + 1.0  # type: ignore[arg-type]
+
+
+@pytest.mark.slow
+def test_a_router_frozen_past_the_lease_costs_no_robot(tmp_path: Path) -> None:
+    """Measured (``python -m benchmarks.link_loss``): a router that stopped
+    reading its clients' links past the lease (a lossy client's link held it
+    up) dropped the coordinator's link and a healthy helper's; the
+    coordinator saw the helper lost, recorded his failure and stopped the
+    goal, though both were back a second later. Here the router itself is
+    frozen 3 s (the 2 s lease): both robots lose their link to it and see
+    each other go. The coordinator says it lost its own link, holds the
+    loss, lets it go when Pippi is seen again, and serves the goal again."""
+    config = str(netutil.hermetic_config(tmp_path))
+    router = netutil.endpoint(netutil.free_port())
+    network = ["--router", router, "--zenoh-config", config, "--society", "router-freeze"]
+    with processes() as running:
+        serving = running.start(
+            ["-m", "cfgplan", "router", "--listen", router], tmp_path / "router.log"
+        )
+        wait_for("the router", lambda: _said(tmp_path / "router.log", "listening"), LIMIT)
+        _, emil_trace = _robot(
+            running, tmp_path, "Emil", EXAMPLE_IMPL, network, "--duration", "120"
+        )
+        _robot(running, tmp_path, "Pippi", EXAMPLE_IMPL, network)
+        wait_for("the goal served", _after(emil_trace, 0.0, "call", **SERVED_FIELDS), LIMIT)
+        time.sleep(1.0)  # past the first switches' hold
+        os.kill(serving.pid, signal.SIGSTOP)
+        try:
+            time.sleep(3.0)
+        finally:
+            os.kill(serving.pid, signal.SIGCONT)
+        let_go = time.time()
+        again = wait_for(
+            "the goal again", _after(emil_trace, let_go, "call", **SERVED_FIELDS), LIMIT
+        )
+        time.sleep(4.5)  # past a held loss's deadline (two leases)
+        running.stop_all()
+    mine = read_trace(emil_trace)
+    failed = [r["resource"] for r in mine if r["event"] == "failure"]
+    assert failed == [], failed
+    assert [r for r in mine if r["event"] == "no-configuration"] == []
+    said = [str(r) for r in mine if r["event"] == "error"]
+    assert any("lost its own link to the router" in s for s in said), said
+    assert float(again["t"]) - let_go < HOLD + 2.0  # type: ignore[arg-type]
+
+
+def _said(log: Path, words: str) -> dict[str, object] | None:
+    """A ``found`` for :func:`wait_for`: ``log`` has ``words``."""
+    text = log.read_text(encoding="utf-8") if log.exists() else ""
+    return {"said": words} if words in text else None

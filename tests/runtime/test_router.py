@@ -22,6 +22,8 @@ def test_a_router_is_zenohs_router_mode_with_the_lease_and_no_scouting() -> None
     assert config.get_json("listen/endpoints") == '["tcp/127.0.0.1:7447"]'
     assert config.get_json("scouting/multicast/enabled") == "false"
     assert config.get_json("transport/link/tx/lease") == "500"
+    wait = "transport/link/tx/queue/congestion_control/block/wait_before_close"
+    assert config.get_json(wait) == "25000"  # a full client's link closed after lease / 20
     with pytest.raises(RunError, match="--listen 'here'"):
         RouterOptions(listen=("here",))
     with pytest.raises(RunError, match="must listen somewhere"):

@@ -154,3 +154,26 @@ def test_a_client_of_a_router_connects_only_there_and_listens_nowhere() -> None:
         ZenohOptions(router=("tcp/10.0.0.1:7447",), keys="keys")
     with pytest.raises(RunError, match="--router 'nowhere'"):
         ZenohOptions(router=("nowhere",))
+
+
+WAIT = "transport/link/tx/queue/congestion_control/block/wait_before_close"
+
+
+def test_a_stuck_link_is_closed_after_a_twentieth_of_the_lease_unless_a_file_says(
+    tmp_path: Path,
+) -> None:
+    """Zenoh waits 5 s on a full link before closing it, on the thread that
+    sends (in a router, the one reading a healthy robot's link): cfgplan
+    waits 100 ms with the 2 s lease, following ``--lease`` and a file's
+    lease; a file's own wait is kept."""
+    assert _get(ZenohOptions(), WAIT) == DEFAULT_LEASE * 1_000_000 / 20 == 100_000
+    assert _get(ZenohOptions(lease=10.0), WAIT) == 500_000
+    leased = tmp_path / "leased.json5"
+    leased.write_text("{ transport: { link: { tx: { lease: 4000 } } } }")
+    assert _get(ZenohOptions(config_file=str(leased)), WAIT) == 200_000
+    own = tmp_path / "own.json5"
+    own.write_text(
+        "{ transport: { link: { tx: { queue: { congestion_control: "
+        "{ block: { wait_before_close: 750000 } } } } } } }"
+    )
+    assert _get(ZenohOptions(config_file=str(own), lease=1.0), WAIT) == 750_000
