@@ -5,8 +5,9 @@ configurations (:mod:`cfgplan.cli.sequence`); ``--fallbacks`` adds the
 robustness report (:mod:`cfgplan.cli.fallbacks`).
 """
 
-from __future__ import annotations
-
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NamedTuple, NoReturn
@@ -50,6 +51,26 @@ FORMATS = ("table", "lisp", "json", "jsonl")
 ENGINES = ("search", "solver")
 K = 10
 """How many configurations ``plan`` lists without ``-k``."""
+
+
+class _Asked(NamedTuple):
+    """What to print, once the configurations are found (a named tuple: a
+    frozen dataclass takes about four times as long to define)."""
+
+    format: str
+    details: bool
+    first: int  # the rank of the first configuration shown
+    listing: bool  # -k or --all (not --rank): the table says when more exist
+    output: Path | None
+    force: bool
+
+    @property
+    def stream(self) -> bool:
+        """Print each configuration as soon as it is proven: a listing (not
+        ``--rank``, which shows one only once those before it are found) in
+        jsonl or lisp, on stdout. The one place this is decided: what
+        :func:`_plan` printed, :func:`_print` does not print again."""
+        return self.listing and self.output is None and self.format in ("jsonl", "lisp")
 
 
 def _progress(stats: Stats, elapsed: float) -> None:
@@ -109,32 +130,12 @@ def _nothing(
     raise typer.Exit(EXIT_NONE)
 
 
-class _Asked(NamedTuple):
-    """What to print, once the configurations are found (a named tuple: a
-    frozen dataclass takes about four times as long to define)."""
-
-    format: str
-    details: bool
-    first: int  # the rank of the first configuration shown
-    listing: bool  # -k or --all (not --rank): the table says when more exist
-    output: Path | None
-    force: bool
-
-    @property
-    def stream(self) -> bool:
-        """Print each configuration as soon as it is proven: a listing (not
-        ``--rank``, which shows one only once those before it are found) in
-        jsonl or lisp, on stdout. The one place this is decided: what
-        :func:`_plan` printed, :func:`_print` does not print again."""
-        return self.listing and self.output is None and self.format in ("jsonl", "lisp")
-
-
 def _print(
     problem: Problem,
     configs: list[Configuration],
     search: Run,
     more: bool | None,
-    backups: list[Fallback] | None,
+    backups: "list[Fallback] | None",
     asked: _Asked,
 ) -> None:
     """The configurations (and fallbacks) in the format asked for: on stdout,
@@ -314,7 +315,9 @@ def plan(
         _print(problem, configs, search, more, backups, asked)
 
 
-def _fallbacks(problem: Problem, config: Configuration, time_limit: float | None) -> list[Fallback]:
+def _fallbacks(
+    problem: Problem, config: Configuration, time_limit: float | None
+) -> "list[Fallback]":
     """The fallbacks of ``config``; ``--time-limit`` bounds each one's search."""
     from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
 
