@@ -32,7 +32,6 @@ from cfgplan.cli.options import (
     rank_option,
 )
 from cfgplan.cli.registry import command
-from cfgplan.configuration.describe import to_json
 from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
 from cfgplan.notation import call_text
@@ -45,7 +44,7 @@ if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-u
 
 # Loaded only when needed (start-up): cfgplan.cli.sequence for several
 # goals, cfgplan.cli.fallbacks for --fallbacks, cfgplan.planner.explain when
-# nothing is found.
+# nothing is found, cfgplan.configuration.describe for --format json.
 
 FORMATS = ("table", "lisp", "json", "jsonl")
 ENGINES = ("search", "solver")
@@ -116,6 +115,7 @@ def _nothing(
 ) -> NoReturn:
     """No admissible configuration: why, on stderr; with JSON, also as data on
     stdout (scripts never get an empty answer); exit 3."""
+    from cfgplan.configuration.describe import to_json
     from cfgplan.planner.explain import explain, explanation
 
     say("\n".join(explain(search.report, call_text(problem.goal_call))))
@@ -150,6 +150,8 @@ def _print(
             return
         text = formats.jsonl(problem, configs, search, more, first)
     elif asked.format == "json":
+        from cfgplan.configuration.describe import to_json
+
         extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
         stats = formats.stats(search, more)
         text = to_json(problem.goal_call, configs, problem.state.media, stats, extra, first)

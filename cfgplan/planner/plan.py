@@ -20,14 +20,12 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import partial
+from typing import TYPE_CHECKING
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.bound import Bound
-from cfgplan.planner.combine import Combined
 from cfgplan.planner.components import Parts, divide, unroll
-from cfgplan.planner.dive import dive
-from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.options import SearchOptions
@@ -39,6 +37,10 @@ from cfgplan.planner.report import Report, Stats, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
+
+if TYPE_CHECKING:  # each loaded where it is used: most runs use none (start-up)
+    from cfgplan.planner.combine import Combined
+    from cfgplan.planner.enumerate import Windows
 
 
 def parts(task: Task, media: bool = True) -> tuple[Grounder, Bound, Partition]:
@@ -150,6 +152,8 @@ def in_parts(
         return search
     if found is None:
         return search
+    from cfgplan.planner.combine import Combined
+
     distinct = search.grower.distinct
 
     def make(given: frozenset[int]) -> tuple[Grower, Pricer]:
@@ -201,6 +205,8 @@ class Run:
             self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
+            from cfgplan.planner.enumerate import Windows
+
             bound = parts(self.task, self.options.media)[1]
             self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
         else:
@@ -285,6 +291,8 @@ class Run:
         (unless :attr:`SearchOptions.dive` is off)."""
         if not self.options.dive:
             return None
+        from cfgplan.planner.dive import dive
+
         grace = self.options.grace
         end = time.perf_counter() + grace if deadline is None else deadline + grace
         grower, pricer = self.strategy.grower, self.strategy.pricer
