@@ -49,7 +49,7 @@ from cfgplan.planner.task import Ground, Task
 from cfgplan.planner.waiting import sort_channels, unreached_by, waiting_parts
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Bound:
     """The bound for one task; :meth:`estimate` on each node."""
 

@@ -42,7 +42,7 @@ class Completion(NamedTuple):
     derivation: int
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Grower:
     """Expands, settles and finishes nodes for one search."""
 

@@ -43,7 +43,7 @@ class Evaluation:
     costs: dict[int, tuple[float, ...]]
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Least:
     """The cheapest derivations of ground instances at one node's prices:
     from scratch (:meth:`full`, :meth:`record`) or from another node's

@@ -94,7 +94,7 @@ class Kept:
         return {**self._touched, **lowered} if lowered else self._touched
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Occurrences:
     """The counts of one task's ground instances and of the stacks of pending
     items met, over one graph."""

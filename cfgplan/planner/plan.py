@@ -170,7 +170,7 @@ def _order(entry: tuple[float, Partial]) -> tuple[float, tuple[int, ...]]:
     return entry[0], entry[1].path
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Run:
     """One planning run; iterate it for the configurations, best first."""
 
