@@ -22,7 +22,7 @@ from cfgplan.syntax.reader import collection_paused, parse, read_domain, read_st
 GOAL_SOURCE = "--goal"
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Problem:
     """Everything needed to plan: the domain, the state, the goals, the compiled task."""
 

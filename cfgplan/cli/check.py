@@ -1,7 +1,9 @@
 """``cfgplan check DOMAIN [STATE]``: read and check, report every problem
 (thesis 4.4); ``--format json`` for tools (:mod:`cfgplan.cli.errors`)."""
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 import re
 from pathlib import Path

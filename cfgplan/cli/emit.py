@@ -13,7 +13,9 @@ emission in the folder whole, and files cfgplan did not write are never
 overwritten or removed.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 from pathlib import Path
 from typing import Annotated

@@ -10,19 +10,18 @@ N-th alone). Names from the input are shown with control characters escaped.
 from __future__ import annotations
 
 import io
-import json
 import shutil
 from typing import TYPE_CHECKING
 
 from cfgplan.configuration.cost import fmt
-from cfgplan.configuration.describe import channel_text, to_dict, to_text
 from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import printable
 from cfgplan.notation import call_text
 from cfgplan.planner import Run
 from cfgplan.problem import Problem
 
-if TYPE_CHECKING:  # rich is loaded for tables only (start-up)
+if TYPE_CHECKING:  # rich is loaded for tables only, json and the descriptions
+    # (cfgplan.configuration.describe) for the other formats only (start-up)
     from rich.table import Table
 
 __all__ = ["jsonl", "lisp", "more_note", "plain", "stats", "streamed", "summary", "table"]
@@ -112,6 +111,8 @@ def table(
             str(c.global_channels),
         ]
         if details:
+            from cfgplan.configuration.describe import channel_text
+
             row.append("\n".join(str(f) for f in c.functionalities))
             row.append("\n".join(channel_text(ch) for ch in c.channels))
         shown.add_row(*(printable(cell, keep="\n") for cell in row))
@@ -133,6 +134,10 @@ def streamed(
     """One configuration as ``--format jsonl`` or ``lisp`` prints it, alone;
     the first one shown (rank ``first``) under the LISP header. Printed as
     soon as it is proven or all at once, the bytes are the same."""
+    import json
+
+    from cfgplan.configuration.describe import to_dict, to_text
+
     if format_ == "jsonl":
         line = to_dict(config, rank, problem.state.media)
         return json.dumps(line, ensure_ascii=False) + "\n"
@@ -158,6 +163,8 @@ def summary(
     explained: dict[str, object] | None = None,
 ) -> str:
     """The last line of ``--format jsonl``: what was planned for, and how."""
+    import json
+
     doc: dict[str, object] = {
         "goal": call_text(problem.goal_call),
         "count": len(configs),

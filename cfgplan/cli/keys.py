@@ -15,7 +15,9 @@ Needs the ``cryptography`` package (``pip install 'cfgplan[keys]'``); a robot
 that only uses keys does not.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 from pathlib import Path
 from typing import Annotated

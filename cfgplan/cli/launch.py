@@ -14,7 +14,9 @@ only its own options; those of ``cfgplan run`` are parsed by run's own command
 writes, instead, the command each host runs (``--host NAME=ADDRESS``).
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 import difflib
 import sys

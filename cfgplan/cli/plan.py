@@ -5,8 +5,9 @@ configurations (:mod:`cfgplan.cli.sequence`); ``--fallbacks`` adds the
 robustness report (:mod:`cfgplan.cli.fallbacks`).
 """
 
-from __future__ import annotations
-
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NamedTuple, NoReturn
@@ -31,7 +32,6 @@ from cfgplan.cli.options import (
     rank_option,
 )
 from cfgplan.cli.registry import command
-from cfgplan.configuration.describe import to_json
 from cfgplan.configuration.model import Configuration
 from cfgplan.files import check_target
 from cfgplan.notation import call_text
@@ -44,12 +44,32 @@ if TYPE_CHECKING:  # the reconfiguration is loaded only for --fallbacks (start-u
 
 # Loaded only when needed (start-up): cfgplan.cli.sequence for several
 # goals, cfgplan.cli.fallbacks for --fallbacks, cfgplan.planner.explain when
-# nothing is found.
+# nothing is found, cfgplan.configuration.describe for --format json.
 
 FORMATS = ("table", "lisp", "json", "jsonl")
 ENGINES = ("both", "search", "solver")
 K = 10
 """How many configurations ``plan`` lists without ``-k``."""
+
+
+class _Asked(NamedTuple):
+    """What to print, once the configurations are found (a named tuple: a
+    frozen dataclass takes about four times as long to define)."""
+
+    format: str
+    details: bool
+    first: int  # the rank of the first configuration shown
+    listing: bool  # -k or --all (not --rank): the table says when more exist
+    output: Path | None
+    force: bool
+
+    @property
+    def stream(self) -> bool:
+        """Print each configuration as soon as it is proven: a listing (not
+        ``--rank``, which shows one only once those before it are found) in
+        jsonl or lisp, on stdout. The one place this is decided: what
+        :func:`_plan` printed, :func:`_print` does not print again."""
+        return self.listing and self.output is None and self.format in ("jsonl", "lisp")
 
 
 def _progress(stats: Stats, elapsed: float) -> None:
@@ -95,6 +115,7 @@ def _nothing(
 ) -> NoReturn:
     """No admissible configuration: why, on stderr; with JSON, also as data on
     stdout (scripts never get an empty answer); exit 3."""
+    from cfgplan.configuration.describe import to_json
     from cfgplan.planner.explain import explain, explanation
 
     say("\n".join(explain(search.report, call_text(problem.goal_call))))
@@ -109,32 +130,12 @@ def _nothing(
     raise typer.Exit(EXIT_NONE)
 
 
-class _Asked(NamedTuple):
-    """What to print, once the configurations are found (a named tuple: a
-    frozen dataclass takes about four times as long to define)."""
-
-    format: str
-    details: bool
-    first: int  # the rank of the first configuration shown
-    listing: bool  # -k or --all (not --rank): the table says when more exist
-    output: Path | None
-    force: bool
-
-    @property
-    def stream(self) -> bool:
-        """Print each configuration as soon as it is proven: a listing (not
-        ``--rank``, which shows one only once those before it are found) in
-        jsonl or lisp, on stdout. The one place this is decided: what
-        :func:`_plan` printed, :func:`_print` does not print again."""
-        return self.listing and self.output is None and self.format in ("jsonl", "lisp")
-
-
 def _print(
     problem: Problem,
     configs: list[Configuration],
     search: Run,
     more: bool | None,
-    backups: list[Fallback] | None,
+    backups: "list[Fallback] | None",
     asked: _Asked,
 ) -> None:
     """The configurations (and fallbacks) in the format asked for: on stdout,
@@ -149,6 +150,8 @@ def _print(
             return
         text = formats.jsonl(problem, configs, search, more, first)
     elif asked.format == "json":
+        from cfgplan.configuration.describe import to_json
+
         extra = None if backups is None else {"fallbacks": [fb.record() for fb in backups]}
         stats = formats.stats(search, more)
         text = to_json(problem.goal_call, configs, problem.state.media, stats, extra, first)
@@ -318,7 +321,9 @@ def plan(
         _print(problem, configs, search, more, backups, asked)
 
 
-def _fallbacks(problem: Problem, config: Configuration, time_limit: float | None) -> list[Fallback]:
+def _fallbacks(
+    problem: Problem, config: Configuration, time_limit: float | None
+) -> "list[Fallback]":
     """The fallbacks of ``config``; ``--time-limit`` bounds each one's search."""
     from cfgplan.reconfigure.fallbacks import fallbacks as fallbacks_of
 

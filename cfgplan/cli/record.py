@@ -9,7 +9,9 @@ messages, JSON Schemas from :mod:`cfgplan.runtime.schema`. It needs the
 the command runs: a robot that only runs its program needs none of it.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 from pathlib import Path
 from types import ModuleType

@@ -5,7 +5,9 @@ The format comes from the suffix of ``-o``: ``.dot`` (DOT source, always
 available), ``.svg`` or ``.png`` (laid out by :mod:`cfgplan.backends.render`).
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 from pathlib import Path
 from typing import Annotated, Literal

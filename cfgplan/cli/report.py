@@ -13,7 +13,9 @@ recording, holds no event, or DIR holding an earlier report without
 ``--force``; 2 usage.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 import importlib
 from pathlib import Path
@@ -74,7 +76,7 @@ def default_folder(run: list[Path]) -> Path:
     return first.with_name(f"{first.stem or first.name}-report")
 
 
-def _make(run: list[Path], out: Path, replay: bool, force: bool) -> Made:
+def _make(run: list[Path], out: Path, replay: bool, force: bool) -> "Made":
     _need_matplotlib()
     from cfgplan.report.make import ReportOptions, make_report
 

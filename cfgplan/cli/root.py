@@ -13,7 +13,6 @@ command module registers itself, and this module imports none of them, nor
 
 from __future__ import annotations
 
-import json
 import os
 import re
 from collections.abc import Callable
@@ -142,6 +141,8 @@ def render_help(columns: int = HELP_WIDTH) -> str:
 
 def write_help_module() -> str:
     """The source of :mod:`cfgplan.cli.help_text`, generated from :func:`render_help`."""
+    import json
+
     return (
         '"""The top-level help of ``cfgplan`` (``--help``, ``-h``, and bare ``cfgplan``)\n'
         f"as typer renders it at {HELP_WIDTH} columns, printed without loading typer.\n\n"

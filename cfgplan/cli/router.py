@@ -6,7 +6,9 @@ line. ``cfgplan launch`` starts one itself (its default topology without
 ``--router tcp/THAT-HOST:7447`` (``zenohd`` or ``rmw_zenohd`` serve as well).
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 from pathlib import Path
 from typing import Annotated

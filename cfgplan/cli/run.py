@@ -15,7 +15,9 @@ how often it ran. ``--cycles N`` counts the cycles of the goal's robot
 switch brings in.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 import sys
 from pathlib import Path

@@ -13,7 +13,9 @@ none left at the end); 4 the run ended without accomplishing the task (the
 bar fell, a block is not aligned, time ran out); 130 interrupted.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations``: typer reads the commands'
+# annotations as objects, with no string to evaluate for each option
+# (start-up, docs/development.md).
 
 import importlib
 import sys

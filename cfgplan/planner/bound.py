@@ -49,7 +49,7 @@ from cfgplan.planner.task import Ground, Task
 from cfgplan.planner.waiting import sort_channels, unreached_by, waiting_parts
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Bound:
     """The bound for one task; :meth:`estimate` on each node."""
 
@@ -243,7 +243,7 @@ class Bound:
         return guarded
 
 
-@dataclass(slots=True)
+@dataclass(eq=False, repr=False, slots=True)
 class Together:
     """One search's use of the together least cost of :meth:`Bound.estimate`.
 
@@ -282,7 +282,7 @@ class Estimator:
         return self.bound.estimate(node, self.together)
 
 
-@dataclass(slots=True)
+@dataclass(eq=False, repr=False, slots=True)
 class _Pending:
     """The pending items as parts of the three least costs of
     :meth:`Bound.estimate`: one part per item in each list, the items'

@@ -79,7 +79,7 @@ class Capped(NamedTuple):
     direct: int
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Capacity:
     """The caps of one task, made from the AND/OR graph of its ground
     instances (``instances``, ``order``: :class:`cfgplan.planner.graph.Graph`)."""

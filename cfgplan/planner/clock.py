@@ -19,7 +19,7 @@ from dataclasses import dataclass
 _deadline: ContextVar[float | None] = ContextVar("cfgplan_deadline", default=None)
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Work:
     """The calls of :func:`check` in a :func:`counting` block: a measure of
     the search's work that, unlike time, is the same on every machine."""

@@ -66,7 +66,7 @@ class _Irregular(Exception):
     """The parts turned out not to combine as assumed: hand over."""
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Combined:
     """An iterator over configurations, best first, part by part."""
 

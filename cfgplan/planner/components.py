@@ -211,7 +211,7 @@ def segments(
     return {a: tuple(c) for a, c in made.items()}
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Trail:
     """Where a replay made each choice, for the next replay to resume from
     the last choice both make alike (replays of one listing share long

@@ -85,7 +85,7 @@ class Window:
         return True
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Windows:
     """An iterator over every configuration, cheapest first, window by window."""
 

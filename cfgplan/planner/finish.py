@@ -27,7 +27,7 @@ from cfgplan.planner.wiring import Channel as PartialChannel
 from cfgplan.planner.wiring import demands
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Models:
     """Result models already built, keyed by everything they hold: the models
     are immutable, so the configurations of one search share them."""

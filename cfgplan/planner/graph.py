@@ -65,7 +65,7 @@ class Instance(NamedTuple):
     key: int = -1  # its number: the key of a functionality; a method's in memos
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Graph:
     """The ground instances met so far, each made once, and what is below each."""
 

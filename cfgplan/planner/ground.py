@@ -161,7 +161,7 @@ def instantiate(
     )
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Grounder:
     """The memo of ground instances for one task."""
 

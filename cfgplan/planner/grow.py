@@ -47,7 +47,7 @@ ReplayKey = tuple[tuple[Ground, ...], int, int]
 :attr:`SearchOptions.replay_worth`: what the replays' rules are made for."""
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Grower:
     """Expands, settles and finishes nodes for one search."""
 

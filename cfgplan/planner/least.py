@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from cfgplan.planner.graph import Instance
 
 
-@dataclass(slots=True)
+@dataclass(eq=False, repr=False, slots=True)
 class Evaluation:
     """The cheapest derivation of every instance below one node's pending
     items at its ``prices`` (``memo``, by instance number), and each method
@@ -43,7 +43,7 @@ class Evaluation:
     costs: dict[int, tuple[float, ...]]
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Least:
     """The cheapest derivations of ground instances at one node's prices:
     from scratch (:meth:`full`, :meth:`record`) or from another node's

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Numbering:
     """Numbers 0, 1, 2, ... for values, in the order they are first asked for."""
 

@@ -37,7 +37,7 @@ SUFFIXES = 4
 its suffix below the body was summed for the parent)."""
 
 
-@dataclass(slots=True)
+@dataclass(eq=False, repr=False, slots=True)
 class Kept:
     """What is kept for one stack of pending items: their summed counts
     (None: the bound is off), and the last node with them evaluated
@@ -94,7 +94,7 @@ class Kept:
         return {**self._touched, **lowered} if lowered else self._touched
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Occurrences:
     """The counts of one task's ground instances and of the stacks of pending
     items met, over one graph."""

@@ -60,7 +60,7 @@ from cfgplan.planner.split import Split, split_at
 from cfgplan.planner.task import Ground
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Partition:
     """The partitioned bound for one task; :meth:`estimate` on each node."""
 

@@ -20,14 +20,12 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from functools import partial
+from typing import TYPE_CHECKING
 
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.bound import Bound
-from cfgplan.planner.combine import Combined
 from cfgplan.planner.components import Parts, divide, unroll
-from cfgplan.planner.dive import dive
-from cfgplan.planner.enumerate import Windows
 from cfgplan.planner.ground import Grounder
 from cfgplan.planner.grow import Grower, ReplayKey
 from cfgplan.planner.options import SearchOptions
@@ -40,6 +38,10 @@ from cfgplan.planner.report import Engine, Report, Stats, StopReason
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
+
+if TYPE_CHECKING:  # each loaded where it is used: most runs use none (start-up)
+    from cfgplan.planner.combine import Combined
+    from cfgplan.planner.enumerate import Windows
 
 
 @dataclass(eq=False)
@@ -177,6 +179,8 @@ def in_parts(
         return search
     if found is None:
         return search
+    from cfgplan.planner.combine import Combined
+
     distinct = search.grower.distinct
 
     def make(given: frozenset[int]) -> tuple[Grower, Pricer]:
@@ -193,7 +197,7 @@ def _order(entry: tuple[float, Partial]) -> tuple[float, tuple[int, ...]]:
     return entry[0], entry[1].path
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Run:
     """One planning run; iterate it for the configurations, best first."""
 
@@ -238,6 +242,8 @@ class Run:
             self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
+            from cfgplan.planner.enumerate import Windows
+
             bound = analysis(self.task, self.options.media).bound
             self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
         else:
@@ -389,6 +395,8 @@ class Run:
         (unless :attr:`SearchOptions.dive` is off)."""
         if not self.options.dive:
             return None
+        from cfgplan.planner.dive import dive
+
         grace = self.options.grace
         end = time.perf_counter() + grace if deadline is None else deadline + grace
         grower, pricer = self.strategy.grower, self.strategy.pricer

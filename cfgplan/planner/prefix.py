@@ -22,7 +22,7 @@ from cfgplan.planner import clock
 T = TypeVar("T")
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Prefix(Generic[T]):
     """Take the first :attr:`limit` of a search (None: all), looking ahead for one more."""
 

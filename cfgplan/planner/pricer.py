@@ -50,7 +50,7 @@ class Reprice(Enum):
     REFINED = "refined"  # only those the stronger bound priced
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Pricer:
     """The bounds of one search, which of them are in use, and why.
 

@@ -94,7 +94,7 @@ def wire_keys(
     return (opened, every), (every,), every
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Prices:
     """What each key costs at one node: its weight, shared (the rules:
     :mod:`cfgplan.planner.partition`)."""

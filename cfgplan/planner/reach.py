@@ -21,7 +21,7 @@ Reached = tuple[frozenset[str], frozenset[str], frozenset[str]]
 """The functionality names, the channels' data predicates, and the two together."""
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Reach:
     """What each signature of one task can reach, memoised."""
 

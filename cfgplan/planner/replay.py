@@ -64,7 +64,7 @@ from cfgplan.planner.task import Ground
 from cfgplan.planner.wiring import Port, Unwired, rewire, settle
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Replays:
     """The replay rules of one search: which instances may repeat, and how a
     node's memory follows its steps."""

@@ -47,7 +47,7 @@ Load = dict[int, float]
 pair's sum over its groups."""
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Room:
     """The media of one task, by robot pair: what they carry together and
     the largest of them (a channel is never split over two media)."""

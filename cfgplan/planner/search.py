@@ -50,7 +50,7 @@ from cfgplan.planner.task import Ground
 Progress = Callable[[Stats, float], None]
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class BestFirst:
     """An iterator over configurations, best first."""
 

@@ -89,7 +89,7 @@ Expansions = Callable[[Ground], Iterable[Body | DeadEnd]]
 """A method call's expansions, every version's in order (dead ends included)."""
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Placement:
     """The senders of one task's ground method instances, computed over the
     part of the graph of ground instances below each call first asked for."""

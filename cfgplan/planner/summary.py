@@ -95,7 +95,7 @@ Summarising = Generator[Ground, Summary, Summary]
 that summary, and returns its own."""
 
 
-@dataclass
+@dataclass(eq=False, repr=False)
 class Summaries:
     """The summaries of one task's ground instances, memoised."""
 

@@ -135,7 +135,7 @@ class MethodSchema(NamedTuple):
         return (self.name, len(self.params))
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Task:
     """Everything the search needs, indexed for lookup; never changed once built."""
 

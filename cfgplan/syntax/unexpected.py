@@ -166,7 +166,9 @@ def _unexpected_token(exc: UnexpectedToken, filename: str, text: str) -> Cfgplan
                 span,
                 f"{_MISSING}; the '(' at {stack[1]} is not closed before {tok}",
             )
-    message = f"unexpected '{tok}'; expected {_describe_expected(set(exc.expected))}"
+    written = text[tok.start_pos : tok.end_pos] if tok.start_pos is not None else str(tok)
+    # As written: the parser reads a curly quote as ' (reader.as_lexed).
+    message = f"unexpected '{written}'; expected {_describe_expected(set(exc.expected))}"
     hint: str | None = None
     empty = _EMPTY.search(text[: tok.start_pos or 0]) if tok.type == "RPAR" else None
     if empty is not None:  # (goal) or (sequence): balanced, but nothing in it

@@ -117,7 +117,10 @@ def test_what_a_command_loads_is_frozen_once() -> None:
         "app._load(['plan'])\nfirst = gc.get_freeze_count()\nx = [[] for _ in range(1000)]\n"
         "app._load(['check'])\nprint(json.dumps([first, gc.get_freeze_count()]))"
     )
-    assert again[0] == again[1]  # the second command line froze nothing more
+    # The second command line froze nothing more: freezing again would add the
+    # 1,000 lists at least. A frozen object may die (a command module's
+    # annotations, evaluated as it loads, go through typing's bounded caches).
+    assert again[1] <= again[0]
     off = _gc_after("gc.disable()\napp._load(['plan'])\nprint(json.dumps([gc.isenabled()]))")
     assert off == [False]
 

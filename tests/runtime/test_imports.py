@@ -125,3 +125,22 @@ def test_a_json_plan_loads_no_table_library(tmp_path: Path) -> None:
     unwanted = ("rich", "cfgplan.reconfigure")
     assert [m for m in loaded if any(m == u or m.startswith(u + ".") for u in unwanted)] == []
     assert "rich" in _loaded_by(args, tmp_path)  # the table
+
+
+@pytest.mark.slow
+def test_a_plan_printed_as_a_table_loads_what_it_uses_only(tmp_path: Path) -> None:
+    """The cheapest configurations of cross-door, as a table: none of the
+    strategies it does not run (parts apart, ``--all``'s windows, the dive
+    after a stopped search) nor the descriptions of the other formats."""
+    args = ["plan", "domains/cross-door/domain.lisp", "domains/cross-door/state-6.2.2-step1.lisp"]
+    loaded = _loaded_by(args, tmp_path)
+    assert "cfgplan.planner.search" in loaded and "rich" in loaded
+    unused = (
+        "cfgplan.planner.combine",
+        "cfgplan.planner.enumerate",
+        "cfgplan.planner.dive",
+        "cfgplan.configuration.describe",
+    )
+    assert [m for m in unused if m in loaded] == []
+    assert "cfgplan.planner.enumerate" in _loaded_by([*args, "--all"], tmp_path)
+    assert "cfgplan.configuration.describe" in _loaded_by([*args, "--format", "json"], tmp_path)

@@ -333,6 +333,16 @@ def test_typographic_quotes_read_as_plain_quotes() -> None:
     assert len(copied.methods) == 7 and len(copied.functionalities) == 9
 
 
+@pytest.mark.parametrize("quote", ["'", "’", "‘"])
+def test_an_unexpected_quote_is_named_as_written(quote: str) -> None:
+    """The parser reads a curly quote as ' (``reader.as_lexed``); the message
+    still names the character the file holds, at its place."""
+    text = f"(make-functionality :name '{quote}(camera ?r))"
+    d = reader_error(text)
+    assert d.message.startswith(f"unexpected '{quote}'; expected")
+    assert d.span is not None and (d.span.line, d.span.column, d.span.end_column) == (1, 28, 29)
+
+
 STEP1_SEXPR = """\
 (state (robot Pippi) (robot Emil) (door Door1) (camera Emil) (camera Pippi)
        (compass Pippi) (compass Emil) (in Pippi Room1) (in Emil Room1)

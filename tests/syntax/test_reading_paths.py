@@ -11,6 +11,10 @@ big domain faster, cfgplan/syntax/reader.py).
   read, and every error's message and place, are those of the grammar
   without it (every list read token by token), on every file and on files
   broken at random.
+- The curly quotes of text copied from the PDF are read as ``'`` before
+  parsing (``reader.as_lexed``): every file, and every file with curly
+  quotes put in at random, reads, or is refused with the same message at the
+  same place, as by the grammar that named them in its terminals itself.
 - The cycle collector is paused while a file is parsed, and restored.
 """
 
@@ -25,6 +29,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+from unittest import mock
 
 import pytest
 from hypothesis import given, settings
@@ -93,7 +98,7 @@ def _by_tree(text: str, filename: str) -> reader.SourceFile:
     transformer = ToIR()
     transformer.use(parser)
     transformer.begin(filename)
-    items = transformer.transform(parser.parse(reader.normalize(text))).children
+    items = transformer.transform(parser.parse(reader.as_lexed(reader.normalize(text)))).children
     assert transformer.failed == ()
     source = reader.SourceFile(filename, text)
     source.add(items)
@@ -253,6 +258,61 @@ def test_a_broken_file_fails_alike_with_one_line_lists_as_tokens(text: str) -> N
     same message at the same place, with ``ATOMS`` as without (in the runs
     before this test: 3,710 of 5,850 such files refused, none differently)."""
     assert _outcome(text, None) == _outcome(text, _token_by_token())
+
+
+def _naming_curly_quotes_grammar() -> str:
+    """The reader's grammar as it was before the reader read curly quotes as
+    ``'``: its quote and the classes of characters no token holds name
+    ``’`` and ``‘`` themselves."""
+    grammar = reader.grammar_text()
+    assert grammar.count("()',;") == 5 and grammar.count('QUOTE: "\'"') == 1
+    grammar = grammar.replace('QUOTE: "\'"', "QUOTE: /['’‘]/")
+    return grammar.replace("()',;", "()'’‘,;")
+
+
+@functools.cache
+def _naming_curly_quotes() -> tuple[Lark, ToIR]:
+    return reader.build_parser(None, _naming_curly_quotes_grammar())
+
+
+def _outcome_naming_curly_quotes(text: str) -> Any:
+    """What the reader gave before: the text parsed as it is (no
+    ``as_lexed``), by :func:`_naming_curly_quotes_grammar`."""
+    with mock.patch.object(reader, "as_lexed", lambda lexed: lexed):
+        return _outcome(text, _naming_curly_quotes())
+
+
+_CURLY = st.sampled_from(["’", "‘", "’(a b)", " ‘", "’ ", ";’", "\n‘"])
+
+
+@st.composite
+def _curly(draw: st.DrawFn) -> str:
+    """A bundled or generated file with some of its quotes made curly and a
+    few curly quotes put in anywhere (in a symbol, a keyword, a comment, a
+    number, between forms)."""
+    text = list(draw(st.sampled_from([t for _, t in TEXTS])))
+    for at in [i for i, char in enumerate(text) if char == "'"]:
+        text[at] = draw(st.sampled_from(["'", "’", "‘"]))
+    for _ in range(draw(st.integers(0, 3))):
+        text.insert(draw(st.integers(0, len(text))), draw(_CURLY))
+    return "".join(text)
+
+
+@pytest.mark.parametrize(("name", "text"), TEXTS, ids=[n for n, _ in TEXTS])
+def test_curly_quotes_read_as_by_the_grammar_naming_them(name: str, text: str) -> None:
+    """Every file, its quotes made curly, reads as by the grammar that named them."""
+    curly = text.replace("'", "’")
+    assert curly != text or "'" not in text
+    assert _outcome(curly, None) == _outcome_naming_curly_quotes(curly)
+
+
+@pytest.mark.quick(37)
+@settings(max_examples=1000, deadline=None, derandomize=True, database=None)
+@given(_curly())
+def test_curly_quotes_anywhere_fail_alike_as_by_the_grammar_naming_them(text: str) -> None:
+    """With curly quotes anywhere the reader reads, or refuses the file with
+    the same message at the same place, as the grammar naming them did."""
+    assert _outcome(text, None) == _outcome_naming_curly_quotes(text)
 
 
 def _spans(value: Any) -> Iterator[tuple[BaseModel, Span]]:
