@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import shlex
 import statistics
 import sys
@@ -193,38 +194,74 @@ Made with `{shown}`; run it again to regenerate this page.
 BEYOND = """\
 ## Beyond one helper and one link
 
+The rows above are two robots, peers on one link. Two more benchmarks go
+further, each with a page of its own; their last runs' tables are below as
+those pages have them, each with the facts of its run (machine, date,
+revision, load, trials).
+
+### Loss on one link, a healthy robot beside it
+
 **Loss on one link can cost a robot on a healthy one, behind a router as
 in a mesh.** The [link-loss page](link-loss.md)
 (`python -m benchmarks.link_loss`) puts a third robot beside the
-coordinator on a healthy link and drops half of the packets on the
-helper's link for 30 s. In a mesh the coordinator lost the robot on the
-healthy link in some trials, and its goal stood still until Emil's link
-healed or seconds later; with launch's default topology, every robot a
-client of one router, it still happens, about as often. Zenoh's debug log
-of the router (`RUST_LOG=zenoh=debug`) shows how: while the lossy client
-reconnects again and again, the router stops reading the two healthy
-clients' links for longer than the lease (`RX task failed ... expired
-after` the lease, for both within half a second) and drops them, and they
-see each other lost; they are back as soon as they connect again. The
-likely cause is Zenoh's routing, not cfgplan's: declarations (liveliness
-tokens, subscribers, interests) go to every client with congestion
-control *block*, and a push to a client whose TCP window the loss has
-closed waits for room in that client's queue (two batches per priority,
-up to `wait_before_close`, 5 s) on the task that reads the healthy link
-it came from, so that link's keep-alives go unread. In a mesh each peer
-routes for itself, and the coordinator's own session stalls the same way
-on its link to the lossy peer. A router does not remove this; bigger
-queues and a shorter `wait_before_close` (each settable with
-`--zenoh-config`, for the robots and for `cfgplan router`) did not remove
-it either in the trials run so far. What would: a robot on a bad link
-behind a router of its own, so that the stall is the routers' link's, or
-Zenoh routing declarations without blocking the link they arrived on.
+coordinator on a healthy link and drops packets on the helper's link.
+Zenoh's debug log of the router (`RUST_LOG=zenoh=debug`) shows how the
+healthy robot can be lost: while the lossy client reconnects again and
+again, the router stops reading the healthy clients' links for longer than
+the lease (`RX task failed ... expired after` the lease) and drops them,
+and they see each other lost; they are back as soon as they connect again.
+The likely cause is Zenoh's routing, not cfgplan's: declarations
+(liveliness tokens, subscribers, interests) go to every client with
+congestion control *block*, and a push to a client whose TCP window the
+loss has closed waits for room in that client's queue (up to Zenoh's
+`wait_before_close`) on the task that reads the healthy link it came from,
+so that link's keep-alives go unread. In a mesh each peer routes for
+itself, and the coordinator's own session stalls the same way on its link
+to the lossy peer. A router does not remove this; bigger queues and a
+shorter `wait_before_close` (each settable with `--zenoh-config`, for the
+robots and for `cfgplan router`) did not remove it either in the trials
+run so far. What would: a robot on a bad link behind a router of its own,
+so that the stall is the routers' link's, or Zenoh routing declarations
+without blocking the link they arrived on.
 
-**The society at scale.** The [scale page](scale.md)
-(`python -m benchmarks.scale`) launches societies of 2 to 50 robots, with
-the router and in a mesh, and kills the helper in use: the connections,
-idle traffic, memory, start-up and switch at each size.
+{link_loss}
+
+### The society at scale, with and without its keys
+
+The [scale page](scale.md) (`python -m benchmarks.scale`) launches
+societies of 2 to 50 robots, through launch's router, with the society's
+keys through its secured router, and in a mesh, and kills the helper in
+use: the connections, idle traffic, memory, start-up and switch at each
+size. What the society does when its router freezes or dies, with keys and
+without, is tested (`tests/security/test_secured_router.py`,
+`tests/cli/test_launch.py`), not measured here.
+
+{scale}
 """
+
+LINK_LOSS_PAGE = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "link-loss.md"
+SCALE_PAGE = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "scale.md"
+
+
+def last_run(path: Path, tables: int) -> str:
+    """The facts of the last run a benchmark's page shows and its first
+    ``tables`` tables, as the page has them (its figures are that run's)."""
+    if not path.exists():
+        return f"({path.name} has no run yet)"
+    text = path.read_text(encoding="utf-8")
+    if "## The last run\n" not in text:
+        raise SystemExit(f"{path}: not a page a benchmark wrote")
+    blocks = [b.strip("\n") for b in text.split("## The last run\n", 1)[1].split("\n\n")]
+    facts = next(b for b in blocks if b.startswith("- machine:"))
+    found = [b.strip() for b in blocks if b.startswith("|")][:tables]
+    made = re.search(r"^Made with `(.*?)`", text, re.M)
+    said = f"From [{path.name}]({path.name}), made with `{made[1]}`:" if made else ""
+    return "\n\n".join([said, facts, *found]).strip()
+
+
+def beyond() -> str:
+    """The section on the other fault benchmarks, with their pages' last runs."""
+    return BEYOND.format(link_loss=last_run(LINK_LOSS_PAGE, 1), scale=last_run(SCALE_PAGE, 2))
 
 
 def page(
@@ -240,9 +277,21 @@ def page(
         facts="\n".join(facts),
         table="\n".join(lines),
         evidence=over,
-        beyond=BEYOND,
+        beyond=beyond(),
         shown=shown,
     )
+
+
+def rewrite(path: Path) -> None:
+    """Write the page at ``path`` again: its own run (facts, table, the trials
+    over the limit) kept as it is, the other benchmarks' last runs taken again
+    from their pages (nothing is measured)."""
+    text = path.read_text(encoding="utf-8")
+    before, sep, rest = text.partition("## Beyond one helper and one link")
+    made = rest.find("\nMade with `python -m benchmarks.faults")
+    if not sep or made < 0:
+        raise SystemExit(f"{path}: not a page benchmarks.faults wrote")
+    path.write_text(before + beyond() + rest[made:], encoding="utf-8")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -262,7 +311,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--markdown", type=Path, help="also write the documentation page here")
     parser.add_argument("--keep", type=Path, help="keep every trial's traces and logs here")
     parser.add_argument("--verbose", action="store_true", help="each trial's figures on stderr")
+    parser.add_argument(
+        "--rewrite",
+        type=Path,
+        metavar="PAGE",
+        help="write PAGE again: its run kept, the link-loss and scale pages' last runs taken again",
+    )
     args = parser.parse_args(argv)
+    if args.rewrite:
+        rewrite(args.rewrite)
+        print(f"wrote {args.rewrite}")
+        return 0
     seconds = args.loss_seconds
     if seconds is None:
         seconds = 5.0 if args.quick else 30.0

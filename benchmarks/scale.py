@@ -138,12 +138,20 @@ def connections(pids: list[int]) -> int:
     return ends // 2
 
 
-def segments() -> int:
-    """TCP segments this machine has sent (/proc/net/snmp)."""
-    rows = [
-        r.split() for r in Path("/proc/net/snmp").read_text().splitlines() if r.startswith("Tcp:")
-    ]
-    return int(rows[1][rows[0].index("OutSegs")])
+def segments(pids: set[int]) -> int:
+    """TCP segments the sockets of these processes have sent (``ss``'s
+    ``segs_out``): the society's own traffic, whatever else the machine sends."""
+    out = subprocess.run(
+        ["ss", "-tinpH"], capture_output=True, text=True, timeout=30, check=True
+    ).stdout
+    total, ours = 0, False
+    for line in out.splitlines():
+        if not line[:1].isspace():  # a socket's line: whose it is
+            ours = any(int(pid) in pids for pid in re.findall(r"pid=(\d+)", line))
+        elif ours:  # its TCP details
+            sent = re.search(r"\bsegs_out:(\d+)", line)
+            total += int(sent[1]) if sent else 0
+    return total
 
 
 def quiet(options: Options) -> tuple[float, float]:
@@ -301,9 +309,9 @@ def measure(n: int, topology: str, options: Options) -> Row:
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=ROOT,
             start_new_session=True,
         )  # fmt: skip
-        society = Society(process, folder)
-        threading.Thread(target=society.read, daemon=True).start()
-        try:
+        try:  # the launch's whole session is stopped below, whatever happens
+            society = Society(process, folder)
+            threading.Thread(target=society.read, daemon=True).start()
             everyone = lambda: all(society.begun(r) for r in robots) and time.time()  # noqa: E731
             up = _until(everyone, options.limit)
             row.up = float(up) - began if up else None  # type: ignore[arg-type]
@@ -335,11 +343,12 @@ def measure(n: int, topology: str, options: Options) -> Row:
 def _idle(society: Society, row: Row, options: Options) -> None:
     """The idle window: CPU of the society, TCP segments, Vacu's messages."""
     received = sum(1 for r in society.trace("Vacu") if r.get("event") == "receive")
-    cpu, sent, t0 = society.cpu(), segments(), time.monotonic()
+    pids = set(society.pids().values())
+    cpu, sent, t0 = society.cpu(), segments(pids), time.monotonic()
     time.sleep(options.idle)
     span = time.monotonic() - t0
     row.idle_cpu = (society.cpu() - cpu) / span
-    row.idle_segments = (segments() - sent) / span
+    row.idle_segments = (segments(pids) - sent) / span
     now = sum(1 for r in society.trace("Vacu") if r.get("event") == "receive")
     row.goal_messages = (now - received) / span
 
@@ -524,7 +533,8 @@ Columns: the established TCP connections of the whole society (each counted
 once); *all up*, every robot's trace begun, and *goal data*, Vacu's `dock`
 running on a pose, after the launch started; over an idle window of
 {idle:g} s, the CPU of every process of the society (100 % is one core),
-the TCP segments the machine sent per second and the messages Vacu's goal
+the TCP segments the society's own sockets sent per second (`ss`'s
+`segs_out`) and the messages Vacu's goal
 received per second; the RSS of a robot process (the median) and of them
 all with the router. Then the helper in use is killed (SIGKILL) {kills}
 times in a row, each once the one killed before is back (launch's

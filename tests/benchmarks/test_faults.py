@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -176,6 +177,30 @@ def test_the_committed_page_was_written_by_the_benchmark() -> None:
     for condition in CONDITIONS:
         assert f"| {condition.name} |" in text, condition.name
     assert "- link: " in text and "Made with `python -m benchmarks.faults" in text
+
+
+def test_the_committed_page_shows_the_link_loss_and_scale_pages_last_runs() -> None:
+    """Beside its own run, the faults page shows the last runs of the
+    link-loss and scale benchmarks as their pages have them (facts and
+    tables): a page written again after either (``--rewrite``) keeps its own
+    run and takes theirs."""
+    from benchmarks.faults import LINK_LOSS_PAGE, SCALE_PAGE, last_run
+
+    text = (ROOT / "docs" / "explanation" / "faults.md").read_text(encoding="utf-8")
+    for shown in (last_run(LINK_LOSS_PAGE, 1), last_run(SCALE_PAGE, 2)):
+        assert "- revision: " in shown and "\n| " in shown
+        assert shown in text
+
+
+def test_a_page_written_again_keeps_its_run_and_takes_the_others_anew(tmp_path: Path) -> None:
+    from benchmarks.faults import beyond, rewrite
+
+    page = tmp_path / "faults.md"
+    ours = "<!-- x -->\n# Faults\n\n## The last run\n\n- machine: m\n\n| a |\n|---|\n| 1 |\n\n"
+    made = "\nMade with `python -m benchmarks.faults --trials 3`; run it again to regenerate it.\n"
+    page.write_text(ours + "## Beyond one helper and one link\n\nold tables\n" + made)
+    rewrite(page)
+    assert page.read_text() == ours + beyond() + made
 
 
 def test_a_row_misses_the_limit_on_one_late_trial_a_stop_or_a_light_switch() -> None:

@@ -22,6 +22,7 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -220,7 +221,7 @@ FLOOD = 8.0  # seconds
 @pytest.mark.slow
 @pytest.mark.parametrize("topology", TOPOLOGIES)
 def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_trace(
-    tmp_path: Path, topology: str
+    tmp_path: Path, topology: str, record_property: Callable[[str, object], None]
 ) -> None:
     """With Pippi's key, a session floods her key to the coordinator with
     unreadable messages and with well-formed reports (as fast as it can put,
@@ -228,7 +229,8 @@ def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_tr
     its 20 cycles a second), nothing is taken for a failure, the drops are
     recorded per kind at most once a second (not one event per message), and
     the trace stays small (before: 0.7 cycles a second, Pippi's outputs
-    taken for a silent link, an error event per message)."""
+    taken for a silent link, an error event per message). What it saw is
+    recorded for the threat model's page (``python -m benchmarks.threats``)."""
     with processes() as running:
         society = Society(running, tmp_path, router=topology == "router")
         with society.attacker() as flooder:
@@ -253,6 +255,10 @@ def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_tr
     assert len(errors) <= 3 * (FLOOD + 2), f"{len(errors)} error events in {FLOOD} s"
     assert not [r for r in during if r["event"] in ("failure", "switch", "no-configuration")]
     dropped = [r for r in errors if "dropped" in str(r["message"])]
+    record_property("messages a second sent", round(sent / FLOOD))
+    record_property("coordinator's cycles a second (of 20)", round(len(cycles) / FLOOD, 1))
+    record_property("error events", len(errors))
+    record_property("trace kB", round(society.trace.stat().st_size / 1000))
     assert dropped, "the flood's drops were never said"
     assert society.trace.stat().st_size < 2_000_000
 
@@ -260,7 +266,7 @@ def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_tr
 @pytest.mark.slow
 @pytest.mark.parametrize("topology", TOPOLOGIES)
 def test_a_name_held_alive_by_a_session_does_not_hide_its_robots_death(
-    tmp_path: Path, topology: str
+    tmp_path: Path, topology: str, record_property: Callable[[str, object], None]
 ) -> None:
     """With Pippi's key, a session declares her liveliness token (Zenoh shows
     two tokens of one key as one), then her process is killed. Emil sees
@@ -287,6 +293,7 @@ def test_a_name_held_alive_by_a_session_does_not_hide_its_robots_death(
 
             found = wait_for("Pippi lost", lost, LIMIT)
             token.undeclare()
+    record_property("kill to loss, s", round(float(found["t"]) - killed, 2))  # type: ignore[arg-type]
     assert float(found["t"]) - killed < 3.0, found  # type: ignore[arg-type]
     said = (tmp_path / "emil.log").read_text()
     assert "its name is still alive" in said
