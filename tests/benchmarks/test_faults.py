@@ -193,14 +193,24 @@ def test_the_committed_page_shows_the_link_loss_and_scale_pages_last_runs() -> N
 
 
 def test_a_page_written_again_keeps_its_run_and_takes_the_others_anew(tmp_path: Path) -> None:
-    from benchmarks.faults import beyond, rewrite
+    """``--rewrite PAGE``: the page of a run, written again, is that page byte
+    for byte (its facts, table and the trials over the limit kept; the other
+    pages' last runs taken as they are)."""
+    from benchmarks.fault_conditions import Options
+    from benchmarks.faults import page, rewrite
 
-    page = tmp_path / "faults.md"
-    ours = "<!-- x -->\n# Faults\n\n## The last run\n\n- machine: m\n\n| a |\n|---|\n| 1 |\n\n"
-    made = "\nMade with `python -m benchmarks.faults --trials 3`; run it again to regenerate it.\n"
-    page.write_text(ours + "## Beyond one helper and one link\n\nold tables\n" + made)
-    rewrite(page)
-    assert page.read_text() == ours + beyond() + made
+    facts = ["- machine: m", "- revision: `abc`"]
+    lines = ["| a | b |", "|---|---|", "| 1 | 2 |"]
+    evidence = [
+        "- 50 % loss, trial 3:\n    +3.54s robot-lost other=Pippi",
+        "- cut, trial 1:\n    +1s x",
+    ]
+    command = ["--trials", "3", "--markdown", "faults.md"]
+    written = page(Options(), lines, facts, evidence, command)
+    path = tmp_path / "faults.md"
+    path.write_text(written.replace("## Beyond one helper", "## Old words\n\n## Beyond one helper"))
+    rewrite(path)
+    assert path.read_text() == written
 
 
 def test_a_row_misses_the_limit_on_one_late_trial_a_stop_or_a_light_switch() -> None:
