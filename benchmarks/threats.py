@@ -235,8 +235,9 @@ THREATS: tuple[Threat, ...] = (
     Threat(
         "With a robot's key, a raw session that declares no process token",
         "",
-        limits="not refused as a second process: it may say only what that robot may say "
-        "(the rows above), and cannot hide the robot's death (its process token)",
+        limits="it is not taken for a second process of the robot; it may say only what "
+        "that robot may say (the rows above), and cannot hide the robot's death (its "
+        "process token)",
     ),
     Threat(
         "A second coordinator of the society's goal",
