@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import shlex
 import statistics
 import sys
@@ -47,7 +48,8 @@ processes: cross-door step 2 (6.2.2; Emil owns the goal and coordinates,
 Pippi helps, every configuration needs her) and docking with Vacu's laser
 failed (Vacu docks and coordinates, Robby's laser localizes him; the ceiling
 camera CamKitchen once left out of the state, once declared but its process
-not started), one `cfgplan run --robot` process per robot over Zenoh, at 20
+not started), one `cfgplan run --robot` process per robot over Zenoh, as
+peers (the helper connects to the coordinator) without the society's keys, at 20
 cycles per second, lease {lease:g} s, hold {hold:g} s. The coordinator runs in one network
 namespace and the helper in another; a forwarder in the benchmark's process
 moves every IP packet between their TUN devices, dropping a seeded share and
@@ -193,8 +195,14 @@ Made with `{shown}`; run it again to regenerate this page.
 BEYOND = """\
 ## Beyond one helper and one link
 
-**Loss on one link, a healthy robot beside it.** The [link-loss
-page](link-loss.md) (`python -m benchmarks.link_loss`) puts a third robot
+The rows above are two robots, peers on one link. Two more benchmarks go
+further, each with a page of its own; their last runs' tables are below as
+those pages have them, each with the facts of its run (machine, date,
+revision, load, trials).
+
+### Loss on one link, a healthy robot beside it
+
+The [link-loss page](link-loss.md) (`python -m benchmarks.link_loss`) puts a third robot
 beside the coordinator on a healthy link and drops half of the packets on
 the helper's link for 30 s, with the code before and after side by side.
 Zenoh sends declarations with congestion control *block*, and a send to a
@@ -212,11 +220,44 @@ losses it sees while the cut lasts and two leases more, and records no
 failure of a robot that comes back (a slow test freezes the router 3 s);
 its goal cannot be served while the router routes nothing.
 
-**The society at scale.** The [scale page](scale.md)
-(`python -m benchmarks.scale`) launches societies of 2 to 50 robots, with
-the router and in a mesh, and kills the helper in use: the connections,
-idle traffic, memory, start-up and switch at each size.
+{link_loss}
+
+### The society at scale, with and without its keys
+
+The [scale page](scale.md) (`python -m benchmarks.scale`) launches
+societies of 2 to 50 robots, through launch's router, with the society's
+keys through its secured router, and in a mesh, and kills the helper in
+use: the connections, idle traffic, memory, start-up and switch at each
+size. What the society does when its router freezes or dies, with keys and
+without, is tested (`tests/security/test_secured_router.py`,
+`tests/cli/test_launch.py`), not measured here.
+
+{scale}
 """
+
+LINK_LOSS_PAGE = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "link-loss.md"
+SCALE_PAGE = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "scale.md"
+
+
+def last_run(path: Path, tables: int) -> str:
+    """The facts of the last run a benchmark's page shows and its first
+    ``tables`` tables, as the page has them (its figures are that run's)."""
+    if not path.exists():
+        return f"({path.name} has no run yet)"
+    text = path.read_text(encoding="utf-8")
+    if "## The last run\n" not in text:
+        raise SystemExit(f"{path}: not a page a benchmark wrote")
+    blocks = [b.strip("\n") for b in text.split("## The last run\n", 1)[1].split("\n\n")]
+    facts = next(b for b in blocks if b.startswith("- machine:"))
+    found = [b.strip() for b in blocks if b.startswith("|")][:tables]
+    made = re.search(r"^Made with `(.*?)`", text, re.M)
+    said = f"From [{path.name}]({path.name}), made with `{made[1]}`:" if made else ""
+    return "\n\n".join([said, facts, *found]).strip()
+
+
+def beyond() -> str:
+    """The section on the other fault benchmarks, with their pages' last runs."""
+    return BEYOND.format(link_loss=last_run(LINK_LOSS_PAGE, 1), scale=last_run(SCALE_PAGE, 2))
 
 
 def page(
@@ -232,35 +273,76 @@ def page(
         facts="\n".join(facts),
         table="\n".join(lines),
         evidence=over,
-        beyond=BEYOND,
+        beyond=beyond(),
         shown=shown,
     )
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+def rewrite(path: Path) -> None:
+    """Write the page at ``path`` again in this module's words: its own run
+    (facts, table, the trials over the limit) kept as it is, the other
+    benchmarks' last runs taken again from their pages (nothing is measured)."""
+    text = path.read_text(encoding="utf-8")
+    made = re.search(r"^Made with `python -m benchmarks\.faults ?(.*?)`; run it again", text, re.M)
+    if made is None or "## The last run\n" not in text:
+        raise SystemExit(f"{path}: not a page benchmarks.faults wrote")
+    run = text.split("## The last run\n", 1)[1].split("## Beyond one helper and one link", 1)[0]
+    blocks = [b.strip("\n") for b in run.split("\n\n") if b.strip()]
+    facts = next(b for b in blocks if b.startswith("- machine:")).splitlines()
+    lines = next(b for b in blocks if b.startswith("|")).splitlines()
+    over = run.split("```text\n", 1)[1].split("\n```", 1)[0] if "```text\n" in run else ""
+    command = shlex.split(made[1])
+    options = options_of(parser().parse_args(command))
+    path.write_text(page(options, lines, facts, [over] if over else [], command), encoding="utf-8")
+
+
+def parser() -> argparse.ArgumentParser:
+    """The command line of ``python -m benchmarks.faults``."""
+    out = argparse.ArgumentParser(
         prog="python -m benchmarks.faults", description=__doc__.splitlines()[0] if __doc__ else ""
     )
-    parser.add_argument("--trials", type=int, default=3, help="trials per condition (3)")
-    parser.add_argument(
+    out.add_argument("--trials", type=int, default=3, help="trials per condition (3)")
+    out.add_argument(
         "--loss-seconds", type=float, help="a loss or delay row lasts (30; --quick: 5)"
     )
-    parser.add_argument("--quick", action="store_true", help="1 trial, loss rows of 5 s")
-    parser.add_argument(
-        "--only", action="append", default=[], help="conditions whose name has this"
+    out.add_argument("--quick", action="store_true", help="1 trial, loss rows of 5 s")
+    out.add_argument("--only", action="append", default=[], help="conditions whose name has this")
+    out.add_argument("--link", choices=["auto", "netns", "proxy"], default="auto")
+    out.add_argument("--seed", type=int, default=33, help="the link's dropped packets (33)")
+    out.add_argument("--markdown", type=Path, help="also write the documentation page here")
+    out.add_argument("--keep", type=Path, help="keep every trial's traces and logs here")
+    out.add_argument("--verbose", action="store_true", help="each trial's figures on stderr")
+    out.add_argument(
+        "--rewrite",
+        type=Path,
+        metavar="PAGE",
+        help="write PAGE again in this module's words: its run kept, the link-loss and scale "
+        "pages' last runs taken again (nothing is measured)",
     )
-    parser.add_argument("--link", choices=["auto", "netns", "proxy"], default="auto")
-    parser.add_argument("--seed", type=int, default=33, help="the link's dropped packets (33)")
-    parser.add_argument("--markdown", type=Path, help="also write the documentation page here")
-    parser.add_argument("--keep", type=Path, help="keep every trial's traces and logs here")
-    parser.add_argument("--verbose", action="store_true", help="each trial's figures on stderr")
-    args = parser.parse_args(argv)
+    return out
+
+
+def options_of(args: argparse.Namespace) -> Options:
+    """The options of a command line (:class:`ValueError` when they make no run)."""
     seconds = args.loss_seconds
     if seconds is None:
         seconds = 5.0 if args.quick else 30.0
     if args.trials < 1 or seconds <= 0:
-        parser.error("--trials must be 1 or more and --loss-seconds above 0")
-    options = Options(trials=1 if args.quick else args.trials, loss_seconds=seconds, seed=args.seed)
+        raise ValueError("--trials must be 1 or more and --loss-seconds above 0")
+    return Options(trials=1 if args.quick else args.trials, loss_seconds=seconds, seed=args.seed)
+
+
+def main(argv: list[str] | None = None) -> int:
+    command = parser()
+    args = command.parse_args(argv)
+    if args.rewrite:
+        rewrite(args.rewrite)
+        print(f"wrote {args.rewrite}")
+        return 0
+    try:
+        options = options_of(args)
+    except ValueError as error:
+        command.error(str(error))
     conditions = [c for c in CONDITIONS if not args.only or any(o in c.name for o in args.only)]
     if not conditions:
         print(f"error: no condition matches {args.only}", file=sys.stderr)

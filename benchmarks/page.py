@@ -94,7 +94,8 @@ side over every family's sizes on the
 Planning is one side of a society's speed; the runtime is the other: the
 [scale page](scale.md) (`python -m benchmarks.scale`) launches societies of 2
 to 50 robots and measures their start-up, idle traffic, memory and the time
-to switch when the helper in use is killed, with the router and in a mesh.
+to switch when the helper in use is killed, with the router (also with the
+society's keys, through its secured router) and in a mesh.
 
 `--against REV` prints instead one table that puts cfgplan at git revision REV
 beside this one, each instance planned by both in turn. Where planning takes

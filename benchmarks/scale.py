@@ -8,6 +8,9 @@ one run on this machine:
 
 * *router* — launch's default: one Zenoh router (``cfgplan router``), every
   robot its client (``--router``);
+* *router + keys* — the same with the society's keys (``--keys``, for the
+  sizes of ``--keys-sizes``): the society's secured router, TLS with mutual
+  authentication, access control enforced by the router and by each robot;
 * *mesh* — ``--topology mesh``: every robot a peer linked to every other.
 
 What each row measures is said by :data:`INTRO`; ``--markdown FILE`` also
@@ -43,7 +46,8 @@ from benchmarks.run import machine
 
 ROOT = Path(__file__).resolve().parents[1]
 DOMAIN = ROOT / "domains" / "docking" / "domain.lisp"
-TOPOLOGIES = ("router", "mesh")
+KEYED = "router + keys"
+TOPOLOGIES = ("router", KEYED, "mesh")
 TICK = os.sysconf("SC_CLK_TCK")
 PAGE = os.sysconf("SC_PAGE_SIZE")
 BASE = 3
@@ -134,12 +138,20 @@ def connections(pids: list[int]) -> int:
     return ends // 2
 
 
-def segments() -> int:
-    """TCP segments this machine has sent (/proc/net/snmp)."""
-    rows = [
-        r.split() for r in Path("/proc/net/snmp").read_text().splitlines() if r.startswith("Tcp:")
-    ]
-    return int(rows[1][rows[0].index("OutSegs")])
+def segments(pids: set[int]) -> int:
+    """TCP segments the sockets of these processes have sent (``ss``'s
+    ``segs_out``): the society's own traffic, whatever else the machine sends."""
+    out = subprocess.run(
+        ["ss", "-tinpH"], capture_output=True, text=True, timeout=30, check=True
+    ).stdout
+    total, ours = 0, False
+    for line in out.splitlines():
+        if not line[:1].isspace():  # a socket's line: whose it is
+            ours = any(int(pid) in pids for pid in re.findall(r"pid=(\d+)", line))
+        elif ours:  # its TCP details
+            sent = re.search(r"\bsegs_out:(\d+)", line)
+            total += int(sent[1]) if sent else 0
+    return total
 
 
 def quiet(options: Options) -> tuple[float, float]:
@@ -268,26 +280,38 @@ class Row:
     others: float = 0.0  # cores the rest of the machine used during the row
 
 
+def keys_for(folder: Path, robots: list[str]) -> Path:
+    """The society's keys for ``robots`` (Vacu coordinates) and its router, in ``folder``."""
+    from cfgplan.security.keys import make_society, plan_society, write_society
+
+    plan = plan_society("scale", robots, (), robots[:1], ["router"])
+    write_society(folder, make_society(plan), force=False)
+    return folder
+
+
 def measure(n: int, topology: str, options: Options) -> Row:
-    """One row: ``n`` robots, ``topology``."""
+    """One row: ``n`` robots, ``topology`` (:data:`TOPOLOGIES`)."""
     row = Row(n, topology, load=(os.getloadavg()[0], 0.0))
+    robots = ["Vacu", *(f"H{k}" for k in range(1, n))]
     with tempfile.TemporaryDirectory(prefix="cfgplan-scale-") as name:
         folder = Path(name)
         state, impl = folder / "state.lisp", folder / "impl.py"
         state.write_text(state_text(n))
         impl.write_text(DOCKING_IMPL)
+        how = ["--topology", topology]
+        if topology == KEYED:
+            how = ["--topology", "router", "--keys", str(keys_for(folder / "keys", robots))]
         machine0, own0, began = busy(), _own(), time.time()
         process = subprocess.Popen(
             [sys.executable, "-m", "cfgplan", "launch", str(DOMAIN), str(state),
-             "--impl", str(impl), "--topology", topology,
+             "--impl", str(impl), *how,
              "--trace", str(folder / "run.jsonl"), "--rate", f"{options.rate:g}", "--respawn"],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=ROOT,
             start_new_session=True,
         )  # fmt: skip
-        society = Society(process, folder)
-        threading.Thread(target=society.read, daemon=True).start()
-        robots = ["Vacu", *(f"H{k}" for k in range(1, n))]
-        try:
+        try:  # the launch's whole session is stopped below, whatever happens
+            society = Society(process, folder)
+            threading.Thread(target=society.read, daemon=True).start()
             everyone = lambda: all(society.begun(r) for r in robots) and time.time()  # noqa: E731
             up = _until(everyone, options.limit)
             row.up = float(up) - began if up else None  # type: ignore[arg-type]
@@ -319,11 +343,12 @@ def measure(n: int, topology: str, options: Options) -> Row:
 def _idle(society: Society, row: Row, options: Options) -> None:
     """The idle window: CPU of the society, TCP segments, Vacu's messages."""
     received = sum(1 for r in society.trace("Vacu") if r.get("event") == "receive")
-    cpu, sent, t0 = society.cpu(), segments(), time.monotonic()
+    pids = set(society.pids().values())
+    cpu, sent, t0 = society.cpu(), segments(pids), time.monotonic()
     time.sleep(options.idle)
     span = time.monotonic() - t0
     row.idle_cpu = (society.cpu() - cpu) / span
-    row.idle_segments = (segments() - sent) / span
+    row.idle_segments = (segments(pids) - sent) / span
     now = sum(1 for r in society.trace("Vacu") if r.get("event") == "receive")
     row.goal_messages = (now - received) / span
 
@@ -497,15 +522,19 @@ and watches it from outside. The society is generated: Vacu, whose laser
 failed, must dock, and each of N−1 helpers H1, H2, … has a laser that can
 tell Vacu its pose, so any of them serves the goal (domains/docking). Each
 size runs in launch's default topology, *router* (one Zenoh router, every
-robot its client: one connection each), and the small sizes also in a
-*mesh* (`--topology mesh`: every robot a peer linked to every other), side
-by side in one run, at {rate:g} cycles per second.
+robot its client: one connection each); some sizes also as *router + keys*
+(`--keys`: the society's secured router, with its own certificate, every
+link TLS with mutual authentication, the society's access control enforced
+by the router on every robot and by every robot on the router), and the
+small sizes also in a *mesh* (`--topology mesh`: every robot a peer linked
+to every other), side by side in one run, at {rate:g} cycles per second.
 
 Columns: the established TCP connections of the whole society (each counted
 once); *all up*, every robot's trace begun, and *goal data*, Vacu's `dock`
 running on a pose, after the launch started; over an idle window of
 {idle:g} s, the CPU of every process of the society (100 % is one core),
-the TCP segments the machine sent per second and the messages Vacu's goal
+the TCP segments the society's own sockets sent per second (`ss`'s
+`segs_out`) and the messages Vacu's goal
 received per second; the RSS of a robot process (the median) and of them
 all with the router. Then the helper in use is killed (SIGKILL) {kills}
 times in a row, each once the one killed before is back (launch's
@@ -595,6 +624,7 @@ def findings(rows: list[Row]) -> str:
     """What the run shows against the goals, from its own figures."""
     routed = sorted((r for r in rows if r.topology == "router"), key=lambda r: r.n)
     meshed = sorted((r for r in rows if r.topology == "mesh"), key=lambda r: r.n)
+    keyed = sorted((r for r in rows if r.topology == KEYED), key=lambda r: r.n)
     out = []
     if routed:
         big = routed[-1]
@@ -627,7 +657,35 @@ def findings(rows: list[Row]) -> str:
             f"- **Memory**: a robot process holds {big.rss_robot / 2**20:.0f} MB "
             f"(RSS; {big.rss_total / 2**20:.0f} MB for all {big.n} and the router)."
         )
+    if keyed:
+        out.append(_keys_finding(keyed, routed))
     return "\n".join(out)
+
+
+def _keys_finding(keyed: list[Row], routed: list[Row]) -> str:
+    """What the society's keys cost behind the router, size by size."""
+    plain = {r.n: r for r in routed}
+    links = ", ".join(f"{r.connections} at {r.n}" for r in keyed)
+    parts = [f"- **With keys**, through the secured router: connections {links}"]
+    per = ", ".join(f"{r.idle_segments / r.n:.1f} at {r.n}" for r in keyed)
+    parts.append(f"; idle TCP segments a second per robot {per}")
+    pairs = [(r, plain[r.n]) for r in keyed if r.n in plain and r.switches and plain[r.n].switches]
+    if pairs:
+        said = ", ".join(
+            f"{statistics.median(k.switches) / statistics.median(o.switches):.1f}× at {k.n}"
+            for k, o in pairs
+        )
+        parts.append(f"; a switch took {said} the one without keys")
+    ups = [(r, plain[r.n]) for r in keyed if r.n in plain and r.up and plain[r.n].up]
+    if ups:
+        said = ", ".join(f"{k.up:.1f} s against {o.up:.1f} s at {k.n}" for k, o in ups)
+        parts.append(f"; all up after {said}")
+    big = keyed[-1]
+    base = next((r for r in keyed if r.n == BASE and r.switches), None)
+    if base is not None and big.switches and big is not base:
+        ratio = statistics.median(big.switches) / statistics.median(base.switches)
+        parts.append(f"; a switch among {big.n} {ratio:.1f}× the one among {BASE}")
+    return "".join(parts) + "."
 
 
 def page(shown: str, options: Options, facts: str, tables: list[str], found: str) -> str:
@@ -670,6 +728,11 @@ def parser() -> argparse.ArgumentParser:
         "--sizes", default="2,3,5,10,20,50", help="robots in the society (2,3,5,10,20,50)"
     )
     out.add_argument(
+        "--keys-sizes",
+        default="3,10,20,50",
+        help="sizes also run with the society's keys, through its secured router (3,10,20,50)",
+    )
+    out.add_argument(
         "--mesh-sizes",
         default="2,3,5,10",
         help="sizes also run as a mesh (2,3,5,10; a mesh of 50 takes minutes to start)",
@@ -700,6 +763,7 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     sizes = [int(s) for s in args.sizes.split(",")]
     meshes = {int(s) for s in args.mesh_sizes.split(",") if s}
+    keyed = {int(s) for s in args.keys_sizes.split(",") if s}
     options = options_of(args)
     if not args.no_compile:
         compileall.compile_dir(ROOT / "cfgplan", quiet=1)
@@ -707,7 +771,7 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[Row] = []
     for n in sizes:
         for topology in TOPOLOGIES:
-            if topology == "mesh" and n not in meshes:
+            if (topology == "mesh" and n not in meshes) or (topology == KEYED and n not in keyed):
                 continue
             best: Row | None = None
             for _ in range(1 + options.reruns):

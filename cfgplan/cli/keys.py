@@ -2,8 +2,9 @@
 ``cfgplan keys renew NAME -o DIR``: one member's key rotated (:mod:`cfgplan.security.renew`).
 
 One key and certificate per robot and device of a state (``--domain DOMAIN
---state STATE``) or per ``--robot NAME``, and per ``--operator NAME`` tool,
-signed by a new certificate authority of the society
+--state STATE``) or per ``--robot NAME``, per ``--operator NAME`` tool, and
+one for the society's router (``cfgplan router --keys``; ``--router NAME``
+names it), signed by a new certificate authority of the society
 (:mod:`cfgplan.security.keys`). ``--keys DIR`` on ``cfgplan run --robot`` and
 on the emitted robot programs then opens every session with TLS, mutual
 authentication and access control by certificate name
@@ -29,6 +30,7 @@ from cfgplan.cli.options import count_of, load_problem
 from cfgplan.cli.root import Command, Group
 from cfgplan.diagnostics import printable, run_error
 from cfgplan.runtime.errors import RunError
+from cfgplan.security.keys import ROUTER, Member
 
 keys_app = typer.Typer(
     name="keys",
@@ -71,6 +73,13 @@ def _state_members(domain: Path, state: Path) -> tuple[list[str], list[str]]:
     return agents, leading
 
 
+def _who(member: Member) -> str:
+    """A member as the output names it: ``robot Emil``, ``operator console``, ``the router``."""
+    if (member.kind, member.name) == ("router", ROUTER):
+        return "the router"
+    return f"{member.kind} {member.name}"
+
+
 @keys_app.command("new", cls=Command)
 def new(
     society: Annotated[
@@ -110,6 +119,16 @@ def new(
             "(repeatable).",
         ),
     ] = None,
+    router: Annotated[
+        str,
+        typer.Option(
+            "--router",
+            metavar="NAME",
+            help="The name of the society's router, whose key is made too (default "
+            f"{ROUTER}; cfgplan router --keys DIR uses it).",
+            show_default=False,
+        ),
+    ] = ROUTER,
     coordinators: Annotated[
         list[str] | None,
         typer.Option(
@@ -134,12 +153,14 @@ def new(
     ] = False,
 ) -> None:
     """Make a society's certificate authority and a key and certificate per robot, device
-    and operator tool, for --keys DIR on cfgplan run and the emitted robot programs.
+    and operator tool, and the society's router's, for --keys DIR on cfgplan run, the
+    emitted robot programs, cfgplan router and cfgplan launch.
 
     Writes DIR/ca.pem and DIR/ca.key (the authority: keep ca.key off the robots),
     per member NAME.pem and NAME.key (its name in lower case), and DIR/society.json
     (the members and what they may do). A robot's host needs society.json, ca.pem
-    and its own two files. Exit codes: 0 written, 1 invalid input, 2 usage.
+    and its own two files; so does the router's. Exit codes: 0 written, 1 invalid
+    input, 2 usage.
     """
     if (domain is None) != (state is None):
         usage_error("give --domain DOMAIN and --state STATE together", "--state")
@@ -158,8 +179,10 @@ def new(
         )
     from cfgplan.security.keys import make_society, plan_society, write_society
 
+    if not router:
+        usage_error("the router's name is empty", "--router")
     try:
-        plan = plan_society(str(society), names, list(operators or ()), leading)
+        plan = plan_society(str(society), names, list(operators or ()), leading, [router])
         written = write_society(output, make_society(plan, days), force)
     except RunError as exc:
         raise run_error(exc) from None
@@ -171,8 +194,9 @@ def new(
     }
     for m in plan.members:
         role = " (coordinator)" if m.coordinator else ""
-        what[f"{m.stem}.pem"] = f"{m.kind} {m.name}'s certificate, {m.common_name}{role}"
-        what[f"{m.stem}.key"] = f"{m.kind} {m.name}'s private key (to its host only)"
+        who = _who(m)
+        what[f"{m.stem}.pem"] = f"{who}'s certificate, {m.common_name}{role}"
+        what[f"{m.stem}.key"] = f"{who}'s private key (to its host only)"
     width = max(len(p.name) for p in written)
     lines = [f"society {plan.society}: keys for {len(members)} member(s) in {output}/ (0700)"]
     lines += [f"  {path.name:<{width}}  {what[path.name]}" for path in written]
@@ -183,7 +207,9 @@ def new(
 def renew(
     member: Annotated[
         str,
-        typer.Argument(metavar="NAME", help="The robot (or operator tool) whose key is replaced."),
+        typer.Argument(
+            metavar="NAME", help="The robot (or operator tool, or router) whose key is replaced."
+        ),
     ],
     output: Annotated[
         Path,
@@ -205,8 +231,9 @@ def renew(
         ),
     ] = DEFAULT_DAYS,
 ) -> None:
-    """Give one robot (or operator tool) a new key and certificate, signed by the society's
-    own authority, and make the old certificate useless where society.json is renewed.
+    """Give one robot (or operator tool, or the router) a new key and certificate, signed by
+    the society's own authority, and make the old certificate useless where society.json
+    is renewed.
 
     Replaces DIR/NAME.pem and DIR/NAME.key (NAME in lower case) and DIR/society.json,
     which now names the new certificate only (its common name ends in @2, @3, ...).
@@ -225,13 +252,12 @@ def renew(
     except RunError as exc:
         raise run_error(exc) from None
     what = {
-        f"{new.stem}.pem": f"{new.kind} {new.name}'s new certificate, {new.common_name} "
-        "(to its host)",
-        f"{new.stem}.key": f"{new.kind} {new.name}'s new private key (to its host only)",
+        f"{new.stem}.pem": f"{_who(new)}'s new certificate, {new.common_name} (to its host)",
+        f"{new.stem}.key": f"{_who(new)}'s new private key (to its host only)",
         "society.json": f"admits {new.common_name}, no longer {old.common_name} (to every host)",
     }
     width = max(len(p.name) for p in written)
-    lines = [f"{new.kind} {new.name}: key generation {new.generation} in {output}/"]
+    lines = [f"{_who(new)}: key generation {new.generation} in {output}/"]
     lines += [f"  {path.name:<{width}}  {what[path.name]}" for path in written]
     lines.append(
         f"the old certificate ({old.common_name}) can do nothing with a member that has the "

@@ -4,7 +4,8 @@ Every robot and device of the state (with ``--no-reconfigure``: of the
 configuration) runs its own ``cfgplan run --robot NAME`` process on this
 machine, scouting off: by default each a client of one Zenoh router that
 launch starts first (``--topology router``; ``--router`` names one that runs
-already), or, in a mesh (``--topology mesh``, the default with ``--keys`` or
+already; with ``--keys`` the society's secured router, with its own
+certificate), or, in a mesh (``--topology mesh``, the default with
 ``--connect``), each linked to every other, the coordinator (the goal's
 robot, 5.5) first, on free loopback ports. Their output is one stream, each
 line prefixed with its robot. The logic is :mod:`cfgplan.runtime.spawn`; this
@@ -263,9 +264,9 @@ def launch(
             metavar="router|mesh",
             parser=choice_of(TOPOLOGIES, "a topology"),
             help="router: every robot a client of one Zenoh router (one connection each; "
-            "started here, or the one --router names); mesh: every robot a peer linked to "
-            "every other (N·(N−1)/2 connections). Default: router, but mesh with --keys or "
-            "--connect (a router is not one of the society's keys).",
+            "started here, with --keys the society's own, or the one --router names); mesh: "
+            "every robot a peer linked to every other (N·(N−1)/2 connections). Default: "
+            "router, but mesh with --connect.",
             show_default=False,
         ),
     ] = None,
@@ -276,16 +277,19 @@ def launch(
             metavar="ENDPOINT",
             parser=parsed(endpoint),
             help="The robots are clients of the Zenoh router at ENDPOINT (cfgplan router, "
-            "zenohd, rmw_zenohd), which launch does not start.",
+            "zenohd, rmw_zenohd; with --keys, cfgplan router --keys), which launch does not "
+            "start.",
             show_default=False,
         ),
     ] = None,
     respawn: Annotated[bool, option(RESPAWN)] = RESPAWN.default,
 ) -> None:
     """Start a whole society on this machine: every robot its own cfgplan run --robot
-    process, each a client of one Zenoh router started first (or, with --topology mesh,
-    each linked to every other, the coordinator first), on loopback with scouting off;
-    each line of output prefixed with its robot.
+    process, each a client of one Zenoh router started first (with --keys DIR, the
+    society's router with its own certificate: TLS, mutual authentication, the society's
+    access control on every robot), or, with --topology mesh, each linked to every other,
+    the coordinator first; on loopback with scouting off; each line of output prefixed
+    with its robot.
 
     Give --impl IMPL and any other option of cfgplan run (cfgplan run --help) with
     launch's own: run's command reads them, and a mistake in one is a usage error
@@ -315,7 +319,7 @@ def launch(
     )
     if hosts and not print_commands:
         usage_error("names the hosts of --print-commands: give --print-commands", "--host")
-    mesh = _mesh(topology, router, run_opts["keys"], run_opts["connect"])
+    mesh = _mesh(topology, router, run_opts["connect"])
     addresses = dict(_parse_hosts(hosts or ()))
     problem = load_problem(
         domain, state, run_opts["goal"], run_opts["weights"], sequence=True, lasting=True
@@ -366,7 +370,15 @@ def launch(
                 extra[r] += [one.flag, trace_of(one.value, r)]
         else:
             common += one.words
-    via = None if mesh else Via(router, run_opts["lease"])
+    keys = next((g.value for g in line.given if g.flag == "--keys"), None)
+    via = None if mesh else Via(router, run_opts["lease"], keys)
+    if via is not None and via.given is None and keys is not None:
+        from cfgplan.security.zenoh_tls import router_of
+
+        try:  # its mistakes said before any robot starts
+            router_of(run_opts["keys"])
+        except RunError as exc:
+            raise run_error(exc) from None
     if print_commands:
         _print_commands(robots, lead, common, extra, addresses, port, via)
         return
@@ -377,34 +389,35 @@ def launch(
 @dataclass(frozen=True)
 class Via:
     """The robots are clients of a router: ``given``, one that runs already
-    (``--router``), or one launch starts (``None``), with the robots' lease."""
+    (``--router``), or one launch starts (``None``), with the robots' lease and,
+    as written, their ``--keys`` folder (the router's certificate is in it)."""
 
     given: str | None
     lease: float | None
+    keys: str | None = None
 
     def started(self, host: str, port: int, listen: str) -> RobotCommand | None:
-        """The router's command, when launch starts it (listening on ``listen``,
+        """The router's command, when launch starts it (listening on ``listen``:``port``,
         reached at ``host``:``port``)."""
-        return None if self.given is not None else router_command(host, port, listen, self.lease)
+        if self.given is not None:
+            return None
+        return router_command(host, port, self._at(listen, port), self.lease, self.keys)
 
     def endpoint(self, host: str, port: int) -> str:
         """What the robots connect to."""
-        return self.given if self.given is not None else endpoint_of(host, port)
+        return self.given if self.given is not None else self._at(host, port)
+
+    def _at(self, host: str, port: int) -> str:
+        """An endpoint of the router's: with keys, TLS."""
+        at = endpoint_of(host, port)
+        return at if self.keys is None else f"tls/{at.removeprefix('tcp/')}"
 
 
-def _mesh(
-    topology: str | None, router: str | None, keys: Path | None, connect: list[str] | None
-) -> bool:
+def _mesh(topology: str | None, router: str | None, connect: list[str] | None) -> bool:
     """Whether the robots are a mesh of peers (``--topology``, and its default)."""
     if router is not None and topology == "mesh":
         usage_error("names a router: not with --topology mesh", "--router")
     if topology == "router" or router is not None:
-        if keys is not None:
-            usage_error(
-                "cannot be combined with --keys: the society's keys name its robots, not a "
-                "router (use --topology mesh)",
-                "--router" if router is not None else "--topology",
-            )
         if connect:
             usage_error(
                 "cannot be combined with --connect: a client of a router reaches the others "
@@ -412,7 +425,7 @@ def _mesh(
                 "--router" if router is not None else "--topology",
             )
         return False
-    return topology == "mesh" or keys is not None or bool(connect)
+    return topology == "mesh" or bool(connect)
 
 
 def _parse_hosts(texts: list[str] | tuple[str, ...]) -> list[tuple[str, str]]:
@@ -447,7 +460,7 @@ def _print_commands(
                 "--host",
             )
         host, at = addresses.get(lead, ""), port or DEFAULT_PORT
-        router = via.started(host, at, endpoint_of("0.0.0.0", at))
+        router = via.started(host, at, "0.0.0.0")
         if router is not None:
             typer.echo(f"# the router on {host} (start it first)")
             typer.echo(router.shell())
@@ -478,7 +491,7 @@ def _launch(
     reach = None
     if via is not None:  # one port: the router's (--port), a free one else
         at = port if port is not None else free_port(host)
-        router = via.started(host, at, endpoint_of(host, at))
+        router = via.started(host, at, host)
         started += [router] if router is not None else []
         reach = via.endpoint(host, at)
     with tempfile.TemporaryDirectory(prefix="cfgplan-launch-") as folder:

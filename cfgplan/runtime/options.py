@@ -242,7 +242,8 @@ ROUTER: Option[list[str]] = Option(
     "Be a client of the Zenoh router at ENDPOINT (cfgplan router, zenohd or rmw_zenohd; "
     "repeatable: one of them), e.g. tcp/192.168.1.2:7447: the robot connects only there and "
     "listens nowhere, so the society's connections grow with its robots, not their square. "
-    "Not with --listen, --connect or --keys.",
+    "Not with --listen or --connect; with --keys, the society's router (cfgplan router "
+    "--keys), over TLS.",
     endpoint,
     repeat=True,
 )

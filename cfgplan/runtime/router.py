@@ -14,6 +14,19 @@ scouting off (nothing is found but the clients that connect). ``zenohd``,
 or ROS 2's ``rmw_zenohd``, serve the robots as well: ``--router`` names any
 of them.
 
+**With the society's keys** (``--keys DIR``, the router's own key and
+certificate that ``cfgplan keys new`` makes, :mod:`cfgplan.security.zenoh_tls`)
+the router listens on TLS only and asks every client for a certificate of the
+society's authority (mutual authentication: a client without one cannot open
+a session), and enforces the society's access control on every client, by
+the name its certificate carries: what a robot may put, declare and
+subscribe to, and what it may be sent, as the robots enforce among peers.
+So a robot that puts on another's keys, declares another's liveliness token
+or subscribes to others' channels is refused by the router itself; nothing
+of it reaches the others. The robots still hold the router to the same
+rules, mirrored, and check everything it forwards (a router is trusted with
+who sent what, not with what it says).
+
 What a router costs: one process every message crosses (one hop more on
 loopback: tens of microseconds) and that the society needs. A router that
 ends cuts every robot off from every other — each sees every other lost and,
@@ -46,7 +59,7 @@ from cfgplan.runtime.zenoh_config import (
     reason,
 )
 
-__all__ = ["DEFAULT_LISTEN", "RouterOptions", "router_config", "serve"]
+__all__ = ["DEFAULT_LISTEN", "RouterOptions", "listening", "router_config", "serve"]
 
 DEFAULT_LISTEN = "tcp/[::]:7447"
 """Where a router listens unless told: Zenoh's port on every interface, as ``zenohd``."""
@@ -62,6 +75,9 @@ class RouterOptions:
     the others see it lost), as a robot's ``--lease``."""
     config_file: str | None = None
     """A Zenoh configuration file under the options (``--zenoh-config``)."""
+    keys: str | None = None
+    """A folder of the society's keys with the router's (``--keys``): TLS, mutual
+    authentication and the society's access control on every client."""
 
     def __post_init__(self) -> None:
         if not self.listen:
@@ -81,7 +97,8 @@ def router_config(options: RouterOptions) -> Any:
     small share of the lease (:data:`~cfgplan.runtime.zenoh_config.STUCK_LINK`):
     the router sends a client declarations on the thread that reads the link
     they came on, and a client behind a lossy link would stall that link (a
-    healthy robot's) for up to Zenoh's 5 s, past its lease."""
+    healthy robot's) for up to Zenoh's 5 s, past its lease; with keys, last, its
+    certificate and the society's access control (every endpoint TLS)."""
     zenohs = load_zenoh().Config()
     config = zenohs if options.config_file is None else read_config(options.config_file)
     leaves_wait = config.get_json(WAIT_BEFORE_CLOSE) == zenohs.get_json(WAIT_BEFORE_CLOSE)
@@ -95,7 +112,22 @@ def router_config(options: RouterOptions) -> Any:
         put_setting(config, key, value, what)
     if leaves_wait:
         follow_lease(config)
+    if options.keys is not None:
+        from cfgplan.security.zenoh_tls import router_of, secure, society_of
+
+        me, society = router_of(options.keys), society_of(options.keys).society
+        secure(config, options.keys, me.name, society, put_setting)
     return config
+
+
+def listening(options: RouterOptions) -> list[str]:
+    """The endpoints the router listens on, as its configuration has them (with
+    keys: TLS)."""
+    if options.keys is None:
+        return list(options.listen)
+    from cfgplan.security.zenoh_tls import secure_endpoint
+
+    return [secure_endpoint(e) for e in options.listen]
 
 
 def serve(
@@ -120,7 +152,12 @@ def serve(
         for signum in (signal.SIGINT, signal.SIGTERM):
             previous[signum] = signal.signal(signum, handler)
     try:
-        say(f"router {session.info.zid()} listening on {_joined(options.listen)}")
+        said = f"router {session.info.zid()} listening on {_joined(listening(options))}"
+        if options.keys is not None:
+            from cfgplan.security.zenoh_tls import router_of
+
+            said += f" (keys of {router_of(options.keys).common_name})"
+        say(said)
         while not stop.wait(0.5):
             pass
         say("router stopped")

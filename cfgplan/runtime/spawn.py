@@ -178,12 +178,17 @@ def commands(
     return out
 
 
-def router_command(host: str, port: int, listen: str, lease: float | None) -> RobotCommand:
+def router_command(
+    host: str, port: int, listen: str, lease: float | None, keys: str | None = None
+) -> RobotCommand:
     """The society's router (``cfgplan router``), listening on ``listen``
-    (reached at ``host``:``port``), with the robots' ``lease`` if one is given."""
+    (reached at ``host``:``port``), with the robots' ``lease`` if one is given
+    and, with the society's ``keys``, secured (its certificate is among them)."""
     args = ["router", "--listen", listen]
     if lease is not None:
         args += ["--lease", f"{lease:g}"]
+    if keys is not None:
+        args += ["--keys", keys]
     return RobotCommand("router", tuple(args), host, port, router=True)
 
 

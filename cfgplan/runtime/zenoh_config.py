@@ -124,7 +124,8 @@ class ZenohOptions:
     """Routers the robot is a Zenoh *client* of (``--router``): it connects to
     one of them and listens nowhere, and everything it says and hears goes
     through that router (connections that grow with the society, not with its
-    square). Empty: a peer, linked to every robot it reaches."""
+    square). With :attr:`keys`, the society's router (``cfgplan router --keys``),
+    reached over TLS. Empty: a peer, linked to every robot it reaches."""
 
     def __post_init__(self) -> None:
         if not self.society:
@@ -143,13 +144,6 @@ class ZenohOptions:
             raise RunError(
                 f"--router and {given}: a client of a router reaches the others only through it",
                 hint="give the router alone, or --listen/--connect without it (a mesh of peers)",
-            )
-        if self.router and self.keys is not None:
-            raise RunError(
-                "--router with --keys: a society's keys name its robots, not a router (the "
-                "access control is per robot, and a router in between would hide who sent "
-                "what)",
-                hint="with --keys, connect the robots as peers (--listen/--connect)",
             )
         if self.lease is not None and not self.lease > 0:
             raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")

@@ -11,7 +11,9 @@ folder only its owner may enter (mode 0700), files only the owner may read
   :func:`cfgplan.safe_names.file_stems` makes it, ``Emil`` -> ``emil``): a
   certificate the CA signed, whose common name names the society and the
   member (:func:`common_name`), and its private key. A member is a robot or a
-  device of the state (a robot program) or an operator tool.
+  device of the state (a robot program), an operator tool, or the society's
+  Zenoh router (``cfgplan router --keys``), which the robots are clients of
+  and which holds each of them to what it may say.
 * ``society.json``: the society's name and, per member, its kind, common
   name, file stem, key generation and whether it may coordinate (send the
   switches of 5.5); no secret. :mod:`cfgplan.security.zenoh_tls` builds
@@ -26,7 +28,8 @@ the common names ``society.json`` lists, so wherever the new ``society.json``
 is, the old certificate still passes the TLS handshake (the CA signed it)
 but may do nothing at all: deny by default.
 
-A robot's host needs ``society.json``, ``ca.pem`` and its own two files.
+A robot's host needs ``society.json``, ``ca.pem`` and its own two files; so
+does the router's host.
 
 Keys are ECDSA on P-256, certificates X.509 v3 for TLS client and server
 alike (a Zenoh peer both listens and connects). Only :func:`make_society`
@@ -52,6 +55,7 @@ from cfgplan.safe_names import file_stems
 __all__ = [
     "CA_STEM",
     "MANIFEST",
+    "ROUTER",
     "Member",
     "SocietyKeys",
     "common_name",
@@ -68,28 +72,31 @@ FORMAT = "cfgplan-keys/1"
 MAX_COMMON_NAME = 64
 """X.509's upper bound on a common name (RFC 5280, ub-common-name)."""
 INSTALL_HINT = "pip install 'cfgplan[keys]' (or pip install cryptography)"
-KINDS = ("robot", "operator")
+KINDS = ("robot", "operator", "router")
+ROUTER = "router"
+"""The name of the router's key that ``cfgplan keys new`` makes unless told another."""
 
 
 def common_name(society: str, name: str, kind: str, generation: int = 1) -> str:
     """The certificate common name of a member: ``lab/Emil`` for robot Emil of
     society ``lab``, ``lab/operator/console`` for operator tool ``console``,
-    ``lab/Emil@2`` for Emil's second key (:mod:`cfgplan.security.renew`).
-    Each part is a key chunk (:func:`cfgplan.runtime.keys.chunk`), so a name
-    never contains a raw ``/`` nor ``@``, and a robot's name (two parts) never
-    reads as an operator's (three)."""
+    ``lab/router/router`` for the society's router ``router``, ``lab/Emil@2``
+    for Emil's second key (:mod:`cfgplan.security.renew`). Each part is a key
+    chunk (:func:`cfgplan.runtime.keys.chunk`), so a name never contains a raw
+    ``/`` nor ``@``, and a robot's name (two parts) never reads as an
+    operator's or a router's (three, the second saying which)."""
     again = f"@{generation}" if generation > 1 else ""
-    if kind == "operator":
-        return f"{chunk(society)}/operator/{chunk(name)}{again}"
+    if kind in ("operator", "router"):
+        return f"{chunk(society)}/{kind}/{chunk(name)}{again}"
     return f"{chunk(society)}/{chunk(name)}{again}"
 
 
 @dataclass(frozen=True)
 class Member:
-    """A robot (or device) program or an operator tool of the society."""
+    """A robot (or device) program, an operator tool or a router of the society."""
 
     name: str
-    kind: str  # "robot" or "operator"
+    kind: str  # "robot", "operator" or "router"
     stem: str  # its files: <stem>.pem and <stem>.key
     common_name: str
     coordinator: bool = False
@@ -107,9 +114,17 @@ class SocietyKeys:
     def member(self, name: str, kind: str = "robot") -> Member | None:
         return next((m for m in self.members if m.name == name and m.kind == kind), None)
 
+    def named(self, name: str) -> Member | None:
+        """The member ``name``: a robot, else an operator tool, else a router."""
+        return next((m for kind in KINDS if (m := self.member(name, kind)) is not None), None)
+
     @property
     def robots(self) -> tuple[Member, ...]:
         return tuple(m for m in self.members if m.kind == "robot")
+
+    @property
+    def routers(self) -> tuple[Member, ...]:
+        return tuple(m for m in self.members if m.kind == "router")
 
     def to_json(self) -> str:
         members = [
@@ -132,17 +147,23 @@ def plan_society(
     robots: Sequence[str],
     operators: Sequence[str] = (),
     coordinators: Iterable[str] = (),
+    routers: Sequence[str] = (),
 ) -> SocietyKeys:
-    """The members of a society's keys (nothing is made yet); :class:`RunError`
-    for names that cannot be given certificates."""
+    """The members of a society's keys (nothing is made yet): ``robots``,
+    ``operators`` (tools) and ``routers``; :class:`RunError` for names that
+    cannot be given certificates."""
     if not society:
         raise RunError("the society name is empty")
     if not robots:
         raise RunError("no robot to make keys for", hint="give --state or --robot NAME")
-    names = [*robots, *operators]
+    names = [*robots, *operators, *routers]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
-        raise RunError(f"named twice: {', '.join(twice)} (a robot and an operator need two names)")
+        raise RunError(
+            f"named twice: {', '.join(twice)} (robots, operator tools and routers need a name "
+            "each)",
+            hint="name the router otherwise: --router NAME" if set(twice) & set(routers) else None,
+        )
     leading = set(coordinators)
     strangers = sorted(leading - set(robots))
     if strangers:
@@ -150,7 +171,7 @@ def plan_society(
     stems = file_stems(names, reserved=[CA_STEM, "society"])
     members = []
     for name in names:
-        kind = "robot" if name in robots else "operator"
+        kind = "robot" if name in robots else "operator" if name in operators else "router"
         cn = common_name(society, name, kind)
         if len(cn) > MAX_COMMON_NAME:
             raise RunError(

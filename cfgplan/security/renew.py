@@ -69,11 +69,11 @@ def _authority(folder: Path) -> tuple[Any, Any]:
 
 
 def renew(folder: Path, name: str, days: int) -> tuple[Member, Member, dict[str, bytes]]:
-    """Member ``name`` (a robot, else an operator tool) of the keys in
+    """Member ``name`` (a robot, else an operator tool, else a router) of the keys in
     ``folder`` as it was and as it becomes, and the files to write: its new
     key and certificate, and ``society.json``."""
     keys = read_society(folder)
-    old = keys.member(name) or keys.member(name, "operator")
+    old = keys.named(name)
     if old is None:
         members = ", ".join(m.name for m in keys.members)
         raise RunError(

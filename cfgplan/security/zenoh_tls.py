@@ -48,6 +48,18 @@ eclipse-zenoh by tests/security/test_zenoh_tls.py):
 
   An operator tool may watch and read everything under ``P`` and publish nothing.
 
+* **Behind the society's router** (``cfgplan router --keys``, ``--router``
+  with ``--keys``; its certificate's common name is ``<society>/router/<name>``,
+  :func:`router_of`): every robot and tool is a client of the router, which
+  holds each of them, by its certificate's name, to the rules above (its
+  session has the members' policies and none of its own: routers do not
+  link to each other). Each member holds the router, in turn, to its own
+  rules :func:`mirrored` (:func:`access_control` with ``me``): the router may
+  send Pippi only what Pippi may be sent, and Pippi sends it only what she
+  may send. The router is trusted with one thing the robots cannot check:
+  that a message it forwards on a key naming Emil came from Emil's
+  certificate; what the message says, the robots check as among peers.
+
 A channel's key names its receiver *and its sender*
 (``P/<receiver>/ch/<sender>/<source>/<target>/<data>``,
 :mod:`cfgplan.runtime.keys`), and a receiver listens only to the key naming
@@ -63,7 +75,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +87,9 @@ __all__ = [
     "SECURE_PROTOCOLS",
     "access_control",
     "member_of",
+    "member_rules",
+    "mirrored",
+    "router_of",
     "secure",
     "secure_endpoint",
     "secure_settings",
@@ -110,9 +125,9 @@ def society_of(folder: str | Path) -> SocietyKeys:
 
 
 def member_of(keys: SocietyKeys, name: str, folder: Path) -> Member:
-    """The member ``name`` (a robot, else an operator tool) of ``keys``, with its
-    files in ``folder``; :class:`RunError` naming what is missing."""
-    member = keys.member(name) or keys.member(name, "operator")
+    """The member ``name`` (a robot, else an operator tool, else a router) of
+    ``keys``, with its files in ``folder``; :class:`RunError` naming what is missing."""
+    member = keys.named(name)
     if member is None:
         robots = ", ".join(m.name for m in keys.robots)
         raise RunError(
@@ -133,64 +148,86 @@ def member_of(keys: SocietyKeys, name: str, folder: Path) -> Member:
     return member
 
 
-def _rule(rules: list[dict[str, Any]], flow: str, messages: Sequence[str], keys: list[str]) -> str:
-    rule_id = f"r{len(rules)}"
-    rules.append(
-        {
-            "id": rule_id,
-            "messages": list(messages),
-            "flows": [flow],
-            "permission": "allow",
-            "key_exprs": keys,
-        }
-    )
-    return rule_id
-
+Rule = tuple[str, tuple[str, ...], tuple[str, ...]]
+"""One permission: (flow, messages, key expressions)."""
 
 WATCH = ("declare_liveliness_subscriber", "liveliness_query")
 
 
-def access_control(keys: SocietyKeys) -> dict[str, Any]:
-    """Zenoh's ``access_control`` for a society (see the module docstring):
-    deny by default, then per member what it may send and be sent."""
-    p = f"{PREFIX}/{chunk(keys.society)}"
+def member_rules(society: str, member: Member) -> list[Rule]:
+    """What ``member`` (a robot or an operator tool) may send (``ingress``: what
+    whoever it is linked to takes from it) and be sent (``egress``)."""
+    p = f"{PREFIX}/{chunk(society)}"
+    alive = (f"{p}/*/alive", f"{p}/*/process/*", f"{p}/*/problem/**")  # tokens: who runs,
+    # which process of it, and which problem
+    if member.kind == "operator":
+        return [
+            ("ingress", ("declare_subscriber",), (f"{p}/**",)),
+            ("ingress", WATCH, alive),
+            ("egress", ("put",), (f"{p}/**",)),
+            ("egress", ("liveliness_token", "reply"), alive),
+        ]
+    r = f"{p}/{chunk(member.name)}"
+    puts: tuple[str, ...] = (
+        f"{p}/*/ch/{chunk(member.name)}/**",
+        f"{p}/coordinator/{chunk(member.name)}",
+    )
+    reads: tuple[str, ...] = (f"{r}/ch/**", f"{r}/configure")
+    if member.coordinator:
+        puts += (f"{p}/*/configure",)
+        reads += (f"{p}/coordinator/*",)
+    return [
+        ("ingress", ("put",), puts),
+        ("ingress", ("declare_subscriber",), reads),
+        ("ingress", ("liveliness_token",), (f"{r}/alive", f"{r}/process/*", f"{r}/problem/**")),
+        ("ingress", (*WATCH, "reply"), alive),
+        ("egress", ("put",), reads),
+        ("egress", ("declare_subscriber",), (f"{p}/**",)),
+        ("egress", ("liveliness_token", *WATCH, "reply"), alive),
+    ]
+
+
+def mirrored(rules: list[Rule]) -> list[Rule]:
+    """``rules`` seen from the other end of the link: what one side may send is
+    what the other may be sent."""
+    swap = {"ingress": "egress", "egress": "ingress"}
+    return [(swap[flow], messages, keys) for flow, messages, keys in rules]
+
+
+def access_control(keys: SocietyKeys, me: Member | None = None) -> dict[str, Any]:
+    """Zenoh's ``access_control`` in the session of ``me`` (see the module
+    docstring): deny by default, then per robot and operator tool what it may
+    send and be sent; and, in a robot's or a tool's own session, per router of
+    the society, what ``me`` may send it and be sent by it — its own rules
+    :func:`mirrored`. A router is held to nothing else: the society's routers
+    do not link to each other."""
     rules: list[dict[str, Any]] = []
     subjects: list[dict[str, Any]] = []
     policies: list[dict[str, Any]] = []
-    alive = [f"{p}/*/alive", f"{p}/*/process/*", f"{p}/*/problem/**"]  # tokens: who runs,
-    # which process of it, and which problem
-    for i, member in enumerate(keys.members):
-        subject = f"s{i}"
+
+    def policy(member: Member, allowed: list[Rule]) -> None:
+        ids = []
+        for flow, messages, key_exprs in allowed:
+            ids.append(f"r{len(rules)}")
+            rules.append(
+                {
+                    "id": ids[-1],
+                    "messages": list(messages),
+                    "flows": [flow],
+                    "permission": "allow",
+                    "key_exprs": list(key_exprs),
+                }
+            )
+        subject = f"s{len(subjects)}"
         subjects.append({"id": subject, "cert_common_names": [member.common_name]})
-        if member.kind == "operator":
-            mine = [
-                _rule(rules, "ingress", ["declare_subscriber"], [f"{p}/**"]),
-                _rule(rules, "ingress", WATCH, alive),
-                _rule(rules, "egress", ["put"], [f"{p}/**"]),
-                _rule(rules, "egress", ["liveliness_token", "reply"], alive),
-            ]
-        else:
-            r = f"{p}/{chunk(member.name)}"
-            puts = [f"{p}/*/ch/{chunk(member.name)}/**", f"{p}/coordinator/{chunk(member.name)}"]
-            reads = [f"{r}/ch/**", f"{r}/configure"]
-            if member.coordinator:
-                puts.append(f"{p}/*/configure")
-                reads.append(f"{p}/coordinator/*")
-            mine = [
-                _rule(rules, "ingress", ["put"], puts),
-                _rule(rules, "ingress", ["declare_subscriber"], reads),
-                _rule(
-                    rules,
-                    "ingress",
-                    ["liveliness_token"],
-                    [f"{r}/alive", f"{r}/process/*", f"{r}/problem/**"],
-                ),
-                _rule(rules, "ingress", [*WATCH, "reply"], alive),
-                _rule(rules, "egress", ["put"], reads),
-                _rule(rules, "egress", ["declare_subscriber"], [f"{p}/**"]),
-                _rule(rules, "egress", ["liveliness_token", *WATCH, "reply"], alive),
-            ]
-        policies.append({"id": f"p{i}", "rules": mine, "subjects": [subject]})
+        policies.append({"id": f"p{len(policies)}", "rules": ids, "subjects": [subject]})
+
+    for member in keys.members:
+        if member.kind != "router":
+            policy(member, member_rules(keys.society, member))
+    if me is not None and me.kind != "router":
+        for router in keys.routers:
+            policy(router, mirrored(member_rules(keys.society, me)))
     return {
         "enabled": True,
         "default_permission": "deny",
@@ -201,7 +238,8 @@ def access_control(keys: SocietyKeys) -> dict[str, Any]:
 
 
 def secure_settings(folder: str | Path, name: str, society: str) -> list[tuple[str, str, str]]:
-    """The settings of ``name``'s session with the keys in ``folder``, as
+    """The settings of ``name``'s session (a robot's, a tool's or the router's)
+    with the keys in ``folder``, as
     (key, JSON5 value, what) for :meth:`zenoh.Config.insert_json5`; the
     endpoints are made secure by :func:`secure_endpoint` apart from these."""
     where = Path(folder)
@@ -224,7 +262,7 @@ def secure_settings(folder: str | Path, name: str, society: str) -> list[tuple[s
     }
     return [
         *((f"transport/link/tls/{k}", json.dumps(v), "--keys") for k, v in tls.items()),
-        ("access_control", json.dumps(access_control(keys)), "--keys (access control)"),
+        ("access_control", json.dumps(access_control(keys, member)), "--keys (access control)"),
     ]
 
 
@@ -249,6 +287,22 @@ def secure(config: Any, folder: str, name: str, society: str, put: Setter) -> No
     for key in ("listen/endpoints", "connect/endpoints"):
         endpoints = json.loads(config.get_json(key))
         put(config, key, json.dumps(_secured(endpoints)), f"--keys ({key})")
+
+
+def router_of(folder: str | Path) -> Member:
+    """The society's router whose keys are in ``folder`` (``cfgplan keys new``
+    makes one); :class:`RunError` when its keys have none, or several."""
+    keys = society_of(folder)
+    if len(keys.routers) == 1:
+        return keys.routers[0]
+    if not keys.routers:
+        raise RunError(
+            f"{folder} has no certificate for a router (keys made before routers had their own)",
+            hint="make the society's keys again with cfgplan keys new (it makes the "
+            "router's), or connect the robots as peers (--topology mesh, --listen/--connect)",
+        )
+    names = ", ".join(m.name for m in keys.routers)
+    raise RunError(f"{folder} has the keys of several routers ({names}); a society has one")
 
 
 def society_for(folder: str | None, society: str, default: str) -> str:

@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -176,6 +177,40 @@ def test_the_committed_page_was_written_by_the_benchmark() -> None:
     for condition in CONDITIONS:
         assert f"| {condition.name} |" in text, condition.name
     assert "- link: " in text and "Made with `python -m benchmarks.faults" in text
+
+
+def test_the_committed_page_shows_the_link_loss_and_scale_pages_last_runs() -> None:
+    """Beside its own run, the faults page shows the last runs of the
+    link-loss and scale benchmarks as their pages have them (facts and
+    tables): a page written again after either (``--rewrite``) keeps its own
+    run and takes theirs."""
+    from benchmarks.faults import LINK_LOSS_PAGE, SCALE_PAGE, last_run
+
+    text = (ROOT / "docs" / "explanation" / "faults.md").read_text(encoding="utf-8")
+    for shown in (last_run(LINK_LOSS_PAGE, 1), last_run(SCALE_PAGE, 2)):
+        assert "- revision: " in shown and "\n| " in shown
+        assert shown in text
+
+
+def test_a_page_written_again_keeps_its_run_and_takes_the_others_anew(tmp_path: Path) -> None:
+    """``--rewrite PAGE``: the page of a run, written again, is that page byte
+    for byte (its facts, table and the trials over the limit kept; the other
+    pages' last runs taken as they are)."""
+    from benchmarks.fault_conditions import Options
+    from benchmarks.faults import page, rewrite
+
+    facts = ["- machine: m", "- revision: `abc`"]
+    lines = ["| a | b |", "|---|---|", "| 1 | 2 |"]
+    evidence = [
+        "- 50 % loss, trial 3:\n    +3.54s robot-lost other=Pippi",
+        "- cut, trial 1:\n    +1s x",
+    ]
+    command = ["--trials", "3", "--markdown", "faults.md"]
+    written = page(Options(), lines, facts, evidence, command)
+    path = tmp_path / "faults.md"
+    path.write_text(written.replace("## Beyond one helper", "## Old words\n\n## Beyond one helper"))
+    rewrite(path)
+    assert path.read_text() == written
 
 
 def test_a_row_misses_the_limit_on_one_late_trial_a_stop_or_a_light_switch() -> None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from benchmarks.reconfigure import ROOT
-from benchmarks.scale import KILL_HEADER, START_HEADER, Row, findings, in_use, kill_cells
+from benchmarks.scale import KEYED, KILL_HEADER, START_HEADER, Row, findings, in_use, kill_cells
 
 
 def test_the_helper_in_use_is_the_last_switchs_else_the_starts_partner() -> None:
@@ -39,6 +39,26 @@ def test_the_findings_say_the_ratio_and_the_verdict_from_the_figures() -> None:
     assert kill_cells(small, [slow])[6] == "-"  # no society of 3 to compare with
 
 
+def test_the_keys_rows_are_said_against_the_rows_without_keys() -> None:
+    """Behind the secured router: its connections and idle traffic, and each
+    size's switch and start-up against the same size's without keys."""
+    plain = [
+        Row(3, "router", up=2.0, switches=[0.010]),
+        Row(50, "router", up=10.0, switches=[0.030]),
+    ]
+    keyed = [
+        Row(3, KEYED, connections=3, up=2.5, idle_segments=60, switches=[0.015]),
+        Row(50, KEYED, connections=50, up=12.0, idle_segments=500, switches=[0.045]),
+    ]
+    said = findings([*plain, *keyed])
+    assert "- **With keys**, through the secured router: connections 3 at 3, 50 at 50" in said
+    assert "idle TCP segments a second per robot 20.0 at 3, 10.0 at 50" in said
+    assert "a switch took 1.5× at 3, 1.5× at 50 the one without keys" in said
+    assert "all up after 2.5 s against 2.0 s at 3, 12.0 s against 10.0 s at 50" in said
+    assert "a switch among 50 3.0× the one among 3" in said
+    assert "With keys" not in findings(plain)
+
+
 def test_the_committed_page_was_written_by_the_benchmark() -> None:
     text = (ROOT / "docs" / "explanation" / "scale.md").read_text(encoding="utf-8")
     assert text.startswith("<!-- Written by `python -m benchmarks.scale")
@@ -47,6 +67,8 @@ def test_the_committed_page_was_written_by_the_benchmark() -> None:
     assert "- machine: " in text and "Made with `python -m benchmarks.scale" in text
     for n in (2, 5, 10, 20, 50):
         assert f"\n| {n} | router |" in text, n
+    for n in (3, 50):  # with the society's keys, through its secured router
+        assert f"\n| {n} | {KEYED} |" in text, n
 
 
 def test_a_page_written_again_keeps_its_runs_facts_tables_and_findings(tmp_path: Path) -> None:

@@ -263,10 +263,10 @@ def test_a_mistaken_run_option_is_a_usage_error_before_anything_starts(  # type:
 
 
 def test_print_commands_behind_a_router_start_it_on_the_coordinators_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
-    """The default topology without --keys: the router first, on the
+    """The default topology: the router first, on the
     coordinator's host (every interface, Zenoh's port, the robots' lease),
     then each robot a client of it, listening nowhere; --router names one
-    that runs already (none is printed); with --keys the robots are a mesh."""
+    that runs already (none is printed)."""
     base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands"]
     hosts = ["--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2"]
     done = cfgplan(*base, *hosts, "--lease", "3")
@@ -288,6 +288,42 @@ def test_print_commands_behind_a_router_start_it_on_the_coordinators_host(cfgpla
     assert mixed.returncode == 2 and "--router" in mixed.stderr
     wrong = cfgplan(*base, *hosts, "--topology", "star")
     assert wrong.returncode == 2 and "'star' is not a topology" in wrong.stderr
+
+
+def test_print_commands_with_keys_start_the_societys_secured_router(  # type: ignore[no-untyped-def]
+    cfgplan, tmp_path: Path
+) -> None:
+    """With --keys the robots are clients of a router too (before: a mesh,
+    a router being none of the society's keys): the society's own router,
+    started with the keys (its certificate is among them) and listening on TLS,
+    and every robot its client over TLS with its own keys; keys as written.
+    Keys without a router's certificate (made before routers had one) are
+    refused before anything starts, saying how to make them; --router names
+    a secured router that runs already."""
+    from cfgplan.security.keys import make_society, plan_society, write_society
+
+    keys, old = society_keys(tmp_path / "keys", "lab", "Emil", "Pippi"), tmp_path / "old"
+    write_society(old, make_society(plan_society("lab", ["Emil", "Pippi"], (), ["Emil"])), False)
+    base = ["launch", *STEP2, "--impl", str(EXAMPLE_IMPL), "--print-commands"]
+    hosts = ["--host", "Emil=10.0.0.1", "--host", "Pippi=10.0.0.2"]
+    done = cfgplan(*base, *hosts, "--keys", str(keys))
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[:2] == [
+        "# the router on 10.0.0.1 (start it first)",
+        f"cfgplan router --listen tls/0.0.0.0:7447 --keys {keys}",
+    ]
+    for robot, line in (("Emil", lines[3]), ("Pippi", lines[5])):
+        assert line.endswith(f"--robot {robot} --router tls/10.0.0.1:7447"), line
+        assert f"--keys {keys}" in line and "--listen" not in line and "--connect" not in line
+    refused = cfgplan(*base, *hosts, "--keys", str(old))
+    assert refused.returncode == 1 and "no certificate for a router" in refused.stderr
+    assert "cfgplan keys new" in refused.stderr and "Traceback" not in refused.stderr
+    given = cfgplan(*base, *hosts, "--keys", str(old), "--router", "tls/10.0.0.9:7447")
+    assert given.returncode == 0, given.stderr
+    assert given.stdout.count("--router tls/10.0.0.9:7447") == 2
+    mesh = cfgplan(*base, *hosts, "--keys", str(old), "--topology", "mesh")
+    assert mesh.returncode == 0 and "cfgplan router" not in mesh.stdout
 
 
 def test_print_commands_needs_every_host(cfgplan) -> None:  # type: ignore[no-untyped-def]
@@ -624,9 +660,35 @@ def _connections(pid: int) -> list[int]:
     return sorted(ports)
 
 
+def cross_door_served(trace: Path, t: float) -> Callable[[], bool]:
+    """Whether Emil's cross-door, in ``trace``, ran on Pippi's data after ``t`` (time.time())."""
+
+    def served() -> bool:
+        return any(
+            r["event"] == "call"
+            and r["functionality"] == "cross-door"
+            and r["status"] == "ran"
+            and float(r["t"]) > t  # type: ignore[arg-type]
+            and r["inputs"]
+            for r in read_trace(trace)
+        )
+
+    return served
+
+
+def society_keys(folder: Path, society: str, *robots: str) -> Path:
+    """The keys of ``robots`` (the first coordinates) and the society's router, in ``folder``."""
+    from cfgplan.security.keys import make_society, plan_society, write_society
+
+    plan = plan_society(society, robots, (), robots[:1], ["router"])
+    write_society(folder, make_society(plan), force=False)
+    return folder
+
+
 @pytest.mark.slow
+@pytest.mark.parametrize("keyed", [False, True], ids=["open", "keys"])
 def test_behind_a_router_each_robot_holds_one_connection_and_outlives_the_routers_death(
-    tmp_path: Path,
+    tmp_path: Path, keyed: bool
 ) -> None:
     """The default topology: launch starts a router, then every robot as its
     client: each robot's only connection is to the router's port (in a mesh,
@@ -634,35 +696,34 @@ def test_behind_a_router_each_robot_holds_one_connection_and_outlives_the_router
     router is killed (SIGKILL): the robots see each other lost; --respawn
     starts the router again on its port after 1 s, the clients reconnect by
     themselves, and the coordinator serves the goal again with Pippi's data.
-    SIGTERM then stops every process, the router last; no pid is left."""
+    SIGTERM then stops every process, the router last; no pid is left. With
+    the society's keys, the same through its secured router (listening on
+    TLS, started again with its keys; before: with --keys launch made a mesh)."""
     trace = tmp_path / "run.jsonl"
+    keys = ["--keys", str(society_keys(tmp_path / "keys", "lab", "Emil", "Pippi"))] if keyed else []
     launched = _launch(
-        "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--respawn", "--trace", str(trace)
+        "--impl", str(EXAMPLE_IMPL), "--rate", "20", "--respawn", "--trace", str(trace), *keys
     )  # fmt: skip
     lines, reader, until = _follow(launched)
-
-    def served_after(t: float) -> bool:
-        return any(
-            r["event"] == "call"
-            and r["functionality"] == "cross-door"
-            and r["status"] == "ran"
-            and float(r["t"]) > t  # type: ignore[arg-type]
-            and r["inputs"]
-            for r in read_trace(tmp_path / "run-emil.jsonl")
-        )
+    protocol = "tls" if keyed else "tcp"
+    listening = re.compile(
+        rf"^router +\| router \w+ listening on {protocol}/127\.0\.0\.1:(\d+)", re.M
+    )
+    emil = tmp_path / "run-emil.jsonl"
 
     try:
         until("Emil sees Pippi", lambda: "Emil: robot Pippi seen" in "".join(lines))
         pids = _pids("".join(lines))
-        port = int(re.search(r"listening on tcp/127\.0\.0\.1:(\d+)", "".join(lines))[1])  # type: ignore[index]
+        port = int(listening.findall("".join(lines))[0])
         for robot in ("Emil", "Pippi"):
             until(f"{robot} connected", lambda r=robot: _connections(pids[r]) == [port])  # type: ignore[misc]
-        until("the goal served", lambda: served_after(0.0))
+        until("the goal served", cross_door_served(emil, 0.0))
         killed = time.time()
         os.kill(pids["router"], signal.SIGKILL)
         until("Emil sees Pippi lost", lambda: "Emil: robot Pippi lost" in "".join(lines))
         until("the router again", lambda: "router | (started again" in "".join(lines))
-        until("the goal served again", lambda: served_after(killed + 1.0))
+        until("the goal served again", cross_door_served(emil, killed + 1.0))
+        until("the router listens again", lambda: len(listening.findall("".join(lines))) == 2)
         router = _newest_pid("".join(lines), "router")
         assert router is not None and router != pids["router"]
         launched.send_signal(signal.SIGTERM)

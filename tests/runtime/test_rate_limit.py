@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import re
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -136,14 +137,17 @@ CHANNEL = "F7->F3 (pos Emil Door1)"
 
 
 @pytest.mark.slow
-def test_a_flood_on_a_channel_is_cut_to_its_allowance_and_recorded(tmp_path: Path) -> None:
+def test_a_flood_on_a_channel_is_cut_to_its_allowance_and_recorded(
+    tmp_path: Path, record_property: Callable[[str, object], None]
+) -> None:
     """Emil (coordinator) and Pippi run with --keys at 20 Hz; a peer holding
     Pippi's certificate floods the channel of the door's position into Emil
     (thousands of messages a second, valid envelopes with Pippi's period)
     and a channel Emil has not attached. Throughout the flood Emil crosses
     the door at his pace; he takes at most allowance / period messages a
     second on the channel (plus the bucket), records the drops once per
-    second at most, and the others never reach him."""
+    second at most, and the others never reach him. What it saw is recorded
+    for the threat model's page (``python -m benchmarks.threats``)."""
     keys = tmp_path / "keys"
     plan = plan_society(SOCIETY, ["Emil", "Pippi"], (), ["Emil"])
     write_society(keys, make_society(plan), force=False)
@@ -189,8 +193,11 @@ def test_a_flood_on_a_channel_is_cut_to_its_allowance_and_recorded(tmp_path: Pat
     during = [r for r in events if began <= float(r["t"]) <= ended]  # type: ignore[arg-type]
     ran = [r for r in during if r["event"] == "call" and r["functionality"] == "cross-door"]
     ran = [r for r in ran if r["status"] == "ran"]
-    assert len(ran) >= 0.5 * 20 * FLOOD, f"Emil starved: {len(ran)} crossings in {FLOOD} s"
     taken = [r for r in during if r["event"] == "receive" and r["channel"] == CHANNEL]
+    record_property("messages a second sent", round(sent / FLOOD))
+    record_property("taken a second", round(len(taken) / (ended - began), 1))
+    record_property("goal's crossings a second (of 20)", round(len(ran) / FLOOD, 1))
+    assert len(ran) >= 0.5 * 20 * FLOOD, f"Emil starved: {len(ran)} crossings in {FLOOD} s"
     assert len(taken) <= (2 / 0.05) * (ended - began) + 8 + 2  # allowance / period, and the bucket
     assert any(r["value"] == [66.6, 6.66] for r in taken)  # the flood's values are taken, bounded
     assert not [r for r in events if r["event"] == "receive" and "F99" in str(r["channel"])]

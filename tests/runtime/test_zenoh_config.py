@@ -139,7 +139,8 @@ def test_a_session_whose_token_is_refused_is_closed(monkeypatch: pytest.MonkeyPa
 
 def test_a_client_of_a_router_connects_only_there_and_listens_nowhere() -> None:
     """``--router``: Zenoh's client mode, the router its only link; what
-    cannot go with it is refused (a mesh's endpoints, the society's keys)."""
+    cannot go with it is refused (a mesh's endpoints; with the society's keys,
+    tests/security/test_zenoh_tls.py)."""
     options = ZenohOptions(router=("tcp/10.0.0.1:7447",))
     assert _get(options, "mode") == "client"
     assert _get(options, "connect/endpoints") == ["tcp/10.0.0.1:7447"]
@@ -150,8 +151,6 @@ def test_a_client_of_a_router_connects_only_there_and_listens_nowhere() -> None:
         ZenohOptions(router=("tcp/10.0.0.1:7447",), listen=("tcp/127.0.0.1:7448",))
     with pytest.raises(RunError, match="--router and --connect"):
         ZenohOptions(router=("tcp/10.0.0.1:7447",), connect=("tcp/127.0.0.1:7448",))
-    with pytest.raises(RunError, match="--router with --keys"):
-        ZenohOptions(router=("tcp/10.0.0.1:7447",), keys="keys")
     with pytest.raises(RunError, match="--router 'nowhere'"):
         ZenohOptions(router=("nowhere",))
 

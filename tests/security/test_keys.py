@@ -40,7 +40,8 @@ def _cn(path: Path) -> str:
 def test_keys_for_every_robot_of_a_state_owner_only_and_signed_by_the_ca(
     tmp_path: Path,
 ) -> None:
-    """One CA, one key and certificate per robot and operator, each file 0600 in
+    """One CA, one key and certificate per robot and operator and one for the
+    society's router, each file 0600 in
     a folder 0700; each certificate names its society and member and is signed by
     the CA; the coordinators are the robots the goals name first (a sequence:
     Pippi, then Emil); the output names files and never shows a key."""
@@ -57,6 +58,8 @@ def test_keys_for_every_robot_of_a_state_owner_only_and_signed_by_the_ca(
         "emil.key",
         "console.pem",
         "console.key",
+        "router.pem",
+        "router.key",
         "society.json",
     }
     assert stat.S_IMODE(folder.stat().st_mode) == 0o700
@@ -67,6 +70,7 @@ def test_keys_for_every_robot_of_a_state_owner_only_and_signed_by_the_ca(
         ("emil", "lab/Emil"),
         ("pippi", "lab/Pippi"),
         ("console", "lab/operator/console"),
+        ("router", "lab/router/router"),
     ):
         assert _cn(folder / f"{stem}.pem") == cn
         x509.load_pem_x509_certificate(
@@ -75,6 +79,8 @@ def test_keys_for_every_robot_of_a_state_owner_only_and_signed_by_the_ca(
     society = json.loads((folder / "society.json").read_text())
     leading = {m["name"] for m in society["members"] if m["coordinator"]}
     assert society["society"] == "lab" and leading == {"Pippi", "Emil"}
+    assert [m["name"] for m in society["members"] if m["kind"] == "router"] == ["router"]
+    assert "router.pem    the router's certificate, lab/router/router" in out.stdout
     printed = out.stdout + out.stderr
     assert "emil.key" in printed and "PRIVATE KEY" not in printed
     for key in folder.glob("*.key"):
@@ -135,6 +141,14 @@ def test_names_that_cannot_be_files_or_common_names(tmp_path: Path) -> None:
         plan_society("x" * 70, ["Emil"], coordinators=["Emil"])
     with pytest.raises(RunError, match="named twice"):
         plan_society("lab", ["Emil"], ["Emil"], ["Emil"])
+    with pytest.raises(RunError, match="named twice: router") as clash:
+        plan_society("lab", ["router"], (), ["router"], ["router"])
+    assert clash.value.hint == "name the router otherwise: --router NAME"
+    hub = plan_society("lab", ["router"], (), ["router"], ["hub"])
+    assert [(m.kind, m.common_name) for m in hub.members] == [
+        ("robot", "lab/router"),
+        ("router", "lab/router/hub"),
+    ]
 
 
 def test_without_cryptography_it_says_how_to_install_it(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -4,7 +4,10 @@ coordinator (:mod:`cfgplan.reconfigure.network`, :mod:`cfgplan.security.rates`).
 
 Each attack is made by a plain zenoh-python session holding Pippi's valid
 certificate (configured as a robot program's is) against a society started
-with ``--keys``: Emil coordinates step 2 of cross-door, Pippi helps. Each
+with ``--keys``: Emil coordinates step 2 of cross-door, Pippi helps; the
+robots are peers, or (``router``) clients of the society's secured router
+(``cfgplan router --keys``), the attacker too: the router lets through what
+Pippi's certificate may say, and the robots refuse the rest themselves. Each
 test asserts what the society does after: Emil crosses the door to the end of
 his run and ends it with exit status 0, and Pippi was not stopped.
 
@@ -19,6 +22,8 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +46,12 @@ from tests.runtime.netutil import (
 
 zenoh = pytest.importorskip("zenoh")
 
+
+def _said(log: Path, text: str) -> bool | None:
+    """Whether ``log`` says ``text`` yet (``None``: not yet, for :func:`wait_for`)."""
+    return (log.exists() and text in log.read_text(encoding="utf-8")) or None
+
+
 SOCIETY = "member-attacks"
 P = f"cfgplan/{SOCIETY}"
 STEP2 = [
@@ -50,27 +61,45 @@ STEP2 = [
 LIMIT = 90.0  # seconds: two interpreters, TLS handshakes and a run, on a loaded machine
 
 
+TOPOLOGIES = ["mesh", "router"]
+
+
 class Society:
     """Emil (coordinator, listening) and Pippi (connecting to him), started with
-    ``--keys`` (or without), each traced."""
+    ``--keys`` (or without), each traced; with ``router``, both clients of the
+    society's router (``cfgplan router``, with the keys when keyed)."""
 
-    def __init__(self, running: Processes, folder: Path, *, keyed: bool = True) -> None:
+    def __init__(
+        self, running: Processes, folder: Path, *, keyed: bool = True, router: bool = False
+    ) -> None:
         self.folder = folder
         self.keys: Path | None = None
+        self.router = router
         common = ["--zenoh-config", str(hermetic_config(folder)), "--lease", "1"]
         common += ["--rate", "20", "--impl", str(EXAMPLE_IMPL), "--society", SOCIETY]
+        secured: list[str] = []
         if keyed:
             self.keys = folder / "keys"
-            plan = plan_society(SOCIETY, ["Emil", "Pippi"], (), ["Emil"])
+            plan = plan_society(SOCIETY, ["Emil", "Pippi"], (), ["Emil"], ["router"])
             write_society(self.keys, make_society(plan), force=False)
-            common += ["--keys", str(self.keys)]
+            secured = ["--keys", str(self.keys)]
+            common += secured
         self.port = free_port()
         self.trace = folder / "emil.jsonl"
         self.pippi_trace = folder / "pippi.jsonl"
         run = ["-m", "cfgplan", "run", *STEP2, *common, "--robot"]
-        emil = ["Emil", "--listen", endpoint(self.port), "--trace", str(self.trace)]
+        nets = {
+            "Emil": ["--listen", endpoint(self.port)],
+            "Pippi": ["--connect", endpoint(self.port)],
+        }
+        if router:
+            serve = ["-m", "cfgplan", "router", "--listen", endpoint(self.port), "--lease", "1"]
+            running.start([*serve, *secured], folder / "router.log")
+            nets = {robot: ["--router", endpoint(self.port)] for robot in nets}
+            wait_for("the router listens", lambda: _said(folder / "router.log", "listening"), LIMIT)
+        emil = ["Emil", *nets["Emil"], "--trace", str(self.trace)]
         self.emil = running.start([*run, *emil, "--duration", "30"], folder / "emil.log")
-        pippi = ["Pippi", "--connect", endpoint(self.port), "--trace", str(self.pippi_trace)]
+        pippi = ["Pippi", *nets["Pippi"], "--trace", str(self.pippi_trace)]
         self.pippi = running.start([*run, *pippi, "--duration", "40"], folder / "pippi.log")
         crossing = first(self.trace, lambda r: r["event"] == "call" and r["status"] == "ran")
         wait_for("Emil runs with Pippi's data", crossing, LIMIT)
@@ -80,12 +109,13 @@ class Society:
         hermetic = str(hermetic_config(self.folder))
         if self.keys is None:
             config = zenoh.Config.from_json5(HERMETIC)
-            config.insert_json5("mode", '"peer"')
+            config.insert_json5("mode", '"client"' if self.router else '"peer"')
             config.insert_json5("connect/endpoints", json.dumps([endpoint(self.port)]))
             config.insert_json5("listen/endpoints", "[]")
             return zenoh.open(config)
-        where = (f"tls/127.0.0.1:{self.port}",)
-        options = ZenohOptions(SOCIETY, (), where, hermetic, keys=str(self.keys))
+        where = (endpoint(self.port),)
+        options = ZenohOptions(SOCIETY, config_file=hermetic, keys=str(self.keys))
+        options = replace(options, **{"router" if self.router else "connect": where})
         return zenoh.open(zenoh_config(options, name))
 
     def served_to_the_end(self, after: float) -> None:
@@ -105,7 +135,8 @@ class Society:
 
 
 @pytest.mark.slow
-def test_a_forged_rival_does_not_stop_the_coordinator(tmp_path: Path) -> None:
+@pytest.mark.parametrize("topology", TOPOLOGIES)
+def test_a_forged_rival_does_not_stop_the_coordinator(tmp_path: Path, topology: str) -> None:
     """With Pippi's key, a session says it is a second process of Pippi (a
     ``ready`` of another instance), reads the coordinator's epoch from the
     ``duplicate`` it is answered, and tells Emil that Pippi follows another
@@ -114,7 +145,7 @@ def test_a_forged_rival_does_not_stop_the_coordinator(tmp_path: Path) -> None:
     not believed: Emil says so and serves his goal to the end of his run
     (before: he said the society had a coordinator already and stopped, exit 1)."""
     with processes() as running:
-        society = Society(running, tmp_path)
+        society = Society(running, tmp_path, router=topology == "router")
         inbox: list[bytes] = []
         got = threading.Event()
 
@@ -148,8 +179,14 @@ def test_a_forged_rival_does_not_stop_the_coordinator(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("keyed", [True, False], ids=["keys", "open"])
-def test_a_problem_token_of_another_problem_stops_nobody(tmp_path: Path, keyed: bool) -> None:
+@pytest.mark.parametrize(
+    ("topology", "keyed"),
+    [("mesh", True), ("mesh", False), ("router", True)],
+    ids=["mesh-keys", "mesh-open", "router-keys"],
+)
+def test_a_problem_token_of_another_problem_stops_nobody(
+    tmp_path: Path, keyed: bool, topology: str
+) -> None:
     """A session declares a problem token of another problem: with Pippi's key
     under her own name, without keys under Emil's and Pippi's. Both robots
     of the society met each other under one problem: neither stops; Emil,
@@ -157,7 +194,7 @@ def test_a_problem_token_of_another_problem_stops_nobody(tmp_path: Path, keyed: 
     society and goes on (before:
     both printed "runs two problems ... both stop" and ended, exit 1)."""
     with processes() as running:
-        society = Society(running, tmp_path, keyed=keyed)
+        society = Society(running, tmp_path, keyed=keyed, router=topology == "router")
         names = ["Pippi"] if keyed else ["Pippi", "Emil"]
         with society.attacker() as forger:
             attacked = time.time()
@@ -172,16 +209,19 @@ def test_a_problem_token_of_another_problem_stops_nobody(tmp_path: Path, keyed: 
     for log in ("emil.log", "pippi.log"):
         said = (tmp_path / log).read_text()
         assert "both stop" not in said and "this one stops" not in said, log
-    # said by Emil, whom the session reached (peers do not route: Pippi never sees it)
-    assert "announces another problem" in (tmp_path / "emil.log").read_text()
+    # said by Emil, whom the session reached (peers do not route: Pippi never sees it;
+    # the router forwards it to both)
+    for log in ("emil.log", "pippi.log") if topology == "router" else ("emil.log",):
+        assert "announces another problem" in (tmp_path / log).read_text(), log
 
 
 FLOOD = 8.0  # seconds
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("topology", TOPOLOGIES)
 def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_trace(
-    tmp_path: Path,
+    tmp_path: Path, topology: str, record_property: Callable[[str, object], None]
 ) -> None:
     """With Pippi's key, a session floods her key to the coordinator with
     unreadable messages and with well-formed reports (as fast as it can put,
@@ -189,9 +229,10 @@ def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_tr
     its 20 cycles a second), nothing is taken for a failure, the drops are
     recorded per kind at most once a second (not one event per message), and
     the trace stays small (before: 0.7 cycles a second, Pippi's outputs
-    taken for a silent link, an error event per message)."""
+    taken for a silent link, an error event per message). What it saw is
+    recorded for the threat model's page (``python -m benchmarks.threats``)."""
     with processes() as running:
-        society = Society(running, tmp_path)
+        society = Society(running, tmp_path, router=topology == "router")
         with society.attacker() as flooder:
             key = flooder.declare_publisher(f"{P}/coordinator/Pippi")
             time.sleep(1.0)  # the declaration reaches Emil
@@ -214,19 +255,26 @@ def test_a_flood_of_the_coordinators_control_key_neither_stalls_nor_fills_the_tr
     assert len(errors) <= 3 * (FLOOD + 2), f"{len(errors)} error events in {FLOOD} s"
     assert not [r for r in during if r["event"] in ("failure", "switch", "no-configuration")]
     dropped = [r for r in errors if "dropped" in str(r["message"])]
+    record_property("messages a second sent", round(sent / FLOOD))
+    record_property("coordinator's cycles a second (of 20)", round(len(cycles) / FLOOD, 1))
+    record_property("error events", len(errors))
+    record_property("trace kB", round(society.trace.stat().st_size / 1000))
     assert dropped, "the flood's drops were never said"
     assert society.trace.stat().st_size < 2_000_000
 
 
 @pytest.mark.slow
-def test_a_name_held_alive_by_a_session_does_not_hide_its_robots_death(tmp_path: Path) -> None:
+@pytest.mark.parametrize("topology", TOPOLOGIES)
+def test_a_name_held_alive_by_a_session_does_not_hide_its_robots_death(
+    tmp_path: Path, topology: str, record_property: Callable[[str, object], None]
+) -> None:
     """With Pippi's key, a session declares her liveliness token (Zenoh shows
     two tokens of one key as one), then her process is killed. Emil sees
     her lost within a second or so (her process token went, her name stayed
     alive: he says a session holds it), not only her inputs going stale
     later (before: no loss at all, only stale inputs)."""
     with processes() as running:
-        society = Society(running, tmp_path)
+        society = Society(running, tmp_path, router=topology == "router")
         with society.attacker() as holder:
             token = holder.liveliness().declare_token(f"{P}/Pippi/alive")
             time.sleep(2.0)  # the token reaches Emil
@@ -245,6 +293,7 @@ def test_a_name_held_alive_by_a_session_does_not_hide_its_robots_death(tmp_path:
 
             found = wait_for("Pippi lost", lost, LIMIT)
             token.undeclare()
+    record_property("kill to loss, s", round(float(found["t"]) - killed, 2))  # type: ignore[arg-type]
     assert float(found["t"]) - killed < 3.0, found  # type: ignore[arg-type]
     said = (tmp_path / "emil.log").read_text()
     assert "its name is still alive" in said

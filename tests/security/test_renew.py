@@ -76,6 +76,29 @@ def test_renew_replaces_one_members_files_and_names_its_generation(tmp_path: Pat
     assert _cn(keys / "pippi.pem") == "renew-test/Pippi@3"
 
 
+def test_the_routers_key_is_renewed_like_a_robots(tmp_path: Path) -> None:
+    """The society's router (its key made by cfgplan keys new): renewed, its
+    common name names its generation, and a robot's session admits the new
+    router and no longer the old one (before: renew knew robots and operator
+    tools only)."""
+    from cfgplan.security.renew import renew
+    from cfgplan.security.zenoh_tls import access_control
+
+    keys = tmp_path / "keys"
+    plan = plan_society(SOCIETY, ["Emil", "Pippi"], (), ["Emil"], ["router"])
+    write_society(keys, make_society(plan), force=False)
+    old, new, files = renew(keys, "router", 30)
+    assert (old.common_name, new.common_name) == (
+        "renew-test/router/router",
+        f"{old.common_name}@2",
+    )
+    write_society(keys, files, force=True)
+    assert _cn(keys / "router.pem") == "renew-test/router/router@2"
+    society = read_society(keys)
+    names = [s["cert_common_names"] for s in access_control(society, society.robots[0])["subjects"]]
+    assert ["renew-test/router/router@2"] in names and [old.common_name] not in names
+
+
 @pytest.mark.slow
 def test_renew_refuses_clearly(tmp_path: Path) -> None:
     """An unknown member, a folder without ca.key (a robot's host), or no keys

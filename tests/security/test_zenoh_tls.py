@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -22,13 +23,26 @@ from tests.backends.support import DOMAINS, EXAMPLE_IMPL, ROOT
 @pytest.fixture(scope="module")
 def keys(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("society") / "keys"
-    plan = plan_society("lab", ["Emil", "Pippi"], ["console"], ["Emil"])
+    plan = plan_society("lab", ["Emil", "Pippi"], ["console"], ["Emil"], ["router"])
     write_society(folder, make_society(plan), force=False)
     return folder
 
 
 def _get(options: ZenohOptions, robot: str, key: str) -> object:
     return json.loads(zenoh_config(options, robot).get_json(key))  # type: ignore[no-any-return]
+
+
+def _allowed(acl: Any, cn: str, flow: str, message: str) -> set[str]:
+    """The key expressions ``acl`` lets the peer named ``cn`` use ``message`` on in ``flow``."""
+    rules = {r["id"]: r for r in acl["rules"]}
+    names = {s["id"]: s["cert_common_names"] for s in acl["subjects"]}
+    (policy,) = [p for p in acl["policies"] if [cn] in (names[s] for s in p["subjects"])]
+    return {
+        k
+        for r in policy["rules"]
+        if flow in rules[r]["flows"] and message in rules[r]["messages"]
+        for k in rules[r]["key_exprs"]
+    }
 
 
 def test_the_schema_refuses_what_it_does_not_know() -> None:
@@ -78,17 +92,9 @@ def test_access_control_of_least_privilege(keys: Path) -> None:
     acl = _get(ZenohOptions(society="lab", keys=str(keys)), "Emil", "access_control")
     assert isinstance(acl, dict)
     assert acl["enabled"] is True and acl["default_permission"] == "deny"
-    rules = {r["id"]: r for r in acl["rules"]}
-    names = {s["id"]: s["cert_common_names"] for s in acl["subjects"]}
 
     def allowed(cn: str, flow: str, message: str) -> set[str]:
-        (policy,) = [p for p in acl["policies"] if [cn] in (names[s] for s in p["subjects"])]
-        return {
-            k
-            for r in policy["rules"]
-            if flow in rules[r]["flows"] and message in rules[r]["messages"]
-            for k in rules[r]["key_exprs"]
-        }
+        return _allowed(acl, cn, flow, message)
 
     assert allowed("lab/Emil", "ingress", "put") >= {"cfgplan/lab/*/configure"}
     assert allowed("lab/Pippi", "ingress", "put") == {  # only keys naming her as the sender
@@ -105,7 +111,76 @@ def test_access_control_of_least_privilege(keys: Path) -> None:
         "cfgplan/lab/Pippi/configure",
     }
     assert allowed("lab/operator/console", "ingress", "put") == set()
-    assert access_control(society_of(keys))["rules"] == acl["rules"]
+    pippis = _get(ZenohOptions(society="lab", keys=str(keys)), "Pippi", "access_control")
+    assert isinstance(pippis, dict)
+    names = [s["cert_common_names"] for s in acl["subjects"]]
+    assert names == [["lab/Emil"], ["lab/Pippi"], ["lab/operator/console"], ["lab/router/router"]]
+    # the rules of the members are the same in every member's session; the router's are Emil's
+    shared = {r for p in acl["policies"][:3] for r in p["rules"]}
+    assert [r for r in pippis["rules"] if r["id"] in shared] == [
+        r for r in acl["rules"] if r["id"] in shared
+    ]
+    assert [r for r in access_control(society_of(keys))["rules"] if r["id"] in shared] == [
+        r for r in acl["rules"] if r["id"] in shared
+    ]
+
+
+def test_the_router_holds_each_client_to_its_rules_and_each_holds_the_router_to_them(
+    keys: Path,
+) -> None:
+    """The society's router (``cfgplan router --keys``): listens on TLS only, asks
+    every client for a certificate of the society's authority, and enforces on
+    each the rules the robots enforce among peers (it is no robot: no rule of its
+    own on the robots' side but this one). Each robot, a client of it, holds the
+    router to its own rules mirrored: the router may send Pippi only what Pippi
+    may be sent, and Pippi sends it only what she may send."""
+    from cfgplan.runtime.router import RouterOptions, listening, router_config
+
+    options = RouterOptions(listen=("tcp/127.0.0.1:7447",), keys=str(keys))
+    config = router_config(options)
+    assert json.loads(config.get_json("listen/endpoints")) == ["tls/127.0.0.1:7447"]
+    assert listening(options) == ["tls/127.0.0.1:7447"]
+    tls = json.loads(config.get_json("transport/link/tls"))
+    assert tls["listen_certificate"] == str(keys / "router.pem") and tls["enable_mtls"] is True
+    routers = json.loads(config.get_json("access_control"))
+    assert routers["default_permission"] == "deny"
+    subjects = [s["cert_common_names"] for s in routers["subjects"]]
+    assert subjects == [["lab/Emil"], ["lab/Pippi"], ["lab/operator/console"]]  # not itself
+    assert _allowed(routers, "lab/Pippi", "ingress", "put") == {
+        "cfgplan/lab/*/ch/Pippi/**",
+        "cfgplan/lab/coordinator/Pippi",
+    }
+    assert _allowed(routers, "lab/Pippi", "egress", "put") == {
+        "cfgplan/lab/Pippi/ch/**",
+        "cfgplan/lab/Pippi/configure",
+    }
+    client = ZenohOptions(society="lab", router=("tcp/127.0.0.1:7447",), keys=str(keys))
+    assert _get(client, "Pippi", "mode") == "client"
+    assert _get(client, "Pippi", "connect/endpoints") == ["tls/127.0.0.1:7447"]
+    pippis = _get(client, "Pippi", "access_control")
+    for flow, other in (("ingress", "egress"), ("egress", "ingress")):
+        for message in ("put", "declare_subscriber", "liveliness_token", "reply"):
+            assert _allowed(pippis, "lab/router/router", flow, message) == _allowed(
+                routers, "lab/Pippi", other, message
+            ), (flow, message)
+    assert _allowed(pippis, "lab/router/router", "ingress", "put") == {
+        "cfgplan/lab/Pippi/ch/**",
+        "cfgplan/lab/Pippi/configure",
+    }
+    emils = _get(client, "Emil", "access_control")
+    assert "cfgplan/lab/coordinator/*" in _allowed(emils, "lab/router/router", "ingress", "put")
+
+
+def test_a_router_without_its_keys_is_refused(keys: Path, tmp_path: Path) -> None:
+    """Keys made without a router's (before routers had their own) cannot start
+    the secured router; the message says how to make them."""
+    from cfgplan.runtime.router import RouterOptions, router_config
+
+    old = tmp_path / "old"
+    write_society(old, make_society(plan_society("lab", ["Emil"], (), ["Emil"])), False)
+    with pytest.raises(RunError, match="no certificate for a router") as refused:
+        router_config(RouterOptions(keys=str(old)))
+    assert refused.value.hint is not None and "cfgplan keys new" in refused.value.hint
 
 
 def test_keys_that_do_not_fit_are_refused(keys: Path, tmp_path: Path) -> None:
