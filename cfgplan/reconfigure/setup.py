@@ -20,15 +20,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from cfgplan.configuration.model import Configuration
 from cfgplan.problem import Problem
 from cfgplan.reconfigure.committed import situation_of
 from cfgplan.reconfigure.decision import Hysteresis
-from cfgplan.reconfigure.local import adapt, coordinator_of
-from cfgplan.reconfigure.network import NetworkAdaptive, coordinate, coordinators_of
+from cfgplan.reconfigure.owner import coordinator_of, coordinators_of, owner, succession_of
 from cfgplan.reconfigure.situation import Situation
-from cfgplan.reconfigure.succession import Steward, succession_of
+from cfgplan.reconfigure.succession import Steward
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks
@@ -42,6 +41,10 @@ from cfgplan.runtime.society import Society
 from cfgplan.runtime.succession import TAKEOVER_AFTER
 from cfgplan.runtime.tracefile import TraceFile
 from cfgplan.runtime.zenoh_transport import ZenohTransport
+
+if TYPE_CHECKING:
+    from cfgplan.configuration.model import Configuration
+    from cfgplan.reconfigure.network import NetworkAdaptive
 
 __all__ = ["Settings", "hooks"]
 
@@ -65,7 +68,7 @@ def hooks(
     running: Society,
     registry: Registry,
     problem: Problem,
-    config: Configuration,
+    config: Configuration | None,
     parts: Sequence[Part],
     settings: Settings,
     trace: TraceFile | None = None,
@@ -74,11 +77,17 @@ def hooks(
 ) -> Hooks | None:
     """The hooks of a run of ``running`` (module docstring); ``None``: none
     needed. ``whole``: every robot of the configuration runs in ``running``
-    (else one robot runs, on the network or alone)."""
+    (else one robot runs, on the network or alone). ``config`` is ``None``
+    for a robot on the network that was planned nothing: one that is not
+    the coordinator (:func:`~cfgplan.reconfigure.owner.owner`) follows it;
+    the planner is loaded only to coordinate (or take over)."""
     hysteresis = Hysteresis(margin=settings.margin)
     transport = running.robots[0].transport if len(running.robots) == 1 else None
     if not isinstance(transport, ZenohTransport):
         if settings.reconfigure and whole:
+            from cfgplan.reconfigure.local import adapt
+
+            assert config is not None  # every robot here: planned
             return adapt(
                 running,
                 registry,
@@ -107,6 +116,8 @@ def hooks(
     steward = max((len(order) for order in succession.orders), default=0) > 1
 
     def take_over(following: Membership) -> NetworkAdaptive:
+        from cfgplan.reconfigure.network import coordinate  # the planner: loaded now
+
         member = following.member
         step = min(member.step, len(goals) - 1)
         situation, dropped = (
@@ -137,7 +148,14 @@ def hooks(
         return adaptive
 
     role: NetworkAdaptive | Membership
-    if robot.name == coordinator_of(problem.goal_call, config):
+    lead = (  # the goal's robot: planned, or told by the goal (a robot that planned nothing)
+        coordinator_of(problem.goal_call, config)
+        if config is not None
+        else owner(problem.task, problem.goal_call) or ""
+    )
+    if config is not None and robot.name == lead:
+        from cfgplan.reconfigure.network import coordinate
+
         role = coordinate(
             running,
             transport,
@@ -164,7 +182,7 @@ def hooks(
             without=settings.without,
             hold=settings.hold,
             succession=succession if steward else None,
-            leader=coordinator_of(problem.goal_call, config),  # lost before first contact too
+            leader=lead,  # lost before first contact too
         )
         injector = Injector(settings.injections, running, facts=False, kill=kill)
         role = Membership(member, injector)
