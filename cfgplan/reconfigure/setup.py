@@ -173,6 +173,9 @@ def hooks(
         )
         role.deployer.member.without = settings.without  # should it step down, then lose it
     else:
+        successors = {r for order in succession.orders for r in order}
+        if robot.name not in successors:  # it never coordinates: it watches only those who do
+            transport.narrow(sorted({lead, *successors} - {""}))
         monitor = Monitor(hold=settings.hold)
         monitor.watch(robot)
         member = Member(
