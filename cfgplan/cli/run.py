@@ -5,6 +5,12 @@ The configuration of the given rank is sorted, divided and wired as for
 joined by the in-process transport), or with ``--robot NAME`` that robot's
 part alone, its global channels over Zenoh to the other robots' programs
 (``cfgplan run --robot`` or the emitted ``emil.py``, on this host or others).
+With ``--robot``, a robot that cannot be the goal's coordinator
+(:func:`~cfgplan.reconfigure.owner.may_coordinate`) plans nothing: it runs
+the part its coordinator sends it, unless its implementations cannot take
+every functionality of the domain (its part is then checked at start) or an
+option shows the configuration (``--ros2``, ``--ros2-map``, ``--live``,
+``--foxglove``).
 The options are those of the emitted programs (:mod:`cfgplan.runtime.main`);
 the console (:mod:`cfgplan.runtime.console`) shows a compact status (in
 place on a terminal, a plain line every 100 cycles otherwise), every loss,

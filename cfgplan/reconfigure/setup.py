@@ -7,7 +7,10 @@
 * one robot alone (``--transport inprocess``): only the scripted faults;
 * one robot on the network: the robot that owns the goal coordinates
   (:func:`~cfgplan.reconfigure.network.coordinate`), any other follows it
-  (:class:`~cfgplan.runtime.member.Membership`); both apply the scripted
+  (:class:`~cfgplan.runtime.member.Membership`; one that may never
+  coordinate watches only the robots it needs,
+  :meth:`~cfgplan.runtime.zenoh_transport.ZenohTransport.narrow`, and one
+  planned nothing loads the planner only to take over); both apply the scripted
   faults aimed at their own robot, and only the coordinator the state
   updates. Where the goals name more than one robot (a sequence whose steps
   name others), each such robot may take over coordination, and a

@@ -35,8 +35,8 @@ def test_the_findings_say_the_ratio_and_the_verdict_from_the_figures() -> None:
     said = findings([small, slow])
     assert "2.7× the" in said and "over the goal of 2×" in said
     assert "after 12.0 s (started together): over" in said
-    assert kill_cells(slow, [small, slow])[6] == "2.7×"
-    assert kill_cells(small, [slow])[6] == "-"  # no society of 3 to compare with
+    assert kill_cells(slow, [small, slow])[7] == "2.7×"
+    assert kill_cells(small, [slow])[7] == "-"  # no society of 3 to compare with
 
 
 def test_the_committed_page_was_written_by_the_benchmark() -> None:
