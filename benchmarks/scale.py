@@ -555,12 +555,12 @@ phases of the switch with the new helper: four messages through the
 router). Timed hop by hop among 50 robots, the coordinator's own work took
 under 2 ms and does not grow with N (a prepare and a commit go to the robots
 whose part changes, not to all). What grew was everyone else's: every robot
-watched every robot's liveliness and problem tokens, so a kill was news to
-all 49 processes at once; the router sent each the deletions, each woke its
+watched every robot's liveliness, problem and planner tokens, so a kill was
+news to all 49 processes at once; the router sent each the deletions, each woke its
 loop while the coordinator switched, and on two cores the prepare and its
 answer took 5 to 9 ms a hop in that burst instead of under 1 ms. A robot
-that follows and may never coordinate now watches only the robots that may
-coordinate, its partners and the coordinator it follows, and drops the
+that never coordinates now watches only the coordinator, the robots that
+may take over, its partners and the coordinator it follows, and drops the
 problem tokens once it met its own problem (the switch protocol,
 [ready before anything is sent](switch-protocol.md#ready-before-anything-is-sent)):
 a kill reaches the coordinator alone. What is left of the growth is the
@@ -580,19 +580,19 @@ fallbacks there ([re-planning](monitoring.md#re-planning)): they are ready
 before the helper is back, which the column *by a fallback* counts.
 
 **Why all 50 take seconds to come up.** Started together, the robots share
-the machine's cores: what each does before its trace begins is CPU, and
-that CPU times N over the cores is the floor. Every robot used to plan its
+the machine's cores: what each does before its trace begins is CPU, and that
+CPU times N over the cores is the floor. Every robot used to plan its
 configuration at start, to learn a part the coordinator sends it anyway:
 0.32 s of CPU for a helper of this society of 50, 7 to 8 s of two cores for
-all. Only the coordinator plans now: a robot that cannot be it (its goal's
-method runs `dock` on Vacu in every version, so Vacu is the coordinator) reads
-and checks the domain and the state (it announces its problem's fingerprint
-and must know the functionalities it may be sent), opens its session and
-waits for its part, loading no search (the [switch
-protocol](switch-protocol.md#who-decides)). Its CPU is imports, most of
-them: typer, pydantic and the intermediate representation's models, Lark,
-the checker, the runtime and Zenoh; reading, checking and compiling the
-state of 50 robots takes 25 ms of it. Without bytecode on disk
+all. A robot that never coordinates plans nothing now (the goal's method
+runs `dock` on Vacu in every version, so Vacu coordinates, and no goal names
+a helper, so none takes over): it reads and checks the domain and the state
+(it announces its problem's fingerprint and must know the functionalities it
+may be sent), opens its session and waits for its part, loading no search
+(the [switch protocol](switch-protocol.md#who-decides)). Its CPU is imports,
+most of them: typer, pydantic and the intermediate representation's models,
+Lark, the checker, the runtime and Zenoh; reading, checking and compiling
+the state of 50 robots takes 25 ms of it. Without bytecode on disk
 (`PYTHONDONTWRITEBYTECODE` in a source checkout, as this machine's
 environment sets) every robot compiles cfgplan again at start. The program
 `cfgplan emit --lang python` writes for a robot imports only the runtime:

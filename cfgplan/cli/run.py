@@ -5,8 +5,8 @@ The configuration of the given rank is sorted, divided and wired as for
 joined by the in-process transport), or with ``--robot NAME`` that robot's
 part alone, its global channels over Zenoh to the other robots' programs
 (``cfgplan run --robot`` or the emitted ``emil.py``, on this host or others).
-With ``--robot``, a robot that cannot be the goal's coordinator
-(:func:`~cfgplan.reconfigure.owner.may_coordinate`) plans nothing: it runs
+With ``--robot``, a robot that never coordinates
+(:func:`~cfgplan.reconfigure.owner.never_coordinates`) plans nothing: it runs
 the part its coordinator sends it, unless its implementations cannot take
 every functionality of the domain (its part is then checked at start) or an
 option shows the configuration (``--ros2``, ``--ros2-map``, ``--live``,
@@ -49,7 +49,7 @@ from cfgplan.cli.registry import command
 from cfgplan.diagnostics import did_you_mean, run_error
 from cfgplan.live.address import Address, parse_address
 from cfgplan.notation import call_text
-from cfgplan.reconfigure.owner import coordinator_of, owner
+from cfgplan.reconfigure.owner import coordinator_of, never_coordinates
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.main import network_options, open_transport
@@ -275,7 +275,7 @@ def run(
         and reconfigure
         and robot in problem.task.agents
         and not (ros2 or ros2_map or live or foxglove)  # they show the configuration
-        and owner(problem.task, problem.goal_call) not in (None, robot)
+        and never_coordinates(problem.task, problem.goal_calls, robot)
     ):  # it follows the coordinator: it plans if its implementations may not run a part
         try:
             registry = Registry.load(impl)

@@ -1,13 +1,14 @@
 """Who coordinates a society: the goal's robot, and who may take over (5.5, 7.3).
 
 The robot that owns the goal coordinates (:func:`coordinator_of`): it plans,
-and every other robot follows it, running the part it is sent. Only the
-coordinator needs the planner at start: :func:`owner` tells, from the
-problem alone (no search), which robot it is where the goal's method says,
-so that every other robot (``cfgplan run --robot``) plans nothing and loads
-no search — a society of 50 robots started together spends its CPU on 50
-planners otherwise. A robot that takes over coordination later
-(:func:`succession_of`) plans then.
+and every other robot follows it, running the part it is sent; when it is
+gone, a robot the remaining goals name takes over (:func:`succession_of`).
+:func:`owner` tells, from the problem alone (no search), which robot the
+coordinator is where the goal's method says, and :func:`never_coordinates`
+which robots follow from start to end: they need no plan (``cfgplan run
+--robot`` plans nothing for them and loads no search) and watch only the
+robots that coordinate — a society of 50 robots started together spends
+its CPU on 50 planners otherwise, and each loss wakes all 50.
 
 :func:`coordinators_of` says which robots may coordinate at all (the
 society's keys), :func:`succession_of` the order in which they take over.
@@ -29,6 +30,7 @@ __all__ = [
     "certain_agents",
     "coordinator_of",
     "coordinators_of",
+    "never_coordinates",
     "owner",
     "succession_of",
 ]
@@ -80,6 +82,17 @@ def owner(task: Task, goal: Ground) -> str | None:
     if len(goal) > 1 and goal[1] in certain_agents(task, goal):
         return goal[1]
     return None
+
+
+def never_coordinates(task: Task, goals: Sequence[Ground], robot: str) -> bool:
+    """Whether ``robot`` never coordinates the society that serves ``goals``,
+    told without planning: the first goal's coordinator is known
+    (:func:`owner`) and is another robot, and no goal names ``robot``, so no
+    order of succession holds it (:func:`succession_of`). Such a robot
+    follows from start to end: it needs no plan of its own."""
+    if not goals or owner(task, goals[0]) in (None, robot):
+        return False
+    return all(robot not in goal[1:] for goal in goals)
 
 
 def coordinators_of(transport: Any, members: frozenset[str]) -> frozenset[str]:

@@ -9,8 +9,8 @@
   (:func:`~cfgplan.reconfigure.network.coordinate`), any other follows it
   (:class:`~cfgplan.runtime.member.Membership`; one that may never
   coordinate watches only the robots it needs,
-  :meth:`~cfgplan.runtime.zenoh_transport.ZenohTransport.narrow`, and one
-  planned nothing loads the planner only to take over); both apply the scripted
+  :meth:`~cfgplan.runtime.zenoh_transport.ZenohTransport.narrow`, and
+  needs no plan at start); both apply the scripted
   faults aimed at their own robot, and only the coordinator the state
   updates. Where the goals name more than one robot (a sequence whose steps
   name others), each such robot may take over coordination, and a
@@ -81,9 +81,9 @@ def hooks(
     """The hooks of a run of ``running`` (module docstring); ``None``: none
     needed. ``whole``: every robot of the configuration runs in ``running``
     (else one robot runs, on the network or alone). ``config`` is ``None``
-    for a robot on the network that was planned nothing: one that is not
-    the coordinator (:func:`~cfgplan.reconfigure.owner.owner`) follows it;
-    the planner is loaded only to coordinate (or take over)."""
+    for a robot on the network that was planned nothing: one that never
+    coordinates (:func:`~cfgplan.reconfigure.owner.never_coordinates`)
+    follows the goal's robot (:func:`~cfgplan.reconfigure.owner.owner`)."""
     hysteresis = Hysteresis(margin=settings.margin)
     transport = running.robots[0].transport if len(running.robots) == 1 else None
     if not isinstance(transport, ZenohTransport):

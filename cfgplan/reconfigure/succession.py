@@ -119,7 +119,11 @@ class Steward:
     @property
     def coordinator(self) -> Coordinator | None:
         """The coordinator while this robot coordinates."""
-        return None if isinstance(self.role, Membership) else self.role.coordinator
+        if isinstance(self.role, Membership):
+            return None
+        from cfgplan.reconfigure.network import NetworkAdaptive  # loaded: it coordinates
+
+        return self.role.coordinator if isinstance(self.role, NetworkAdaptive) else None
 
     @property
     def finished(self) -> str | None:

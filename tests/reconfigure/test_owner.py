@@ -11,7 +11,7 @@ import pytest
 
 from benchmarks.fault_conditions import DOCKING_IMPL
 from cfgplan.problem import Problem, load
-from cfgplan.reconfigure.owner import certain_agents, coordinator_of, owner
+from cfgplan.reconfigure.owner import certain_agents, coordinator_of, never_coordinates, owner
 from cfgplan.runtime.registry import Registry
 from tests.backends.support import DOMAINS, ROOT
 from tests.runtime.netutil import endpoint, free_port, hermetic_config
@@ -66,15 +66,37 @@ def test_the_docking_robot_coordinates_whatever_helper_lends_its_laser(tmp_path:
 
 
 def test_the_owner_told_without_planning_is_the_planned_coordinator() -> None:
-    """Cross-door 6.2.2: Pippi, in each of the first configurations planned."""
+    """Cross-door 6.2.2: Pippi, in each configuration planned (44 and 47)."""
     from cfgplan.planner import plan
 
     problem = load(*CROSS_DOOR)
-    configs, _ = plan(problem.task, problem.goal_call, limit=4)
-    assert len(configs) == 4
+    configs, _ = plan(problem.task, problem.goal_call, limit=8)
+    assert len(configs) == 2
     told = owner(problem.task, problem.goal_call)
     assert told == "Pippi"
     assert {coordinator_of(problem.goal_call, c) for c in configs} == {told}
+
+
+SEQUENCE = (
+    DOMAINS / "cross-door/domain-steps.lisp",
+    DOMAINS / "cross-door/state-6.2.2-sequence.lisp",
+)
+
+
+def test_who_never_coordinates(tmp_path: Path) -> None:
+    """A docking helper never does; Vacu does. In the 6.2.2 sequence Pippi
+    coordinates and Emil, whom the second goal names, may take over: each
+    plans at start."""
+    docking = _problem(tmp_path, DOCKING, DOCKING_STATE)
+    goals = docking.goal_calls
+    assert [r for r in ("Vacu", "H1", "H2") if never_coordinates(docking.task, goals, r)] == [
+        "H1",
+        "H2",
+    ]
+    sequence = load(*SEQUENCE)
+    assert owner(sequence.task, sequence.goal_call) == "Pippi"
+    assert not never_coordinates(sequence.task, sequence.goal_calls, "Emil")
+    assert not never_coordinates(sequence.task, sequence.goal_calls, "Pippi")
 
 
 def test_where_the_goals_method_does_not_tell_every_robot_plans(tmp_path: Path) -> None:
@@ -88,6 +110,7 @@ def test_where_the_goals_method_does_not_tell_every_robot_plans(tmp_path: Path) 
     both = _problem(tmp_path, RELAYED, RELAYED_STATE, "(do-both Bo Cy)")
     assert certain_agents(both.task, both.goal_call) == frozenset()
     assert owner(both.task, both.goal_call) is None
+    assert not never_coordinates(both.task, both.goal_calls, "Ada")  # it may: it plans
     domain = (
         RELAYED
         + """
