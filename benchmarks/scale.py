@@ -62,7 +62,7 @@ class Options:
     limit: float = 240.0  # seconds any one wait may take
     idle: float = 3.0  # seconds of the idle window
     kills: int = 3  # helpers in use killed in a row, one after the other's switch
-    between: float = 2.0  # seconds from the killed helpers being back to the next kill
+    between: float = 0.1  # seconds from the killed helpers being back to the next kill
     switch_limit: float = 30.0  # seconds a kill waits for its switch
     quiet: float = 0.5  # cores others may use before a row starts (waited for)
     settle: float = 20.0  # seconds a row waits for the machine to be that quiet
@@ -177,7 +177,7 @@ class Society:
     folder: Path
     lines: list[str] = field(default_factory=list)
     spent: float = 0.0  # CPU seconds of processes that were killed
-    killed: list[tuple[str, float]] = field(default_factory=list)  # (robot, time.time())
+    killed: list[tuple[str, int]] = field(default_factory=list)  # robot, lines said before
 
     def read(self) -> None:
         assert self.process.stdout is not None
@@ -215,13 +215,13 @@ class Society:
             return False
 
 
-def _until(found: Callable[[], object], limit: float) -> object | None:
+def _until(found: Callable[[], object], limit: float, poll: float = 0.05) -> object | None:
     deadline = time.monotonic() + limit
     while time.monotonic() < deadline:
         got = found()
         if got:
             return got
-        time.sleep(0.05)
+        time.sleep(poll)
     return None
 
 
@@ -271,9 +271,11 @@ class Row:
     idle_cpu: float = 0.0  # share of one core
     idle_segments: float = 0.0  # per second
     goal_messages: float = 0.0  # per second, what Vacu received
-    rss_robot: float = 0.0  # median over the robots, bytes
+    rss_robot: float = 0.0  # median over the helpers, bytes
+    rss_coordinator: float = 0.0  # Vacu's, bytes
     rss_total: float = 0.0  # the robots and the router
     switches: list[float] = field(default_factory=list)  # kill -> switch, seconds
+    fallbacks: int = 0  # switches answered by a fallback planned ahead (else by a search)
     again: list[float] = field(default_factory=list)  # kill -> goal data
     seen: list[float] = field(default_factory=list)  # kill -> the coordinator's robot-lost
     load: tuple[float, float] = (0.0, 0.0)  # 1-min load average before, after
@@ -320,8 +322,9 @@ def measure(n: int, topology: str, options: Options) -> Row:
             pids = list(society.pids().values())
             row.connections = connections(pids)
             _idle(society, row, options)
-            robot_pids = [p for r, p in society.pids().items() if r != "router"]
-            row.rss_robot = statistics.median(_rss(p) for p in robot_pids) if robot_pids else 0
+            helpers = [p for r, p in society.pids().items() if r not in ("router", "Vacu")]
+            row.rss_robot = statistics.median(_rss(p) for p in helpers) if helpers else 0
+            row.rss_coordinator = _rss(society.pids().get("Vacu", 0))
             row.rss_total = sum(_rss(p) for p in society.pids().values())
             for _ in range(options.kills if first and n > 2 else 0):  # 2: no other helper
                 if not _kill(society, row, options):
@@ -356,31 +359,33 @@ def _idle(society: Society, row: Row, options: Options) -> None:
 def _kill(society: Society, row: Row, options: Options) -> bool:
     """Kill (SIGKILL) the helper in use: the time to the switch and to goal
     data again; False when there was none to kill or nothing followed."""
-    if _until(lambda: back(society), options.switch_limit) is None:
+    if _until(lambda: back(society), options.switch_limit, poll=0.002) is None:
         return False
-    time.sleep(options.between)  # the coordinator's fallbacks for the new situation
+    time.sleep(options.between)  # the fallbacks should be ready by now
     helper = in_use(society.trace("Vacu"))
     pid = society.pids().get(helper or "")
     if helper is None or pid is None:
         return False
     society.spent += _cpu(pid)
+    society.killed.append((helper, len(society.lines)))
     killed = time.time()
     os.kill(pid, signal.SIGKILL)
-    society.killed.append((helper, killed))
 
-    def switched() -> float | None:
+    def switched() -> dict[str, object] | None:
         for r in society.trace("Vacu"):
             if r.get("event") == "switch" and _t(r) > killed:
-                return _t(r)
+                return r
         return None
 
-    switch = _until(switched, options.switch_limit)
-    if switch is None:
+    found = _until(switched, options.switch_limit)
+    if not isinstance(found, dict):
         return False
-    again = _until(lambda: _served(society, float(switch)), options.switch_limit)  # type: ignore[arg-type]
+    switch = _t(found)
+    again = _until(lambda: _served(society, switch), options.switch_limit)
     if again is None:
         return False
-    row.switches.append(float(switch) - killed)  # type: ignore[arg-type]
+    row.switches.append(switch - killed)
+    row.fallbacks += found.get("source") == "fallback"
     lost = next(
         (
             _t(r)
@@ -396,16 +401,15 @@ def _kill(society: Society, row: Row, options: Options) -> bool:
 
 
 def back(society: Society) -> bool:
-    """Whether Vacu has seen every helper killed so far again (its
-    ``recovery``): respawned and past the hold, so that the next kill has the
-    society's every helper to switch to, not one still coming back."""
-    trace = society.trace("Vacu")
+    """Whether Vacu has said that every helper killed so far works again
+    (its ``recovery``, on its console, which says it at once: its trace is
+    flushed once a cycle): respawned and past the hold, so that the next
+    kill has the society's every helper to switch to, not one still coming
+    back."""
+    lines = society.lines
     return all(
-        any(
-            r.get("event") == "recovery" and r.get("resource") == robot and _t(r) > killed
-            for r in trace
-        )
-        for robot, killed in society.killed
+        any(re.match(rf"Vacu +\| .*: {robot} works again \(", line) for line in lines[said:])
+        for robot, said in society.killed
     )
 
 
@@ -422,9 +426,10 @@ class Program:
 
 
 def programs(options: Options) -> list[Program]:
-    """H1 of the society of 3, a client of a router, started as ``cfgplan run
-    --robot H1`` and as the program ``cfgplan emit --lang python`` writes
-    (no planner); each alone, its CPU when its trace begins, its RSS a second later."""
+    """The society of 3's coordinator Vacu and helper H1, clients of a router,
+    started as ``cfgplan run --robot``, and H1 as the program ``cfgplan emit
+    --lang python`` writes (no planner); each alone, its CPU when its trace
+    begins, its RSS a second later."""
     out: list[Program] = []
     with tempfile.TemporaryDirectory(prefix="cfgplan-scale-") as name:
         folder = Path(name)
@@ -443,12 +448,12 @@ def programs(options: Options) -> list[Program]:
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=ROOT,
         )  # fmt: skip
         common = ["--impl", str(impl), "--router", f"tcp/127.0.0.1:{port}", "--society", "scale"]
+        run = ["-m", "cfgplan", "run", str(DOMAIN), str(state), "--robot"]
         kinds = {
-            "cfgplan run --robot H1 (plans)": [
-                "-m", "cfgplan", "run", str(DOMAIN), str(state), "--robot", "H1",
-            ],
+            "cfgplan run --robot Vacu (the coordinator: plans)": [*run, "Vacu"],
+            "cfgplan run --robot H1 (a helper: plans nothing)": [*run, "H1"],
             "h1.py from cfgplan emit (no planner)": [str(emitted / "h1.py")],
-        }  # fmt: skip
+        }
         try:
             for kind, args in kinds.items():
                 trace = folder / f"{len(out)}.jsonl"
@@ -474,11 +479,11 @@ def programs(options: Options) -> list[Program]:
 
 START_HEADER = [
     "robots", "topology", "TCP connections", "all up", "goal data", "CPU idle",
-    "TCP segments/s idle", "goal messages/s", "RSS per robot", "RSS total",
+    "TCP segments/s idle", "goal messages/s", "RSS per helper", "RSS coordinator", "RSS total",
 ]  # fmt: skip
 KILL_HEADER = [
-    "robots", "topology", "kills", "kill → loss seen", "kill → switch", "kill → goal data",
-    f"switch ÷ {BASE} robots'", "load before / after", "others' CPU",
+    "robots", "topology", "kills", "by a fallback", "kill → loss seen", "kill → switch",
+    "kill → goal data", f"switch ÷ {BASE} robots'", "load before / after", "others' CPU",
 ]  # fmt: skip
 PROGRAM_HEADER = ["robot process", "CPU to its first trace line", "RSS"]
 
@@ -500,7 +505,8 @@ def start_cells(row: Row) -> list[str]:
     return [
         str(row.n), row.topology, str(row.connections), _s(row.up), _s(row.first),
         f"{100 * row.idle_cpu:.0f} %", f"{row.idle_segments:.0f}", f"{row.goal_messages:.0f}",
-        f"{row.rss_robot / 2**20:.0f} MB", f"{row.rss_total / 2**20:.0f} MB",
+        f"{row.rss_robot / 2**20:.0f} MB", f"{row.rss_coordinator / 2**20:.0f} MB",
+        f"{row.rss_total / 2**20:.0f} MB",
     ]  # fmt: skip
 
 
@@ -510,8 +516,8 @@ def kill_cells(row: Row, rows: list[Row]) -> list[str]:
     if base is not None and base.switches and row.switches:
         ratio = f"{statistics.median(row.switches) / statistics.median(base.switches):.1f}×"
     return [
-        str(row.n), row.topology, str(len(row.switches)), _ms(row.seen), _ms(row.switches),
-        _ms(row.again),
+        str(row.n), row.topology, str(len(row.switches)), str(row.fallbacks), _ms(row.seen),
+        _ms(row.switches), _ms(row.again),
         ratio, f"{row.load[0]:.1f} / {row.load[1]:.1f}", f"{row.others:.2f} cores",
     ]  # fmt: skip
 
@@ -536,17 +542,19 @@ running on a pose, after the launch started; over an idle window of
 the TCP segments the society's own sockets sent per second (`ss`'s
 `segs_out`) and the messages Vacu's goal
 received per second; the RSS of a robot process (the median) and of them
-all with the router. Then the helper in use is killed (SIGKILL) {kills}
-times in a row, each once the one killed before is back (launch's
-`--respawn` starts a killed helper again, and the coordinator has seen it
-recover, and {between:g} s more for its fallbacks, so that a small society
-has every helper to switch to and the coordinator a plan ready): the time
-from the kill to the coordinator's switch and to the goal's data again
-(median, min–max), the first of them split off: the kill to the
-coordinator's `robot-lost` (Zenoh: the router, or the peer, sees the
-connection close and withdraws the robot's liveliness token), and the
-median switch over the same topology's among
-{base} robots. The machine is shared: each row waits until other work takes
+all with the router, the helpers' (the median) and the coordinator's apart.
+Then the helper in use is killed (SIGKILL) {kills} times in a row, each once
+the one killed before is back (launch's `--respawn` starts a killed helper
+again, and the coordinator says it works again) and {between:g} s more:
+that recovery switches nothing (the helper back costs what the running one
+does), and the fallbacks of the situation it returns to must be ready by
+then. Measured: how many switches a fallback planned ahead answered (*by a
+fallback*; the others were planned by search), the time from the kill to the
+coordinator's switch and to the goal's data again (median, min–max), the
+first of them split off: the kill to the coordinator's `robot-lost` (Zenoh:
+the router, or the peer, sees the connection close and withdraws the
+robot's liveliness token), and the median switch over the same topology's
+among {base} robots. The machine is shared: each row waits until other work takes
 under {quiet:g} cores, records the load average before and after (the
 society's own processes raise it), and the cores everything else used
 while it ran (the machine's busy time less the society's and this
@@ -566,34 +574,57 @@ TARGETS = """\
 
 {findings}
 
-**Why a switch among many takes longer.** A switch after a kill has two
-parts, and the table splits them: Zenoh's, the kill to the coordinator's
-`robot-lost` ("kill → loss seen": the router sees the killed robot's
-connection close and withdraws everything that robot declared, liveliness
-tokens, subscribers and interests, from every other client, the
-coordinator's token deletion among them), and cfgplan's, from that
-`robot-lost` to the `switch` (the rest of "kill → switch": the failure
-taken, the fallback planned ahead chosen, the steps of the switch sent).
-Both grow with N here: every robot declares a handful of tokens and
-subscribers and watches every other's, and the coordinator's loop, which
-takes the loss on its next pass, shares two cores with the idle society
-and other work. Profiling the coordinator's pass at 50 robots is what is
-left to do.
+**Why a switch among many took longer, and what is left.** A switch after a
+kill has two parts, and the table splits them: Zenoh's, the kill to the
+coordinator's `robot-lost` ("kill → loss seen": the router sees the killed
+robot's connection close and withdraws its liveliness tokens from the
+clients that watch them), and cfgplan's, from that `robot-lost` to the
+`switch` (the failure taken, the fallback planned ahead chosen, then the two
+phases of the switch with the new helper: four messages through the
+router). Timed hop by hop among 50 robots, the coordinator's own work took
+under 2 ms and does not grow with N (a prepare and a commit go to the robots
+whose part changes, not to all). What grew was everyone else's: every robot
+watched every robot's liveliness, problem and planner tokens, so a kill was
+news to all 49 processes at once; the router sent each the deletions, each woke its
+loop while the coordinator switched, and on two cores the prepare and its
+answer took 5 to 9 ms a hop in that burst instead of under 1 ms. A robot
+that never coordinates now watches only the coordinator, the robots that
+may take over, its partners and the coordinator it follows, and drops the
+problem tokens once it met its own problem (the switch protocol,
+[ready before anything is sent](switch-protocol.md#ready-before-anything-is-sent)):
+a kill reaches the coordinator alone. What is left of the growth is the
+busier machine: 50 idle robot loops and their keep-alives share the two
+cores, so each wake-up on the way (the router's, the coordinator's, the new
+helper's) waits longer for a core; on a loaded machine the spread between
+kills is as wide as the difference between sizes.
+
+**Fallbacks after a recovery.** Fallbacks are kept by situation, and a
+recovery that switches nothing leaves the society in a situation whose
+fallbacks for the running configuration were never computed (before the
+kill it ran another helper). They were queued then, and at 50 robots each
+takes tens of milliseconds to plan, so a kill within the next few hundred
+milliseconds was planned by search. While a resource is out, the
+coordinator now plans the situation its recovery returns to, and the
+fallbacks there ([re-planning](monitoring.md#re-planning)): they are ready
+before the helper is back, which the column *by a fallback* counts.
 
 **Why all 50 take seconds to come up.** Started together, the robots share
-the machine's cores: what each does before its trace begins is CPU, and
-that CPU times N over the cores is the floor. Alone, a robot process of
-`cfgplan run --robot` takes about 0.3 s of CPU to its first trace line
-(`python -X importtime`: about 0.25 s of it imports — the interpreter's
-site, typer, pydantic and the intermediate representation's models, Lark,
-the planner's modules, the runtime and Zenoh — then reading the domain and
-planning, 0.06 s); 50 of them on 2 cores are 7 to 8 s of that alone, and
-under contention each takes more. Without bytecode on disk
+the machine's cores: what each does before its trace begins is CPU, and that
+CPU times N over the cores is the floor. Every robot used to plan its
+configuration at start, to learn a part the coordinator sends it anyway:
+0.32 s of CPU for a helper of this society of 50, 7 to 8 s of two cores for
+all. A robot that never coordinates plans nothing now (the goal's method
+runs `dock` on Vacu in every version, so Vacu coordinates, and no goal names
+a helper, so none takes over): it reads and checks the domain and the state
+(it announces its problem's fingerprint and must know the functionalities it
+may be sent), opens its session and waits for its part, loading no search
+(the [switch protocol](switch-protocol.md#who-decides)). Its CPU is imports,
+most of them: typer, pydantic and the intermediate representation's models,
+Lark, the checker, the runtime and Zenoh; reading, checking and compiling
+the state of 50 robots takes 25 ms of it. Without bytecode on disk
 (`PYTHONDONTWRITEBYTECODE` in a source checkout, as this machine's
-environment sets) every robot compiles cfgplan again: 0.47 s each, 12 s at
-50. What would cut it further is a helper that does not plan: the program
-`cfgplan emit --lang python` writes for a robot imports only the runtime
-and follows its coordinator, installing the parts it is sent:
+environment sets) every robot compiles cfgplan again at start. The program
+`cfgplan emit --lang python` writes for a robot imports only the runtime:
 
 {programs}
 """
@@ -638,6 +669,13 @@ def findings(rows: list[Row]) -> str:
         if meshed:
             per = ", ".join(f"{r.idle_segments / r.n:.1f} at {r.n}" for r in meshed)
             out.append(f"  In a mesh: {per}.")
+        if big.switches:
+            out.append(
+                f"- **Fallbacks ready after a recovery**: among {big.n}, {big.fallbacks} of "
+                f"{len(big.switches)} kills (each right after the helper killed before was "
+                "back) were answered by a fallback planned ahead"
+                + ("." if big.fallbacks == len(big.switches) else ", the others by a search.")
+            )
         base = next((r for r in routed if r.n == BASE and r.switches), None)
         if base is not None and big.switches:
             ratio = statistics.median(big.switches) / statistics.median(base.switches)
@@ -654,8 +692,9 @@ def findings(rows: list[Row]) -> str:
                 "during the row)."
             )
         out.append(
-            f"- **Memory**: a robot process holds {big.rss_robot / 2**20:.0f} MB "
-            f"(RSS; {big.rss_total / 2**20:.0f} MB for all {big.n} and the router)."
+            f"- **Memory**: a helper's process holds {big.rss_robot / 2**20:.0f} MB, the "
+            f"coordinator's {big.rss_coordinator / 2**20:.0f} MB (RSS; "
+            f"{big.rss_total / 2**20:.0f} MB for all {big.n} and the router)."
         )
     if keyed:
         out.append(_keys_finding(keyed, routed))

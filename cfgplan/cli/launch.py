@@ -326,7 +326,7 @@ def launch(
     )
     rank = run_opts["rank"]
     config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
-    from cfgplan.reconfigure.local import coordinator_of
+    from cfgplan.reconfigure.owner import coordinator_of
 
     lead = coordinator_of(problem.goal_call, config)
     known = list(problem.task.agents) if run_opts["reconfigure"] else list(config.agents)

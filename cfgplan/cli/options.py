@@ -26,7 +26,6 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError, Diagnostic
 from cfgplan.notation import call_text
 from cfgplan.option_values import choice, number, whole
-from cfgplan.planner import plan
 from cfgplan.problem import GOAL_SOURCE, Problem, load
 from cfgplan.syntax.reader import collection_paused
 
@@ -281,6 +280,8 @@ def nothing(report_: Report, goal: str) -> NoReturn:
 
 def choose(problem: Problem, rank: int) -> Configuration:
     """The configuration of ``rank`` (1: the cheapest); exit 3 when there are fewer."""
+    from cfgplan.planner import plan  # here: a robot that follows plans nothing (run)
+
     configs, search = plan(problem.task, problem.goal_call, limit=rank)
     goal = call_text(problem.goal_call)
     if not configs:

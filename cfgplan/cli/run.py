@@ -5,6 +5,12 @@ The configuration of the given rank is sorted, divided and wired as for
 joined by the in-process transport), or with ``--robot NAME`` that robot's
 part alone, its global channels over Zenoh to the other robots' programs
 (``cfgplan run --robot`` or the emitted ``emil.py``, on this host or others).
+With ``--robot``, a robot that never coordinates
+(:func:`~cfgplan.reconfigure.owner.never_coordinates`) plans nothing: it runs
+the part its coordinator sends it, unless its implementations cannot take
+every functionality of the domain (its part is then checked at start) or an
+option shows the configuration (``--ros2``, ``--ros2-map``, ``--live``,
+``--foxglove``).
 The options are those of the emitted programs (:mod:`cfgplan.runtime.main`);
 the console (:mod:`cfgplan.runtime.console`) shows a compact status (in
 place on a terminal, a plain line every 100 cycles otherwise), every loss,
@@ -25,10 +31,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from cfgplan.backends.part import runtime_part
-from cfgplan.backends.wiring import deploy
 from cfgplan.cli.app import usage_error
-from cfgplan.cli.emit import title
 from cfgplan.cli.options import (
     DomainArg,
     GoalsOpt,
@@ -45,9 +48,10 @@ from cfgplan.cli.options import (
     parsed,
 )
 from cfgplan.cli.registry import command
-from cfgplan.cli.sequence import first_step
 from cfgplan.diagnostics import did_you_mean, run_error
 from cfgplan.live.address import Address, parse_address
+from cfgplan.notation import call_text
+from cfgplan.reconfigure.owner import coordinator_of, never_coordinates
 from cfgplan.reconfigure.setup import Settings, hooks
 from cfgplan.runtime import Registry, RunError, RunOptions, Society, build, execute, society
 from cfgplan.runtime.main import network_options, open_transport
@@ -84,6 +88,8 @@ from cfgplan.runtime.transport import InProcessTransport, Transport
 from cfgplan.security.identity import problem_id
 
 if TYPE_CHECKING:
+    from cfgplan.configuration.model import Configuration
+    from cfgplan.problem import Problem
     from cfgplan.ros2.bindings import Bindings
 
 TRANSPORTS = ("zenoh", "inprocess")
@@ -263,8 +269,25 @@ def run(
         use_sim_time=use_sim_time,
     )
     problem = load_problem(domain, state, goal, weights, sequence=True, lasting=True)
-    config = first_step(problem, rank) if len(problem.goals) > 1 else choose(problem, rank)
-    parts = [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
+    config: Configuration | None = None
+    parts: list[Part] = []
+    registry: Registry | None = None
+    if (
+        kind == "zenoh"
+        and reconfigure
+        and robot in problem.task.agents
+        and not (ros2 or ros2_map or live or foxglove)  # they show the configuration
+        and never_coordinates(problem.task, problem.goal_calls, robot)
+    ):  # it follows the coordinator: it plans if its implementations may not run a part
+        try:
+            registry = Registry.load(impl)
+        except RunError as exc:
+            raise run_error(exc) from None
+        if not registry.serves(objects_and_inputs(problem)):
+            registry = None  # its part is checked at start, as the coordinator's
+    if registry is None:  # the coordinator plans; so does every robot without one
+        config = planned(problem, rank)
+        parts = runtime_parts(config, problem)
     options = RunOptions(
         rate=rate,
         cycles=cycles,
@@ -288,7 +311,8 @@ def run(
     recording = None
     fox = None
     try:
-        registry = Registry.load(impl)
+        if registry is None:
+            registry = Registry.load(impl)
         if robot is None:
             running = society(parts, registry)
         else:
@@ -299,7 +323,7 @@ def run(
                     f"no robot {robot} in this configuration (its robots: {names})",
                     hint=did_you_mean(robot, problem.task.agents),
                 )
-            part = part or Part(robot, (), ())  # a robot of the state: it waits for a part
+            part = part or Part(robot, (), ())  # a robot of the state, or that follows: it waits
             topics = None
             if ros2_map is not None:  # checked against the domain before the network opens
                 from cfgplan.ros2.topics import load_map
@@ -348,6 +372,7 @@ def run(
             if ros2 and ros_node is not None:  # the society's events on the node's topics
                 from cfgplan.ros2.node import RclpyEvents
 
+                assert config is not None  # --ros2: planned
                 ros_events = RclpyEvents(ros_node, robot, config)
                 running.subscribe(ros_events)
             elif ros2:  # its Adaptation events on /cfgplan/events (cfgplan.ros2)
@@ -363,8 +388,6 @@ def run(
             ros_events.follow(adapting)
         names = ", ".join(r.name for r in running.robots)
         lasting = how_long(options.cycles, options.duration)
-        from cfgplan.reconfigure.local import coordinator_of
-
         if record is not None:  # mcap is imported only then (cfgplan.record)
             from cfgplan.record.launch import start_recording
             from cfgplan.record.policy import Policy
@@ -374,14 +397,17 @@ def run(
         if foxglove is not None:  # foxglove-sdk is imported only then
             from cfgplan.record.launch import open_foxglove
 
-            heading = title(problem, config, rank)
+            assert config is not None  # --foxglove: planned
+            heading = heading_of(problem, config, rank)
             fox = open_foxglove(foxglove, running, adapting, config, problem.goal_call, heading)
             running.subscribe(fox)
         page = None
         if live is not None:  # aiohttp is imported only then (cfgplan.live)
             from cfgplan.live.launch import open_live
 
-            page = open_live(live, running, adapting, problem, config, title(problem, config, rank))
+            assert config is not None  # --live: planned
+            heading = heading_of(problem, config, rank)
+            page = open_live(live, running, adapting, problem, config, heading)
         try:
             code = execute(
                 running,
@@ -389,8 +415,8 @@ def run(
                 source=registry.source,
                 trace=written,
                 hooks=adapting,
-                heading=f"{title(problem, config, rank)}: {names}; {lasting}",
-                lead=coordinator_of(problem.goal_call, config),  # --cycles: the goal robot's
+                heading=f"{heading_of(problem, config, rank)}: {names}; {lasting}",
+                lead=None if config is None else coordinator_of(problem.goal_call, config),
             )
         finally:
             if page is not None:
@@ -420,6 +446,43 @@ def run(
         raise run_error(exc) from None
     if code:
         raise typer.Exit(code)
+
+
+def planned(problem: Problem, rank: int) -> Configuration:
+    """The configuration of ``rank`` the society starts with (of the first step
+    of a sequence); exit 3 when there is none."""
+    if len(problem.goals) > 1:
+        from cfgplan.cli.sequence import first_step
+
+        return first_step(problem, rank)
+    return choose(problem, rank)
+
+
+def runtime_parts(config: Configuration, problem: Problem) -> list[Part]:
+    """``config`` per robot, sorted, divided and wired (5.1-5.3) for the runtime."""
+    from cfgplan.backends.part import runtime_part
+    from cfgplan.backends.wiring import deploy
+
+    return [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
+
+
+def objects_and_inputs(problem: Problem) -> list[tuple[str, int, int]]:
+    """Each functionality of the domain: its name, object arguments (those
+    after the robot) and inputs, as an implementation is called."""
+    return [
+        (name, arity - 1, len(schema.inputs))
+        for (name, arity), schema in problem.task.functionalities.items()
+    ]
+
+
+def heading_of(problem: Problem, config: Configuration | None, rank: int) -> str:
+    """What a run says first: its configuration, or, for a robot that plans
+    nothing, that it follows the coordinator."""
+    if config is None:
+        return f"Following the coordinator, for {call_text(problem.goal_call)}"
+    from cfgplan.cli.emit import title
+
+    return title(problem, config, rank)
 
 
 def refuse_combinations(

@@ -25,7 +25,7 @@ import time
 from cfgplan.configuration.model import Configuration
 from cfgplan.live.address import Address
 from cfgplan.problem import Problem
-from cfgplan.reconfigure.local import coordinator_of
+from cfgplan.reconfigure.owner import coordinator_of
 from cfgplan.reconfigure.succession import Shown, coordinating
 from cfgplan.runtime.errors import RunError
 from cfgplan.runtime.launch import Hooks

@@ -11,7 +11,12 @@ the background, one after the other, each given :data:`AHEAD_LIMIT` seconds
 (a search cut by it keeps nothing: that resource's failure is then planned
 for when it happens). Each fallback is planned on a task of its own, derived
 for the purpose, so the robots' thread never plans a task this thread is
-planning. A new decision restarts the list.
+planning. A new decision restarts the list. Once the running
+configuration's fallbacks are known, the situations a recovery of what is
+out would return to are planned, and their fallbacks too where the society
+would stay on its configuration
+(:meth:`~cfgplan.reconfigure.policy.Reconfigurator.look_ahead`): a recovery
+that switches nothing then finds them ready.
 """
 
 from __future__ import annotations
@@ -56,8 +61,9 @@ class Ahead:
             self._wake.clear()
             while not self._closed:
                 job = self.reconfigurator.next_fallback()
-                if job is None:
+                if job is not None:
+                    self.reconfigurator.compute(*job, time_limit=self.time_limit)
+                elif not self.reconfigurator.look_ahead(self.time_limit):
                     break
-                self.reconfigurator.compute(*job, time_limit=self.time_limit)
             if not self._wake.is_set():
                 self.idle.set()

@@ -31,7 +31,7 @@ from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.situation import Situation, derive
 from cfgplan.reconfigure.switch import Change, change, highest_label, relabel
 
-__all__ = ["Fallback", "Resource", "fallbacks", "medium_text", "resources"]
+__all__ = ["Fallback", "Resource", "fallbacks", "medium_text", "outages", "resources"]
 
 
 def medium_text(medium: Medium) -> str:
@@ -57,6 +57,14 @@ class Resource:
             return situation.losing(self.robot)
         return situation.medium_down(self.medium)
 
+    def recover(self, situation: Situation) -> Situation:
+        """``situation`` with this resource working again (a robot back)."""
+        if self.kind == "functionality":
+            return situation.recovered(self.instance)
+        if self.kind == "robot":
+            return situation.returning(self.robot)
+        return situation.medium_up(self.medium)
+
 
 def resources(config: Configuration, media: tuple[Medium, ...]) -> list[Resource]:
     """Functionality instances (the configuration's order), robots and
@@ -68,6 +76,15 @@ def resources(config: Configuration, media: tuple[Medium, ...]) -> list[Resource
     out += [Resource("robot", robot=r, text=r) for r in config.agents]
     used = dict.fromkeys(a.medium for a in config.media)
     out += [Resource("medium", medium=i, text=medium_text(media[i])) for i in used]
+    return out
+
+
+def outages(situation: Situation, media: tuple[Medium, ...]) -> list[Resource]:
+    """What is out of service in ``situation``: robots lost, functionality
+    instances failed, media down (each of which may come back)."""
+    out = [Resource("robot", robot=r, text=r) for r in situation.lost]
+    out += [Resource("functionality", instance=f, text=call_text(f)) for f in situation.failed]
+    out += [Resource("medium", medium=i, text=medium_text(media[i])) for i in situation.media_down]
     return out
 
 

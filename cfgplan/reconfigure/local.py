@@ -26,6 +26,7 @@ from cfgplan.planner.task import Ground, Task
 from cfgplan.reconfigure.ahead import Ahead
 from cfgplan.reconfigure.coordinate import Coordinator, Done, Failed
 from cfgplan.reconfigure.decision import Decision, Hysteresis
+from cfgplan.reconfigure.owner import coordinator_of
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.executor import Robot
@@ -38,19 +39,6 @@ from cfgplan.runtime.registry import Registry
 from cfgplan.runtime.society import Society
 
 __all__ = ["Adaptive", "InProcessDeployer", "adapt", "coordinator_of"]
-
-
-def coordinator_of(goal: Ground, config: Configuration | None) -> str:
-    """The robot that owns the goal: its first argument that is an agent of
-    the configuration (``do-cross-door(Emil, Door1)``: Emil), else the
-    configuration's first agent, else the goal's first argument."""
-    agents = [] if config is None else config.agents
-    for arg in goal[1:]:
-        if arg in agents:
-            return arg
-    if agents:
-        return agents[0]
-    return goal[1] if len(goal) > 1 else goal[0]
 
 
 class InProcessDeployer:

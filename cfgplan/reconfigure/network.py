@@ -42,6 +42,7 @@ from cfgplan.reconfigure.committed import state_of
 from cfgplan.reconfigure.coordinate import Coordinator
 from cfgplan.reconfigure.decision import Hysteresis
 from cfgplan.reconfigure.deployer import RETRY, RETRY_MOST, SWITCH_TIMEOUT, NetworkDeployer
+from cfgplan.reconfigure.owner import coordinators_of
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.reconfigure.situation import Situation
 from cfgplan.reconfigure.stall import Doubts, Heartbeat
@@ -72,7 +73,6 @@ from cfgplan.runtime.society import Society
 from cfgplan.runtime.succession import Succession, candidates
 from cfgplan.runtime.zenoh_transport import DEFAULT_LEASE, ZenohTransport
 from cfgplan.security.rates import Throttle
-from cfgplan.security.zenoh_tls import society_of
 
 __all__ = [
     "RETRY",
@@ -737,14 +737,3 @@ def coordinate(
         transport.subscribe(coordinator_key(transport.society, other), adaptive.receiver(other))
         transport.declare(configure_key(transport.society, other))  # ready to talk to it
     return adaptive
-
-
-def coordinators_of(transport: ZenohTransport, members: frozenset[str]) -> frozenset[str]:
-    """The robots that may coordinate ``transport``'s society: with its keys,
-    those its ``society.json`` marks so (only they may send switches); without,
-    any robot of the state."""
-    folder = getattr(transport.options, "keys", None)
-    if not folder:
-        return members
-    keys = society_of(folder)
-    return frozenset(m.name for m in keys.robots if m.coordinator)

@@ -7,7 +7,10 @@
 * one robot alone (``--transport inprocess``): only the scripted faults;
 * one robot on the network: the robot that owns the goal coordinates
   (:func:`~cfgplan.reconfigure.network.coordinate`), any other follows it
-  (:class:`~cfgplan.runtime.member.Membership`); both apply the scripted
+  (:class:`~cfgplan.runtime.member.Membership`; one that may never
+  coordinate watches only the robots it needs,
+  :meth:`~cfgplan.runtime.zenoh_transport.ZenohTransport.narrow`, and
+  needs no plan at start); both apply the scripted
   faults aimed at their own robot, and only the coordinator the state
   updates. Where the goals name more than one robot (a sequence whose steps
   name others), each such robot may take over coordination, and a
@@ -20,15 +23,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from cfgplan.configuration.model import Configuration
 from cfgplan.problem import Problem
 from cfgplan.reconfigure.committed import situation_of
 from cfgplan.reconfigure.decision import Hysteresis
-from cfgplan.reconfigure.local import adapt, coordinator_of
-from cfgplan.reconfigure.network import NetworkAdaptive, coordinate, coordinators_of
+from cfgplan.reconfigure.owner import coordinator_of, coordinators_of, owner, succession_of
 from cfgplan.reconfigure.situation import Situation
-from cfgplan.reconfigure.succession import Steward, succession_of
+from cfgplan.reconfigure.succession import Steward
 from cfgplan.runtime.faults import Injection
 from cfgplan.runtime.inject import Injector, Scripted
 from cfgplan.runtime.launch import Hooks
@@ -42,6 +44,10 @@ from cfgplan.runtime.society import Society
 from cfgplan.runtime.succession import TAKEOVER_AFTER
 from cfgplan.runtime.tracefile import TraceFile
 from cfgplan.runtime.zenoh_transport import ZenohTransport
+
+if TYPE_CHECKING:
+    from cfgplan.configuration.model import Configuration
+    from cfgplan.reconfigure.network import NetworkAdaptive
 
 __all__ = ["Settings", "hooks"]
 
@@ -65,7 +71,7 @@ def hooks(
     running: Society,
     registry: Registry,
     problem: Problem,
-    config: Configuration,
+    config: Configuration | None,
     parts: Sequence[Part],
     settings: Settings,
     trace: TraceFile | None = None,
@@ -74,11 +80,17 @@ def hooks(
 ) -> Hooks | None:
     """The hooks of a run of ``running`` (module docstring); ``None``: none
     needed. ``whole``: every robot of the configuration runs in ``running``
-    (else one robot runs, on the network or alone)."""
+    (else one robot runs, on the network or alone). ``config`` is ``None``
+    for a robot on the network that was planned nothing: one that never
+    coordinates (:func:`~cfgplan.reconfigure.owner.never_coordinates`)
+    follows the goal's robot (:func:`~cfgplan.reconfigure.owner.owner`)."""
     hysteresis = Hysteresis(margin=settings.margin)
     transport = running.robots[0].transport if len(running.robots) == 1 else None
     if not isinstance(transport, ZenohTransport):
         if settings.reconfigure and whole:
+            from cfgplan.reconfigure.local import adapt
+
+            assert config is not None  # every robot here: planned
             return adapt(
                 running,
                 registry,
@@ -107,6 +119,8 @@ def hooks(
     steward = max((len(order) for order in succession.orders), default=0) > 1
 
     def take_over(following: Membership) -> NetworkAdaptive:
+        from cfgplan.reconfigure.network import coordinate  # the planner: loaded now
+
         member = following.member
         step = min(member.step, len(goals) - 1)
         situation, dropped = (
@@ -137,7 +151,14 @@ def hooks(
         return adaptive
 
     role: NetworkAdaptive | Membership
-    if robot.name == coordinator_of(problem.goal_call, config):
+    lead = (  # the goal's robot: planned, or told by the goal (a robot that planned nothing)
+        coordinator_of(problem.goal_call, config)
+        if config is not None
+        else owner(problem.task, problem.goal_call) or ""
+    )
+    if config is not None and robot.name == lead:
+        from cfgplan.reconfigure.network import coordinate
+
         role = coordinate(
             running,
             transport,
@@ -155,6 +176,9 @@ def hooks(
         )
         role.deployer.member.without = settings.without  # should it step down, then lose it
     else:
+        successors = {r for order in succession.orders for r in order}
+        if robot.name not in successors:  # it never coordinates: it watches only those who do
+            transport.narrow(sorted({lead, *successors} - {""}))
         monitor = Monitor(hold=settings.hold)
         monitor.watch(robot)
         member = Member(
@@ -164,7 +188,7 @@ def hooks(
             without=settings.without,
             hold=settings.hold,
             succession=succession if steward else None,
-            leader=coordinator_of(problem.goal_call, config),  # lost before first contact too
+            leader=lead,  # lost before first contact too
         )
         injector = Injector(settings.injections, running, facts=False, kill=kill)
         role = Membership(member, injector)

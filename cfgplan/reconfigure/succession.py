@@ -34,45 +34,26 @@ passes from one to the other.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
-from cfgplan.configuration.model import Configuration
 from cfgplan.notation import atom_text, call_text
-from cfgplan.planner.task import Ground
-from cfgplan.reconfigure.coordinate import Coordinator
-from cfgplan.reconfigure.local import Adaptive
-from cfgplan.reconfigure.network import NetworkAdaptive
-from cfgplan.reconfigure.policy import Reconfigurator
+from cfgplan.reconfigure.owner import succession_of
 from cfgplan.runtime.events import Adaptation
 from cfgplan.runtime.member import Membership
 from cfgplan.runtime.monitor import Detection
 from cfgplan.runtime.part import Part
-from cfgplan.runtime.succession import TAKEOVER_AFTER, Succession
+
+if TYPE_CHECKING:  # a robot that follows loads no planner: the coordinator's side is lazy
+    from cfgplan.configuration.model import Configuration
+    from cfgplan.reconfigure.coordinate import Coordinator
+    from cfgplan.reconfigure.network import NetworkAdaptive
+    from cfgplan.reconfigure.policy import Reconfigurator
 
 __all__ = ["Shown", "Steward", "coordinating", "succession_of"]
 
 
-def succession_of(
-    goals: Sequence[Ground],
-    agents: Collection[str],
-    may: Collection[str] | None = None,
-    after: float = TAKEOVER_AFTER,
-) -> Succession:
-    """The order of succession of each step of ``goals``: the robots of
-    ``agents`` (and of ``may``, those that may coordinate, if given) that the
-    goals from that step on name, in the order they are named."""
-    orders: list[tuple[str, ...]] = []
-    for step in range(len(goals)):
-        named: list[str] = []
-        for goal in goals[step:]:
-            for arg in goal[1:]:
-                if arg in agents and (may is None or arg in may) and arg not in named:
-                    named.append(arg)
-        orders.append(tuple(named))
-    return Succession(tuple(orders), after)
-
-
-TakeOver = Callable[[Membership], NetworkAdaptive]
+TakeOver = Callable[[Membership], "NetworkAdaptive"]
 """Makes a robot that followed a coordinator its society's coordinator (its
 member's step, the run it followed, one generation later)."""
 
@@ -92,9 +73,10 @@ class Steward:
 
     def between(self, cycle: int, elapsed: float) -> None:
         role = self.role
-        if isinstance(role, Membership) and role.member.takeover_due():
-            self.role = self._takeover(role)
-        elif isinstance(role, NetworkAdaptive) and role.superseded is not None:
+        if isinstance(role, Membership):
+            if role.member.takeover_due():
+                self.role = self._takeover(role)
+        elif role.superseded is not None:
             leader, epoch = role.superseded
             role.retire()
             member = role.deployer.member
@@ -137,6 +119,10 @@ class Steward:
     @property
     def coordinator(self) -> Coordinator | None:
         """The coordinator while this robot coordinates."""
+        if isinstance(self.role, Membership):
+            return None
+        from cfgplan.reconfigure.network import NetworkAdaptive  # loaded: it coordinates
+
         return self.role.coordinator if isinstance(self.role, NetworkAdaptive) else None
 
     @property
@@ -163,6 +149,9 @@ def coordinating(hooks: object) -> Coordinator | None:
     """The coordinator among a run's hooks (:func:`cfgplan.reconfigure.setup.hooks`),
     if this process runs it now: what the live page, Foxglove and ROS 2 show
     the running configuration of (a :class:`Steward` that follows runs none)."""
+    from cfgplan.reconfigure.local import Adaptive
+    from cfgplan.reconfigure.network import NetworkAdaptive
+
     if isinstance(hooks, Adaptive | NetworkAdaptive | Steward):
         return hooks.coordinator
     return None

@@ -63,7 +63,7 @@ def open_foxglove(
             "--foxglove needs the foxglove-sdk package, which is not installed",
             hint=FOXGLOVE_HINT,
         ) from None
-    from cfgplan.reconfigure.local import coordinator_of
+    from cfgplan.reconfigure.owner import coordinator_of
     from cfgplan.reconfigure.succession import Shown, coordinating
     from cfgplan.record.foxglove_live import serve
 

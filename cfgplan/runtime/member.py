@@ -212,7 +212,15 @@ class Member:
         self.epoch, self.leader, self._leader_gone = epoch, leader, False
         self.current, self.pending = 0, {}
         self._listen()
+        self._watch_leader()
         self._send(Ready(self.robot.name, self.instance))
+
+    def _watch_leader(self) -> None:
+        """Watch the coordinator followed, where only some robots are watched
+        (:meth:`~cfgplan.runtime.zenoh_transport.ZenohTransport.narrow`)."""
+        watch = getattr(self.network, "watch_robot", None)
+        if watch is not None:
+            watch(self.leader)
 
     def takeover_due(self) -> bool:
         """Whether this robot takes over coordination now: the coordinator it
@@ -347,6 +355,7 @@ class Member:
         in the queue while its token went — it is lost as if its token went
         now (unless it was lost before): a takeover is not missed."""
         self.leader = sender
+        self._watch_leader()
         if self._alive(sender):
             self._leader_gone, self._lost_at, self._gone = False, None, None
             return

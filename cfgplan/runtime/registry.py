@@ -193,6 +193,22 @@ class Registry:
             raise _import_fault(text, exc) from None
         return cls.from_module(module)
 
+    def serves(self, functionalities: Iterable[tuple[str, int, int]]) -> bool:
+        """Whether each functionality ``(name, objects, inputs)`` has an
+        implementation that can be called with its ``objects`` object
+        arguments and ``inputs`` inputs (:meth:`Implementation.check`): then
+        any part made of them passes :func:`~cfgplan.runtime.install.runnable`'s
+        check of implementations."""
+        for name, objects, inputs in functionalities:
+            impl = self._by_name.get(name)
+            if impl is None:
+                return False
+            try:
+                impl.check(name, objects, inputs)
+            except RunError:
+                return False
+        return True
+
     def require(self, names: Iterable[str]) -> None:
         """Fail at once, naming every functionality without implementation."""
         missing = sorted({n for n in names if n not in self._by_name})

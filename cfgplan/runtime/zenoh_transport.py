@@ -18,6 +18,9 @@ each robot program opens one Zenoh session in *peer* mode (no router) and:
   lost as soon as its connection closes; one that freezes (a stopped process,
   a hung machine, a cut cable) when the *lease* runs out without a word from
   it: :data:`~cfgplan.runtime.zenoh_config.DEFAULT_LEASE` seconds unless set.
+  It watches every robot's token; a robot that follows and may never
+  coordinate watches only those it needs (:meth:`ZenohTransport.narrow`), so
+  that a robot lost among 50 is news to a few processes, not to all 50.
 
 Addressing (:class:`~cfgplan.runtime.zenoh_config.ZenohOptions`): ``--listen``
 and ``--connect`` endpoints (``tcp/192.168.1.7:7447``); without them, robots
@@ -139,8 +142,10 @@ class ZenohTransport:
         self._arrivals: queue.SimpleQueue[tuple[str, bool]] = queue.SimpleQueue()
         self._watch: tuple[frozenset[str], Presence] | None = None
         self._watcher: Any = None
+        self._narrowed: set[str] | None = None  # the robots watched one by one (narrow())
         self.alive: set[str] = set()
-        """Robots of the society whose liveliness token is seen (after :meth:`watch`)."""
+        """Robots of the society whose liveliness token is seen (after
+        :meth:`watch`): of every robot, or of those watched (:meth:`narrow`)."""
         self.presence_listeners: list[Presence] = []
         """Told of every robot of the society appearing or lost (the coordinator)."""
         self._processes: queue.SimpleQueue[tuple[str, str, bool]] = queue.SimpleQueue()
@@ -413,13 +418,59 @@ class ZenohTransport:
             drops, self._router_drops = self._router_drops, 0
         return drops > 0 or not list(self._session.info.links())
 
+    def narrow(self, robots: Collection[str]) -> None:
+        """Watch the liveliness of ``robots`` only (and whether they plan, their
+        planner tokens), and, as they come, of the partners (:meth:`watch`)
+        and of the coordinator followed (:meth:`watch_robot`), not every
+        robot's; and stop watching the problem tokens once a robot of this
+        one's problem is met (it is then a member, which no other problem's
+        token stops, :mod:`cfgplan.security.identity`; the coordinator says
+        who is not of the society). For a robot that follows and never
+        coordinates (``robots``: the coordinator and those that may take over,
+        :mod:`cfgplan.reconfigure.owner`): every robot lost or back otherwise
+        reaches every process of the society and wakes it, 49 of them at once
+        among 50 robots, while the coordinator switches. Before :meth:`watch`."""
+        self._narrowed = set()
+        if self._planner_watch is not None:  # every robot's: those of ``robots`` instead
+            self._planner_watch.undeclare()
+            self._planner_watch = None
+            with self._lock:
+                self._planners.clear()
+        for name in sorted(robots):
+            self.watch_robot(name)
+
+    def watch_robot(self, name: str) -> None:
+        """Watch ``name``'s liveliness (and its planner token) too, if only
+        some robots' is watched (:meth:`narrow`): its token, up now, is
+        reported as its subscriber's history arrives (milliseconds)."""
+        if self._narrowed is None or name in self._narrowed or name == self.robot:
+            return
+        self._narrowed.add(name)
+        liveliness = self._session.liveliness()
+        watched = liveliness.declare_subscriber(
+            alive_key(self.society, name), self._on_token, history=True
+        )
+        self._subscribers.append(watched)
+        problem = self.options.problem
+        if self.options.plans and problem is not None:
+            planner = planner_key(self.society, name, problem.fingerprint)
+            self._subscribers.append(
+                liveliness.declare_subscriber(planner, self._on_planner, history=True)
+            )
+
     def watch(self, robot: str, partners: Collection[str], report: Presence) -> None:
         """Report ``partners`` appearing and lost; called again (after a
         switch) it changes the partners, and a new partner already seen is
         reported seen at once."""
+        first = self._watch is None  # what is seen until now is queued, reported at poll
         before = self._watch[0] if self._watch is not None else frozenset()
         self._watch = (frozenset(partners), report)
-        if self._watcher is None:
+        if self._narrowed is not None:
+            for name in sorted(partners):
+                self.watch_robot(name)
+            if first:
+                return
+        elif self._watcher is None:
             self._watcher = self._session.liveliness().declare_subscriber(
                 alive_pattern(self.society), self._on_token, history=True
             )
@@ -471,6 +522,9 @@ class ZenohTransport:
         society runs another problem (:attr:`conflict`) and nothing else ends the run."""
         if self._aliens:
             self._weigh(time.monotonic())
+        if self._narrowed is not None and self._met and self._problems is not None:
+            self._problems.undeclare()  # a member: no other problem's token concerns it
+            self._problems = None
         if self.conflict is not None and not self.conflict_handled:
             raise RunError(self.conflict, hint="robots of one problem share a society name")
         with self._lock:

@@ -81,13 +81,15 @@ def test_a_small_gain_does_not_switch_back() -> None:
     assert back.action == "switch" and back.config is not None and back.config.cost == 44
 
 
-def test_fallbacks_are_computed_again_after_a_recovery_that_causes_no_switch() -> None:
-    """Measured: fallbacks are kept by situation, and a recovery that
-    switched nothing (a small gain, a robot back that nothing needs) queued
-    none for the new situation, so every second failure was planned by
-    search (38-154 ms at 40-50 robots instead of 0.03 ms). The compass
-    returns and 47 stays: its fallbacks are queued again, and the next
-    failure of what 47 uses is answered by one."""
+def test_a_recovery_that_causes_no_switch_finds_the_fallbacks_ready() -> None:
+    """Fallbacks are kept by situation: a recovery that switched nothing (a
+    small gain, a robot back that nothing needs) left the new situation with
+    none, and the next failure was planned by search (38-154 ms at 40-50
+    robots instead of 0.03 ms); then they were queued again, but a failure
+    before they were computed was still searched. Now, while the compass is
+    out, the situation its return leads to is planned ahead: 47 would stay
+    there, so its fallbacks there are computed too, and ready the moment
+    the compass returns."""
     _, r = _start(STEP2)
     while r.prepare():
         pass
@@ -95,14 +97,50 @@ def test_fallbacks_are_computed_again_after_a_recovery_that_causes_no_switch() -
     while r.prepare():
         pass
     assert r.recovered(COMPASS).action == "stay"
-    assert r.next_fallback() is not None
-    while r.prepare():
-        pass
+    assert r.next_fallback() is None  # nothing left to compute: ready
     running = r.running
     assert running is not None
     camera = next(f for f in running.functionalities if f.name == "camera")
     used = Resource("functionality", instance=(camera.name, *camera.args), text="camera")
     assert r.failed(used).source == "fallback"
+
+
+Decided = tuple[str, object]
+"""A decision's action and what it runs (its identity and cost)."""
+
+
+def _decisions(
+    files: tuple[object, object], ahead: bool, *changes: tuple[str, Resource]
+) -> list[Decided]:
+    """The decisions after each change, with every fallback and look ahead
+    computed before it (``ahead``) or none."""
+    _, r = _start(files, Weights(reliability=10))
+    out: list[Decided] = []
+    for what, resource in changes:
+        while ahead and r.prepare():
+            pass
+        decision = r.failed(resource) if what == "fail" else r.recovered(resource)
+        config = decision.config
+        out.append((decision.action, None if config is None else (config.identity(), config.cost)))
+    return out
+
+
+def test_looking_ahead_changes_no_decision() -> None:
+    """The cheapest configuration of a situation a recovery returns to,
+    planned ahead, is what the recovery decides by: the decisions are those
+    of searching at each change (carry-bar 6.3.2 with reliability weights:
+    the laser back is worth the switch to 33 once, not after a second
+    failure; cross-door: the compass back is not worth it)."""
+    carry = [("fail", LASER), ("recover", LASER), ("fail", LASER), ("recover", LASER)]
+    assert _decisions(CARRY, True, *carry) == _decisions(CARRY, False, *carry)
+    assert [action for action, _ in _decisions(CARRY, True, *carry)] == [
+        "switch",
+        "switch",
+        "switch",
+        "stay",
+    ]
+    step2 = [("fail", COMPASS), ("recover", COMPASS), ("fail", PIPPI), ("recover", PIPPI)]
+    assert _decisions(STEP2, True, *step2) == _decisions(STEP2, False, *step2)
 
 
 def test_the_laser_returning_is_worth_the_switch_back_to_33() -> None:

@@ -75,9 +75,9 @@ FAST = ("cfgplan.cli", "cfgplan.cli.app", "cfgplan.cli.help_text", "cfgplan.cli.
 (the registry is a map of names and a decorator: it imports nothing but importlib)."""
 
 
-def _loaded_by(args: list[str], tmp_path: Path) -> list[str]:
+def loading(args: list[str], tmp_path: Path) -> tuple[list[str], str]:
     """The modules the command line ``cfgplan ARGS`` has imported when it exits
-    (as the console script runs it, whatever it prints)."""
+    (as the console script runs it, whatever it prints), and what it printed."""
     found = tmp_path / "modules.json"
     code = (
         "import atexit, json, pathlib, sys\n"
@@ -96,7 +96,12 @@ def _loaded_by(args: list[str], tmp_path: Path) -> list[str]:
     )
     assert out.returncode in (0, 2), out.stderr
     modules: list[str] = json.loads(found.read_text("utf-8"))
-    return modules
+    return modules, out.stdout
+
+
+def _loaded_by(args: list[str], tmp_path: Path) -> list[str]:
+    """The modules the command line ``cfgplan ARGS`` has imported when it exits."""
+    return loading(args, tmp_path)[0]
 
 
 @pytest.mark.parametrize("args", [["--version"], ["--help"], ["-h"], []])
