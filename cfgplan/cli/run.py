@@ -448,7 +448,7 @@ def run(
         raise typer.Exit(code)
 
 
-def planned(problem: Problem, rank: int) -> Configuration:
+def planned(problem: "Problem", rank: int) -> "Configuration":
     """The configuration of ``rank`` the society starts with (of the first step
     of a sequence); exit 3 when there is none."""
     if len(problem.goals) > 1:
@@ -458,7 +458,7 @@ def planned(problem: Problem, rank: int) -> Configuration:
     return choose(problem, rank)
 
 
-def runtime_parts(config: Configuration, problem: Problem) -> list[Part]:
+def runtime_parts(config: "Configuration", problem: "Problem") -> list[Part]:
     """``config`` per robot, sorted, divided and wired (5.1-5.3) for the runtime."""
     from cfgplan.backends.part import runtime_part
     from cfgplan.backends.wiring import deploy
@@ -466,7 +466,7 @@ def runtime_parts(config: Configuration, problem: Problem) -> list[Part]:
     return [runtime_part(p, config.cost) for p in deploy(config, problem.domain)]
 
 
-def objects_and_inputs(problem: Problem) -> list[tuple[str, int, int]]:
+def objects_and_inputs(problem: "Problem") -> list[tuple[str, int, int]]:
     """Each functionality of the domain: its name, object arguments (those
     after the robot) and inputs, as an implementation is called."""
     return [
@@ -475,7 +475,7 @@ def objects_and_inputs(problem: Problem) -> list[tuple[str, int, int]]:
     ]
 
 
-def heading_of(problem: Problem, config: Configuration | None, rank: int) -> str:
+def heading_of(problem: "Problem", config: "Configuration | None", rank: int) -> str:
     """What a run says first: its configuration, or, for a robot that plans
     nothing, that it follows the coordinator."""
     if config is None:
