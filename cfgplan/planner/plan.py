@@ -44,7 +44,7 @@ if TYPE_CHECKING:  # each loaded where it is used: most runs use none (start-up)
     from cfgplan.planner.enumerate import Windows
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, repr=False)
 class Analysis:
     """What the planner works out about a task once, for every search of it
     (:func:`analysis`): the grounding memo, the two bounds made on it, and what
