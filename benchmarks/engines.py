@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -39,7 +38,7 @@ from pathlib import Path
 from benchmarks import families
 from benchmarks.families import weak
 from benchmarks.run import ROOT, machine
-from benchmarks.sweeps import Measured, measure, plan_command, written
+from benchmarks.sweeps import Measured, measure, measured, plan_command, timed, written
 
 Family = Callable[[int], tuple[str, str]]
 
@@ -73,18 +72,11 @@ class Referenced:
 def referenced(domain: Path, state: Path, cap: float) -> Referenced:
     command = [sys.executable, "-m", "benchmarks.engines", "--reference", str(domain),
                str(state), "--cap", f"{cap:g}"]  # fmt: skip
-    start = time.perf_counter()
-    with tempfile.TemporaryFile() as out:
-        process = subprocess.Popen(command, cwd=ROOT, stdout=out, stderr=subprocess.DEVNULL)
-        _, status, usage = os.wait4(process.pid, 0)
-        took = time.perf_counter() - start
-        out.seek(0)
-        text = out.read().decode()
-    mib = usage.ru_maxrss / 1024
-    if os.waitstatus_to_exitcode(status) != 0:
-        return Referenced(None, mib, None)
-    found = json.loads(text)
-    return Referenced(took if found["ended"] else None, mib, found["cost"])
+    run = timed(command, ROOT)
+    if run.code != 0:
+        return Referenced(None, run.mib, None)
+    found = json.loads(run.text)
+    return Referenced(run.seconds if found["ended"] else None, run.mib, found["cost"])
 
 
 def reference_one(domain: Path, state: Path, cap: float) -> None:
@@ -100,13 +92,11 @@ def reference_one(domain: Path, state: Path, cap: float) -> None:
     print(json.dumps({"cost": None if found is None else found.cost, "ended": ended}))
 
 
-def answered(command: list[str], cap: float) -> tuple[Measured, str]:
-    """``command`` measured (:func:`benchmarks.sweeps.measure`), and which engine answered."""
-    with tempfile.TemporaryFile() as out:
-        found = measure(command, ROOT, cap, out)
-        out.seek(0)
-        text = out.read().decode()
-    engine = json.loads(text)["stats"]["engine"] if found.seconds is not None else ""
+def answered(command: list[str]) -> tuple[Measured, str]:
+    """``command`` measured (:func:`benchmarks.sweeps.measured`), and which engine answered."""
+    run = timed(command, ROOT)
+    found = measured(run)
+    engine = json.loads(run.text)["stats"]["engine"] if found.seconds is not None else ""
     return found, engine
 
 
@@ -119,7 +109,7 @@ def rows(cap: float, only: str | None, step: int) -> Iterator[list[str]]:
                 domain, state = written(Path(tmp), make(size))
                 search = measure(plan_command(domain, state, cap, "-k", "1", "--engine", "search"),
                                  ROOT, cap)  # fmt: skip
-                ours, by = answered(plan_command(domain, state, cap, "-k", "1"), cap)
+                ours, by = answered(plan_command(domain, state, cap, "-k", "1"))
                 ref = referenced(domain, state, cap)
             goal = ""
             if ref.seconds is not None:

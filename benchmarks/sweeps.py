@@ -30,7 +30,6 @@ alike; the two must agree on the best cost.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
 import subprocess
@@ -40,7 +39,6 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
 
 from benchmarks import families
 from benchmarks.run import ROOT, checkout, machine
@@ -65,33 +63,50 @@ class Measured:
         return f"{self.seconds:.2f}" if self.seconds is not None else f"> {cap:g}"
 
 
-def measure(command: list[str], cwd: Path, cap: float, out: IO[bytes] | None = None) -> Measured:
-    """Run ``command`` (a ``cfgplan plan ... --format json``) as a fresh
-    process: wall time from start to exit, and its own peak RSS; its output
-    is left in ``out`` when given."""
+@dataclass(frozen=True)
+class Timed:
+    """One process run to its end: wall time from start to exit, exit code,
+    its own peak RSS and what it printed."""
+
+    seconds: float
+    code: int
+    mib: float
+    text: str
+
+
+def timed(command: list[str], cwd: Path) -> Timed:
+    """Run ``command`` as a fresh process and wait for it (killed, by its pid,
+    if the wait is interrupted)."""
     start = time.perf_counter()
-    with contextlib.ExitStack() as stack:
-        if out is None:
-            out = stack.enter_context(tempfile.TemporaryFile())
+    with tempfile.TemporaryFile() as out:
         process = subprocess.Popen(command, cwd=cwd, stdout=out, stderr=subprocess.DEVNULL)
         try:
             _, status, usage = os.wait4(process.pid, 0)
         except BaseException:
             process.kill()
             raise
-        process.returncode = os.waitstatus_to_exitcode(status)
         took = time.perf_counter() - start
         out.seek(0)
         text = out.read().decode()
-    mib = usage.ru_maxrss / 1024
-    if process.returncode not in (0, 3):  # 3: it ended, and nothing is admissible
-        return Measured(None, mib, None)
-    found = json.loads(text)
+    return Timed(took, os.waitstatus_to_exitcode(status), usage.ru_maxrss / 1024, text)
+
+
+def measured(run: Timed) -> Measured:
+    """What a ``cfgplan plan ... --format json`` process found, as :func:`timed` ran it."""
+    if run.code not in (0, 3):  # 3: it ended, and nothing is admissible
+        return Measured(None, run.mib, None)
+    found = json.loads(run.text)
     if found["stats"]["stopped"]:
-        return Measured(None, mib, None)
+        return Measured(None, run.mib, None)
     listed = found.get("sequences", found.get("configurations", []))
     best = listed[0].get("total_cost", listed[0].get("cost")) if listed else None
-    return Measured(took, mib, best)
+    return Measured(run.seconds, run.mib, best)
+
+
+def measure(command: list[str], cwd: Path, cap: float) -> Measured:
+    """Run ``command`` (a ``cfgplan plan ... --format json``) as a fresh
+    process: wall time from start to exit, and its own peak RSS."""
+    return measured(timed(command, cwd))
 
 
 def plan_command(domain: Path, state: Path, cap: float, *more: str) -> list[str]:
