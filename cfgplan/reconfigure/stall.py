@@ -82,9 +82,13 @@ class Heartbeat:
         return worst
 
     def stop(self) -> None:
+        """Stop beating: from now on :meth:`take` counts only the pauses noted
+        (no beat is due, so the time since the last one is no pause)."""
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=1.0)
+        with self._lock:
+            self._thread = None
 
 
 @dataclass
