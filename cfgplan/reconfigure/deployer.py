@@ -42,10 +42,12 @@ back, :data:`RETRY` seconds later, twice as long after each silence in a row
 
 A robot that says it is ready gets the running configuration's part (a
 commit carrying the part; after the switch in flight, if one is). When the
-task is accomplished every robot is told to **finish**; each says so and
-answers ``finished``, and the coordinator leaves once all have answered (at
-most :data:`SWITCH_TIMEOUT` seconds later): a robot that left after
-finishing is not lost to anyone (:meth:`~cfgplan.runtime.Robot.release`).
+task is accomplished every robot is told to **finish** (again, to those
+that have not answered, every ``greet`` seconds: a message can be lost on
+the way); each says so and answers ``finished``, and the coordinator leaves
+once all have answered (at most :data:`SWITCH_TIMEOUT` seconds later): a
+robot that left after finishing is not lost to anyone
+(:meth:`~cfgplan.runtime.Robot.release`).
 """
 
 from __future__ import annotations
@@ -128,6 +130,7 @@ class NetworkDeployer:
     (:meth:`acked`): taken as lost by the coordinator (:class:`NetworkAdaptive`)."""
     ending: tuple[set[str], float] | None = None
     """After :meth:`finish`: the robots yet to answer it, and until when (clock)."""
+    _finishing: tuple[Finish, float] | None = None  # the finish, and when (clock) to send it again
     ready: set[str] = field(default_factory=set)
     """Robots that said they are ready since their token last appeared."""
     greet: float = 0.25
@@ -260,6 +263,7 @@ class NetworkDeployer:
         for robot, (at, wait) in sorted(self._greeting.items()):
             if at <= now:
                 self._hello(robot, min(self.greet_most, 2 * wait))
+        self._finish_again(now)
         switch = self.switch
         if switch is None or now < switch.deadline:
             return
@@ -354,9 +358,27 @@ class NetworkDeployer:
         self.member.robot.release()
         self._greeting.clear()
         alive = set(self.transport.alive) - {self.me}
+        message = Finish(self.current, self.me, self.epoch, goal)
         for robot in sorted((set(self.parts) | alive) - {self.me}):
-            self._to(robot, Finish(self.current, self.me, self.epoch, goal))
+            self._to(robot, message)
         self.ending = (alive, self.clock() + self.timeout)
+        self._finishing = (message, self.clock() + self.greet)
+
+    def _finish_again(self, now: float) -> None:
+        """Tell the robots that have not answered the finish again, every
+        ``greet`` seconds until they do or the wait is over: a message can be
+        lost on the way (Zenoh drops one that its link's queue cannot take at
+        once, as on a loaded machine), and a robot never told would run on
+        after the run ended. A robot answers every finish it is told."""
+        if self.ending is None or self._finishing is None:
+            return
+        message, at = self._finishing
+        waiting, deadline = self.ending
+        if now < at or now >= deadline or not waiting:
+            return
+        for robot in sorted(waiting):
+            self._to(robot, message)
+        self._finishing = (message, now + self.greet)
 
     def ended(self) -> list[str] | None:
         """After :meth:`finish`: ``None`` while robots are still awaited, else
