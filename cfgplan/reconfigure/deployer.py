@@ -32,7 +32,13 @@ with the messages of :mod:`cfgplan.runtime.protocol`:
   (the robot installs it when it gets it, or liveliness reports it lost); a
   commit refused (the robot lost what it prepared) is sent again with the
   part, and refused again makes the robot lost: nothing is rolled back,
-  the others run the new configuration.
+  the others run the new configuration;
+* a message can be lost on the way: Zenoh drops one that its link's queue
+  cannot take at once (as on a loaded machine), and so a robot's answer.
+  The prepare or the commit is told again to the robots that have not
+  answered it, ``greet`` seconds later and twice as long each time, while
+  the step's wait is not over (:class:`_Telling`); a robot answers a message
+  told again as it did the first time.
 
 A robot taken as lost for its silence while liveliness still shows it alive
 (a message lost, or a robot busy catching up) would otherwise never be seen
@@ -42,10 +48,12 @@ back, :data:`RETRY` seconds later, twice as long after each silence in a row
 
 A robot that says it is ready gets the running configuration's part (a
 commit carrying the part; after the switch in flight, if one is). When the
-task is accomplished every robot is told to **finish**; each says so and
-answers ``finished``, and the coordinator leaves once all have answered (at
-most :data:`SWITCH_TIMEOUT` seconds later): a robot that left after
-finishing is not lost to anyone (:meth:`~cfgplan.runtime.Robot.release`).
+task is accomplished every robot is told to **finish** (told again, as a
+step of a switch is, to those that have not answered); each says so and
+answers ``finished``, and the coordinator leaves
+once all have answered (at most :data:`SWITCH_TIMEOUT` seconds later): a
+robot that left after finishing is not lost to anyone
+(:meth:`~cfgplan.runtime.Robot.release`).
 """
 
 from __future__ import annotations
@@ -89,6 +97,27 @@ RETRY_MOST = 30.0
 
 
 @dataclass
+class _Telling:
+    """Messages to robots, told again to those that have not answered them,
+    ``wait`` seconds later and twice as long each time: a message can be
+    lost on the way (Zenoh drops one that its link's queue cannot take at
+    once, as on a loaded machine), and a robot answers a message told again
+    as it answered it the first time."""
+
+    told: dict[str, ToRobot]  # the message each robot was told
+    at: float  # when (clock) to tell again
+    wait: float
+
+    def due(self, now: float, waiting: set[str]) -> list[tuple[str, ToRobot]]:
+        """What to tell again now: the messages of the robots ``waiting``."""
+        if now < self.at:
+            return []
+        self.wait *= 2
+        self.at = now + self.wait
+        return [(robot, self.told[robot]) for robot in sorted(waiting & set(self.told))]
+
+
+@dataclass
 class _Switch:
     decision: Decision
     parts: dict[str, Part]  # those of the robots alive, which take part
@@ -99,6 +128,7 @@ class _Switch:
     waiting: set[str]
     deadline: float
     resent: set[str] = field(default_factory=set)  # refused the commit: sent the part itself
+    telling: _Telling | None = None  # the step's messages, told again to who has not answered
 
 
 @dataclass
@@ -128,6 +158,7 @@ class NetworkDeployer:
     (:meth:`acked`): taken as lost by the coordinator (:class:`NetworkAdaptive`)."""
     ending: tuple[set[str], float] | None = None
     """After :meth:`finish`: the robots yet to answer it, and until when (clock)."""
+    _finishing: _Telling | None = None  # the finish, told again to who has not answered
     ready: set[str] = field(default_factory=set)
     """Robots that said they are ready since their token last appeared."""
     greet: float = 0.25
@@ -172,9 +203,12 @@ class NetworkDeployer:
         if absent:  # its part would reach nobody: the others would wait for its data for good
             self._abort(absent, NOT_RUNNING)
             return
+        told: dict[str, ToRobot] = {}
         for robot in joining:
             part = part_to_json(targets[robot])
-            self._to(robot, Prepare(decision.id, self.me, self.epoch, part))
+            told[robot] = Prepare(decision.id, self.me, self.epoch, part)
+            self._to(robot, told[robot])
+        self.switch.telling = self._telling(told)
         if not joining:
             self._commit()
 
@@ -186,9 +220,12 @@ class NetworkDeployer:
         joining = [r for r in others if not _empty(switch.parts[r])]
         switch.awaiting, switch.waiting = Phase.INSTALLED, set(joining)
         switch.deadline = self.clock() + self.timeout
+        told: dict[str, ToRobot] = {}
         for robot in others:  # first: they install while this robot does
             leaving = None if robot in joining else part_to_json(switch.parts[robot])
-            self._to(robot, Commit(number, self.me, self.epoch, leaving, self.step()))
+            told[robot] = Commit(number, self.me, self.epoch, leaving, self.step())
+            self._to(robot, told[robot])
+        switch.telling = self._telling(told)
         own = switch.parts.get(self.me)
         if own is not None:
             self.member.install(number, own)
@@ -233,7 +270,10 @@ class NetworkDeployer:
             if robot not in switch.resent:
                 switch.resent.add(robot)
                 part = part_to_json(switch.parts[robot])
-                self._to(robot, Commit(number, self.me, self.epoch, part, self.step()))
+                commit = Commit(number, self.me, self.epoch, part, self.step())
+                if switch.telling is not None:
+                    switch.telling.told[robot] = commit
+                self._to(robot, commit)
                 return
             self.refused.append((robot, reason))
         elif phase != switch.awaiting:
@@ -260,6 +300,7 @@ class NetworkDeployer:
         for robot, (at, wait) in sorted(self._greeting.items()):
             if at <= now:
                 self._hello(robot, min(self.greet_most, 2 * wait))
+        self._tell_again(now)
         switch = self.switch
         if switch is None or now < switch.deadline:
             return
@@ -354,9 +395,30 @@ class NetworkDeployer:
         self.member.robot.release()
         self._greeting.clear()
         alive = set(self.transport.alive) - {self.me}
+        message = Finish(self.current, self.me, self.epoch, goal)
         for robot in sorted((set(self.parts) | alive) - {self.me}):
-            self._to(robot, Finish(self.current, self.me, self.epoch, goal))
+            self._to(robot, message)
         self.ending = (alive, self.clock() + self.timeout)
+        self._finishing = self._telling(dict.fromkeys(sorted(alive), message))
+
+    def _telling(self, told: dict[str, ToRobot]) -> _Telling:
+        """``told`` (each robot's message), to be told again from ``greet``
+        seconds on to those that have not answered (:class:`_Telling`)."""
+        return _Telling(told, self.clock() + self.greet, self.greet)
+
+    def _tell_again(self, now: float) -> None:
+        """Tell again the step of the switch, or the finish, to the robots
+        that have not answered it, while their wait is not over: without it,
+        a prepare or an answer lost made the switch abort and the robot be
+        taken as lost for its silence, and a finish lost left a robot
+        running after the run ended."""
+        switch = self.switch
+        if switch is not None and switch.telling is not None and now < switch.deadline:
+            for robot, message in switch.telling.due(now, switch.waiting):
+                self._to(robot, message)
+        if self.ending is not None and self._finishing is not None and now < self.ending[1]:
+            for robot, message in self._finishing.due(now, self.ending[0]):
+                self._to(robot, message)
 
     def ended(self) -> list[str] | None:
         """After :meth:`finish`: ``None`` while robots are still awaited, else

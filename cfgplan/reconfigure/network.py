@@ -109,6 +109,10 @@ class NetworkAdaptive:
     _throttle: Throttle = field(default_factory=Throttle)  # what is said of dropped messages
     _twins: set[str] = field(default_factory=set)  # other processes of this robot, alive
     _rivals: dict[str, tuple[Rival, float]] = field(default_factory=dict)  # said, by robot
+    _claims: dict[str, tuple[str, str, float]] = field(default_factory=dict)
+    """Later runs said, by robot, whose leader was not alive here then: the
+    leader, its run, and until when (the deployer's clock) that is weighed
+    (:meth:`_weigh_claims`)."""
     _ended: dict[str, tuple[str, float]] = field(default_factory=dict)  # process gone, name up
     _hidden: set[str] = field(default_factory=set)  # lost while a session held their name
     _presence: Callable[[str, bool], None] | None = None  # the monitor's listener
@@ -151,6 +155,8 @@ class NetworkAdaptive:
             self._settle_ended()
         if self._rivals and self.refusal is None:
             self._weigh_rivals()
+        if self._claims:
+            self._weigh_claims()
         detections = self.monitor.drain()
         self._stalled()  # after the drain: a stall before any loss drained is seen
         self._cut_from_router()
@@ -542,9 +548,43 @@ class NetworkAdaptive:
         greeting comes soon (it greets every robot it sees). If ``leader`` is
         gone, this coordinator counts a generation beyond it and sends
         ``robot`` its part again (a robot follows a later run once its
-        coordinator is gone). Else it is not believed."""
+        coordinator is gone). Else it is not believed.
+
+        Gone is not what this robot's session says at one moment: a process
+        frozen past the lease lost every token, and its session takes them
+        back only as it catches up, while the messages that waited meanwhile
+        — the successor's greeting among them — are read. ``leader`` not
+        alive here is weighed for a lease (:meth:`_weigh_claims`): seen alive
+        meanwhile, it is decided as above; still gone at the end, this one
+        counts beyond it."""
         if self.retired or self.superseded is not None:
             return  # decided already (a rival and the later run's own greeting, in one pass)
+        gone = leader not in self.deployer.transport.alive
+        if gone and leader != self.deployer.me and self._beyond(leader, epoch):
+            if robot not in self._claims:
+                lease = getattr(self.deployer.transport, "lease", DEFAULT_LEASE)
+                self._claims[robot] = (leader, epoch, self.deployer.clock() + lease)
+            return
+        self._decide_later(robot, leader, epoch)
+
+    def _beyond(self, leader: str, epoch: str) -> bool:
+        """Whether this coordinator may count a generation beyond ``leader``'s
+        run ``epoch`` once ``leader`` is gone."""
+        return leader in self.coordinators and generation(epoch) < MAX_GENERATION
+
+    def _weigh_claims(self) -> None:
+        """The later runs held by :meth:`_later`: each decided once its leader
+        is alive here, or once its lease is over."""
+        now, alive = self.deployer.clock(), self.deployer.transport.alive
+        for robot, (leader, epoch, deadline) in sorted(self._claims.items()):
+            if leader in alive or now >= deadline:
+                del self._claims[robot]
+                self._decide_later(robot, leader, epoch)
+
+    def _decide_later(self, robot: str, leader: str, epoch: str) -> None:
+        """Step down for ``leader``, count beyond it, or go on (:meth:`_later`)."""
+        if self.retired or self.superseded is not None:
+            return
         me, over = self.deployer.me, generation(epoch)
         alive = self.deployer.transport.alive
         if robot == leader != me and leader in alive and leader in self.coordinators:
@@ -562,7 +602,7 @@ class NetworkAdaptive:
                     Adaptation(robot=me, t=time.time(), what="step-down", info=info)
                 )
                 return
-        if leader not in alive and leader in self.coordinators and over < MAX_GENERATION:
+        if leader not in alive and self._beyond(leader, epoch):
             raised = new_epoch(over + 1)
             self.deployer.epoch = self.deployer.member.epoch = raised
             if f"{robot} later run" not in self._noted:

@@ -24,8 +24,10 @@ over, so that what remains is still served:
 * **convergence**: a coordinator told so by a robot — the run it follows is
   of a later generation, and its robot is alive and next in the order — steps
   down and follows it (a frozen coordinator let go, or one started again while
-  its successor runs). If that robot is gone, it counts a generation beyond
-  it instead, and the robot follows it.
+  its successor runs). If that robot is gone — still not alive a lease
+  later: a coordinator let go reads the greeting before its session has the
+  successor's token back — it counts a generation beyond it instead, and
+  the robot follows it.
 
 :class:`Steward` holds the two roles of a robot that may coordinate and
 passes from one to the other.

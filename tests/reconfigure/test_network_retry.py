@@ -54,6 +54,10 @@ class Me:
     @dataclass
     class _Robot:
         name: str = "Emil"
+        released: bool = False
+
+        def release(self) -> None:  # the run is over: the others leave, no loss
+            self.released = True
 
     robot: _Robot = field(default_factory=_Robot)
     installed: list[int] = field(default_factory=list)
@@ -250,3 +254,72 @@ def test_a_robot_of_the_new_configuration_not_running_aborts_the_switch_at_once(
     deployer.deploy(SimpleNamespace(id=1), parts, lambda: done.append(True), fail)  # type: ignore[arg-type]
     assert aborted == [(["Cam"], NOT_RUNNING)] and done == [] and deployer.switch is None
     assert network.to("Rasmus", "prepare") == []  # nothing prepared, only the abort
+
+
+def test_a_finish_lost_on_the_way_is_told_again_until_the_robot_answers() -> None:
+    """Emil's task is accomplished: he tells Pippi to finish. On a loaded
+    machine Zenoh drops a message its link's queue cannot take at once, and
+    the finish, told once, was lost: Pippi never ended her run, and took over
+    once Emil left. Told again ``greet`` seconds later, then twice as long
+    each time, while she has not answered and the wait is not over, she ends;
+    once she answers she is told no more. A robot that never answers is told
+    until the wait is over, and is then said silent."""
+    adaptive, network, clock, _ = _society()
+    deployer = adaptive.deployer
+
+    def tick(seconds: float) -> None:
+        clock.now += seconds
+        deployer.tick()
+
+    goal = "do-cross-door(Emil, Door1)"
+    deployer.finish(goal)
+    (told,) = network.to("Pippi", "finish")
+    assert (told["from"], told["goal"]) == ("Emil", goal)
+    tick(deployer.greet - 0.01)
+    assert len(network.to("Pippi", "finish")) == 1 and deployer.ended() is None
+    tick(0.02)
+    assert network.to("Pippi", "finish") == [told, told]  # the first one was lost
+    deployer.acked("Pippi", int(str(told["id"])), Phase.FINISHED, "")
+    assert deployer.ended() == []
+    tick(4 * deployer.greet)
+    assert len(network.to("Pippi", "finish")) == 2  # answered: told no more
+
+    adaptive, network, clock, _ = _society()
+    deployer = adaptive.deployer
+    deployer.finish(goal)
+    for _ in range(round(SWITCH_TIMEOUT / deployer.greet) + 4):
+        tick(deployer.greet)
+    assert deployer.ended() == ["Pippi"]
+    tries = len(network.to("Pippi", "finish"))
+    assert tries == 4, tries  # at 0, 0.25, 0.75 and 1.75 s; none past the 2 s wait
+
+
+def test_a_prepare_or_a_commit_lost_on_the_way_is_told_again_until_the_robot_answers() -> None:
+    """Emil's compass fails: the switch to 47 needs Pippi. Her prepare is lost
+    on the way (or her answer is): she is told it again ``greet`` seconds
+    later, answers, and the switch commits; the commit is lost in turn: told
+    again, she installs it and answers, and the switch runs — not aborted
+    for her silence, she is not taken as lost (before, one message lost cost
+    the abort, her loss, and a switch to nothing until she was tried again)."""
+    adaptive, network, clock, events = _society()
+    deployer = adaptive.deployer
+    compass = Detection("failure", "Emil", 1.0, instance=("compass", "Emil"), how="injected")
+    adaptive.take(compass)
+    (prepare,) = network.to("Pippi", "prepare")
+    _wait(adaptive, clock, deployer.greet - 0.01)
+    assert len(network.to("Pippi", "prepare")) == 1
+    _wait(adaptive, clock, 0.02)
+    assert network.to("Pippi", "prepare") == [prepare, prepare]
+    number = int(str(prepare["id"]))
+    deployer.acked("Pippi", number, Phase.READY, "")
+    (commit,) = [m for m in network.to("Pippi", "commit") if m["id"] == number]
+    _wait(adaptive, clock, deployer.greet + 0.01)
+    assert [m for m in network.to("Pippi", "commit") if m["id"] == number] == [commit, commit]
+    deployer.acked("Pippi", number, Phase.INSTALLED, "")
+    assert deployer.switch is None
+    _wait(adaptive, clock, SWITCH_TIMEOUT)
+    assert len(network.to("Pippi", "commit")) == 2  # answered: told no more
+    assert ("abort", "silent") not in _what(events)
+    running = adaptive.coordinator.reconfigurator.running
+    assert running is not None and running.cost == 47 and "Pippi" in running.agents
+    assert "Pippi" not in adaptive.coordinator.reconfigurator.situation.lost

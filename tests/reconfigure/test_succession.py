@@ -123,16 +123,21 @@ def test_a_coordinator_steps_down_only_for_the_robot_next_in_the_order_alive() -
     rival may come in one pass); a helper's word alone does not (with its
     own key it could make her follow a robot that coordinates nothing); a
     later run of Rasmus (alive, but not next) is not believed; a later run
-    of a robot gone makes her count a generation beyond it."""
-    adaptive, network, _clock, events = _wall({"Pippi", "Emil", "Rasmus"})
-    adaptive.deployer.member.robot.record = events.append  # type: ignore[attr-defined]
+    of a robot gone — still gone a lease later — makes her count a
+    generation beyond it."""
+    adaptive, network, clock, events = _wall({"Pippi", "Emil", "Rasmus"})
+    adaptive.deployer.member.robot.record = events.append  # type: ignore[method-assign, assignment]
     adaptive.deployer.epoch = "1.aa"
     adaptive.succession = Succession((("Pippi", "Emil", "Rasmus"),))
     adaptive.coordinators = frozenset({"Pippi", "Emil", "Rasmus"})
     adaptive.receive(encode(Rival("Emil", "1.aa", "Rasmus", "2.rr")), "Emil")
     assert adaptive.superseded is None and _steps(events) == []
     network.alive.discard("Emil")
-    adaptive.later("Emil", "2.ee")  # Emil is gone: this coordinator counts beyond him
+    adaptive.later("Emil", "2.ee")  # Emil is gone: weighed for a lease first
+    adaptive.between(1, 0.05)
+    assert adaptive.superseded is None and adaptive.deployer.epoch == "1.aa"
+    clock.now += network.lease
+    adaptive.between(2, 0.1)  # still gone: this coordinator counts beyond him
     assert adaptive.superseded is None and generation(adaptive.deployer.epoch) == 3
     network.alive.add("Emil")
     adaptive.receive(encode(Rival("Rasmus", adaptive.deployer.epoch, "Emil", "4.ee")), "Rasmus")
@@ -150,3 +155,29 @@ def test_a_coordinator_steps_down_only_for_the_robot_next_in_the_order_alive() -
     adaptive.process("Emil", "b2b2b2b2b2b2b2b2", True)  # no duplicate from a run fenced off
     adaptive.receive(encode(Ready("Rasmus", "c3c3c3c3c3c3c3c3")), "Rasmus")
     assert network.sent == []
+
+
+def test_a_coordinator_let_go_steps_down_for_a_successor_whose_token_is_not_back_yet() -> None:
+    """Pippi, frozen past the lease, is let go: her session lost Emil's token
+    and takes it back only as it catches up, while she reads Emil's greeting
+    of his run 2, which waited meanwhile. His token back within the lease,
+    she steps down and follows him; she counts no generation beyond him.
+    Before, she took him for gone at once, went on as run 3, and he stepped
+    down for her: the society went back to the coordinator that froze."""
+    adaptive, network, clock, events = _wall({"Pippi", "Emil"})
+    adaptive.deployer.member.robot.record = events.append  # type: ignore[method-assign, assignment]
+    adaptive.deployer.epoch = "1.aa"
+    adaptive.succession = Succession((("Pippi", "Emil"),))
+    adaptive.coordinators = frozenset({"Pippi", "Emil"})
+    network.alive.discard("Emil")
+    adaptive.later("Emil", "2.ee")  # his greeting, read before his token is back
+    adaptive.between(1, 0.05)
+    assert adaptive.superseded is None and adaptive.deployer.epoch == "1.aa"
+    clock.now += network.lease / 2
+    network.alive.add("Emil")
+    adaptive.between(2, 0.1)
+    assert adaptive.superseded == ("Emil", "2.ee") and adaptive.deployer.epoch == "1.aa"
+    (down,) = _steps(events)
+    assert (down["leader"], down["epoch"], down["was"]) == ("Emil", "2.ee", "1.aa")
+    said = adaptive.deployer.member.errors  # type: ignore[attr-defined]
+    assert not [e for e in said if "later run" in e], said

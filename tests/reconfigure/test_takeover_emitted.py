@@ -89,6 +89,12 @@ def test_the_successor_passes_over_an_emitted_robot_which_follows_it(tmp_path: P
         logged = wait_for(
             "the log served again", _after(rasmus_trace, float(switch["t"]), "call", **LOGGED), 10.0
         )  # type: ignore[arg-type]
+        # Emil's program, still running: his trace is read once what it must hold is in it
+        epoch = str(takeover["epoch"])
+        obeyed = _after(emil_trace, killed, "install", epoch=epoch, leader="Rasmus")
+        wait_for("Emil installs Rasmus's switch", obeyed, 10.0)
+        detects = _after(emil_trace, t, "call", functionality="detect", status="ran")
+        wait_for("Emil's detection runs under Rasmus", detects, 10.0)
         again = tmp_path / "again"
         again.mkdir()
         _, back_trace = _planner(running, again, "Pippi", net)
@@ -96,7 +102,6 @@ def test_the_successor_passes_over_an_emitted_robot_which_follows_it(tmp_path: P
         stepped = float(down["t"])  # type: ignore[arg-type]
         wait_for("the log after", _after(rasmus_trace, stepped + 1.0, "call", **LOGGED), 10.0)
     assert (takeover["robot"], takeover["after"], takeover["step"]) == ("Rasmus", "Pippi", 0)
-    epoch = str(takeover["epoch"])
     assert epoch.startswith("2.") and t - killed < LEASE + 1.0, (epoch, t - killed)
     # After the fault: Rasmus keeps the log, Emil's program obeys his run alone.
     assert switch["to_cost"] == 27 and switch["cause"] == "takeover from Pippi", switch
