@@ -112,7 +112,7 @@ class Bound:
         for key in needed:
             if key not in placed:
                 schema = task.functionalities[(key[0], len(key) - 1)]
-                mandatory += task.functionality_cost(schema, key)
+                mandatory += task.costs.functionality(schema, key)
         # Two lower bounds on the functionalities still to add, counted two ways
         # (certain instances; least cost per group of items that cannot share).
         # Either may be the larger, and both may count the same instance, so
@@ -127,7 +127,7 @@ class Bound:
         alone = self._alone(node, pending, methods, future)
         have = _have(node, resolved, task)
         parts = self._parts(node, pending, methods, alone, have, counted)
-        reach, cost = self.summaries.reach.names, task.channel_cost
+        reach, cost = self.summaries.reach.names, task.costs.channel
         receivers = {c[3][0] for c in future if c[3] is not None}
         unreached = unreached_by(reach, receivers, methods.values())
         waiting = waiting_parts(cost, future, resolved, alone, unreached)
@@ -148,7 +148,7 @@ class Bound:
             if together is not None:
                 together.met(whole > total)
             total = max(total, whole)
-        return total + sum(task.agent_cost(agent) for agent in new_robots - node.robots)
+        return total + sum(task.costs.agent(agent) for agent in new_robots - node.robots)
 
     def _alone(
         self,
@@ -237,7 +237,7 @@ class Bound:
             total = 0.0
             for p in node.placed:
                 if p.call[0] in names and beyond(p.call, ancestry):
-                    total += task.functionality_cost(p.schema, p.call)
+                    total += task.costs.functionality(p.schema, p.call)
             if total:
                 guarded[item.label] = total
         return guarded
@@ -319,12 +319,12 @@ def _have(node: Partial, resolved: set[tuple[str, Ground, Ground, Ground]], task
     """:data:`Have` of ``node``, whose resolved channels are ``resolved``."""
     functionalities: dict[str, float] = {}
     if node.placed:
-        cost_of, get = task.functionality_cost, functionalities.get
+        cost_of, get = task.costs.functionality, functionalities.get
         for p in node.placed:
             functionalities[p.call[0]] = get(p.call[0], 0.0) + cost_of(p.schema, p.call)
     channels: dict[str, float] = {}
     if resolved:
-        channel_cost, get = task.channel_cost, channels.get
+        channel_cost, get = task.costs.channel, channels.get
         for kind, data, _, _ in resolved:
             channels[data[0]] = get(data[0], 0.0) + channel_cost(kind)
     return functionalities, channels

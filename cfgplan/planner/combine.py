@@ -44,7 +44,7 @@ from cfgplan.planner.grow import Completion, Grower
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.pricer import Pricer
 from cfgplan.planner.ranking import merge
-from cfgplan.planner.report import Report, Stats, StopReason
+from cfgplan.planner.report import Report, Stats, Status
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.task import Ground
 
@@ -80,7 +80,7 @@ class Combined:
     """A fresh grower and pricer for each part's search, given the labels of
     the functionalities the forced steps placed (:attr:`Grower.given`)."""
     progress: Progress | None = None
-    stopped: StopReason | None = None
+    status: Status = Status.COMPLETE
     stats: Stats = field(default_factory=Stats)
     handed_over: bool = False
     """Whether the plain search lists the rest (the parts did not combine)."""
@@ -138,8 +138,7 @@ class Combined:
                     self.stats.seconds = time.perf_counter() - start
                     yield config
         except clock.OutOfTime:
-            self.stats.complete = False
-            self.stopped = StopReason.TIME_LIMIT
+            self.status = Status.TIME_LIMIT
         self.stats.seconds = time.perf_counter() - start
 
     def _combine(self) -> Iterator[Configuration]:
@@ -212,8 +211,8 @@ class Combined:
             search = self._searches[p]
             admitted = next(self._streams[p], None)
             self._count()
-            if search.stopped is not None:
-                self.stopped = search.stopped
+            if search.status.stopped:
+                self.status = search.status
                 raise clock.OutOfTime
             if search.stats.duplicates:
                 raise _Irregular
@@ -246,4 +245,4 @@ class Combined:
                 listed -= 1
             else:
                 yield config
-        self.stopped = plain.stopped
+        self.status = plain.status

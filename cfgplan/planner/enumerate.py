@@ -43,7 +43,7 @@ from cfgplan.planner.finish import Pieces, admissible, build, fingerprint
 from cfgplan.planner.grow import Grower
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.pricer import Heuristic, Pricer
-from cfgplan.planner.report import DeadEnd, Report, Stats, StopReason
+from cfgplan.planner.report import DeadEnd, Report, Stats, Status
 from cfgplan.planner.search import Progress
 from cfgplan.planner.task import Ground
 
@@ -97,7 +97,7 @@ class Windows:
     """Decides only whether a node can complete: all a window without an upper
     edge needs, and cheaper than a bound (the first walk's pricer)."""
     progress: Progress | None = None
-    stopped: StopReason | None = None
+    status: Status = Status.COMPLETE
     _start: float = field(default=0.0)
 
     @property
@@ -113,8 +113,7 @@ class Windows:
         try:
             yield from self._windows()
         except clock.OutOfTime:
-            self.stats.complete = False
-            self.stopped = StopReason.TIME_LIMIT
+            self.status = Status.TIME_LIMIT
         self.stats.seconds = time.perf_counter() - self._start
 
     def _windows(self) -> Iterator[Configuration]:

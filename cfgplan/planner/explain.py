@@ -46,7 +46,7 @@ def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
         )
     elif len(lines) == 1:
         lines.append("  the goal's method has no version")
-    if report.unfinished and not report.undecided:
+    if report.status.stopped and report.explaining:
         lines.append("  (the search for dead ends ran out of time: there may be more)")
     return lines
 
@@ -75,5 +75,5 @@ def explanation(report: Report) -> dict[str, Any]:
             {"condition": condition.value, "reason": reason, "configurations": count}
             for (condition, reason), count in rejected.items()
         ],
-        "complete": not report.unfinished,
+        "complete": not report.status.stopped,
     }

@@ -90,7 +90,7 @@ class Graph:
         found = self._wires.get(ident)
         if found is None:
             counted, shares, free = wire_keys(kind, data, sender, receiver)
-            weight = self.grounder.task.channel_cost(kind)
+            weight = self.grounder.task.costs.channel(kind)
             number = self.number
             found = Wire(
                 weight,
@@ -123,7 +123,7 @@ class Graph:
             task = self.grounder.task
             schema = task.functionality(call)
             if schema is not None:
-                weight = task.functionality_cost(schema, call)
+                weight = task.costs.functionality(schema, call)
                 found = Instance(call, True, weight=weight, key=self.number(("f", call)))
             else:
                 options = []

@@ -104,38 +104,18 @@ class Least:
         """The cheapest derivation of every instance of ``orders`` (each
         children before parents), by instance number, from scratch."""
         memo: dict[int, float] = {}
-        # The hot loop of the search: price_options inlined, sums in its order.
-        agent_price, agent_prices = prices.agent, prices.agents
-        totals, present, placed = prices.totals, prices.present, prices.node.labels
-        count = totals.get  # (no Prices.shared: a stack priced from scratch is seldom met again)
-        fits, load = self.room.fits, prices.load
+        functionality, fits = prices.functionality, self.room.fits
         for order in orders:
             for instance in order:
                 key = instance.key
                 if key in memo:
                     continue
                 if instance.functionality:
-                    memo[key] = 0.0 if instance.call in placed else instance.weight / totals[key]
+                    memo[key] = functionality(instance.call, instance.weight, key)
                     continue
-                best = float("inf")
-                for option in instance.options:
-                    if option.needs and not fits(option.needs, load):
-                        continue  # communication-inadmissible below this node
-                    cost = 0.0
-                    for child in option.child_keys:
-                        cost += memo[child]
-                    for own in option.channels:
-                        if own.free not in present:
-                            share = 0
-                            for counted in own.shares:
-                                share += count(counted, 0)
-                            cost += own.weight / share
-                    for agent in option.agents:
-                        price = agent_prices.get(agent)
-                        cost += agent_price(agent) if price is None else price
-                    if cost < best:
-                        best = cost
-                memo[key] = best
+                priced = [0.0] * len(instance.options)
+                price_options(instance, range(len(priced)), priced, memo, prices, fits)
+                memo[key] = min(priced, default=INF)
         return memo
 
     def priced(self, instance: Instance, memo: dict[int, float], prices: Prices) -> list[float]:
@@ -152,14 +132,13 @@ class Least:
         memo: dict[int, float] = {}
         costs: dict[int, tuple[float, ...]] = {}
         height = self.height
-        totals, placed = prices.totals, prices.node.labels
         for order in orders:
             for instance in order:
                 key = instance.key
                 if key in memo:
                     continue
                 if instance.functionality:
-                    memo[key] = 0.0 if instance.call in placed else instance.weight / totals[key]
+                    memo[key] = prices.functionality(instance.call, instance.weight, key)
                     height[key] = 0
                     continue
                 priced = self.priced(instance, memo, prices)
@@ -202,13 +181,12 @@ class Least:
                 else:
                     found[1].update(positions)
 
-        placed, totals = prices.node.labels, prices.totals
         for key in changed:
             functionality = self.functionalities.get(key)
             if functionality is not None:
                 if key not in memo:
                     continue
-                value = 0.0 if functionality.call in placed else functionality.weight / totals[key]
+                value = prices.functionality(functionality.call, functionality.weight, key)
                 if value == memo[key]:
                     continue
                 memo[key] = value

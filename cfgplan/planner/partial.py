@@ -258,10 +258,10 @@ def place_functionality(
     if isinstance(settled, DeadEnd):
         return settled
     channels, added, resolved = settled
-    added += task.functionality_cost(schema, item.call)
+    added += task.costs.functionality(schema, item.call)
     robots = node.robots
     if new.robot not in robots:
-        added += task.agent_cost(new.robot)
+        added += task.costs.agent(new.robot)
         robots = robots | {new.robot}
     labels = dict(node.labels)
     labels[item.call] = item.label

@@ -113,7 +113,7 @@ class Partition:
         prices = Prices(task, node, certain, totals, present, self.number, load, shared=shared)
         memo, costs = self._evaluate(kept, calls, prices, lowered)
         total = sum(map(prices.channel, future))
-        total += sum(task.agent_cost(agent) for agent in certain - node.robots)
+        total += sum(task.costs.agent(agent) for agent in certain - node.robots)
         agent = prices.agent
         for key, on in kept.items:
             total += memo[key]

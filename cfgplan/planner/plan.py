@@ -34,7 +34,7 @@ from cfgplan.planner.partition import Partition
 from cfgplan.planner.prefix import Prefix
 from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
 from cfgplan.planner.replay import Replays
-from cfgplan.planner.report import Engine, Report, Stats, StopReason
+from cfgplan.planner.report import Engine, Report, Stats, Status
 from cfgplan.planner.search import BestFirst, Progress
 from cfgplan.planner.split import Split
 from cfgplan.planner.task import Ground, Task
@@ -211,21 +211,23 @@ class Run:
     """When the time limit started counting (perf_counter; default: now)."""
     ahead: bool = False
     """Once ``limit`` configurations are listed, look for one more (not
-    listed) to say whether more exist (:attr:`more`), with bounded work
+    listed) to say whether more exist (:attr:`status`), with bounded work
     (:mod:`cfgplan.planner.prefix`): ``-k 1`` never runs to the end of a
     search to prove there is no second configuration."""
     options: SearchOptions = field(default_factory=SearchOptions)
     """The strategies' settings and switches (parts apart, the look-ahead's
     least work, ...), given to every grower of the run."""
-    more: bool | None = field(init=False, default=False)
-    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`; None
-    when the solver ran (it finds the first configuration and looks no further)."""
+    status: Status = field(init=False, default=Status.COMPLETE)
+    """How the run ended: stopped (the time limit, the user), or as the
+    prefix it listed (:attr:`cfgplan.planner.prefix.Prefix.status`); UNKNOWN
+    when the solver answered (it finds the first configuration and looks no
+    further)."""
     engine: Engine = field(init=False, default=Engine.SEARCH)
     """Which engine found the configurations."""
     raced: bool = field(init=False, default=False)
     """The solver's process was started beside the search
     (:attr:`SearchOptions.race`): whoever answered, the first configuration is
-    all the run looks for (:attr:`more` is None)."""
+    all the run looks for (:attr:`status` is UNKNOWN)."""
     answered: Stats | None = field(init=False, default=None)
     """The work of the solver's process, when it answered the race."""
     inadmissible: bool = field(init=False, default=False)
@@ -334,7 +336,7 @@ class Run:
         """:attr:`SearchOptions.solver`: the first cheapest configuration by the
         solver (:meth:`_by_solver`), or None: the search goes on from the start
         (and stops at once when out of time). What comes after it is not looked
-        for (:attr:`more` is None)."""
+        for (:attr:`status` is UNKNOWN)."""
         from cfgplan.planner import solver
 
         try:
@@ -356,12 +358,13 @@ class Run:
         return self.strategy.stats if self.answered is None else self.answered
 
     @property
-    def report(self) -> Report:
-        return self.strategy.report if self.explained is None else self.explained
+    def stopped(self) -> Status | None:
+        """:attr:`status` when it stopped the run, else None (for cfgplan.reconfigure's callers)."""
+        return self.status if self.status.stopped else None
 
     @property
-    def stopped(self) -> StopReason | None:
-        return self.strategy.stopped
+    def report(self) -> Report:
+        return self.strategy.report if self.explained is None else self.explained
 
     def __iter__(self) -> Iterator[Configuration]:
         started = time.perf_counter() if self.started is None else self.started
@@ -373,21 +376,21 @@ class Run:
                 for config in prefix.take(self._search()):
                     listed += 1
                     yield config
-            first_only = self.engine is Engine.SOLVER or self.raced
-            self.more = None if first_only and listed else prefix.more
-            if prefix.cut or (self.raced and listed):
-                self.stats.complete = False
+            self.status = self.strategy.status
+            if not self.status.stopped:
+                first_only = self.engine is Engine.SOLVER or self.raced
+                self.status = Status.UNKNOWN if first_only and listed else prefix.status
         except KeyboardInterrupt:
-            self.stats.complete = False
-            self.strategy.stopped = StopReason.INTERRUPTED
-        if self.stopped is not None and not listed:
+            self.status = Status.INTERRUPTED
+        self.stats.complete = self.status.exhausted
+        if self.status.stopped and not listed:
             guess = self._dive(deadline)
             if guess is not None:
                 yield guess
             else:  # nothing found, nothing proved
-                self.report.unfinished = self.report.undecided = True
+                self.report.status = self.status
             return
-        if not listed and (self.inadmissible or (self.stats.pruned and self.stats.complete)):
+        if not listed and (self.inadmissible or (self.stats.pruned and self.status.exhausted)):
             self._explain(started, deadline)
 
     def _dive(self, deadline: float | None) -> Configuration | None:
@@ -427,8 +430,7 @@ class Run:
             for _ in explaining:
                 break
         report = explaining.report
-        if explaining.stopped is not None:
-            report.unfinished = True
+        report.status, report.explaining = explaining.status, True
         self.explained = report
 
 

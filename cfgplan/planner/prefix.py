@@ -6,9 +6,9 @@ fewer exist, run the search to its end: ``-k 1`` would cost what ``--all``
 does. So, once N are listed, the search goes on for one more with at most as
 much work again as the first N took (at least :attr:`Prefix.least` steps of
 :func:`cfgplan.planner.clock.check`, the same count on every machine): one
-found, ``more`` is True; the search ended, False; the work ran out, None (not
-known). One rule, used by :class:`cfgplan.planner.plan.Run` and
-:class:`cfgplan.planner.sequence.SequenceSearch`.
+found, the status (:class:`cfgplan.planner.report.Status`) is ``MORE``; the
+search ended, ``COMPLETE``; the work ran out, ``UNKNOWN``. One rule, used by
+:class:`cfgplan.planner.plan.Run` and :class:`cfgplan.planner.sequence.SequenceSearch`.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Generic, TypeVar
 
 from cfgplan.planner import clock
+from cfgplan.planner.report import Status
 
 T = TypeVar("T")
 
@@ -31,11 +32,10 @@ class Prefix(Generic[T]):
     """Once :attr:`limit` are listed, look for one more (not listed)."""
     least: int = 10_000
     """The least work the look-ahead may do, whatever the first ones took."""
-    more: bool | None = field(init=False, default=False)
-    """With :attr:`ahead`: True, one more exists; False, none (the search
-    ended); None, not known (the look-ahead's work ran out)."""
-    cut: bool = field(init=False, default=False)
-    """The search was left before its end: what it reports may not be complete."""
+    status: Status = field(init=False, default=Status.COMPLETE)
+    """COMPLETE, the search ended; with :attr:`ahead`, MORE, one more exists,
+    or UNKNOWN, the look-ahead's work ran out; without, CUT once :attr:`limit`
+    are listed."""
 
     def take(self, found: Iterable[T]) -> Iterator[T]:
         """The first :attr:`limit` of ``found``; the work of making them (the
@@ -45,14 +45,14 @@ class Prefix(Generic[T]):
             with clock.counting() as work:
                 for item in found:
                     if self.limit is not None and listed >= self.limit:  # the look-ahead's
-                        self.more, self.cut = True, True
+                        self.status = Status.MORE
                         return
                     listed += 1
                     yield item
                     if self.limit is not None and listed >= self.limit:
                         if not self.ahead:
-                            self.cut = True
+                            self.status = Status.CUT
                             return
                         work.most = work.done + max(self.least, work.done)
         except clock.OutOfWork:
-            self.more, self.cut = None, True
+            self.status = Status.UNKNOWN

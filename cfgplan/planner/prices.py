@@ -117,21 +117,30 @@ class Prices:
         if found is None:
             found = 0.0
             if agent not in self.node.robots and agent not in self.certain:
-                found = self.task.agent_cost(agent) / self.totals[self.number(("@", agent))]
+                found = self.task.costs.agent(agent) / self.totals[self.number(("@", agent))]
             self.agents[agent] = found
         return found
 
     def channel(self, own: Wire) -> float:
+        """A channel's price: nothing where C holds one it merges with, else
+        its weight shared by the channels it may merge with (the sum of their
+        counts, an int: the same in any order), found once per wire."""
         if own.free in self.present:
             return 0.0
         found = self.shared.get(own.number)
         if found is None:
-            share = 0  # an int: the same sum in any order
+            share = 0
             count = self.totals.get
             for key in own.shares:
                 share += count(key, 0)
             found = self.shared[own.number] = own.weight / share
         return found
+
+    def functionality(self, call: Ground, weight: float, key: int) -> float:
+        """A functionality instance's price (key number ``key``): nothing
+        where C holds it already, else its weight shared by the times it can
+        occur (the rules: :mod:`cfgplan.planner.partition`)."""
+        return 0.0 if call in self.node.labels else weight / self.totals[key]
 
 
 class PricedOption(Protocol):
@@ -169,10 +178,8 @@ def price_options(
     channels, then its agents, added in that order (one order, so one float);
     infinite where the media cannot carry its own global channels
     (:mod:`cfgplan.planner.room`)."""
-    # Prices.channel and Prices.agent inlined (and all of this in Least.full).
     agent_price, agent_prices = prices.agent, prices.agents
-    present, count, load = prices.present, prices.totals.get, prices.load
-    shared = prices.shared
+    channel, load = prices.channel, prices.load
     options = instance.options
     for position in positions:
         option = options[position]
@@ -183,14 +190,7 @@ def price_options(
         for child in option.child_keys:
             cost += memo[child]
         for own in option.channels:
-            if own.free not in present:
-                price = shared.get(own.number)
-                if price is None:
-                    share = 0
-                    for counted in own.shares:
-                        share += count(counted, 0)
-                    price = shared[own.number] = own.weight / share
-                cost += price
+            cost += channel(own)
         for agent in option.agents:
             price = agent_prices.get(agent)
             cost += agent_price(agent) if price is None else price

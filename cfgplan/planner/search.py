@@ -44,7 +44,7 @@ from cfgplan.planner.grow import Completion, Grower
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.pricer import Pricer, Reprice
 from cfgplan.planner.ranking import place
-from cfgplan.planner.report import Report, Stats, StopReason
+from cfgplan.planner.report import Report, Stats, Status
 from cfgplan.planner.task import Ground
 
 Progress = Callable[[Stats, float], None]
@@ -62,7 +62,7 @@ class BestFirst:
     progress: Progress | None = None
     origin: Partial | None = None
     """Where to search from (default: the goal alone on the stack)."""
-    stopped: StopReason | None = None
+    status: Status = Status.COMPLETE
     last: Partial | None = None
     """The complete node listed last (:meth:`completions`)."""
     _heap: list[tuple[float, tuple[int, ...], bool, Partial]] = field(default_factory=list)
@@ -103,8 +103,7 @@ class BestFirst:
         try:
             yield from self._search(start)
         except clock.OutOfTime:
-            self.stats.complete = False
-            self.stopped = StopReason.TIME_LIMIT
+            self.status = Status.TIME_LIMIT
         self.stats.seconds = time.perf_counter() - start
 
     def _search(self, start: float) -> Iterator[Completion]:

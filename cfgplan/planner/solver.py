@@ -162,7 +162,7 @@ def _facts(task: Task, graph: Graph, goal: Ground) -> _Facts:
             schema = task.functionality(call)
             assert schema is not None
             lines.append(f"func({n}). robot({n},{agent(call[1])}).")
-            (cost,) = _units([task.functionality_cost(schema, call)], cost_unit)
+            (cost,) = _units([task.costs.functionality(schema, call)], cost_unit)
             lines.append(f"fcost({n},{cost}).")
             for b, inst in enumerate(graph.grounder.instances(schema, call)):
                 ins, outs = inst.io
@@ -192,11 +192,10 @@ def _facts(task: Task, graph: Graph, goal: Ground) -> _Facts:
         # Bandwidths matter only where the state declares media (4.6).
         units = -1 if width is None or not task.media else _units([width], width_unit)[0]
         lines.append(f"{predicate}({args},{units}).")
-    w = task.weights
-    g, loc = _units([w.global_, w.local], cost_unit)
+    g, loc = _units([task.costs.channel("global"), task.costs.channel("local")], cost_unit)
     lines.append(f"chw(global,{g}). chw(local,{loc}).")
     for a, k in agents.items():
-        (aw,) = _units([task.agent_cost(a)], cost_unit)
+        (aw,) = _units([task.costs.agent(a)], cost_unit)
         lines.append(f"agentw({k},{aw}).")
     if task.media:
         lines.append("media.")

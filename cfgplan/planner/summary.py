@@ -267,7 +267,7 @@ class Summaries:
             # Outputs that use a variable its preconditions bind stay open
             # (not ground), so they name no certain producer: weaker, still a bound.
             outs = tuple((substitute(o, env), call) for o in schema.outputs)
-            cost = self.task.functionality_cost(schema, call)
+            cost = self.task.costs.functionality(schema, call)
             return Summary(
                 True, frozenset({call}), frozenset({call[1]}), frozenset(), outs, cost, 0.0, cost
             )
@@ -324,9 +324,9 @@ class Summaries:
             producers[data] = call if is_functionality else sub.producer(data)
         # A part is named by what it can reach; an own functionality (and a
         # channel into one) by itself alone: it shares with no other part.
-        own_cost = float(sum(self.task.channel_cost(kind) for kind, _ in own))
+        own_cost = float(sum(self.task.costs.channel(kind) for kind, _ in own))
         wires: list[Part] = [({data[0] for _, data in own}, own_cost)]
-        wires += [(own_part(c), self.task.channel_cost(c[0])) for c in into_own]
+        wires += [(own_part(c), self.task.costs.channel(c[0])) for c in into_own]
         # Together: a part is named by both kinds of name (a functionality name
         # and a data predicate never mean one thing, so at worst two parts are
         # taken as sharing that cannot: weaker, still a bound).

@@ -22,7 +22,6 @@ kept: it orders the bindings, hence the derivations at equal cost (6.3.2).
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -32,7 +31,8 @@ from typing import Any, NamedTuple
 
 from cfgplan.configuration.cost import Weights
 from cfgplan.ir.model import Medium, SExpr, Span, expr_variables, is_variable
-from cfgplan.planner.levels import Levels, unit_of
+from cfgplan.planner.costs import Costs
+from cfgplan.planner.levels import Levels
 
 Ground = tuple[str, ...]
 """A ground atom or call as a tuple: ``("in", "Pippi", "Room1")``."""
@@ -247,21 +247,20 @@ class Task:
         return found
 
     @cached_property
-    def levels(self) -> Levels:
-        """How its costs are ranked (:mod:`cfgplan.planner.levels`): by the
-        unit the weights and every ``:cost`` are multiples of, unless
-        reliability adds logarithms to them."""
-        return self.levels_with()
+    def costs(self) -> Costs:
+        """What each part of its configurations costs (:mod:`cfgplan.planner.costs`)."""
+        return Costs(
+            self.weights,
+            self.devices,
+            self.links,
+            self.reliability,
+            tuple(f.cost for f in self.functionalities.values() if f.cost is not None),
+        )
 
-    def levels_with(self, *more: float) -> Levels:
-        """:attr:`levels` of sums that may also add ``more`` (a sequence's
-        switch weight)."""
-        w = self.weights
-        if w.reliability:
-            return Levels(None)
-        values = [w.robot, w.device, w.global_, w.local, w.functionality, *more]
-        values += [f.cost for f in self.functionalities.values() if f.cost is not None]
-        return Levels(unit_of(values))
+    @cached_property
+    def levels(self) -> Levels:
+        """How its costs are ranked (:meth:`cfgplan.planner.costs.Costs.levels`)."""
+        return self.costs.levels()
 
     @cached_property
     def uncertain(self) -> bool:
@@ -282,35 +281,9 @@ class Task:
     def versions(self, call: Ground) -> tuple[MethodSchema, ...]:
         return self.methods.get((call[0], len(call) - 1), ())
 
-    def functionality_cost(self, schema: FunctionalitySchema, call: Ground) -> float:
-        """The functionality's ``:cost``, else the functionality weight (3.5),
-        plus ``W·(−ln p)`` for its reliability p when ``reliability=W``."""
-        cost = schema.cost if schema.cost is not None else self.weights.functionality
-        if self.weights.reliability:
-            p = self.functionality_reliability(schema, call)
-            cost += self.weights.reliability * -math.log(p)
-        return cost
-
     def functionality_reliability(self, schema: FunctionalitySchema, call: Ground) -> float:
-        found = self.reliability.get(call)
-        if found is not None:
-            return found
-        return schema.reliability if schema.reliability is not None else 1.0
-
-    def channel_cost(self, kind: str) -> float:
-        """A channel's weight (3.5); see :meth:`link_cost` for its media."""
-        return self.weights.global_ if kind == "global" else self.weights.local
-
-    def link_cost(self, sender: str, receiver: str) -> float:
-        """``W·(−ln p)`` for a global channel between two robots: p is the most
-        reliable medium from ``sender`` to ``receiver`` (1 when none says)."""
-        if not self.weights.reliability or sender == receiver:
-            return 0.0
-        return self.weights.reliability * -math.log(self.links.get((sender, receiver), 1.0))
-
-    def agent_cost(self, agent: str) -> float:
-        """What running something on ``agent`` costs: a robot's or a device's weight."""
-        return self.weights.device if agent in self.devices else self.weights.robot
+        """:meth:`cfgplan.planner.costs.Costs.reliability_of`."""
+        return self.costs.reliability_of(schema, call)
 
 
 def index_facts(

@@ -135,9 +135,9 @@ def settle(
         ident = (ch.kind, ch.source, ch.target, ch.data)
         if ident not in resolved and ident not in new:
             new.add(ident)
-            added += task.channel_cost(ch.kind)
+            added += task.costs.channel(ch.kind)
             if ch.kind == "global":
-                added += task.link_cost(src.robot, dst.robot)
+                added += task.costs.link(src.robot, dst.robot)
                 new_global = True
             continue
         # An identical channel is already there (rare): keep it, drop this one.

@@ -38,6 +38,7 @@ from cfgplan.planner.ground import Grounder
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.plan import Run
+from cfgplan.planner.report import Status
 from cfgplan.planner.successors import successors
 from cfgplan.problem import Problem, load
 
@@ -220,7 +221,7 @@ def test_a_fact_repeated_forty_times_costs_nothing() -> None:
         state.write_text(repeated)
         problem = load(domain, state)
     configs, run = plan(problem.task, problem.goal_call, limit=None, time_limit=60)
-    assert run.stopped is None
+    assert not run.status.stopped
     assert [c.cost for c in configs] == [44, 47]
 
 
@@ -298,7 +299,7 @@ def test_recursive_delegation_is_listed_whole() -> None:
     chains of relays from the hub to the sensing robot, listed once each."""
     problem = problem_of(delegation(4))
     configs, run = plan(problem.task, problem.goal_call, limit=None)
-    assert run.stats.complete and run.stopped is None
+    assert run.status is Status.COMPLETE
     assert len(configs) == len({c.identity() for c in configs}) == 21
     assert configs[0].cost == 27  # R1 asks R4, which senses
     for config in configs:
