@@ -45,7 +45,7 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     from cfgplan.planner.sequence import SequenceSearch
 
     # -k N looks for one sequence more than it lists, with bounded work, to say
-    # whether more exist (as for one goal: cfgplan.planner.prefix)
+    # whether more exist (as for one goal: cfgplan.planner.search)
     ahead = options.limit is not None and options.rank is None
     search = SequenceSearch(
         problem.goal_calls,

@@ -3,7 +3,7 @@
 Every dead end the search met is kept (first occurrence, in the order met):
 method versions whose preconditions no binding satisfies, with the first
 failing condition and its bindings (and the fact it nearly matches, when a
-constant of it looks like a slip: :func:`cfgplan.planner.match.why_not`);
+constant of it looks like a slip: :func:`cfgplan.planner.ground.why_not`);
 channels that end on the wrong robots; and configurations rejected after
 expansion (information, cycles, media).
 """

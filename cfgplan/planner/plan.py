@@ -6,7 +6,7 @@ then ``--all``, grounds and summarises once), the strategy — best-first
 search for the ``limit`` cheapest (:mod:`cfgplan.planner.search`), or, when
 the goal's choices fall into independent parts, each part searched so and
 the parts combined (:mod:`cfgplan.planner.combine`), windows of depth-first
-walks to list them all in bounded memory (:mod:`cfgplan.planner.enumerate`)
+walks to list them all in bounded memory (:mod:`cfgplan.planner.search`)
 — the time limit, the greedy dive when a
 search is stopped before it has proven anything, and, when nothing is
 admissible, a search without the bounds to say why. Configurations come out
@@ -25,23 +25,20 @@ from typing import TYPE_CHECKING
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.bound import Bound
-from cfgplan.planner.components import Parts, divide, unroll
+from cfgplan.planner.combine import Parts, divide, unroll
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.grow import Grower, ReplayKey
+from cfgplan.planner.grow import Grower, ReplayKey, Replays
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
-from cfgplan.planner.partition import Partition
-from cfgplan.planner.prefix import Prefix
+from cfgplan.planner.partition import Partition, Split
 from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
-from cfgplan.planner.replay import Replays
 from cfgplan.planner.report import Engine, Report, Stats, Status
-from cfgplan.planner.search import BestFirst, Progress
-from cfgplan.planner.split import Split
+from cfgplan.planner.search import BestFirst, Prefix, Progress
 from cfgplan.planner.task import Ground, Task
 
 if TYPE_CHECKING:  # each loaded where it is used: most runs use none (start-up)
     from cfgplan.planner.combine import Combined
-    from cfgplan.planner.enumerate import Windows
+    from cfgplan.planner.search import Windows
 
 
 @dataclass(eq=False, repr=False)
@@ -78,9 +75,9 @@ def analysis(task: Task, media: bool = True) -> Analysis:
 
 
 def divided(task: Task, goal: Ground, media: bool = True) -> Parts | None:
-    """The goal's independent parts (:mod:`cfgplan.planner.components`), made
+    """The goal's independent parts (:mod:`cfgplan.planner.combine`), made
     once per task and goal; None when there are not two, or when costs have
-    no unit (:mod:`cfgplan.planner.levels`: then sums of parts may not rank
+    no unit (:mod:`cfgplan.planner.costs`: then sums of parts may not rank
     as whole configurations do). ``media``: as :func:`analysis`."""
     analysed = analysis(task, media)
     made = analysed.components
@@ -119,7 +116,7 @@ def partitioned(bound: Bound, partition: Partition) -> Heuristic:
 
 def splitting(bound: Bound, partition: Partition) -> Splitter:
     """:func:`partitioned`, taken apart at the top item for the children
-    (:mod:`cfgplan.planner.split`)."""
+    (:mod:`cfgplan.planner.partition`)."""
 
     def split(node: Partial) -> tuple[float | None, Split | None]:
         return partition.split(node, bound.certain_agents(node))
@@ -212,14 +209,14 @@ class Run:
     ahead: bool = False
     """Once ``limit`` configurations are listed, look for one more (not
     listed) to say whether more exist (:attr:`status`), with bounded work
-    (:mod:`cfgplan.planner.prefix`): ``-k 1`` never runs to the end of a
+    (:mod:`cfgplan.planner.search`): ``-k 1`` never runs to the end of a
     search to prove there is no second configuration."""
     options: SearchOptions = field(default_factory=SearchOptions)
     """The strategies' settings and switches (parts apart, the look-ahead's
     least work, ...), given to every grower of the run."""
     status: Status = field(init=False, default=Status.COMPLETE)
     """How the run ended: stopped (the time limit, the user), or as the
-    prefix it listed (:attr:`cfgplan.planner.prefix.Prefix.status`); UNKNOWN
+    prefix it listed (:attr:`cfgplan.planner.search.Prefix.status`); UNKNOWN
     when the solver answered (it finds the first configuration and looks no
     further)."""
     engine: Engine = field(init=False, default=Engine.SEARCH)
@@ -244,7 +241,7 @@ class Run:
             self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
-            from cfgplan.planner.enumerate import Windows
+            from cfgplan.planner.search import Windows
 
             bound = analysis(self.task, self.options.media).bound
             self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
@@ -263,9 +260,9 @@ class Run:
                 return
         if self.options.race is not None and first_only and self.task.levels.unit is not None:
             # (costs without a unit have no bracket: nothing to race)
-            from cfgplan.planner import portfolio  # loaded when asked for (start-up)
+            from cfgplan.planner import solver  # loaded when asked for (start-up)
 
-            if portfolio.FORKS:
+            if solver.FORKS:
                 yield from self._race(self.options.race)
                 return
         self._divide()
@@ -273,18 +270,18 @@ class Run:
 
     def _race(self, after: int) -> Iterator[Configuration]:
         """The first configuration, by the search or by the solver's process
-        started beside it after ``after`` steps (:mod:`cfgplan.planner.portfolio`),
+        started beside it after ``after`` steps (:mod:`cfgplan.planner.solver`),
         whichever ends first. Nothing is yielded while the child runs: the
         caller's own clock steps are not the race's."""
-        from cfgplan.planner import portfolio
+        from cfgplan.planner import solver
 
         found: Configuration | None = None
         try:
-            with portfolio.racing(self._in_child, after) as rival:
+            with solver.racing(self._in_child, after) as rival:
                 self._divide()
                 searched = iter(self.strategy)
                 found = next(searched, None)
-        except portfolio.Overtaken as won:
+        except solver.Overtaken as won:
             self.raced = True
             self.engine = Engine.SOLVER
             config, self.answered = won.answer
@@ -398,7 +395,7 @@ class Run:
         (unless :attr:`SearchOptions.dive` is off)."""
         if not self.options.dive:
             return None
-        from cfgplan.planner.dive import dive
+        from cfgplan.planner.search import dive
 
         grace = self.options.grace
         end = time.perf_counter() + grace if deadline is None else deadline + grace

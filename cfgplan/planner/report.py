@@ -38,7 +38,7 @@ class Status(Enum):
     """The search ran to its end: everything there is was listed."""
     MORE = "more"
     """The list was cut at ``-k N`` and at least one more exists (the look-ahead
-    of :mod:`cfgplan.planner.prefix` found it)."""
+    of :mod:`cfgplan.planner.search` found it)."""
     CUT = "cut"
     """The list was cut at ``-k N`` and no more was looked for (``--rank``)."""
     UNKNOWN = "unknown"
@@ -68,7 +68,7 @@ class Status(Enum):
 
 class Engine(Enum):
     """Which engine found a run's configurations: the best-first search, or
-    the solver (:mod:`cfgplan.planner.solver`, :mod:`cfgplan.planner.portfolio`)."""
+    the solver (:mod:`cfgplan.planner.solver`, :mod:`cfgplan.planner.solver`)."""
 
     SEARCH = "search"
     SOLVER = "solver"
@@ -125,7 +125,7 @@ class Stats:
 
     nodes: int = 0  # nodes taken to be expanded or finished
     expansions: int = 0  # method instances expanded
-    replays: int = 0  # of them, sub-derivations done again in one step (replay.py)
+    replays: int = 0  # of them, sub-derivations done again in one step (grow.py)
     derivations: int = 0  # complete derivations met (duplicates included)
     duplicates: int = 0  # complete derivations whose configuration was listed already
     rejected: int = 0  # complete derivations found inadmissible (4.5 step 4)

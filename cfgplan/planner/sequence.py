@@ -42,15 +42,13 @@ from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.combine import Combined
+from cfgplan.planner.costs import Levels
 from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Effects
-from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, analysis, growing, in_parts
-from cfgplan.planner.prefix import Prefix
-from cfgplan.planner.ranking import merge
 from cfgplan.planner.report import Report, Status
-from cfgplan.planner.search import BestFirst
+from cfgplan.planner.search import BestFirst, Prefix, merge
 from cfgplan.planner.task import EffectSpec, Ground, Pattern, Task, Test, derive
 
 Facts = tuple[Ground, ...]
@@ -181,7 +179,7 @@ def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects |
     way it is helped); else None. So it is when the expansion can reach (over
     the graph of ground instances) at most one functionality instance with a
     postcondition, it is in every feasible expansion of the goal (its
-    summary's, :mod:`cfgplan.planner.summary`), it has one binding of its
+    summary's, :mod:`cfgplan.planner.bound`), it has one binding of its
     preconditions, and no method version it can reach has a postcondition."""
     analysed = analysis(task, options.media)
     grounder, bound = analysed.grounder, analysed.bound
@@ -266,7 +264,7 @@ class Ranked:
 @dataclass(order=True)
 class _Entry:
     """A sequence (complete or not) or an offer, at its place: price, then
-    the ranks of its steps' configurations (:mod:`cfgplan.planner.ranking`)."""
+    the ranks of its steps' configurations (:mod:`cfgplan.planner.search`)."""
 
     priority: float
     order: tuple[int, ...]  # the rank of each step's configuration: ties by earlier steps
@@ -288,12 +286,12 @@ class SequenceSearch:
     """List at most this many sequences (None: every one)."""
     ahead: bool = False
     """Once :attr:`limit` are listed, look for one more with bounded work
-    (:mod:`cfgplan.planner.prefix`), to say whether more exist (:attr:`status`)."""
+    (:mod:`cfgplan.planner.search`), to say whether more exist (:attr:`status`)."""
     options: SearchOptions = field(default_factory=SearchOptions)
     """The settings of every step's search, and the look-ahead's least work."""
     status: Status = field(init=False, default=Status.COMPLETE)
     """How the search ended: stopped, or as the prefix it listed
-    (:attr:`cfgplan.planner.prefix.Prefix.status`)."""
+    (:attr:`cfgplan.planner.search.Prefix.status`)."""
     _ranked: dict[tuple[int, Facts], Ranked] = field(default_factory=dict)
     _states: dict[tuple[int, ...], tuple[Facts, tuple[str, ...]]] = field(default_factory=dict)
     _remaining: dict[tuple[int, Facts], float] = field(default_factory=dict)
@@ -404,7 +402,7 @@ class SequenceSearch:
         return done[(step, facts)]
 
     def _search(self) -> Iterator[PlannedSequence]:
-        """Best-first over sequences (:func:`cfgplan.planner.ranking.merge`);
+        """Best-first over sequences (:func:`cfgplan.planner.search.merge`);
         a prefix is priced with :meth:`remaining` (exact without switches),
         an offer at the prefix's cost plus its configuration's alone (less
         or equal to what it turns out)."""
@@ -491,7 +489,7 @@ class SequenceSearch:
     @cached_property
     def _levels(self) -> Levels:
         """How totals are ranked: as the steps' costs are, the switch weight
-        counted in (:mod:`cfgplan.planner.levels`; a sum of floats in another
+        counted in (:mod:`cfgplan.planner.costs`; a sum of floats in another
         order may differ in the last bit)."""
         return self.task.costs.levels(self.switch)
 

@@ -98,7 +98,7 @@ def test_the_note_says_may_when_it_is_not_known() -> None:
 def test_sequences_look_ahead_by_the_same_rule() -> None:
     """``cfgplan plan -k N`` of a sequence planned N + 1 sequences to fill
     ``more``; now it looks for one more as one goal does
-    (:mod:`cfgplan.planner.prefix`). 6.2.2 as a sequence (Pippi, then Emil,
+    (:mod:`cfgplan.planner.search`). 6.2.2 as a sequence (Pippi, then Emil,
     crosses): more exist; the one listed is the first of a search without a
     limit; a sequence of one goal with one configuration has no second."""
     from pathlib import Path

@@ -1,4 +1,4 @@
-"""Costs and bounds at levels (cfgplan.planner.levels): equal decimals rank
+"""Costs and bounds at levels (cfgplan.planner.costs): equal decimals rank
 equal however their floats were summed, and a bound never ranks above a
 cost it bounds."""
 
@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cfgplan.configuration.cost import Weights
-from cfgplan.planner.levels import Levels, level, unit_of
+from cfgplan.planner.costs import Levels, level, unit_of
 from tests.planner.problems import PROPERTY, load_text
 
 SWITCHED = """\

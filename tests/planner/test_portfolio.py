@@ -1,4 +1,4 @@
-"""The search and the solver's process racing for ``-k 1`` (:mod:`cfgplan.planner.portfolio`).
+"""The search and the solver's process racing for ``-k 1`` (:mod:`cfgplan.planner.solver`).
 
 The race itself with stand-in engines (who wins, that the child is gone by its
 pid however the race ends, that nothing is raced within the search's own budget),
@@ -25,8 +25,8 @@ from benchmarks.families import structured
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import clock, plan
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.portfolio import Answer, Overtaken, Prepare, Rival, racing
 from cfgplan.planner.report import Engine, Status
+from cfgplan.planner.solver import Answer, Overtaken, Prepare, Rival, racing
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
 from tests.planner.test_thesis import problem
@@ -212,7 +212,7 @@ def test_past_the_searchs_cliff_the_solver_answers() -> None:
 RACER = """
 import sys, time
 from cfgplan.planner import clock
-from cfgplan.planner.portfolio import racing
+from cfgplan.planner.solver import racing
 
 def prepare():
     def solve():

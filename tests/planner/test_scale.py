@@ -35,11 +35,11 @@ from cfgplan.planner import plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.finish import finish
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.grow import successors
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.plan import Run
 from cfgplan.planner.report import Status
-from cfgplan.planner.successors import successors
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -79,14 +79,14 @@ def branch_and_bound(problem: Problem) -> float | None:
     [
         pytest.param(ecology(10, 3, 2), marks=pytest.mark.slow),
         media_tight(5, 2, 1),
-        # the media test of room.py prunes here
+        # the media test of partial.py prunes here
         pytest.param(media_tight(7, 4, 4), marks=pytest.mark.slow),
         pytest.param(fusion(5, 3, 4, 3), marks=pytest.mark.slow),
         pytest.param(chain(12), marks=pytest.mark.slow),
         wall(3, 6, 3),
         pytest.param(
             gateway(5), marks=pytest.mark.slow
-        ),  # the media cap on sharing (capacity.py) makes the root's bound exact
+        ),  # the media cap on sharing (partition.py) makes the root's bound exact
         # ... and only a lower bound: two views a camera, two own cameras
         pytest.param(gateway(6, 4, 60), marks=pytest.mark.slow),
     ],
