@@ -33,7 +33,7 @@ from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition, Split
 from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
 from cfgplan.planner.report import Engine, Report, Stats, Status
-from cfgplan.planner.search import BestFirst, Prefix, Progress
+from cfgplan.planner.search import BestFirst, Prefix, Progress, place
 from cfgplan.planner.task import Ground, Task
 
 if TYPE_CHECKING:  # each loaded where it is used: most runs use none (start-up)
@@ -188,10 +188,6 @@ def in_parts(
 
 def _no_bound(node: Partial) -> float:
     return 0.0
-
-
-def _order(entry: tuple[float, Partial]) -> tuple[float, tuple[int, ...]]:
-    return entry[0], entry[1].path
 
 
 @dataclass(eq=False, repr=False)
@@ -405,7 +401,8 @@ class Run:
                 if isinstance(self.strategy, BestFirst):
                     frontier = self.strategy.frontier
                 else:  # the windows keep no frontier: dive from the start
-                    frontier = sorted(grower.settle(root(self.goal), pricer), key=_order)
+                    settled = grower.settle(root(self.goal), pricer)
+                    frontier = sorted(settled, key=lambda entry: place(*entry))
                 return dive(frontier, partial(grower.children, pricer=pricer), grower.finish)
         except (clock.OutOfTime, KeyboardInterrupt):
             return None

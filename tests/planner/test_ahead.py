@@ -115,3 +115,32 @@ def test_sequences_look_ahead_by_the_same_rule() -> None:
     alone = load_text(REUSED_SENSOR, "(state robot(R1))\n(sequence (do-task R1))\n")
     one = SequenceSearch(alone.goal_calls, alone.task, limit=1, ahead=True)
     assert len(list(one)) == 1 and one.status is Status.COMPLETE
+
+
+def test_the_json_reads_one_status() -> None:
+    """How a run ended was spread over ``Stats.complete``, ``Run.stopped``,
+    ``Run.more`` and the report's ``unfinished``/``undecided``; the JSON's
+    ``exhausted``, ``more`` and ``stopped`` are now read off one
+    :class:`Status`, for each way a run ends: the list cut with one more
+    found, cut without looking, run to its end, stopped by the time limit."""
+    from cfgplan.cli.formats import stats
+
+    domain, state = _hidden(2)
+    problem = load_text(domain, state)
+    ends = {}
+    for limit, ahead, seconds in (
+        (1, True, None),
+        (1, False, None),
+        (None, False, None),
+        (1, True, 0.0),
+    ):
+        run = Run(problem.task, problem.goal_call, limit, ahead=ahead, time_limit=seconds)
+        list(run)
+        shown = stats(run, run.status.more)
+        ends[run.status] = (shown["exhausted"], shown["more"], shown["stopped"])
+    assert ends == {
+        Status.MORE: (False, True, None),
+        Status.CUT: (False, False, None),
+        Status.COMPLETE: (True, False, None),
+        Status.TIME_LIMIT: (False, False, "time limit"),
+    }
