@@ -350,13 +350,16 @@ class Least:
         """The cheapest derivation of every instance of ``orders`` (each
         children before parents), by instance number, from scratch."""
         memo: dict[int, float] = {}
-        for instance in self._unpriced(orders, memo):
-            if instance.functionality:
-                memo[instance.key] = prices.functionality(
-                    instance.call, instance.weight, instance.key
-                )
-            else:
-                memo[instance.key] = min(self.priced(instance, memo, prices), default=INF)
+        functionality, priced = prices.functionality, self.priced  # (the hot loop)
+        for order in orders:
+            for instance in order:
+                key = instance.key
+                if key not in memo:
+                    memo[key] = (
+                        functionality(instance.call, instance.weight, key)
+                        if instance.functionality
+                        else min(priced(instance, memo, prices), default=INF)
+                    )
         return memo
 
     @staticmethod
