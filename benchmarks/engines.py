@@ -8,7 +8,7 @@ start to exit with its own peak memory:
   4.5 alone: ``cfgplan plan`` as it was before the race);
 - **cfgplan**: ``cfgplan plan D S -k 1``, the default ``--engine both``: the
   search, and past a moment the solver's process racing it
-  (:mod:`cfgplan.planner.portfolio`); "by" says which engine answered;
+  (:mod:`cfgplan.planner.solver`); "by" says which engine answered;
 - **reference**: a planner built on an answer-set solver over the ground
   instances, one expansion per instance (:func:`cfgplan.planner.solver.upper`,
   run as ``python -m benchmarks.engines --reference D S``): the kind of planner

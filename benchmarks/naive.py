@@ -3,7 +3,7 @@
 Depth-first over every derivation (each method version, each precondition
 binding), collecting every admissible configuration, then sorting by cost;
 ties keep the depth-first order (6.3.2). It grows nodes with cfgplan's own
-step (:func:`cfgplan.planner.successors.successors`), so that the benchmark
+step (:func:`cfgplan.planner.grow.successors`), so that the benchmark
 compares search strategies, not two implementations of the step.
 """
 
@@ -12,8 +12,8 @@ from __future__ import annotations
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner.finish import finish
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.grow import successors
 from cfgplan.planner.partial import Partial, root
-from cfgplan.planner.successors import successors
 from cfgplan.planner.task import Ground, Task
 
 

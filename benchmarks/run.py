@@ -37,6 +37,13 @@ CAP = 60.0
 """Seconds a run may take before it is stopped and shown as "> CAP"."""
 
 
+def _stopped(run: Any) -> bool:
+    """Whether a run was stopped, however this version of cfgplan says it
+    (one status, or the stop reason of older ones)."""
+    status = getattr(run, "status", None)
+    return bool(status.stopped) if status is not None else bool(run.stopped)
+
+
 def _planner(mode: str, problem: Any, instance: Instance) -> Any:
     """What to time: cfgplan's ``plan`` (wherever this version of cfgplan keeps
     it: ``--against`` runs this harness on an older cfgplan), its sequence
@@ -55,7 +62,7 @@ def _planner(mode: str, problem: Any, instance: Instance) -> Any:
                 s.steps[-1].configuration.model_copy(update={"cost": s.total})
                 for s in islice(search, most)
             ]
-            return found, bool(search.stopped)
+            return found, _stopped(search)
 
         return sequences
     if mode == "baseline":
@@ -70,7 +77,7 @@ def _planner(mode: str, problem: Any, instance: Instance) -> Any:
 
     def planned(task: Any, goal: Any) -> tuple[list[Any], bool]:
         configs, run = plan(task, goal, limit=limit, time_limit=CAP)
-        return configs, bool(run.stopped)
+        return configs, _stopped(run)
 
     return planned
 

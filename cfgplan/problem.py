@@ -15,8 +15,7 @@ from cfgplan.configuration.cost import Weights
 from cfgplan.diagnostics import CfgplanError, Diagnostic, error
 from cfgplan.ir.model import Domain, Goal, Span, State
 from cfgplan.notation import atom_text
-from cfgplan.planner.compile import compile_task, pattern
-from cfgplan.planner.task import Ground, Task
+from cfgplan.planner.task import Ground, Task, compile_task, pattern
 from cfgplan.syntax.reader import collection_paused, parse, read_domain, read_state
 
 GOAL_SOURCE = "--goal"

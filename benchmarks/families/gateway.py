@@ -8,7 +8,7 @@ R1, R3, ... have a camera of their own too, at ``:cost 25``: with fewer
 cameras than robots (``D < N``) some of them must use it. A bound that
 believes every robot can share the cheapest camera tries the partial
 assignments (factorial in N) before its first configuration; the media cap
-on sharing (:mod:`cfgplan.planner.capacity`) knows each robot pays for one.
+on sharing (:mod:`cfgplan.planner.partition`) knows each robot pays for one.
 """
 
 from __future__ import annotations

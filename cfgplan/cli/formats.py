@@ -56,8 +56,8 @@ def stats(search: Run, more: bool | None = False) -> dict[str, object]:
         "derivations": s.derivations,
         "duplicates": s.duplicates,
         "rejected": s.rejected,
-        "exhausted": s.complete,
-        "stopped": search.stopped.value if search.stopped else None,
+        "exhausted": search.status.exhausted,
+        "stopped": search.status.value if search.status.stopped else None,
     }
 
 

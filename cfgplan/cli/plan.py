@@ -105,9 +105,7 @@ def _plan(
         if asked.stream:  # printed as soon as it is proven
             sys.stdout.write(formats.streamed(problem, config, len(configs), asked.format))
             sys.stdout.flush()
-    if options.solver or search.raced:  # the first is found, and no second looked for
-        return search, configs, None
-    return search, configs, search.more if search.ahead else False
+    return search, configs, search.status.more
 
 
 def _nothing(
@@ -308,9 +306,9 @@ def plan(
         )
         if verbose:
             _verbose(search)
-        if search.stopped:
+        if search.status.stopped:
             found = f"{len(configs)} configuration(s)" if configs else "nothing"
-            say(f"cfgplan: search stopped ({search.stopped.value}); reporting {found} found so far")
+            say(f"cfgplan: search stopped ({search.status.value}); reporting {found} found so far")
         if not configs:
             _nothing(problem, search, format_, output, force)
         if rank is not None:

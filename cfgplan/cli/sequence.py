@@ -45,7 +45,7 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
     from cfgplan.planner.sequence import SequenceSearch
 
     # -k N looks for one sequence more than it lists, with bounded work, to say
-    # whether more exist (as for one goal: cfgplan.planner.prefix)
+    # whether more exist (as for one goal: cfgplan.planner.search)
     ahead = options.limit is not None and options.rank is None
     search = SequenceSearch(
         problem.goal_calls,
@@ -56,9 +56,9 @@ def plan_sequences(problem: Problem, options: SequenceOptions, format_: str) -> 
         ahead=ahead,
     )
     found = list(search)
-    more = search.more if ahead else False
-    if search.stopped is not None:
-        say(f"cfgplan: search stopped ({search.stopped.value}); reporting {len(found)} found")
+    more = search.status.more
+    if search.status.stopped:
+        say(f"cfgplan: search stopped ({search.status.value}); reporting {len(found)} found")
     if not found:
         _impossible(problem, search)
         raise typer.Exit(EXIT_NONE)
@@ -151,8 +151,8 @@ def _document(
         "communication_checked": bool(problem.state.media),
         "stats": {
             "more": more,
-            "exhausted": search.complete,
-            "stopped": search.stopped.value if search.stopped else None,
+            "exhausted": search.status.exhausted,
+            "stopped": search.status.value if search.status.stopped else None,
         },
     }
 

@@ -366,6 +366,6 @@ def problems(
     ``weights`` when given (and the configuration must record the same
     weights), else with the configuration's own weights; ``reliability``
     replaces the reliability of some functionality instances, as the planner's
-    task may (:func:`cfgplan.planner.compile.compile_task`).
+    task may (:func:`cfgplan.planner.task.compile_task`).
     """
     return _Checker(config, domain, state, weights, reliability or {}).run()

@@ -1,7 +1,7 @@
 """Matching preconditions against the facts of a state, for the independent
 admissibility checker (:mod:`cfgplan.configuration.admissible`; thesis 3.5,
 causal admissibility). It shares no code with the planner's matcher
-(:mod:`cfgplan.planner.unify`, :mod:`cfgplan.planner.match`), so that the two
+(:mod:`cfgplan.planner.unify`, :mod:`cfgplan.planner.ground`), so that the two
 check each other.
 """
 

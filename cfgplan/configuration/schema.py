@@ -20,7 +20,10 @@ from typing import Literal
 from pydantic import Field
 
 from cfgplan.documents import Closed, Number
-from cfgplan.planner.report import Condition, StopReason
+from cfgplan.planner.report import Condition
+
+Stopped = Literal["time limit", "interrupted"]
+"""The values of :class:`cfgplan.planner.report.Status` that stop a run."""
 
 __all__ = [
     "ChannelEntry",
@@ -133,7 +136,7 @@ class SearchStats(Closed):
     duplicates: int = Field(description="Partial configurations reached again and skipped.")
     rejected: int = Field(description="Complete ones refused by an admissibility check.")
     exhausted: bool = Field(description="True when the search ran to its end.")
-    stopped: StopReason | None = Field(description="Why the search was stopped, or null.")
+    stopped: Stopped | None = Field(description="Why the search was stopped, or null.")
 
 
 class DeadEnd(Closed):
@@ -245,7 +248,7 @@ class SequenceStats(Closed):
 
     more: bool = Field(description="True when `-k` cut the list and more sequences exist.")
     exhausted: bool
-    stopped: StopReason | None
+    stopped: Stopped | None
 
 
 class SequenceDocument(Closed):

@@ -1,16 +1,19 @@
 """The configuration planner of thesis 4.5.
 
 The pipeline reads off the module names: ``task`` (the domain and state
-compiled), ``unify`` and ``match`` (preconditions against the state),
-``ground`` (instances made on demand), ``partial`` (the node and the two
-steps that grow it), ``successors`` (one step of 4.5), ``bound`` and
-``partition`` (the heuristics), ``pricer`` (a node's priority by them, and
-when the dearer one is worth it), ``grow`` (what every strategy does to a
-node), ``search`` (best-first), ``components`` and ``combine`` (a goal's
-independent parts, searched apart and combined) and ``enumerate`` (every
-configuration, in bounded memory), ``dive`` (an anytime answer), ``clock`` (the time limit),
-``finish`` (step 4: admissibility), ``report`` and ``explain`` (why nothing
-was found), and ``plan``, the entry point.
+compiled) and ``costs`` (what each part costs, and how costs rank),
+``unify`` and ``ground`` (preconditions against the state, instances made on
+demand), ``graph`` (the AND/OR graph of ground instances), ``partial`` (the
+node, its channels, and the two steps that grow it), ``bound`` and
+``partition`` (the two lower bounds), ``pricer`` (a node's priority by them,
+and when the dearer one is worth it), ``grow`` (one step of 4.5, replays, and
+what every strategy does to a node), ``search`` (the tie order, best-first,
+``--all`` in bounded memory, the anytime dive, ``-k N`` and one more),
+``combine`` (a goal's independent parts, searched apart and combined),
+``solver`` (the answer-set solver and its race with the search), ``clock``
+(the time limit), ``options`` (the search's settings), ``finish`` (step 4:
+admissibility), ``report`` and ``explain`` (why nothing was found, and how a
+run ended), ``sequence`` (several goals), and ``plan``, the entry point.
 
 The entry point (``plan``, ``Run``, ``Stats``) is imported when first asked
 for: reading, checking and compiling a problem (:mod:`cfgplan.problem`) use

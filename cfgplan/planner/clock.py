@@ -68,7 +68,7 @@ def limit(deadline: float | None) -> Iterator[None]:
 def beside(tick: Callable[[], None]) -> Iterator[None]:
     """Call ``tick`` at every :func:`check` of the block: what runs beside the
     search and may end it, by raising (the solver's process racing it,
-    :mod:`cfgplan.planner.portfolio`)."""
+    :mod:`cfgplan.planner.solver`)."""
     token = _beside.set(tick)
     try:
         yield

@@ -3,7 +3,7 @@
 Every dead end the search met is kept (first occurrence, in the order met):
 method versions whose preconditions no binding satisfies, with the first
 failing condition and its bindings (and the fact it nearly matches, when a
-constant of it looks like a slip: :func:`cfgplan.planner.match.why_not`);
+constant of it looks like a slip: :func:`cfgplan.planner.ground.why_not`);
 channels that end on the wrong robots; and configurations rejected after
 expansion (information, cycles, media).
 """
@@ -46,7 +46,7 @@ def explain(report: Report, goal: str, limit: int = 40) -> list[str]:
         )
     elif len(lines) == 1:
         lines.append("  the goal's method has no version")
-    if report.unfinished and not report.undecided:
+    if report.status.stopped and report.explaining:
         lines.append("  (the search for dead ends ran out of time: there may be more)")
     return lines
 
@@ -75,5 +75,5 @@ def explanation(report: Report) -> dict[str, Any]:
             {"condition": condition.value, "reason": reason, "configurations": count}
             for (condition, reason), count in rejected.items()
         ],
-        "complete": not report.unfinished,
+        "complete": not report.status.stopped,
     }

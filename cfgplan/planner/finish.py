@@ -17,14 +17,11 @@ from cfgplan.configuration.media import assign
 from cfgplan.configuration.model import Assignment, Channel, Configuration, FunctionalityInstance
 from cfgplan.notation import atom_text, call_text
 from cfgplan.planner import clock
-from cfgplan.planner.canonical import channel_numbers, digest, placed_names
-from cfgplan.planner.ground import Effects
-from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Partial, Placed
+from cfgplan.planner.ground import Effects, Numbering
+from cfgplan.planner.partial import Channel as PartialChannel
+from cfgplan.planner.partial import Partial, Placed, channel_numbers, demands, digest, placed_names
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Ground, Task
-from cfgplan.planner.wiring import Channel as PartialChannel
-from cfgplan.planner.wiring import demands
 
 
 @dataclass(eq=False, repr=False)

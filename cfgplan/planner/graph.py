@@ -1,4 +1,7 @@
-"""The AND/OR graph of ground instances (4.5): every method instance with one
+"""The AND/OR graph of ground instances (4.5), and the passes over it made once
+per task and goal.
+
+The AND/OR graph of ground instances (4.5): every method instance with one
 option per feasible expansion (its method versions in domain order, the
 bindings of their preconditions in state order), every functionality
 instance with its weight. Made on demand from the grounder's expansions,
@@ -7,34 +10,110 @@ as the grounder is, :func:`cfgplan.planner.plan.analysis`), numbered by its
 numbering.
 
 The passes over it are elsewhere: what every expansion of an instance
-contains (:mod:`cfgplan.planner.summary`, the first bound), the partitioned
+contains (:mod:`cfgplan.planner.bound`, the first bound), the partitioned
 bound's occurrence counts and cheapest derivations (:mod:`cfgplan.planner.partition`,
-:mod:`cfgplan.planner.occurrences`, :mod:`cfgplan.planner.prices`,
-:mod:`cfgplan.planner.least`), how often the
-media let a shared cost occur (:mod:`cfgplan.planner.capacity`), and the
-independent parts of a goal (:mod:`cfgplan.planner.components`). What the
+:mod:`cfgplan.planner.partition`, :mod:`cfgplan.planner.partition`,
+:mod:`cfgplan.planner.partition`), how often the
+media let a shared cost occur (:mod:`cfgplan.planner.partition`), and the
+independent parts of a goal (:mod:`cfgplan.planner.combine`). What the
 graph holds of an expansion is what those passes read: its children and
 their numbers, its own channels as the bound prices them
-(:class:`~cfgplan.planner.prices.Wire`), the agents its functionalities run
+(:class:`~cfgplan.planner.partition.Wire`), the agents its functionalities run
 on, and what its global channels need of the media
-(:mod:`cfgplan.planner.room`).
+(:mod:`cfgplan.planner.partial`).
+
+Which method instances may occur again in one derivation: the
+ones a search remembers for replays (:mod:`cfgplan.planner.grow`). Passes
+over the grounder's graph of ground instances,
+made once per task and goal (:meth:`cfgplan.planner.grow.Grower`), with the
+recursion guard of 4.5 ignored: they over-approximate, which only makes a
+search remember more than it replays.
 """
 
 from __future__ import annotations
 
-from collections.abc import Container
+import math
+from collections.abc import Callable, Container, Iterable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from cfgplan.planner.canonical import channel_number
-from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder
-from cfgplan.planner.numbering import Numbering
-from cfgplan.planner.partial import Placed
-from cfgplan.planner.prices import Wire, wire_keys
+from cfgplan.planner.ground import ChannelSpec, Expansion, Grounder, Numbering
+from cfgplan.planner.partial import Channel, Need, Placed, Room, channel_number
 from cfgplan.planner.report import DeadEnd
-from cfgplan.planner.room import Need, Room
 from cfgplan.planner.task import Ground
-from cfgplan.planner.wiring import Channel
+
+PriceKey = tuple[object, ...]
+"""What costs, as counted: ``("f", call)`` for a functionality (so that no
+call, a tuple of names, is ever mistaken for another key); ``("@", agent)``; for
+channels of one kind and data: ``("=", kind, data, sender, receiver)`` (both
+ends known), ``("?r", kind, data, receiver)`` (only the receiver known),
+``("?s", kind, data, sender)`` (only the sender), ``("?", kind, data)`` (both
+ends open), and the sums ``("*", kind, data)`` (every channel),
+``("to", kind, data, receiver)`` and ``("from", kind, data, sender)`` (every
+one with that end known), ``("?r*", kind, data)`` and ``("?s*", kind, data)``
+(every one with only a receiver, only a sender known)."""
+
+Counts = dict[int, int]
+"""Most occurrences of each key in one derivation, keys by their numbers
+(:attr:`cfgplan.planner.partition.Partition.number`: small integers hash
+faster than nested tuples)."""
+
+
+def add(total: Counts, counts: Counts) -> None:
+    """Add ``counts`` to ``total`` (the occurrences of two parts of one derivation)."""
+    get = total.get
+    for key, n in counts.items():
+        total[key] = get(key, 0) + n
+
+
+def most(options: Iterable[Counts]) -> Counts:
+    """The most occurrences of each key in any one of ``options`` (a method's
+    expansions, each its occurrences: one derivation takes one expansion)."""
+    found: Counts = {}
+    for total in options:
+        for key, n in total.items():
+            if n > found.get(key, 0):
+                found[key] = n
+    return found
+
+
+class Wire(NamedTuple):
+    """A channel as this bound prices it: ``weight / S``, S the sum of the
+    counts of ``shares`` (the channels it might merge with, itself included);
+    nothing when C holds a channel with key ``free``. Its occurrence counts
+    towards ``counted``. Keys by their numbers; ``number``: the wire's own
+    (:meth:`cfgplan.planner.graph.Graph.wire` makes each once), by which
+    :attr:`Prices.shared` keeps its price."""
+
+    weight: float
+    counted: tuple[int, ...]
+    shares: tuple[int, ...]
+    free: int
+    number: int
+
+
+def wire_keys(
+    kind: str, data: object, sender: Ground | None, receiver: Ground | None
+) -> tuple[tuple[PriceKey, ...], tuple[PriceKey, ...], PriceKey]:
+    """What a channel whose known ends (functionality calls) are given counts
+    towards, what it shares with, and what makes it free (:class:`Wire`)."""
+    every: PriceKey = ("*", kind, data)
+    opened: PriceKey = ("?", kind, data)
+    if sender is not None and receiver is not None:
+        key: PriceKey = ("=", kind, data, sender, receiver)
+        to: PriceKey = ("to", kind, data, receiver)
+        by: PriceKey = ("from", kind, data, sender)
+        shares = (key, ("?r", kind, data, receiver), ("?s", kind, data, sender), opened)
+        return (key, every, to, by), shares, key
+    if receiver is not None:
+        to = ("to", kind, data, receiver)
+        counted = (("?r", kind, data, receiver), every, to, ("?r*", kind, data))
+        return counted, (to, ("?s*", kind, data), opened), to
+    if sender is not None:
+        by = ("from", kind, data, sender)
+        counted = (("?s", kind, data, sender), every, by, ("?s*", kind, data))
+        return counted, (by, ("?r*", kind, data), opened), by
+    return (opened, every), (every,), every
 
 
 class Option(NamedTuple):
@@ -90,7 +169,7 @@ class Graph:
         found = self._wires.get(ident)
         if found is None:
             counted, shares, free = wire_keys(kind, data, sender, receiver)
-            weight = self.grounder.task.channel_cost(kind)
+            weight = self.grounder.task.costs.channel(kind)
             number = self.number
             found = Wire(
                 weight,
@@ -123,7 +202,7 @@ class Graph:
             task = self.grounder.task
             schema = task.functionality(call)
             if schema is not None:
-                weight = task.functionality_cost(schema, call)
+                weight = task.costs.functionality(schema, call)
                 found = Instance(call, True, weight=weight, key=self.number(("f", call)))
             else:
                 options = []
@@ -140,7 +219,7 @@ class Graph:
 
     def order(self, call: Ground) -> tuple[Instance, ...]:
         """Every instance below ``call`` (itself last), children before
-        parents: the order :meth:`cfgplan.planner.least.Least.full` evaluates
+        parents: the order :meth:`cfgplan.planner.partition.Least.full` evaluates
         them in, made once."""
         found = self.reach(call)
         assert found is not None  # counts() found no recursion below the pending items
@@ -230,3 +309,136 @@ def graph_of(grounder: Grounder, media: bool = True) -> Graph:
         room = Room(grounder.task, grounder.numbering, media)
         found = grounder.graphs[media] = Graph(grounder, room, grounder.numbering)
     return found
+
+
+def repeatable(
+    graph: Graph, roots: Iterable[Ground], least: int = 1, worth: float = 0
+) -> frozenset[Ground]:
+    """The method instances below ``roots`` that may occur twice in one
+    derivation (the recursion guard ignored): below two method items of one
+    option's body, or below two roots; and whose derivations may take at
+    least ``least`` method expansions (one below itself: any). Only they are
+    remembered; none when replays could save fewer than ``worth`` expansions
+    in all (each later occurrence of each, at its longest: the thesis's
+    build-a-wall, two or three short repeats)."""
+    task = graph.grounder.task
+    reach: dict[Ground, frozenset[Ground]] = {}
+
+    def below(call: Ground) -> frozenset[Ground]:
+        found = reach.get(call)
+        if found is None:
+            seen = {call}
+            todo = [call]
+            while todo:
+                current = todo.pop()
+                for option in graph.instance(current).options:
+                    for child in option.children:
+                        if child not in seen and task.is_method(child):
+                            seen.add(child)
+                            todo.append(child)
+            found = reach[call] = frozenset(seen)
+        return found
+
+    methods = [call for call in roots if task.is_method(call)]
+    found: set[Ground] = set()
+    _twice(methods, below, found)
+    for call in {c for root in methods for c in below(root)}:
+        for option in graph.instance(call).options:
+            slots = [child for child in option.children if task.is_method(child)]
+            if len(slots) > 1:
+                _twice(slots, below, found)
+    if least > 1 or worth > 0:
+        longest = _longest(graph, found)
+        found = {call for call in found if longest[call] >= least}
+        if worth > 0 and found:
+            occurs = _occurrences(graph, methods, {c for root in methods for c in below(root)})
+            saved = sum((occurs[call] - 1) * longest[call] for call in found)
+            if saved < worth:
+                found = set()
+    return frozenset(found)
+
+
+def _occurrences(graph: Graph, roots: list[Ground], calls: set[Ground]) -> dict[Ground, float]:
+    """At most how often each of ``calls`` (every method instance below
+    ``roots``) occurs in one derivation: once per root, and for each caller,
+    as often as the caller times the most the caller's one body holds it
+    (infinite on and below a cycle)."""
+    task = graph.grounder.task
+    most: dict[Ground, dict[Ground, int]] = {}  # caller -> child -> most per body
+    waiting = dict.fromkeys(calls, 0)  # callers not yet counted
+    for call in calls:
+        per: dict[Ground, int] = {}
+        for option in graph.instance(call).options:
+            counts: dict[Ground, int] = {}
+            for child in option.children:
+                if task.is_method(child):
+                    counts[child] = counts.get(child, 0) + 1
+            for child, count in counts.items():
+                per[child] = max(per.get(child, 0), count)
+        most[call] = per
+        for child in per:
+            waiting[child] += 1
+    occurs: dict[Ground, float] = dict.fromkeys(calls, 0.0)
+    for root in roots:
+        occurs[root] += 1
+    ready = [call for call, count in waiting.items() if count == 0]
+    while ready:
+        call = ready.pop()
+        for child, count in most[call].items():
+            occurs[child] += occurs[call] * count
+            waiting[child] -= 1
+            if waiting[child] == 0:
+                ready.append(child)
+    for call, count in waiting.items():
+        if count:  # on or below a cycle
+            occurs[call] = math.inf
+    return occurs
+
+
+def _longest(graph: Graph, calls: Iterable[Ground]) -> dict[Ground, float]:
+    """The most method expansions a derivation of each call may take (the
+    recursion guard ignored: infinite where an instance is below itself)."""
+    task = graph.grounder.task
+    longest: dict[Ground, float] = {}
+    on_path: set[Ground] = set()
+    for start in calls:
+        todo: list[tuple[Ground, bool]] = [(start, False)]
+        while todo:
+            call, ready = todo.pop()
+            if call in longest:
+                continue
+            options = graph.instance(call).options
+            children = {c for o in options for c in o.children if task.is_method(c)}
+            if not ready:
+                on_path.add(call)
+                todo.append((call, True))
+                for child in children:
+                    if child in on_path:
+                        longest[call] = math.inf  # below itself
+                    elif child not in longest:
+                        todo.append((child, False))
+                continue
+            on_path.discard(call)
+            if call in longest:
+                continue
+            longest[call] = max(
+                (
+                    1 + sum(longest.get(c, math.inf) for c in o.children if task.is_method(c))
+                    for o in options
+                ),
+                default=1,
+            )
+    return longest
+
+
+def _twice(
+    slots: list[Ground], below: Callable[[Ground], frozenset[Ground]], found: set[Ground]
+) -> None:
+    """Add to ``found`` what is below two of ``slots``."""
+    once: set[Ground] = set()
+    for slot in slots:
+        for call in below(slot):
+            if call in once:
+                found.add(call)
+            else:
+                once.add(call)

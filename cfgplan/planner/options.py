@@ -7,13 +7,12 @@ or its order, only how much work finding it takes (the property tests of
 Not here: the sizes of what a task's bounds keep (made once per task and
 shared by every search of it, :func:`cfgplan.planner.plan.analysis`), which no
 search could set for itself: how many stacks' counts are kept
-(:data:`cfgplan.planner.occurrences.STACKS`,
-:data:`cfgplan.planner.capacity.STACKS`), and where
-:func:`cfgplan.planner.parts.least` changes its way of meeting parts
+(:data:`cfgplan.planner.partition.STACKS`), and where
+:func:`cfgplan.planner.bound.least` changes its way of meeting parts
 (``WIDE``, ``MOST_WIDE``, ``GROUPS``: the same floats either way, each way
 tested on its own in ``tests/planner/test_parts.py``), and when an evaluation
 of the partitioned bound starts from a sibling's
-(:attr:`cfgplan.planner.least.Least.reuse`, ``smallest``: the same floats
+(:attr:`cfgplan.planner.partition.Least.reuse`, ``smallest``: the same floats
 either way). Tests read them and never patch them."""
 
 from __future__ import annotations
@@ -41,7 +40,7 @@ class SearchOptions:
     bound up: from then on, when fewer than one refinement in :attr:`pays` paid
     (pruned a node, raised its priority past the next node's, so that another
     node is taken first, or priced some of its children above their own bound,
-    :mod:`cfgplan.planner.split`), the bound is dropped for the rest of the
+    :mod:`cfgplan.planner.partition`), the bound is dropped for the rest of the
     search, unless it was at least the first bound every time: then it is
     kept, for :attr:`rely` to drop the first instead (where both are exact, a
     deep chain, the stronger one priced from its last evaluation is the
@@ -70,7 +69,7 @@ class SearchOptions:
 
     one_pass: int = 5_000
     """Nodes the first walk of ``--all``, over every cost at once, may take
-    before it has listed anything (:mod:`cfgplan.planner.enumerate`)."""
+    before it has listed anything (:mod:`cfgplan.planner.search`)."""
 
     most_held: int = 250_000
     """Configurations one window of ``--all`` may hold before its upper edge
@@ -78,7 +77,7 @@ class SearchOptions:
 
     media: bool = True
     """Price as impossible an expansion whose own global channels the media
-    cannot carry on top of a node's (:mod:`cfgplan.planner.room`, in the
+    cannot carry on top of a node's (:mod:`cfgplan.planner.partial`, in the
     partitioned bound); False prices it as if the media carried anything.
     The configurations found are the same (a completion always fits the
     media: step 4 checks it), only the work to find them differs."""
@@ -90,13 +89,13 @@ class SearchOptions:
     splits: bool = True
     """Price the children of a node the stronger bound refined from that
     node's split, so that most are never refined themselves
-    (:mod:`cfgplan.planner.split`); False prices each child alone."""
+    (:mod:`cfgplan.planner.partition`); False prices each child alone."""
 
     replays: bool = True
     """In the best-first search, do a sub-derivation closed before again in
     one step where the same method instance is on top again, beside a node
     for its other derivations priced at their floor
-    (:mod:`cfgplan.planner.replay`); False walks it step by step."""
+    (:mod:`cfgplan.planner.grow`); False walks it step by step."""
 
     replay_trial: int = 4
     """Sub-derivations remembered but not replayed a search may meet before
@@ -126,17 +125,17 @@ class SearchOptions:
     """``-k 1``: the steps of the clock (:func:`cfgplan.planner.clock.check`, a
     measure of work that is the same on every machine) the search makes alone
     before the solver's process is started beside it, the first of the two to
-    end answering (:mod:`cfgplan.planner.portfolio`); None: the search alone.
+    end answering (:mod:`cfgplan.planner.solver`); None: the search alone.
     ``cfgplan plan`` races after :data:`RACE` steps (its ``--engine both``); a
     library caller chooses (a robot's runtime, a long-lived process with Zenoh's
     threads, plans small problems and does not race)."""
     dive: bool = True
     """When a limit stops the search before anything was proven, dive greedily
-    from the open nodes for a configuration (:mod:`cfgplan.planner.dive`,
+    from the open nodes for a configuration (:mod:`cfgplan.planner.search`,
     shown with ``*``); False reports that nothing was found."""
 
     ahead_least: int = 10_000
-    """The least work the look-ahead of ``-k N`` may do (:mod:`cfgplan.planner.prefix`)."""
+    """The least work the look-ahead of ``-k N`` may do (:mod:`cfgplan.planner.search`)."""
 
     grace: float = 0.35
     """Seconds past the time limit the greedy dive may take when nothing was

@@ -6,7 +6,7 @@ then ``--all``, grounds and summarises once), the strategy — best-first
 search for the ``limit`` cheapest (:mod:`cfgplan.planner.search`), or, when
 the goal's choices fall into independent parts, each part searched so and
 the parts combined (:mod:`cfgplan.planner.combine`), windows of depth-first
-walks to list them all in bounded memory (:mod:`cfgplan.planner.enumerate`)
+walks to list them all in bounded memory (:mod:`cfgplan.planner.search`)
 — the time limit, the greedy dive when a
 search is stopped before it has proven anything, and, when nothing is
 admissible, a search without the bounds to say why. Configurations come out
@@ -25,23 +25,20 @@ from typing import TYPE_CHECKING
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import clock
 from cfgplan.planner.bound import Bound
-from cfgplan.planner.components import Parts, divide, unroll
+from cfgplan.planner.combine import Parts, divide, unroll
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.grow import Grower, ReplayKey
+from cfgplan.planner.grow import Grower, ReplayKey, Replays
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
-from cfgplan.planner.partition import Partition
-from cfgplan.planner.prefix import Prefix
+from cfgplan.planner.partition import Partition, Split
 from cfgplan.planner.pricer import Heuristic, Pricer, Splitter
-from cfgplan.planner.replay import Replays
-from cfgplan.planner.report import Engine, Report, Stats, StopReason
-from cfgplan.planner.search import BestFirst, Progress
-from cfgplan.planner.split import Split
+from cfgplan.planner.report import Engine, Report, Stats, Status
+from cfgplan.planner.search import BestFirst, Prefix, Progress, place
 from cfgplan.planner.task import Ground, Task
 
 if TYPE_CHECKING:  # each loaded where it is used: most runs use none (start-up)
     from cfgplan.planner.combine import Combined
-    from cfgplan.planner.enumerate import Windows
+    from cfgplan.planner.search import Windows
 
 
 @dataclass(eq=False, repr=False)
@@ -78,9 +75,9 @@ def analysis(task: Task, media: bool = True) -> Analysis:
 
 
 def divided(task: Task, goal: Ground, media: bool = True) -> Parts | None:
-    """The goal's independent parts (:mod:`cfgplan.planner.components`), made
+    """The goal's independent parts (:mod:`cfgplan.planner.combine`), made
     once per task and goal; None when there are not two, or when costs have
-    no unit (:mod:`cfgplan.planner.levels`: then sums of parts may not rank
+    no unit (:mod:`cfgplan.planner.costs`: then sums of parts may not rank
     as whole configurations do). ``media``: as :func:`analysis`."""
     analysed = analysis(task, media)
     made = analysed.components
@@ -119,7 +116,7 @@ def partitioned(bound: Bound, partition: Partition) -> Heuristic:
 
 def splitting(bound: Bound, partition: Partition) -> Splitter:
     """:func:`partitioned`, taken apart at the top item for the children
-    (:mod:`cfgplan.planner.split`)."""
+    (:mod:`cfgplan.planner.partition`)."""
 
     def split(node: Partial) -> tuple[float | None, Split | None]:
         return partition.split(node, bound.certain_agents(node))
@@ -193,10 +190,6 @@ def _no_bound(node: Partial) -> float:
     return 0.0
 
 
-def _order(entry: tuple[float, Partial]) -> tuple[float, tuple[int, ...]]:
-    return entry[0], entry[1].path
-
-
 @dataclass(eq=False, repr=False)
 class Run:
     """One planning run; iterate it for the configurations, best first."""
@@ -211,21 +204,23 @@ class Run:
     """When the time limit started counting (perf_counter; default: now)."""
     ahead: bool = False
     """Once ``limit`` configurations are listed, look for one more (not
-    listed) to say whether more exist (:attr:`more`), with bounded work
-    (:mod:`cfgplan.planner.prefix`): ``-k 1`` never runs to the end of a
+    listed) to say whether more exist (:attr:`status`), with bounded work
+    (:mod:`cfgplan.planner.search`): ``-k 1`` never runs to the end of a
     search to prove there is no second configuration."""
     options: SearchOptions = field(default_factory=SearchOptions)
     """The strategies' settings and switches (parts apart, the look-ahead's
     least work, ...), given to every grower of the run."""
-    more: bool | None = field(init=False, default=False)
-    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`; None
-    when the solver ran (it finds the first configuration and looks no further)."""
+    status: Status = field(init=False, default=Status.COMPLETE)
+    """How the run ended: stopped (the time limit, the user), or as the
+    prefix it listed (:attr:`cfgplan.planner.search.Prefix.status`); UNKNOWN
+    when the solver answered (it finds the first configuration and looks no
+    further)."""
     engine: Engine = field(init=False, default=Engine.SEARCH)
     """Which engine found the configurations."""
     raced: bool = field(init=False, default=False)
     """The solver's process was started beside the search
     (:attr:`SearchOptions.race`): whoever answered, the first configuration is
-    all the run looks for (:attr:`more` is None)."""
+    all the run looks for (:attr:`status` is UNKNOWN)."""
     answered: Stats | None = field(init=False, default=None)
     """The work of the solver's process, when it answered the race."""
     inadmissible: bool = field(init=False, default=False)
@@ -242,7 +237,7 @@ class Run:
             self.task, self.options, self.distinct, splits=ranked, replays=ranked
         )
         if self.limit is None:
-            from cfgplan.planner.enumerate import Windows
+            from cfgplan.planner.search import Windows
 
             bound = analysis(self.task, self.options.media).bound
             self.strategy = Windows(made, pricer, self.goal, bound.feasible, self.progress)
@@ -261,9 +256,9 @@ class Run:
                 return
         if self.options.race is not None and first_only and self.task.levels.unit is not None:
             # (costs without a unit have no bracket: nothing to race)
-            from cfgplan.planner import portfolio  # loaded when asked for (start-up)
+            from cfgplan.planner import solver  # loaded when asked for (start-up)
 
-            if portfolio.FORKS:
+            if solver.FORKS:
                 yield from self._race(self.options.race)
                 return
         self._divide()
@@ -271,18 +266,18 @@ class Run:
 
     def _race(self, after: int) -> Iterator[Configuration]:
         """The first configuration, by the search or by the solver's process
-        started beside it after ``after`` steps (:mod:`cfgplan.planner.portfolio`),
+        started beside it after ``after`` steps (:mod:`cfgplan.planner.solver`),
         whichever ends first. Nothing is yielded while the child runs: the
         caller's own clock steps are not the race's."""
-        from cfgplan.planner import portfolio
+        from cfgplan.planner import solver
 
         found: Configuration | None = None
         try:
-            with portfolio.racing(self._in_child, after) as rival:
+            with solver.racing(self._in_child, after) as rival:
                 self._divide()
                 searched = iter(self.strategy)
                 found = next(searched, None)
-        except portfolio.Overtaken as won:
+        except solver.Overtaken as won:
             self.raced = True
             self.engine = Engine.SOLVER
             config, self.answered = won.answer
@@ -334,7 +329,7 @@ class Run:
         """:attr:`SearchOptions.solver`: the first cheapest configuration by the
         solver (:meth:`_by_solver`), or None: the search goes on from the start
         (and stops at once when out of time). What comes after it is not looked
-        for (:attr:`more` is None)."""
+        for (:attr:`status` is UNKNOWN)."""
         from cfgplan.planner import solver
 
         try:
@@ -356,12 +351,13 @@ class Run:
         return self.strategy.stats if self.answered is None else self.answered
 
     @property
-    def report(self) -> Report:
-        return self.strategy.report if self.explained is None else self.explained
+    def stopped(self) -> Status | None:
+        """:attr:`status` when it stopped the run, else None (for cfgplan.reconfigure's callers)."""
+        return self.status if self.status.stopped else None
 
     @property
-    def stopped(self) -> StopReason | None:
-        return self.strategy.stopped
+    def report(self) -> Report:
+        return self.strategy.report if self.explained is None else self.explained
 
     def __iter__(self) -> Iterator[Configuration]:
         started = time.perf_counter() if self.started is None else self.started
@@ -373,21 +369,21 @@ class Run:
                 for config in prefix.take(self._search()):
                     listed += 1
                     yield config
-            first_only = self.engine is Engine.SOLVER or self.raced
-            self.more = None if first_only and listed else prefix.more
-            if prefix.cut or (self.raced and listed):
-                self.stats.complete = False
+            self.status = self.strategy.status
+            if not self.status.stopped:
+                first_only = self.engine is Engine.SOLVER or self.raced
+                self.status = Status.UNKNOWN if first_only and listed else prefix.status
         except KeyboardInterrupt:
-            self.stats.complete = False
-            self.strategy.stopped = StopReason.INTERRUPTED
-        if self.stopped is not None and not listed:
+            self.status = Status.INTERRUPTED
+        self.stats.complete = self.status.exhausted
+        if self.status.stopped and not listed:
             guess = self._dive(deadline)
             if guess is not None:
                 yield guess
             else:  # nothing found, nothing proved
-                self.report.unfinished = self.report.undecided = True
+                self.report.status = self.status
             return
-        if not listed and (self.inadmissible or (self.stats.pruned and self.stats.complete)):
+        if not listed and (self.inadmissible or (self.stats.pruned and self.status.exhausted)):
             self._explain(started, deadline)
 
     def _dive(self, deadline: float | None) -> Configuration | None:
@@ -395,7 +391,7 @@ class Run:
         (unless :attr:`SearchOptions.dive` is off)."""
         if not self.options.dive:
             return None
-        from cfgplan.planner.dive import dive
+        from cfgplan.planner.search import dive
 
         grace = self.options.grace
         end = time.perf_counter() + grace if deadline is None else deadline + grace
@@ -405,7 +401,8 @@ class Run:
                 if isinstance(self.strategy, BestFirst):
                     frontier = self.strategy.frontier
                 else:  # the windows keep no frontier: dive from the start
-                    frontier = sorted(grower.settle(root(self.goal), pricer), key=_order)
+                    settled = grower.settle(root(self.goal), pricer)
+                    frontier = sorted(settled, key=lambda entry: place(*entry))
                 return dive(frontier, partial(grower.children, pricer=pricer), grower.finish)
         except (clock.OutOfTime, KeyboardInterrupt):
             return None
@@ -427,8 +424,7 @@ class Run:
             for _ in explaining:
                 break
         report = explaining.report
-        if explaining.stopped is not None:
-            report.unfinished = True
+        report.status, report.explaining = explaining.status, True
         self.explained = report
 
 

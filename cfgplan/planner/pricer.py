@@ -8,7 +8,7 @@ Two admissible bounds are at hand. The *first*
 is settled (:meth:`Pricer.price`). The *stronger*
 (:mod:`cfgplan.planner.partition`) is dear: a strategy applies it lazily,
 to the node it takes (:meth:`Pricer.refined`); taken apart at that node's top
-item (:mod:`cfgplan.planner.split`) it also prices the node's children
+item (:mod:`cfgplan.planner.partition`) it also prices the node's children
 (:meth:`Pricer.expanded`), most of which are then never refined themselves.
 
 Whether the stronger bound pays for itself is decided here, and only here
@@ -27,18 +27,18 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 
-from cfgplan.planner.levels import Levels
+from cfgplan.planner.costs import Levels
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
+from cfgplan.planner.partition import Split
 from cfgplan.planner.report import Stats
-from cfgplan.planner.split import Split
 
 Heuristic = Callable[[Partial], float | None]
 """A lower bound on what a node still costs; None when it has no completion."""
 
 Splitter = Callable[[Partial], tuple[float | None, Split | None]]
 """The stronger bound, with the node's bound taken apart at its top item
-(:mod:`cfgplan.planner.split`)."""
+(:mod:`cfgplan.planner.partition`)."""
 
 INFINITE = float("inf")
 
@@ -59,7 +59,7 @@ class Pricer:
     pricer's own methods."""
 
     levels: Levels
-    """Rounds priorities and costs to the task's unit of cost (:mod:`cfgplan.planner.levels`)."""
+    """Rounds priorities and costs to the task's unit of cost (:mod:`cfgplan.planner.costs`)."""
     first: Heuristic
     """The first bound: every node settled is priced by it."""
     stronger: Heuristic | None = None
@@ -112,14 +112,14 @@ class Pricer:
 
     def priority(self, node: Partial, rest: float) -> float:
         """``cost + rest`` at its level as a lower bound, never above the level
-        of a completion's cost (:meth:`cfgplan.planner.levels.Levels.bound`:
+        of a completion's cost (:meth:`cfgplan.planner.costs.Levels.bound`:
         rounded up to a multiple of the unit of costs, less a hair for the
         float sums of shared costs)."""
         return self.levels.bound(node.cost + rest)
 
     def cost(self, node: Partial) -> float:
         """A complete node's cost as configurations are ranked and reported
-        (:meth:`cfgplan.planner.levels.Levels.cost`)."""
+        (:meth:`cfgplan.planner.costs.Levels.cost`)."""
         return self.levels.cost(node.cost)
 
     def expanded(
@@ -167,7 +167,7 @@ class Pricer:
         self, nodes: Iterable[Iterator[Partial]], beaten: float | None = None
     ) -> float | None:
         """The least priority of ``nodes`` (a replay's deviations, each settled,
-        :func:`cfgplan.planner.replay.deviations`), by the bound in use: a
+        :func:`cfgplan.planner.grow.deviations`), by the bound in use: a
         lower bound on every derivation that deviates; None when none can
         complete. Once one is at most ``beaten``, that one's (the rest are
         not priced)."""

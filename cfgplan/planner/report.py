@@ -28,16 +28,47 @@ class Condition(Enum):
     COMMUNICATION = "communication admissibility"  # the media cannot carry the channels
 
 
-class StopReason(Enum):
-    """Why a search ended before it had listed everything it was asked for."""
+class Status(Enum):
+    """How a run ended: the one status a search, a sequence search, the
+    command line, the JSON output (``exhausted``, ``more``, ``stopped``) and
+    the explanation of "nothing found" read. The value is the word shown to
+    the user."""
 
+    COMPLETE = "complete"
+    """The search ran to its end: everything there is was listed."""
+    MORE = "more"
+    """The list was cut at ``-k N`` and at least one more exists (the look-ahead
+    of :mod:`cfgplan.planner.search` found it)."""
+    CUT = "cut"
+    """The list was cut at ``-k N`` and no more was looked for (``--rank``)."""
+    UNKNOWN = "unknown"
+    """The list was cut and whether more exist is not known: the look-ahead's
+    work ran out, or the solver answered (it finds the first and looks no further)."""
     TIME_LIMIT = "time limit"
+    """Stopped by the time limit: what was listed is what was found by then."""
     INTERRUPTED = "interrupted"
+    """Stopped by the user (Ctrl-C)."""
+
+    @property
+    def stopped(self) -> bool:
+        """The search was stopped before it could say what it was asked."""
+        return self in (Status.TIME_LIMIT, Status.INTERRUPTED)
+
+    @property
+    def exhausted(self) -> bool:
+        """The search ran to its end (JSON ``exhausted``)."""
+        return self is Status.COMPLETE
+
+    @property
+    def more(self) -> bool | None:
+        """Whether more than the listed exist (JSON ``more``): True, one was
+        found; None, not known; False, none, or none was looked for."""
+        return True if self is Status.MORE else None if self is Status.UNKNOWN else False
 
 
 class Engine(Enum):
     """Which engine found a run's configurations: the best-first search, or
-    the solver (:mod:`cfgplan.planner.solver`, :mod:`cfgplan.planner.portfolio`)."""
+    the solver (:mod:`cfgplan.planner.solver`, :mod:`cfgplan.planner.solver`)."""
 
     SEARCH = "search"
     SOLVER = "solver"
@@ -66,10 +97,20 @@ class Report:
 
     dead: dict[tuple[str, Condition], DeadEnd] = field(default_factory=dict)
     rejected: list[DeadEnd] = field(default_factory=list)
-    unfinished: bool = False  # the search that collected them was stopped
-    undecided: bool = False
-    """The search itself was stopped before it found a configuration or
-    proved there is none: the dead ends are only those met so far."""
+    status: Status = Status.COMPLETE
+    """How the search that met them ended: stopped, they are only those met
+    so far (JSON ``complete`` is false)."""
+    explaining: bool = False
+    """They were met by the search run again without its bounds, after the
+    run had proved that nothing is admissible (:meth:`Run._explain
+    <cfgplan.planner.plan.Run._explain>`): stopped, the answer stands and
+    only the list of dead ends may be short. Otherwise a stopped search has
+    decided nothing: one may exist."""
+
+    @property
+    def undecided(self) -> bool:
+        """The run was stopped before it found a configuration or proved there is none."""
+        return self.status.stopped and not self.explaining
 
     def note(self, dead: DeadEnd) -> None:
         self.dead.setdefault((dead.where, dead.condition), dead)
@@ -84,10 +125,13 @@ class Stats:
 
     nodes: int = 0  # nodes taken to be expanded or finished
     expansions: int = 0  # method instances expanded
-    replays: int = 0  # of them, sub-derivations done again in one step (replay.py)
+    replays: int = 0  # of them, sub-derivations done again in one step (grow.py)
     derivations: int = 0  # complete derivations met (duplicates included)
     duplicates: int = 0  # complete derivations whose configuration was listed already
     rejected: int = 0  # complete derivations found inadmissible (4.5 step 4)
     pruned: int = 0  # nodes the bounds proved to have no completion
     seconds: float = 0.0
-    complete: bool = True  # False when a limit stopped the search early
+    complete: bool = True
+    """:attr:`Status.exhausted` of the run, copied by the run as it ends, for
+    callers that keep only its counts (cfgplan.reconfigure's); the run's
+    :attr:`~cfgplan.planner.plan.Run.status` is the status."""

@@ -42,15 +42,13 @@ from cfgplan.ir.model import is_variable
 from cfgplan.notation import atom_text
 from cfgplan.planner import clock
 from cfgplan.planner.combine import Combined
+from cfgplan.planner.costs import Levels
 from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Effects
-from cfgplan.planner.levels import Levels
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, analysis, growing, in_parts
-from cfgplan.planner.prefix import Prefix
-from cfgplan.planner.ranking import merge
-from cfgplan.planner.report import Report, StopReason
-from cfgplan.planner.search import BestFirst
+from cfgplan.planner.report import Report, Status
+from cfgplan.planner.search import BestFirst, Prefix, merge
 from cfgplan.planner.task import EffectSpec, Ground, Pattern, Task, Test, derive
 
 Facts = tuple[Ground, ...]
@@ -181,7 +179,7 @@ def fixed_effects(task: Task, goal: Ground, options: SearchOptions) -> Effects |
     way it is helped); else None. So it is when the expansion can reach (over
     the graph of ground instances) at most one functionality instance with a
     postcondition, it is in every feasible expansion of the goal (its
-    summary's, :mod:`cfgplan.planner.summary`), it has one binding of its
+    summary's, :mod:`cfgplan.planner.bound`), it has one binding of its
     preconditions, and no method version it can reach has a postcondition."""
     analysed = analysis(task, options.media)
     grounder, bound = analysed.grounder, analysed.bound
@@ -255,7 +253,7 @@ class Ranked:
     def get(self, j: int) -> Configuration | None:
         while len(self.found) <= j:
             config = next(self._more, None)
-            if self.search.stopped is not None:
+            if self.search.status.stopped:
                 raise clock.OutOfTime  # a step's search was stopped: so is the sequence
             if config is None:
                 return None
@@ -266,7 +264,7 @@ class Ranked:
 @dataclass(order=True)
 class _Entry:
     """A sequence (complete or not) or an offer, at its place: price, then
-    the ranks of its steps' configurations (:mod:`cfgplan.planner.ranking`)."""
+    the ranks of its steps' configurations (:mod:`cfgplan.planner.search`)."""
 
     priority: float
     order: tuple[int, ...]  # the rank of each step's configuration: ties by earlier steps
@@ -288,13 +286,12 @@ class SequenceSearch:
     """List at most this many sequences (None: every one)."""
     ahead: bool = False
     """Once :attr:`limit` are listed, look for one more with bounded work
-    (:mod:`cfgplan.planner.prefix`), to say whether more exist (:attr:`more`)."""
+    (:mod:`cfgplan.planner.search`), to say whether more exist (:attr:`status`)."""
     options: SearchOptions = field(default_factory=SearchOptions)
     """The settings of every step's search, and the look-ahead's least work."""
-    more: bool | None = field(init=False, default=False)
-    """With :attr:`ahead`: :attr:`cfgplan.planner.prefix.Prefix.more`."""
-    stopped: StopReason | None = None
-    complete: bool = True
+    status: Status = field(init=False, default=Status.COMPLETE)
+    """How the search ended: stopped, or as the prefix it listed
+    (:attr:`cfgplan.planner.search.Prefix.status`)."""
     _ranked: dict[tuple[int, Facts], Ranked] = field(default_factory=dict)
     _states: dict[tuple[int, ...], tuple[Facts, tuple[str, ...]]] = field(default_factory=dict)
     _remaining: dict[tuple[int, Facts], float] = field(default_factory=dict)
@@ -356,13 +353,11 @@ class SequenceSearch:
         try:
             with clock.limit(deadline):
                 yield from prefix.take(self._search())
-            self.more = prefix.more
-            if prefix.cut:
-                self.complete = False
+            self.status = prefix.status
         except clock.OutOfTime:
-            self.stopped, self.complete = StopReason.TIME_LIMIT, False
+            self.status = Status.TIME_LIMIT
         except KeyboardInterrupt:
-            self.stopped, self.complete = StopReason.INTERRUPTED, False
+            self.status = Status.INTERRUPTED
 
     def remaining(self, step: int, facts: Facts) -> float:
         """The least the steps from ``step`` on can cost from a state (switches
@@ -407,7 +402,7 @@ class SequenceSearch:
         return done[(step, facts)]
 
     def _search(self) -> Iterator[PlannedSequence]:
-        """Best-first over sequences (:func:`cfgplan.planner.ranking.merge`);
+        """Best-first over sequences (:func:`cfgplan.planner.search.merge`);
         a prefix is priced with :meth:`remaining` (exact without switches),
         an offer at the prefix's cost plus its configuration's alone (less
         or equal to what it turns out)."""
@@ -494,16 +489,16 @@ class SequenceSearch:
     @cached_property
     def _levels(self) -> Levels:
         """How totals are ranked: as the steps' costs are, the switch weight
-        counted in (:mod:`cfgplan.planner.levels`; a sum of floats in another
+        counted in (:mod:`cfgplan.planner.costs`; a sum of floats in another
         order may differ in the last bit)."""
-        return self.task.levels_with(self.switch)
+        return self.task.costs.levels(self.switch)
 
     def blocked(self) -> tuple[int, Task, Report] | None:
         """When no sequence exists (the search ran to its end): the step (0-based)
         that has no admissible configuration in any state the steps before it
         reach, the task of the state the cheapest prefix reaching it leaves, and
         why nothing is admissible there, as ``plan`` says it."""
-        if not self.complete or self.remaining(0, self.task.facts) < math.inf:
+        if not self.status.exhausted or self.remaining(0, self.task.facts) < math.inf:
             return None
         prefix = self._deepest()
         facts, _ = self.state_after(prefix)

@@ -1,8 +1,11 @@
-"""The planning task: a domain and a state compiled into plain, fast structures.
+"""The planning task: a domain and a state compiled into plain, fast structures,
+and the compiler that makes it from the checked IR.
+
+The planning task: a domain and a state compiled into plain, fast structures.
 
 Like pyperplan's task model, this is what search works on: tuples and dicts,
 no pydantic on the hot path. Built once from the IR
-(:func:`cfgplan.planner.compile.compile_task`), derived in one way
+(:func:`cfgplan.planner.task.compile_task`), derived in one way
 (:func:`derive`), and frozen: no field of it ever changes. What is worked out
 from those fields is kept with the task, so that it goes when the task goes
 (a running society plans on one derived task after another): its own derived
@@ -10,19 +13,26 @@ values as cached properties (:attr:`Task.recursive`, :attr:`Task.levels`,
 :attr:`Task.positions`, ...), and what the planner makes once per task in two
 slots: its analysis (:attr:`Task.analyses`: the grounding memo, the bounds, the
 goal's independent parts and the replays' rules, :func:`cfgplan.planner.plan.analysis`)
-and the matching orders (:attr:`Task.joins`, :mod:`cfgplan.planner.join`). Nothing kept there ever
+and the matching orders (:attr:`Task.joins`, :mod:`cfgplan.planner.ground`). Nothing kept there ever
 changes what the task says. (A table beside the task, keyed weakly by it,
 would never let it go: what the planner keeps refers to the task.)
 
 The world state is a *set* of facts (4.4): a fact written twice is one fact,
 so it gives one binding, one derivation. State order (first occurrence) is
 kept: it orders the bindings, hence the derivations at equal cost (6.3.2).
+
+From the checked IR to the planning task (:class:`cfgplan.planner.task.Task`).
+
+Compiled once per problem: domain schemas become plain tuples (patterns,
+ordered precondition tests, effect specs), the state's facts become a set in
+state order with its two indexes, and the media their link reliabilities.
+Everything the search reads afterwards is in the task; nothing here runs on
+the hot path.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -31,8 +41,24 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from cfgplan.configuration.cost import Weights
-from cfgplan.ir.model import Medium, SExpr, Span, expr_variables, is_variable
-from cfgplan.planner.levels import Levels, unit_of
+from cfgplan.ir.model import (
+    Atom,
+    Condition,
+    Domain,
+    Effect,
+    Eval,
+    Functionality,
+    Medium,
+    Method,
+    Negation,
+    SExpr,
+    Span,
+    State,
+    expr_variables,
+    is_variable,
+)
+from cfgplan.notation import sexpr_text
+from cfgplan.planner.costs import Costs, Levels
 
 Ground = tuple[str, ...]
 """A ground atom or call as a tuple: ``("in", "Pippi", "Room1")``."""
@@ -99,7 +125,7 @@ class PortSchema(NamedTuple):
 
 class Join(NamedTuple):
     """A schema's preconditions in the order they are matched
-    (:func:`cfgplan.planner.join.join`); ``atoms``, the atoms in written order,
+    (:func:`cfgplan.planner.ground.join`); ``atoms``, the atoms in written order,
     give the bindings' sort key when ``reordered``."""
 
     tests: tuple[Test, ...]
@@ -167,7 +193,7 @@ class Task:
         default_factory=dict, init=False, repr=False
     )
     """The matching orders made for this task's schemas
-    (:func:`cfgplan.planner.join.join`), by the tests' identity and the
+    (:func:`cfgplan.planner.ground.join`), by the tests' identity and the
     variables bound at the start; valid in any state, so a derived task with
     the same schemas starts with them."""
 
@@ -239,7 +265,7 @@ class Task:
     def argument_values(self) -> Mapping[tuple[str, int, int], int]:
         """How many distinct values each argument (predicate, arity, position)
         takes in the state: what a matching order estimates by
-        (:mod:`cfgplan.planner.join`)."""
+        (:mod:`cfgplan.planner.ground`)."""
         found: dict[tuple[str, int, int], int] = {}
         for predicate, arity, position, _ in self.facts_by_argument:
             key = (predicate, arity, position)
@@ -247,21 +273,20 @@ class Task:
         return found
 
     @cached_property
-    def levels(self) -> Levels:
-        """How its costs are ranked (:mod:`cfgplan.planner.levels`): by the
-        unit the weights and every ``:cost`` are multiples of, unless
-        reliability adds logarithms to them."""
-        return self.levels_with()
+    def costs(self) -> Costs:
+        """What each part of its configurations costs (:mod:`cfgplan.planner.costs`)."""
+        return Costs(
+            self.weights,
+            self.devices,
+            self.links,
+            self.reliability,
+            tuple(f.cost for f in self.functionalities.values() if f.cost is not None),
+        )
 
-    def levels_with(self, *more: float) -> Levels:
-        """:attr:`levels` of sums that may also add ``more`` (a sequence's
-        switch weight)."""
-        w = self.weights
-        if w.reliability:
-            return Levels(None)
-        values = [w.robot, w.device, w.global_, w.local, w.functionality, *more]
-        values += [f.cost for f in self.functionalities.values() if f.cost is not None]
-        return Levels(unit_of(values))
+    @cached_property
+    def levels(self) -> Levels:
+        """How its costs are ranked (:meth:`cfgplan.planner.costs.Costs.levels`)."""
+        return self.costs.levels()
 
     @cached_property
     def uncertain(self) -> bool:
@@ -282,35 +307,9 @@ class Task:
     def versions(self, call: Ground) -> tuple[MethodSchema, ...]:
         return self.methods.get((call[0], len(call) - 1), ())
 
-    def functionality_cost(self, schema: FunctionalitySchema, call: Ground) -> float:
-        """The functionality's ``:cost``, else the functionality weight (3.5),
-        plus ``W·(−ln p)`` for its reliability p when ``reliability=W``."""
-        cost = schema.cost if schema.cost is not None else self.weights.functionality
-        if self.weights.reliability:
-            p = self.functionality_reliability(schema, call)
-            cost += self.weights.reliability * -math.log(p)
-        return cost
-
     def functionality_reliability(self, schema: FunctionalitySchema, call: Ground) -> float:
-        found = self.reliability.get(call)
-        if found is not None:
-            return found
-        return schema.reliability if schema.reliability is not None else 1.0
-
-    def channel_cost(self, kind: str) -> float:
-        """A channel's weight (3.5); see :meth:`link_cost` for its media."""
-        return self.weights.global_ if kind == "global" else self.weights.local
-
-    def link_cost(self, sender: str, receiver: str) -> float:
-        """``W·(−ln p)`` for a global channel between two robots: p is the most
-        reliable medium from ``sender`` to ``receiver`` (1 when none says)."""
-        if not self.weights.reliability or sender == receiver:
-            return 0.0
-        return self.weights.reliability * -math.log(self.links.get((sender, receiver), 1.0))
-
-    def agent_cost(self, agent: str) -> float:
-        """What running something on ``agent`` costs: a robot's or a device's weight."""
-        return self.weights.device if agent in self.devices else self.weights.robot
+        """:meth:`cfgplan.planner.costs.Costs.reliability_of`."""
+        return self.costs.reliability_of(schema, call)
 
 
 def index_facts(
@@ -362,7 +361,7 @@ def derive(
     reliabilities (7.2). No domain is read, checked or compiled: a sequence's
     later steps, or a running society's changed state, are planned from it.
     What the planner worked out for ``task`` (:attr:`Task.analyses`) is not
-    carried, but for the matching orders (:mod:`cfgplan.planner.join`),
+    carried, but for the matching orders (:mod:`cfgplan.planner.ground`),
     valid in any state while the schemas are the same."""
     unique = tuple(dict.fromkeys(facts))
     by_pred, by_arg = index_facts(unique)
@@ -386,3 +385,116 @@ def derive(
     if functionalities is None:
         derived.joins.update(task.joins)
     return derived
+
+
+def pattern(atom: Atom) -> Pattern:
+    """An IR atom as the task holds it: ``("in", "?r", "?room")``."""
+    return (atom.predicate, *atom.args)
+
+
+def _tests(conditions: Sequence[Condition], bound: set[str]) -> tuple[Test, ...]:
+    """Order preconditions so every ``not`` and ``eval`` runs once its variables
+    are bound by the name or an earlier atom (atoms keep their order): an
+    ``eval`` written before the atom that binds its variable is postponed."""
+    known = set(bound)
+    ordered: list[Test] = []
+    waiting: list[tuple[set[str], Test]] = []
+
+    def release() -> None:
+        for need, test in list(waiting):
+            if need <= known:
+                ordered.append(test)
+                waiting.remove((need, test))
+
+    for cond in conditions:
+        if isinstance(cond, Atom):
+            ordered.append(Test(TestKind.ATOM, pattern(cond), span=cond.span, text=str(cond)))
+            known.update(cond.variables())
+            release()
+        elif isinstance(cond, Negation):
+            test = Test(TestKind.NOT, pattern(cond.atom), span=cond.span, text=str(cond))
+            waiting.append((set(cond.atom.variables()), test))
+            release()
+        elif isinstance(cond, Eval):
+            test = Test(TestKind.EVAL, expr=cond.expr, span=cond.span, text=sexpr_text(cond.expr))
+            waiting.append((set(cond.variables()), test))
+            release()
+    ordered.extend(test for _, test in waiting)
+    return tuple(ordered)
+
+
+def _effects(effects: Sequence[Effect]) -> tuple[EffectSpec, ...]:
+    out: list[EffectSpec] = []
+    for eff in effects:
+        if isinstance(eff, Negation):
+            out.append(EffectSpec(False, pattern(eff.atom)))
+        else:
+            out.append(EffectSpec(True, pattern(eff)))
+    return tuple(out)
+
+
+def _functionality(f: Functionality) -> FunctionalitySchema:
+    params = f.name.args
+    return FunctionalitySchema(
+        name=f.name.predicate,
+        params=params,
+        inputs=tuple(pattern(a) for a in f.inputs),
+        outputs=tuple(pattern(a) for a in f.outputs),
+        tests=_tests(f.precond, {p for p in params if is_variable(p)}),
+        effects=_effects(f.postcond),
+        cost=f.cost,
+        freq=f.freq,
+        reliability=f.reliability,
+        span=f.span,
+    )
+
+
+def _method(m: Method, version: int) -> MethodSchema:
+    params = m.name.args
+    return MethodSchema(
+        name=m.name.predicate,
+        version=version,
+        params=params,
+        tests=_tests(m.precond, {p for p in params if is_variable(p)}),
+        effects=_effects(m.postcond),
+        inputs=tuple(PortSchema(p.label, pattern(p.data), p.bandwidth) for p in m.inputs),
+        outputs=tuple(PortSchema(p.label, pattern(p.data), p.bandwidth) for p in m.outputs),
+        channels=tuple(
+            ChannelSchema(c.kind, c.robots, c.source, c.target, pattern(c.data), c.bandwidth)
+            for c in m.channels
+        ),
+        body=tuple((b.label, pattern(b.call)) for b in m.body),
+        span=m.span,
+    )
+
+
+def compile_task(
+    domain: Domain,
+    state: State,
+    weights: Weights | None = None,
+    reliability: Mapping[Ground, float] | None = None,
+) -> Task:
+    """Compile a checked domain and a state into a :class:`Task`; ``reliability``
+    replaces the reliability of some functionality instances."""
+    functionalities: dict[Signature, FunctionalitySchema] = {}
+    for f in domain.functionalities:
+        functionalities.setdefault(f.name.signature, _functionality(f))
+    methods: dict[Signature, list[MethodSchema]] = {}
+    for m in domain.methods:
+        versions = methods.setdefault(m.name.signature, [])
+        versions.append(_method(m, len(versions) + 1))
+    facts = tuple(dict.fromkeys(pattern(a) for a in state.facts))  # a set, in state order
+    by_pred, by_arg = index_facts(facts)
+    return Task(
+        functionalities=MappingProxyType(functionalities),
+        methods=MappingProxyType({k: tuple(v) for k, v in methods.items()}),
+        facts=facts,
+        facts_by_predicate=by_pred,
+        facts_by_argument=by_arg,
+        media=state.media,
+        weights=weights or Weights(),
+        devices=devices_of(facts),
+        reliability=MappingProxyType(dict(reliability or {})),
+        links=MappingProxyType(links_of(state.media)),
+        state_names=frozenset(t for fact in facts for t in fact),
+    )

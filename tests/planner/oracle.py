@@ -7,7 +7,7 @@ sorted by cost, as the planner claims to return them. Channels are checked,
 merged and costed once the stack is empty. Beyond the thesis, as the planner:
 ``(any A B)`` channels (local on one robot, global between two), devices
 weighted as devices, costs ranked at the levels the planner ranks them
-(:mod:`cfgplan.planner.levels`), and with a ``reliability`` weight W, W·(−ln p)
+(:mod:`cfgplan.planner.costs`), and with a ``reliability`` weight W, W·(−ln p)
 for each functionality's reliability p and for each global channel between two
 robots, p the most reliable medium between them (7.2).
 """
@@ -23,7 +23,7 @@ from cfgplan.configuration.matching import satisfying
 from cfgplan.configuration.media import Demand, assign
 from cfgplan.ir.model import Atom, Functionality, Method, Negation
 from cfgplan.notation import atom_text
-from cfgplan.planner.levels import Levels, unit_of
+from cfgplan.planner.costs import Levels, unit_of
 from cfgplan.problem import Problem
 
 Ground = tuple[str, ...]

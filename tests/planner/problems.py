@@ -17,8 +17,8 @@ from cfgplan.configuration.model import Configuration
 from cfgplan.diagnostics import CfgplanError
 from cfgplan.ir.model import Domain
 from cfgplan.planner import plan
-from cfgplan.planner.compile import compile_task
 from cfgplan.planner.options import SearchOptions
+from cfgplan.planner.task import compile_task
 from cfgplan.problem import Problem, load
 from cfgplan.syntax.reader import SourceFile, parse, state_from
 

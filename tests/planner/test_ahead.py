@@ -15,6 +15,7 @@ from benchmarks.families.delegation import delegation
 from cfgplan.cli.formats import more_note
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.plan import Run, plan
+from cfgplan.planner.report import Status
 from tests.planner.problems import load_text
 from tests.planner.test_reproducers import REUSED_SENSOR
 
@@ -69,19 +70,19 @@ def test_the_look_ahead_says_more_exist_none_or_not_known() -> None:
     problem = load_text(domain, state)
     first, _ = plan(problem.task, problem.goal_call, limit=1)
     found, listed = _listed(domain, state, 10_000)
-    assert found.more is True and listed == first
+    assert found.status is Status.MORE and listed == first
     cut, listed = _listed(domain, state, 0)
-    assert cut.more is None and listed == first
+    assert cut.status is Status.UNKNOWN and listed == first
     assert cut.stats.nodes < found.stats.nodes  # it stopped looking early
     alone, listed = _listed(REUSED_SENSOR, "(state robot(R1))\n(goal (do-task R1))\n", 10_000)
-    assert alone.more is False and len(listed) == 1
+    assert alone.status is Status.COMPLETE and len(listed) == 1
 
 
 def test_without_the_look_ahead_nothing_is_said() -> None:
     domain, state = delegation(6)
     problem = load_text(domain, state)
     search = Run(problem.task, problem.goal_call, 1)
-    assert len(list(search)) == 1 and search.more is False
+    assert len(list(search)) == 1 and search.status is Status.CUT
 
 
 def test_the_note_says_may_when_it_is_not_known() -> None:
@@ -97,7 +98,7 @@ def test_the_note_says_may_when_it_is_not_known() -> None:
 def test_sequences_look_ahead_by_the_same_rule() -> None:
     """``cfgplan plan -k N`` of a sequence planned N + 1 sequences to fill
     ``more``; now it looks for one more as one goal does
-    (:mod:`cfgplan.planner.prefix`). 6.2.2 as a sequence (Pippi, then Emil,
+    (:mod:`cfgplan.planner.search`). 6.2.2 as a sequence (Pippi, then Emil,
     crosses): more exist; the one listed is the first of a search without a
     limit; a sequence of one goal with one configuration has no second."""
     from pathlib import Path
@@ -109,8 +110,37 @@ def test_sequences_look_ahead_by_the_same_rule() -> None:
     problem = load(root / "domain-steps.lisp", root / "state-6.2.2-sequence.lisp")
     unlimited = next(iter(SequenceSearch(problem.goal_calls, problem.task)))
     search = SequenceSearch(problem.goal_calls, problem.task, limit=1, ahead=True)
-    assert list(search) == [unlimited] and search.more is True
-    assert search.complete is False  # it was left before its end
+    assert list(search) == [unlimited] and search.status is Status.MORE
+    assert not search.status.exhausted  # it was left before its end
     alone = load_text(REUSED_SENSOR, "(state robot(R1))\n(sequence (do-task R1))\n")
     one = SequenceSearch(alone.goal_calls, alone.task, limit=1, ahead=True)
-    assert len(list(one)) == 1 and one.more is False
+    assert len(list(one)) == 1 and one.status is Status.COMPLETE
+
+
+def test_the_json_reads_one_status() -> None:
+    """How a run ended was spread over ``Stats.complete``, ``Run.stopped``,
+    ``Run.more`` and the report's ``unfinished``/``undecided``; the JSON's
+    ``exhausted``, ``more`` and ``stopped`` are now read off one
+    :class:`Status`, for each way a run ends: the list cut with one more
+    found, cut without looking, run to its end, stopped by the time limit."""
+    from cfgplan.cli.formats import stats
+
+    domain, state = _hidden(2)
+    problem = load_text(domain, state)
+    ends = {}
+    for limit, ahead, seconds in (
+        (1, True, None),
+        (1, False, None),
+        (None, False, None),
+        (1, True, 0.0),
+    ):
+        run = Run(problem.task, problem.goal_call, limit, ahead=ahead, time_limit=seconds)
+        list(run)
+        shown = stats(run, run.status.more)
+        ends[run.status] = (shown["exhausted"], shown["more"], shown["stopped"])
+    assert ends == {
+        Status.MORE: (False, True, None),
+        Status.CUT: (False, False, None),
+        Status.COMPLETE: (True, False, None),
+        Status.TIME_LIMIT: (False, False, "time limit"),
+    }

@@ -17,7 +17,7 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.planner import plan
 from cfgplan.planner.explain import explain, explanation
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.report import StopReason
+from cfgplan.planner.report import Status
 from cfgplan.problem import load
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -35,7 +35,7 @@ def test_time_limit_returns_a_configuration_marked_not_proven(tmp_path: Path) ->
     finds an admissible configuration, marked as not proven optimal."""
     p = load(*big(tmp_path))
     configs, search = plan(p.task, p.goal_call, limit=None, time_limit=0)
-    assert search.stopped is StopReason.TIME_LIMIT
+    assert search.status is Status.TIME_LIMIT
     assert len(configs) == 1 and not configs[0].proven
     assert problems(configs[0], p.domain, p.state) == []
 
@@ -49,7 +49,7 @@ def test_stopped_with_nothing_found_says_nothing_is_proved(tmp_path: Path) -> No
     configs, search = plan(
         p.task, p.goal_call, limit=1, time_limit=0, options=SearchOptions(dive=False)
     )
-    assert configs == [] and search.stopped is StopReason.TIME_LIMIT
+    assert configs == [] and search.status is Status.TIME_LIMIT
     lines = explain(search.report, "do-build-wall")
     assert lines == [
         "no configuration of do-build-wall found before the search was stopped:",
@@ -62,7 +62,7 @@ def test_configurations_found_before_the_limit_are_proven() -> None:
     p = load(ROOT / "domains/build-wall/domain.lisp", ROOT / "domains/build-wall/state-6.4.lisp")
     configs, search = plan(p.task, p.goal_call, limit=3)
     assert [c.proven for c in configs] == [True, True, True]
-    assert not search.stopped
+    assert not search.status.stopped
 
 
 def test_cli_time_limit_json(tmp_path: Path) -> None:

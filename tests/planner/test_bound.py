@@ -13,10 +13,10 @@ from hypothesis import given
 from benchmarks.families import fusion
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.grow import successors
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.plan import combined
-from cfgplan.planner.successors import successors
 from cfgplan.planner.task import Ground
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
@@ -223,7 +223,7 @@ def test_a_recursive_path_is_priced_at_its_cheapest_completion() -> None:
     priced 0, the converters waiting on the stack (named like the call's
     own) counted as one part with it, and so did the converters already in
     C. Now a recursive call is priced at its lightest derivation
-    (summary.py) and what only the path's own ancestors call is a part of
+    (bound.py) and what only the path's own ancestors call is a part of
     its own (``Summaries.beyond``): on the first nodes of the search, the
     bound never exceeds the cheapest completion and, once a converter waits
     on the stack, equals it."""

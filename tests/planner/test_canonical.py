@@ -1,4 +1,4 @@
-"""The canonical form of a node (cfgplan.planner.canonical): the node up to labels."""
+"""The canonical form of a node (cfgplan.planner.partial): the node up to labels."""
 
 from __future__ import annotations
 
@@ -7,11 +7,10 @@ import copy
 import pytest
 
 from benchmarks.families import conversion
-from cfgplan.planner.canonical import canonical
 from cfgplan.planner.finish import fingerprint
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.partial import Item, Partial, root
-from cfgplan.planner.successors import successors
+from cfgplan.planner.grow import successors
+from cfgplan.planner.partial import Item, Partial, canonical, root
 from tests.backends.support import DOMAINS
 from tests.planner.problems import load_text
 from tests.planner.test_partial import local, task, with_channels

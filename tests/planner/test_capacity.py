@@ -1,4 +1,4 @@
-"""The media cap on sharing (cfgplan/planner/capacity.py): what it caps, what
+"""The media cap on sharing (cfgplan/planner/partition.py): what it caps, what
 it must leave alone, and that planning with it finds what the depth-first
 oracle finds on random camera-and-hub domains built to exercise it."""
 
@@ -14,11 +14,9 @@ from hypothesis import strategies as st
 
 from benchmarks.families import gateway
 from cfgplan.configuration.cost import Weights
-from cfgplan.planner.capacity import Capacity
-from cfgplan.planner.partial import root
+from cfgplan.planner.partial import Load, root
+from cfgplan.planner.partition import Capacity, Counts
 from cfgplan.planner.plan import analysis
-from cfgplan.planner.prices import Counts
-from cfgplan.planner.room import Load
 from cfgplan.planner.task import Ground
 from cfgplan.problem import Problem
 from tests.planner.oracle import depth_first

@@ -1,4 +1,4 @@
-"""Independent parts searched apart (cfgplan/planner/components.py, combine.py)
+"""Independent parts searched apart (cfgplan/planner/combine.py, combine.py)
 list exactly what the plain best-first search lists: the same configurations,
 costs, labels and derivation numbers, in the same order."""
 

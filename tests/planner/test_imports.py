@@ -59,7 +59,7 @@ def cycle(edges: dict[str, set[str]]) -> list[str] | None:
 
 def test_the_planner_has_no_import_cycle() -> None:
     edges = imports("cfgplan.planner")
-    assert len(edges) > 30  # the modules were found
+    assert len(edges) > 15  # the modules were found
     assert cycle(edges) is None
 
 

@@ -1,4 +1,4 @@
-"""The matching order of preconditions (cfgplan.planner.join; 4.5, step 2b):
+"""The matching order of preconditions (cfgplan.planner.ground; 4.5, step 2b):
 most selective atom first, the bindings still in the written order's
 (6.3.2) — checked against a depth-first match of the tests as written."""
 
@@ -7,8 +7,7 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cfgplan.planner.join import join
-from cfgplan.planner.match import _walk, bindings, exists
+from cfgplan.planner.ground import _walk, bindings, exists, join
 from cfgplan.planner.task import Task
 from cfgplan.planner.task import TestKind as Kind
 from cfgplan.planner.unify import Bindings

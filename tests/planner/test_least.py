@@ -1,5 +1,5 @@
 """The partitioned bound priced from another node's evaluation
-(cfgplan.planner.least.Least.again) is the bound priced from scratch, float
+(cfgplan.planner.partition.Least.again) is the bound priced from scratch, float
 for float: every node a real search refines, its bound and its split (the
 price of each expansion of its top item), with the evaluations reused as
 much as can be and not at all."""
@@ -11,12 +11,10 @@ from collections.abc import Iterator
 import pytest
 
 from benchmarks.families import chain, ecology, fusion, gateway, media_tight, wall
-from cfgplan.planner.least import Least
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
-from cfgplan.planner.partition import Partition
+from cfgplan.planner.partition import Least, Partition, Split
 from cfgplan.planner.plan import plan
-from cfgplan.planner.split import Split
 from tests.planner.test_scale import problem_of
 
 Refined = tuple[Partition, Partial, frozenset[str]]
@@ -52,7 +50,7 @@ def priced(
     """Each node's bound and split by a new partition of its own task (those
     made go to ``made``): every node priced from scratch (``cold``), or each
     from the last one with its pending items whenever ``reuse`` and
-    ``smallest`` (:class:`cfgplan.planner.least.Least`) allow."""
+    ``smallest`` (:class:`cfgplan.planner.partition.Least`) allow."""
     partitions: dict[int, Partition] = {}
     for searched, node, certain in nodes:
         found = partitions.get(id(searched))

@@ -1,4 +1,4 @@
-"""Costs and bounds at levels (cfgplan.planner.levels): equal decimals rank
+"""Costs and bounds at levels (cfgplan.planner.costs): equal decimals rank
 equal however their floats were summed, and a bound never ranks above a
 cost it bounds."""
 
@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cfgplan.configuration.cost import Weights
-from cfgplan.planner.levels import Levels, level, unit_of
+from cfgplan.planner.costs import Levels, level, unit_of
 from tests.planner.problems import PROPERTY, load_text
 
 SWITCHED = """\
@@ -49,11 +49,11 @@ def test_a_switch_weight_joins_the_unit() -> None:
     even = Weights(robot=10, global_=4, local=2, functionality=2, device=10)
     task = load_text(SWITCHED, "(state (robot X))\n\n(goal (job X))\n", even).task
     assert task.levels == Levels(Fraction(2))
-    assert task.levels_with(0) == Levels(Fraction(2))  # no switch: costs as they were
-    assert task.levels_with(3) == Levels(Fraction(1))
-    assert task.levels_with(0.5) == Levels(Fraction(1, 2))
-    assert task.levels_with(1 / 3) == Levels(None)
-    assert task.levels_with(1e-6) == Levels(None)  # 4e6 is 4e12 of it: past the range
+    assert task.costs.levels(0) == Levels(Fraction(2))  # no switch: costs as they were
+    assert task.costs.levels(3) == Levels(Fraction(1))
+    assert task.costs.levels(0.5) == Levels(Fraction(1, 2))
+    assert task.costs.levels(1 / 3) == Levels(None)
+    assert task.costs.levels(1e-6) == Levels(None)  # 4e6 is 4e12 of it: past the range
 
 
 def test_an_edge_above_a_level_is_below_the_next() -> None:

@@ -1,8 +1,8 @@
-"""Matching preconditions against the state (cfgplan.planner.match; 4.5, step 2b)."""
+"""Matching preconditions against the state (cfgplan.planner.ground; 4.5, step 2b)."""
 
 from __future__ import annotations
 
-from cfgplan.planner.match import bindings, candidates, why_not
+from cfgplan.planner.ground import bindings, candidates, why_not
 from cfgplan.planner.task import Task
 from tests.planner.problems import load_text
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from cfgplan.planner.ground import ChannelSpec, Effects, Expansion, Grounder
-from cfgplan.planner.numbering import Numbering
+from cfgplan.planner.ground import ChannelSpec, Effects, Expansion, Grounder, Numbering
 from cfgplan.planner.partial import (
+    Channel,
     Item,
     Partial,
     expand_method,
@@ -16,7 +16,6 @@ from cfgplan.planner.partial import (
 )
 from cfgplan.planner.report import Condition, DeadEnd
 from cfgplan.planner.task import Task
-from cfgplan.planner.wiring import Channel
 from tests.planner.problems import load_text
 
 DOMAIN = """\

@@ -1,5 +1,5 @@
 """The least parts that may share names can cost together
-(cfgplan/planner/parts.py): the groups of parts linked by shared names,
+(cfgplan/planner/bound.py): the groups of parts linked by shared names,
 each counted once at its dearest part, found however wide the parts are."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cfgplan.planner.parts import GROUPS, MOST_WIDE, WIDE, _grouped, _many, least, own_part
+from cfgplan.planner.bound import GROUPS, MOST_WIDE, WIDE, _grouped, _many, least, own_part
 from tests.planner.problems import PROPERTY
 
 

@@ -1,4 +1,4 @@
-"""The search and the solver's process racing for ``-k 1`` (:mod:`cfgplan.planner.portfolio`).
+"""The search and the solver's process racing for ``-k 1`` (:mod:`cfgplan.planner.solver`).
 
 The race itself with stand-in engines (who wins, that the child is gone by its
 pid however the race ends, that nothing is raced within the search's own budget),
@@ -25,8 +25,8 @@ from benchmarks.families import structured
 from cfgplan.configuration.admissible import problems
 from cfgplan.planner import clock, plan
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.portfolio import Answer, Overtaken, Prepare, Rival, racing
-from cfgplan.planner.report import Engine
+from cfgplan.planner.report import Engine, Status
+from cfgplan.planner.solver import Answer, Overtaken, Prepare, Rival, racing
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve
 from tests.planner.test_thesis import problem
@@ -174,7 +174,7 @@ def test_the_race_finds_the_searchs_first_configuration(example: Generated) -> N
     raced, run = plan(p.task, p.goal_call, limit=1, options=RACE)
     assert [c.model_dump() for c in raced] == [c.model_dump() for c in searched]
     if raced and not p.task.weights.reliability:  # costs with a unit: a race was run
-        assert run.raced and run.more is None
+        assert run.raced and run.status is Status.UNKNOWN
 
 
 def test_a_search_within_its_budget_runs_alone() -> None:
@@ -203,7 +203,7 @@ def test_past_the_searchs_cliff_the_solver_answers() -> None:
     (alone,), _ = plan(p.task, p.goal_call, limit=1, options=SearchOptions(solver=True))
     p = load_text(*texts)
     (raced,), run = plan(p.task, p.goal_call, limit=1, options=RACE)
-    assert run.engine is Engine.SOLVER and run.raced and run.more is None
+    assert run.engine is Engine.SOLVER and run.raced and run.status is Status.UNKNOWN
     assert raced.model_dump() == alone.model_dump()
     assert problems(raced, p.domain, p.state) == []
     assert run.stats.derivations == 1  # the walk's, not the search's thousands of nodes
@@ -212,7 +212,7 @@ def test_past_the_searchs_cliff_the_solver_answers() -> None:
 RACER = """
 import sys, time
 from cfgplan.planner import clock
-from cfgplan.planner.portfolio import racing
+from cfgplan.planner.solver import racing
 
 def prepare():
     def solve():

@@ -39,9 +39,9 @@ from cfgplan.configuration.admissible import problems
 from cfgplan.configuration.model import Configuration
 from cfgplan.planner import plan
 from cfgplan.planner.options import SearchOptions
+from cfgplan.planner.partial import Load, Need, Room
 from cfgplan.planner.plan import Run, analysis
 from cfgplan.planner.report import Condition
-from cfgplan.planner.room import Load, Need, Room
 from tests.planner.generated import generated
 from tests.planner.oracle import depth_first
 from tests.planner.problems import FIRST_NODE, PROPERTY, Generated, load_generated, run, solve
@@ -128,7 +128,7 @@ def test_reliability_ranks_as_depth_first(example: Generated, k: int) -> None:
     """With ``--weights reliability=W`` (7.2) the cost adds W·(−ln p) for each
     functionality and each global channel between two robots (p of the most
     reliable medium): costs with no unit, ranked to 11 significant digits
-    (:mod:`cfgplan.planner.levels`). All derivations, and the first ``k``
+    (:mod:`cfgplan.planner.costs`). All derivations, and the first ``k``
     with both bounds on every node, are the depth-first planner's."""
     problem = solve(example)
     oracle = depth_first(problem, example.weights)
@@ -222,8 +222,8 @@ class Coverage:
     repeated_channel: bool  # a channel written twice, and configurations found
     repeated_call: bool  # a call twice in a body, and configurations found
     raised: bool  # the partitioned bound, on from the first node, raised a priority
-    media_cut: bool  # ... and left out an expansion the media cannot carry (room.py)
-    replayed: bool  # a ranked search replayed a sub-derivation (replay.py), and listed
+    media_cut: bool  # ... and left out an expansion the media cannot carry (partial.py)
+    replayed: bool  # a ranked search replayed a sub-derivation (grow.py), and listed
 
 
 def _coverage(example: Generated) -> Coverage:

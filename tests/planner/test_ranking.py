@@ -1,4 +1,4 @@
-"""The listing order and the one lazy k-best merge (cfgplan.planner.ranking),
+"""The listing order and the one lazy k-best merge (cfgplan.planner.search),
 which lists the combinations of independent parts (combine.py) and the
 sequences of configurations (sequence.py)."""
 
@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cfgplan.planner.partial import root
-from cfgplan.planner.ranking import merge, place
+from cfgplan.planner.search import merge, place
 
 Offer = tuple[int, tuple[int, ...]]  # (sum, index in each list)
 

@@ -1,4 +1,4 @@
-"""Replays of closed sub-derivations (cfgplan/planner/replay.py).
+"""Replays of closed sub-derivations (cfgplan/planner/grow.py).
 
 The claims, each tested where it can fail:
 
@@ -22,14 +22,12 @@ from hypothesis import given
 
 from benchmarks.families import dag
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.grow import Grower
+from cfgplan.planner.grow import Grower, filtered, replay, successors
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.plan import Run, growing
 from cfgplan.planner.pricer import Pricer
-from cfgplan.planner.replay import filtered, replay
 from cfgplan.planner.search import BestFirst
-from cfgplan.planner.successors import successors
 from cfgplan.problem import Problem
 from tests.planner.generated import generated
 from tests.planner.problems import PROPERTY, Generated, load_text, solve

@@ -1,4 +1,4 @@
-"""What the media still have room for (cfgplan.planner.room), and the
+"""What the media still have room for (cfgplan.planner.partial), and the
 partitioned bound that leaves out expansions the media cannot carry
 (media-tight, where a member cannot take both a raw image stream,
 40, and its pose, 5, from one camera host over a medium of 40)."""
@@ -14,14 +14,11 @@ from hypothesis import strategies as st
 from benchmarks.families import media_tight
 from cfgplan.planner import Run, plan
 from cfgplan.planner.bound import Bound
-from cfgplan.planner.ground import ChannelSpec, Grounder
-from cfgplan.planner.numbering import Numbering
+from cfgplan.planner.ground import ChannelSpec, Grounder, Numbering
+from cfgplan.planner.grow import successors
 from cfgplan.planner.options import SearchOptions
-from cfgplan.planner.partial import Partial, root
+from cfgplan.planner.partial import Channel, Partial, Room, root
 from cfgplan.planner.partition import Partition
-from cfgplan.planner.room import Room
-from cfgplan.planner.successors import successors
-from cfgplan.planner.wiring import Channel
 from cfgplan.problem import Problem
 from tests.planner.problems import PROPERTY, load_text
 from tests.planner.test_bound import least_completion

@@ -35,10 +35,11 @@ from cfgplan.planner import plan
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.finish import finish
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.grow import successors
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial, root
 from cfgplan.planner.plan import Run
-from cfgplan.planner.successors import successors
+from cfgplan.planner.report import Status
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -78,14 +79,14 @@ def branch_and_bound(problem: Problem) -> float | None:
     [
         pytest.param(ecology(10, 3, 2), marks=pytest.mark.slow),
         media_tight(5, 2, 1),
-        # the media test of room.py prunes here
+        # the media test of partial.py prunes here
         pytest.param(media_tight(7, 4, 4), marks=pytest.mark.slow),
         pytest.param(fusion(5, 3, 4, 3), marks=pytest.mark.slow),
         pytest.param(chain(12), marks=pytest.mark.slow),
         wall(3, 6, 3),
         pytest.param(
             gateway(5), marks=pytest.mark.slow
-        ),  # the media cap on sharing (capacity.py) makes the root's bound exact
+        ),  # the media cap on sharing (partition.py) makes the root's bound exact
         # ... and only a lower bound: two views a camera, two own cameras
         pytest.param(gateway(6, 4, 60), marks=pytest.mark.slow),
     ],
@@ -220,7 +221,7 @@ def test_a_fact_repeated_forty_times_costs_nothing() -> None:
         state.write_text(repeated)
         problem = load(domain, state)
     configs, run = plan(problem.task, problem.goal_call, limit=None, time_limit=60)
-    assert run.stopped is None
+    assert not run.status.stopped
     assert [c.cost for c in configs] == [44, 47]
 
 
@@ -298,7 +299,7 @@ def test_recursive_delegation_is_listed_whole() -> None:
     chains of relays from the hub to the sensing robot, listed once each."""
     problem = problem_of(delegation(4))
     configs, run = plan(problem.task, problem.goal_call, limit=None)
-    assert run.stats.complete and run.stopped is None
+    assert run.status is Status.COMPLETE
     assert len(configs) == len({c.identity() for c in configs}) == 21
     assert configs[0].cost == 27  # R1 asks R4, which senses
     for config in configs:

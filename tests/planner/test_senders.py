@@ -1,4 +1,4 @@
-"""Where a method instance can send its outputs from (cfgplan/planner/senders.py;
+"""Where a method instance can send its outputs from (cfgplan/planner/ground.py;
 thesis 4.5 steps 3d and 4): the expansions whose channel can never get its
 sending end onto the robot it declares are dead ends from the start."""
 

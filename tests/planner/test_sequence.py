@@ -19,7 +19,7 @@ from cfgplan.ir.model import Atom
 from cfgplan.notation import atom_text
 from cfgplan.planner import plan
 from cfgplan.planner.combine import Combined
-from cfgplan.planner.levels import level
+from cfgplan.planner.costs import level
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.sequence import SequenceSearch, apply, fixed_effects, touched, unseen
 from cfgplan.planner.task import Task, derive

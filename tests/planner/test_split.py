@@ -1,4 +1,4 @@
-"""Children priced from their parent's split (cfgplan.planner.split): never
+"""Children priced from their parent's split (cfgplan.planner.partition): never
 past a child's cheapest completion, the same ranked lists with fewer
 refinements, and a node taken after its twin of one canonical form that it
 comes before in depth-first order superseding that twin."""
@@ -14,11 +14,11 @@ from benchmarks.families import ecology, fusion, media_tight, wall
 from cfgplan.planner import search
 from cfgplan.planner.bound import Bound
 from cfgplan.planner.ground import Grounder
+from cfgplan.planner.grow import successors
 from cfgplan.planner.options import SearchOptions
 from cfgplan.planner.partial import Partial
 from cfgplan.planner.partition import Partition
 from cfgplan.planner.plan import Run, growing
-from cfgplan.planner.successors import successors
 from cfgplan.problem import load
 from tests.planner.test_bound import least_completion
 from tests.planner.test_room import search_tree

@@ -1,4 +1,4 @@
-"""The static summaries of ground instances (cfgplan.planner.summary): what
+"""The static summaries of ground instances (cfgplan.planner.bound): what
 every expansion of an instance holds, intersected over its method versions
 and bindings, and the least it can cost; computed without recursion, so a
 hierarchy far deeper than Python's recursion limit is summarised.
@@ -10,9 +10,9 @@ import sys
 
 from benchmarks.fuzz_inputs import chain
 from cfgplan.planner import plan
+from cfgplan.planner.bound import Summaries
 from cfgplan.planner.graph import graph_of
 from cfgplan.planner.ground import Grounder
-from cfgplan.planner.summary import Summaries
 from tests.planner.problems import load_text
 
 TWO_VERSIONS = """\

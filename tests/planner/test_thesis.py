@@ -13,8 +13,8 @@ import pytest
 from cfgplan.configuration.model import Configuration
 from cfgplan.notation import call_text
 from cfgplan.planner import plan
-from cfgplan.planner.compile import compile_task
 from cfgplan.planner.report import Condition
+from cfgplan.planner.task import compile_task
 from cfgplan.problem import Problem, load
 
 ROOT = Path(__file__).resolve().parents[2]

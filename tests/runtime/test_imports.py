@@ -142,10 +142,10 @@ def test_a_plan_printed_as_a_table_loads_what_it_uses_only(tmp_path: Path) -> No
     assert "cfgplan.planner.search" in loaded and "rich" in loaded
     unused = (
         "cfgplan.planner.combine",
-        "cfgplan.planner.enumerate",
-        "cfgplan.planner.dive",
+        "cfgplan.planner.search",
+        "cfgplan.planner.search",
         "cfgplan.configuration.describe",
     )
     assert [m for m in unused if m in loaded] == []
-    assert "cfgplan.planner.enumerate" in _loaded_by([*args, "--all"], tmp_path)
+    assert "cfgplan.planner.search" in _loaded_by([*args, "--all"], tmp_path)
     assert "cfgplan.configuration.describe" in _loaded_by([*args, "--format", "json"], tmp_path)
