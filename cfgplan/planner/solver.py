@@ -544,6 +544,7 @@ class Rival:
         # pipes), and should it hang, the search never waits for it: it
         # answers alone, and the child is killed.
         ends: list[int] = []
+        parent = os.getpid()  # before the fork: the child may first run after the parent ended
         try:
             ends += os.pipe()
             ends += os.pipe()
@@ -558,7 +559,7 @@ class Rival:
             self._in_child = True
             os.close(answers)
             os.close(go)
-            _answer(self.engine, hear, answer)
+            _answer(self.engine, parent, hear, answer)
         os.close(answer)
         os.close(hear)
         self.pid, self._answers, self._go = pid, answers, go
@@ -600,13 +601,16 @@ class Rival:
         self._answers = self._go = None
 
 
-def _answer(engine: Prepare, hear: int, answer: int) -> NoReturn:
+def _answer(engine: Prepare, parent: int, hear: int, answer: int) -> NoReturn:
     """The child: prepare ``engine``, wait for the word on ``hear``, then write
     its answer (pickled) to ``answer``; exit without returning into the search
-    it was forked from, nor flushing what the parent had buffered (``os._exit``)."""
+    it was forked from, nor flushing what the parent had buffered (``os._exit``).
+    ``parent``: the search's pid, taken before the fork (on a loaded machine the
+    child may first run after the parent ended; ``os.getppid()`` would then name
+    the process that adopted it)."""
     code = 1
     try:
-        _die_with(os.getppid())
+        _die_with(parent)
         signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C: the parent reports
         gc.freeze()  # the parent's objects stay out of the child's collections (fewer copies)
         solve = engine()
