@@ -164,8 +164,9 @@ def run_trial(
             if options.zenoh_log is not None:
                 program = ["-c", LOGGED, options.zenoh_log]
             command = link.wrap(side, [sys.executable, *program, *args])
+            env = {k: v for k, v in os.environ.items() if k != "ZENOH_RUNTIME"}  # each its own
             started.append(
-                subprocess.Popen(command, cwd=code, stdout=log, stderr=subprocess.STDOUT)
+                subprocess.Popen(command, cwd=code, env=env, stdout=log, stderr=subprocess.STDOUT)
             )
 
     try:
