@@ -340,9 +340,13 @@ the router that says nothing, then a cut link, so the router's FIN after
 its `accept_timeout` is never acknowledged) measures it: with one
 acceptor thread the healthy clients' beat stopped for the whole 10 s
 linger; with the spare threads for 1.8 s, and they are still dropped
-once. The fix belongs in Zenoh (no `SO_LINGER` on an async socket, or the
-close on a blocking thread); until then the hold below covers the
-coordinator in a router's society.
+once. So the table's count of healthy robots lost is not expected to fall
+(the stall still outlasts the lease); how long they stay away is. The fix
+belongs in Zenoh (no `SO_LINGER` on an async socket, or the close on a
+blocking thread), whose maintainers have it open as
+[Zenoh should not use deprecated `set_linger`](https://github.com/eclipse-zenoh/zenoh/issues/2350),
+after tokio deprecated `set_linger` for this very block; until then the
+hold below covers the coordinator in a router's society.
 
 **What cfgplan does about it.** A robot that is a client of a router now
 knows when its *own* link to the router is gone (Zenoh closes the link

@@ -171,7 +171,8 @@ their silence. With spare threads the stall ends sooner, not at once (an idle
 thread takes the I/O over only once something wakes it; the lease's close of
 the silent links does): a failed handshake on a dead link silenced the
 healthy clients 1.8 s instead of 10 s (``tests/runtime/test_stuck_handshake.py``),
-and they are still dropped once; the rest is Zenoh's to fix. A lossy robot's
+and they are still dropped once; the rest is Zenoh's to fix (its open report
+"Zenoh should not use deprecated set_linger"). A lossy robot's
 established link closed on a reading thread holds that one the same way,
 hence spare readers too. A ``ZENOH_RUNTIME`` already set is kept."""
 
