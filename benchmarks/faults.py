@@ -213,8 +213,12 @@ past the lease; the router drops that healthy robot. cfgplan now closes a
 stuck link after a twentieth of the lease (100 ms), for the router and
 every robot (a slow test in two network namespaces: the healthy client's
 longest gap 0.13 s, against 5.6 s and its loss). A second stall of the
-router remains, not explained yet: it sometimes stops reading both healthy
-clients' links past the lease with no send failing, and drops them. The
+router comes from Zenoh's 10 s `SO_LINGER` on TCP links: a failed
+handshake with the lossy robot is dropped on the one thread that drives
+the I/O of every link the router accepted, and `close(2)` waits there for
+a FIN the loss eats, up to 10 s, while no client is read. cfgplan gives
+Zenoh spare threads, which cut that stall to the lease (1.8 s against 10 s
+in a slow test) but not to nothing: the fix is Zenoh's. The
 coordinator, knowing its own link to the router is gone, now holds the
 losses it sees while the cut lasts and two leases more, and records no
 failure of a robot that comes back (a slow test freezes the router 3 s);

@@ -164,8 +164,9 @@ def run_trial(
             if options.zenoh_log is not None:
                 program = ["-c", LOGGED, options.zenoh_log]
             command = link.wrap(side, [sys.executable, *program, *args])
+            env = {k: v for k, v in os.environ.items() if k != "ZENOH_RUNTIME"}  # each its own
             started.append(
-                subprocess.Popen(command, cwd=code, stdout=log, stderr=subprocess.STDOUT)
+                subprocess.Popen(command, cwd=code, env=env, stdout=log, stderr=subprocess.STDOUT)
             )
 
     try:
@@ -298,18 +299,54 @@ with the 2 s lease) for `cfgplan router` and for every robot, unless a
 `--zenoh-config` file sets it: a link that cannot take a control message
 for that long is closed, and its robot is lost, as it would be anyway.
 
-**A second stall, not explained yet.** With that setting the router still,
-in some trials, stops reading *both* healthy clients' links past the lease
-while Emil's link is lossy, with no failed send in its log (no `Unable to
-push non droppable network message`), and drops them within 0.2 s of each
-other; in one trial the coordinator's own link to it then stayed down for
-14 s. In one such trial run with `--zenoh-log debug`, the router had
-closed Emil's link (his lease run out) 7 s before, tried to admit Emil
-again twice (`Read error ... early eof` on its accept thread), and logged
-nothing else until both healthy links expired. What holds it is not known;
-a candidate is the admission of Emil's new transport, which takes the
-routing tables' locks (`new_transport_unicast` in
-`zenoh/src/net/routing/gateway.rs`) that every routed message needs.
+**A second stall: a socket closed on the thread that reads the others.**
+Zenoh sets `SO_LINGER` to 10 s on every TCP link (`LinkUnicastTcp::new`
+in `io/zenoh-links/zenoh-link-tcp/src/unicast.rs`, `TCP_LINGER_TIMEOUT`
+in its `lib.rs`; a build-time constant, with `#[allow(deprecated)]` over
+tokio's `set_linger`, deprecated because it makes a drop block). With it,
+`close(2)` of a socket whose FIN (or last bytes) the other end has not
+acknowledged blocks the calling thread in the kernel until they are, or
+10 s, non-blocking socket or not. A handshake with Emil that fails (his
+`open_timeout` runs out and he hangs up: `Read error ... early eof`; or
+the router's `accept_timeout`) ends in `accept_link`
+(`io/zenoh-transport/src/unicast/establishment/accept.rs`), a task on
+Zenoh's *acceptor* runtime (`handle_new_link_unicast` in
+`unicast/manager.rs`), which drops the socket there; its FIN crosses the
+lossy link and is lost, and the thread waits. That runtime has one thread
+by default, and the listener's accept loop runs on it too, so every
+socket it accepted (the healthy clients' as well) is registered with its
+I/O driver: while that thread sits in `close(2)`, no readiness reaches
+any receive task, the router reads no client and accepts no new one, and
+past the lease drops them all. No lock is involved (the routing tables'
+locks are taken and let go before any network wait in
+`new_transport_unicast`). Sampling the router's threads' kernel wait
+(`/proc/PID/task/*/wchan`) every 20 ms in a small harness (a router, two
+healthy clients beating at 50 Hz, a third behind the 50 % loss for 30 s)
+shows it: in the trials where both healthy clients were dropped, the
+thread `acc-0` sat in `wait_woken` for 10.1, 13.8 and 6.9 s, and the
+healthy clients' longest silence was 10.1, 14.1 and 6.9 s. The same close
+on a receive thread (`rx-*`, when Emil's established link is dropped) was
+seen holding one for 10 s as well.
+
+**What cfgplan does about that one.** No Zenoh setting removes the
+linger. cfgplan starts Zenoh with spare threads (`ZENOH_RUNTIME` set to
+8 acceptor threads and 4 receive threads, unless it is set already) for
+`cfgplan router` and every robot. It shortens the stall but does not end
+it: the spare threads sleep until something wakes one (tokio's I/O
+driver is taken over only by a thread that goes idle), and the first
+thing that does is the router's own lease closing the silent links. A
+slow test (`tests/runtime/test_stuck_handshake.py`: a TCP connection to
+the router that says nothing, then a cut link, so the router's FIN after
+its `accept_timeout` is never acknowledged) measures it: with one
+acceptor thread the healthy clients' beat stopped for the whole 10 s
+linger; with the spare threads for 1.8 s, and they are still dropped
+once. So the table's count of healthy robots lost is not expected to fall
+(the stall still outlasts the lease); how long they stay away is. The fix
+belongs in Zenoh (no `SO_LINGER` on an async socket, or the close on a
+blocking thread), whose maintainers have it open as
+[Zenoh should not use deprecated `set_linger`](https://github.com/eclipse-zenoh/zenoh/issues/2350),
+after tokio deprecated `set_linger` for this very block; until then the
+hold below covers the coordinator in a router's society.
 
 **What cfgplan does about it.** A robot that is a client of a router now
 knows when its *own* link to the router is gone (Zenoh closes the link
@@ -328,10 +365,10 @@ not apply: a peer's link that closes is the loss of the robot at its other
 end, and nothing tells it from a stall of the link. There the healthy link
 between Pippi and Rasmus still went in some trials, both seeing the other
 lost at the same moment and back only seconds later: the second stall, in
-a peer's session. What is left: find that stall in Zenoh (a router's or a
-peer's receive tasks stopping with no send failing), or judge a robot's
-liveliness over a second path (its data still arriving, or a peer that
-still hears it) before a loss is taken.
+a peer's session (a peer accepts links too, and Pippi accepted both
+Rasmus's and Emil's). What is left: the linger in Zenoh, and in a mesh,
+judging a robot's liveliness over a second path (its data still arriving,
+or a peer that still hears it) before a loss is taken.
 """
 
 

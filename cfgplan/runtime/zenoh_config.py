@@ -11,6 +11,7 @@ then the options of :class:`ZenohOptions` (endpoints, scouting, lease, keys).
 from __future__ import annotations
 
 import json
+import os
 import re
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -29,6 +30,7 @@ __all__ = [
     "DEFAULT_SOCIETY",
     "OPEN_TIMEOUT_MS",
     "RETRY",
+    "RUNTIME_THREADS",
     "STUCK_LINK",
     "WAIT_BEFORE_CLOSE",
     "ZenohOptions",
@@ -38,6 +40,7 @@ __all__ = [
     "put_setting",
     "read_config",
     "reason",
+    "spare_threads",
     "stuck_link_wait",
     "zenoh_config",
 ]
@@ -149,7 +152,39 @@ class ZenohOptions:
             raise RunError(f"--lease {self.lease}: the lease must be a positive number of seconds")
 
 
+RUNTIME_THREADS = "(acc: (worker_threads: 8), rx: (worker_threads: 4))"
+"""Threads of Zenoh's runtimes (the ``ZENOH_RUNTIME`` environment variable): 8 to
+accept links (Zenoh's default 1), 4 to read them (Zenoh's 2).
+
+Zenoh sets ``SO_LINGER`` to 10 s on every TCP link (``TCP_LINGER_TIMEOUT`` in
+``zenoh-link-tcp``, fixed when the wheel is built), so dropping a socket whose
+FIN the other end has not acknowledged holds the dropping *thread* in
+``close(2)`` until it is, or 10 s. A handshake with a robot behind a lossy
+link that fails (it hangs up after its ``open_timeout``, or the router's
+``accept_timeout`` runs out) is dropped on the accepting runtime, whose one
+thread also drives the I/O of every link the listener accepted: while it
+waits, the router (or a peer) reads none of its links and accepts none, and
+past the lease drops them all, healthy robots lost. Sampled in a router
+beside 50 % loss on one client's link, that thread sat in ``close(2)`` 6.9 to
+14 s in the trials in which both healthy clients were dropped, as long as
+their silence. With spare threads the stall ends sooner, not at once (an idle
+thread takes the I/O over only once something wakes it; the lease's close of
+the silent links does): a failed handshake on a dead link silenced the
+healthy clients 1.8 s instead of 10 s (``tests/runtime/test_stuck_handshake.py``),
+and they are still dropped once; the rest is Zenoh's to fix (its open report
+"Zenoh should not use deprecated set_linger"). A lossy robot's
+established link closed on a reading thread holds that one the same way,
+hence spare readers too. A ``ZENOH_RUNTIME`` already set is kept."""
+
+
+def spare_threads() -> None:
+    """Give Zenoh's runtimes :data:`RUNTIME_THREADS` unless ``ZENOH_RUNTIME`` is set
+    (read when Zenoh starts its first runtime: call before the first session)."""
+    os.environ.setdefault("ZENOH_RUNTIME", RUNTIME_THREADS)
+
+
 def load_zenoh() -> ModuleType:
+    spare_threads()
     try:
         import zenoh
     except ImportError:

@@ -20,20 +20,15 @@ missing, a failure under CI.
 from __future__ import annotations
 
 import json
-import os
-import selectors
 import subprocess
-import sys
-from collections.abc import Iterator
 
 import pytest
 
-from benchmarks.lossy_link import LinkUnavailable, NetnsLink
-from benchmarks.reconfigure import ROOT
+from benchmarks.lossy_link import NetnsLink
 from cfgplan.runtime.zenoh_config import DEFAULT_LEASE
+from tests.runtime.conftest import next_line, say, start_in, stop_all
 
 PORT = 7447  # inside the namespaces nobody else listens
-LIMIT = 60.0  # seconds for any process to answer
 
 STUCK = """
 import sys, time, zenoh
@@ -82,68 +77,28 @@ print(json.dumps({"gap": gap, "gone": gone, "beats": len(times) - 2}), flush=Tru
 """
 
 
-@pytest.fixture
-def link() -> Iterator[NetnsLink]:
-    try:
-        made = NetnsLink(seed=5)
-    except LinkUnavailable as error:
-        reason = f"no network namespaces here ({error}); .ci/run runs as root"
-        if os.environ.get("CI"):
-            pytest.fail(f"{reason}, and CI must not skip this test", pytrace=False)
-        pytest.skip(reason)
-    try:
-        yield made
-    finally:
-        made.close()
-
-
-def _start(link: NetnsLink, side: int, args: list[str]) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        link.wrap(side, [sys.executable, *args]),
-        cwd=ROOT,
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-
-
-def _line(process: subprocess.Popen[str]) -> str:
-    """The process's next line of output, within :data:`LIMIT` seconds."""
-    assert process.stdout is not None
-    with selectors.DefaultSelector() as selector:
-        selector.register(process.stdout, selectors.EVENT_READ)
-        if not selector.select(LIMIT):
-            raise AssertionError(f"no answer within {LIMIT:g} s from {process.args!r}")
-    return process.stdout.readline().strip()
-
-
 @pytest.mark.slow
-def test_a_client_on_a_stuck_link_does_not_stall_a_healthy_one(link: NetnsLink) -> None:
+def test_a_client_on_a_stuck_link_does_not_stall_a_healthy_one(netns_link: NetnsLink) -> None:
+    link = netns_link
     router = f"tcp/{link.addresses[0]}:{PORT}"
     seconds = 4 * DEFAULT_LEASE
     started: list[subprocess.Popen[str]] = []
     try:
-        serving = _start(link, 0, ["-m", "cfgplan", "router", "--listen", router])
+        serving = start_in(link, 0, ["-m", "cfgplan", "router", "--listen", router])
         started.append(serving)
-        assert "listening" in _line(serving)
-        stuck = _start(link, 1, ["-c", STUCK, router])
+        assert "listening" in next_line(serving)
+        stuck = start_in(link, 1, ["-c", STUCK, router])
         started.append(stuck)
-        assert _line(stuck) == "ready"
-        healthy = _start(link, 0, ["-c", HEALTHY, router, f"{seconds:g}", "4000"])
+        assert next_line(stuck) == "ready"
+        healthy = start_in(link, 0, ["-c", HEALTHY, router, f"{seconds:g}", "4000"])
         started.append(healthy)
-        assert _line(healthy) == "ready"
+        assert next_line(healthy) == "ready"
         link.set(loss=1.0)  # the stuck client's link: its TCP window shuts, the router keeps it
-        assert healthy.stdin is not None
-        healthy.stdin.write("go\n")
-        healthy.stdin.flush()
-        seen = json.loads(_line(healthy))
+        say(healthy)
+        seen = json.loads(next_line(healthy))
     finally:
         link.set()
-        for process in started:
-            process.kill()
-        for process in started:
-            process.wait(LIMIT)
+        stop_all(started)
     assert seen["gone"] == [], seen  # the router never dropped the healthy client
     assert seen["gap"] < DEFAULT_LEASE / 2, seen  # its link was never left unread for long
     assert seen["beats"] > 10 * seconds, seen

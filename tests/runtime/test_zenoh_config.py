@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import socket
 from pathlib import Path
 from types import SimpleNamespace
@@ -10,6 +11,7 @@ from types import SimpleNamespace
 import pytest
 
 from cfgplan.runtime import RunError
+from cfgplan.runtime.zenoh_config import RUNTIME_THREADS, spare_threads
 from cfgplan.runtime.zenoh_transport import (
     DEFAULT_LEASE,
     OPEN_TIMEOUT_MS,
@@ -176,3 +178,16 @@ def test_a_stuck_link_is_closed_after_a_twentieth_of_the_lease_unless_a_file_say
         "{ block: { wait_before_close: 750000 } } } } } } }"
     )
     assert _get(ZenohOptions(config_file=str(own), lease=1.0), WAIT) == 750_000
+
+
+def test_zenoh_gets_spare_threads_unless_the_environment_names_its_own(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv("ZENOH_RUNTIME", raising=False)
+    spare_threads()
+    assert os.environ["ZENOH_RUNTIME"] == RUNTIME_THREADS
+    assert "acc: (worker_threads: 8)" in RUNTIME_THREADS  # Zenoh's default is 1
+    mine = "(rx: (worker_threads: 3))"
+    monkeypatch.setenv("ZENOH_RUNTIME", mine)
+    spare_threads()
+    assert os.environ["ZENOH_RUNTIME"] == mine
