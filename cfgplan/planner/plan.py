@@ -351,11 +351,6 @@ class Run:
         return self.strategy.stats if self.answered is None else self.answered
 
     @property
-    def stopped(self) -> Status | None:
-        """:attr:`status` when it stopped the run, else None (for cfgplan.reconfigure's callers)."""
-        return self.status if self.status.stopped else None
-
-    @property
     def report(self) -> Report:
         return self.strategy.report if self.explained is None else self.explained
 
@@ -375,7 +370,6 @@ class Run:
                 self.status = Status.UNKNOWN if first_only and listed else prefix.status
         except KeyboardInterrupt:
             self.status = Status.INTERRUPTED
-        self.stats.complete = self.status.exhausted
         if self.status.stopped and not listed:
             guess = self._dive(deadline)
             if guess is not None:

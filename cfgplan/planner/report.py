@@ -131,7 +131,3 @@ class Stats:
     rejected: int = 0  # complete derivations found inadmissible (4.5 step 4)
     pruned: int = 0  # nodes the bounds proved to have no completion
     seconds: float = 0.0
-    complete: bool = True
-    """:attr:`Status.exhausted` of the run, copied by the run as it ends, for
-    callers that keep only its counts (cfgplan.reconfigure's); the run's
-    :attr:`~cfgplan.planner.plan.Run.status` is the status."""

@@ -187,7 +187,7 @@ def fallback(
         limit=1,
         time_limit=time_limit,
     )
-    proven = search.stopped is None and all(c.proven for c in found)
+    proven = not search.status.stopped and all(c.proven for c in found)
     withdrawn = tuple(f for f in after.withdrawn(task) if f not in before.withdrawn(task))
     if not found:
         why = explain(search.report, call_text(goal))

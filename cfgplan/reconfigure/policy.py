@@ -350,7 +350,7 @@ class Reconfigurator:
         """The cheapest configuration of ``task`` for the goal, or why there is
         none, and whether the search proved it (no ``time_limit`` cut it)."""
         found, search = plan(task, self.goal, limit=1, time_limit=time_limit)
-        proven = search.stopped is None and all(c.proven for c in found)
+        proven = not search.status.stopped and all(c.proven for c in found)
         if found:
             return found[0], (), proven
         return None, tuple(explain(search.report, call_text(self.goal))), proven
@@ -410,7 +410,7 @@ class Reconfigurator:
             found, search = plan(self.derived(), self.goal, limit=limit)
             if any(c.identity() == config.identity() for c in found):
                 return True
-            if search.stats.complete or len(found) < limit or limit >= most:
+            if search.status.exhausted or len(found) < limit or limit >= most:
                 return False
             limit *= 4
 
