@@ -713,6 +713,9 @@ def test_behind_a_router_each_robot_holds_one_connection_and_outlives_the_router
 
     try:
         until("Emil sees Pippi", lambda: "Emil: robot Pippi seen" in "".join(lines))
+        # The router says it listens once its session is open; its clients may connect
+        # and meet before its line reaches launch's output (by a thread of its own).
+        until("the router says it listens", lambda: bool(listening.findall("".join(lines))))
         pids = _pids("".join(lines))
         port = int(listening.findall("".join(lines))[0])
         for robot in ("Emil", "Pippi"):
