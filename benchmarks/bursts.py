@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -32,18 +31,13 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 from benchmarks.run import machine
+from cfgplan.runtime.spawn import free_port
 from cfgplan.runtime.zenoh_config import ZenohOptions, zenoh_config
 
 KEY = "cfgplan-bench/bursts"
 SIZE = 150  # bytes: about a commit's JSON
 GAP = 0.02  # seconds between bursts
 WAIT = 30.0  # seconds any step may take
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def receive(endpoint: str, seconds: float) -> None:

@@ -35,7 +35,8 @@ from pathlib import Path
 from typing import Literal
 
 from benchmarks.lossy_link import Link, NetnsLink, ProxyLink
-from benchmarks.reconfigure import DOMAINS, HERMETIC, IMPL, ROOT, free_port
+from benchmarks.reconfigure import DOMAINS, HERMETIC, IMPL, ROOT
+from cfgplan.runtime.spawn import free_port
 from cfgplan.runtime.zenoh_config import DEFAULT_LEASE
 
 Record = dict[str, object]

@@ -27,8 +27,9 @@ from pathlib import Path
 from benchmarks.fault_conditions import CONDITIONS, Condition, Options, Trial, TrialError, run_trial
 from benchmarks.lossy_link import Link, LinkUnavailable, NetnsLink, ProxyLink
 from benchmarks.page import revision
-from benchmarks.reconfigure import free_port, table
+from benchmarks.reconfigure import table
 from benchmarks.run import machine
+from cfgplan.runtime.spawn import free_port
 
 HEADER = [
     "condition",

@@ -31,7 +31,6 @@ import json
 import os
 import platform
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -46,6 +45,7 @@ from cfgplan.problem import load
 from cfgplan.reconfigure.fallbacks import Resource
 from cfgplan.reconfigure.policy import Reconfigurator
 from cfgplan.reconfigure.situation import Situation, derive
+from cfgplan.runtime.spawn import free_port
 
 ROOT = Path(__file__).resolve().parents[1]
 DOMAINS = ROOT / "domains"
@@ -141,12 +141,6 @@ def scenario(
         f"{cold_ms / warm_ms:.1f}x",
         f"{cold_ms / min(decide):,.0f}x",
     ]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _records(path: Path) -> list[dict[str, object]]:

@@ -41,8 +41,9 @@ from pathlib import Path
 
 from benchmarks.fault_conditions import DOCKING_IMPL
 from benchmarks.page import revision
-from benchmarks.reconfigure import free_port, table
+from benchmarks.reconfigure import table
 from benchmarks.run import machine
+from cfgplan.runtime.spawn import free_port
 
 ROOT = Path(__file__).resolve().parents[1]
 DOMAIN = ROOT / "domains" / "docking" / "domain.lisp"

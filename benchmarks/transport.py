@@ -26,7 +26,6 @@ import json
 import os
 import platform
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -36,6 +35,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from cfgplan.runtime import Channel, InProcessTransport, Transport, make_global_channel
+from cfgplan.runtime.spawn import free_port
 from cfgplan.runtime.zenoh_transport import ZenohOptions, ZenohTransport
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,12 +44,6 @@ SOCIETY = "cfgplan-benchmark"
 PAYLOADS: dict[str, object] = {"pose": (0.695, -2.601), "scan 1000 floats": [0.5] * 1000}
 STOP = "stop"
 TIME_LIMIT = 60.0  # seconds for any one wait
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def ends(transport: Transport, me: str, other: str) -> tuple[Channel, Channel, Channel]:
